@@ -1,0 +1,3 @@
+// placeholder: being written
+#include "commands.hpp"
+namespace calstand::cli { void register_units(CLI::App&) {} }

@@ -1,0 +1,13 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace calstand::cli {
+
+// Each subcommand lives in its own cmd_<name>.cpp and registers itself here. A command's
+// callback returns through CLI11; errors are reported as one line on stderr with exit code 2
+// (bad input) or 1 (failure), see main.cpp.
+void register_noise_study(CLI::App& app);
+void register_units(CLI::App& app);
+
+}  // namespace calstand::cli

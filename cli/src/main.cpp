@@ -1,0 +1,27 @@
+// calstand: the command line of the calstand IMU test and calibration station.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "calstand 0.1.0");
+  calstand::cli::register_noise_study(app);
+  calstand::cli::register_units(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const calstand::core::InputError& e) {
+    std::cerr << "calstand: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "calstand: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,40 @@
+#include "core/clock.hpp"
+
+#include <thread>
+
+namespace calstand::core {
+
+SteadyClock::SteadyClock() : epoch_(std::chrono::steady_clock::now()) {}
+
+double SteadyClock::now_s() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch_).count();
+}
+
+void SteadyClock::sleep_until(double t_s) {
+  const auto deadline =
+      epoch_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                   std::chrono::duration<double>(t_s));
+  std::this_thread::sleep_until(deadline);
+}
+
+double VirtualClock::now_s() const {
+  std::lock_guard lock(mutex_);
+  return now_s_;
+}
+
+void VirtualClock::sleep_until(double /*t_s*/) {
+  // Virtual time belongs to the simulator loop: a waiter cannot move it.
+}
+
+void VirtualClock::advance(double dt_s) {
+  if (dt_s <= 0.0) return;
+  std::lock_guard lock(mutex_);
+  now_s_ += dt_s;
+}
+
+void VirtualClock::advance_to(double t_s) {
+  std::lock_guard lock(mutex_);
+  if (t_s > now_s_) now_s_ = t_s;
+}
+
+}  // namespace calstand::core

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace calstand::sim {
+
+/// Exercise 2 of the seed notes ("simulation of common random processes") as a reproducible
+/// study. Rates are in deg/h, angles in deg.
+struct NoiseStudyOptions {
+  int runs = 100;                       ///< Monte-Carlo runs (random-walk sigmas need >= 100)
+  std::uint64_t seed = 1;
+  double white_sigma_dph = 0.03;        ///< per-sample sigma of the raw white noise [deg/h]
+  double sample_rate_hz = 1000.0;
+  double duration_s = 3600.0;
+  int filter_order = 2;                 ///< Butterworth order of the band-limiting filters
+  std::vector<double> cutoffs_hz{100.0, 10.0, 1.0};
+  std::vector<double> walk_times_s{10.0, 60.0, 360.0, 3600.0};
+  std::vector<double> gm_taus_s{4.0, 40.0, 400.0, 4000.0};
+};
+
+struct WhiteNoiseRow {
+  double cutoff_hz;   ///< low-pass cutoff; the raw noise row uses sample_rate/2
+  double rms;         ///< simulated RMS [deg/h]
+  double theory;      ///< sigma * sqrt(ENBW / (fs/2)) [deg/h]
+};
+
+struct RandomWalkRow {
+  double t_s;         ///< integration time [s]
+  double sigma;       ///< std of the integrated angle across runs [deg]
+  double theory;      ///< sigma_rate * sqrt(dt * t) [deg]
+};
+
+struct GaussMarkovRow {
+  double tau_s;       ///< correlation time [s]
+  double q;           ///< PSD of the driving white noise [(deg/h)^2/Hz... see noise_study.cpp]
+  double sigma;       ///< simulated stationary sigma [deg/h]
+  double theory;      ///< sqrt(q tau / 2) [deg/h]
+  double within_run_sigma;  ///< mean over runs of each run's own (de-meaned) sigma [deg/h]
+};
+
+struct NoiseStudyResult {
+  std::vector<WhiteNoiseRow> white;
+  std::vector<RandomWalkRow> random_walk;
+  std::vector<GaussMarkovRow> gauss_markov;
+};
+
+/// Runs the study. Throws std::invalid_argument naming the option when one is out of range.
+NoiseStudyResult run_noise_study(const NoiseStudyOptions& options);
+
+}  // namespace calstand::sim

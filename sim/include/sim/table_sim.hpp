@@ -1,0 +1,86 @@
+#pragma once
+
+#include <string>
+
+#include "core/table_state.hpp"
+#include "sim/status.hpp"
+
+namespace calstand::sim {
+
+/// Limits and servo behaviour of one simulated table axis.
+struct AxisLimits {
+  double max_rate_dps = 300.0;             ///< |rate| never exceeds this [deg/s]
+  double max_accel_dps2 = 200.0;           ///< |acceleration| never exceeds this [deg/s^2]
+  double encoder_resolution_deg = 1e-4;    ///< reported angles are multiples of this [deg]
+  double position_tolerance_deg = 1e-3;    ///< in_position when |error| stays below this [deg]
+  double rate_tolerance_dps = 1e-3;        ///< rate settled when |rate error| below this [deg/s]
+  double settle_time_s = 0.5;              ///< error must stay in tolerance this long [s]
+  double servo_time_constant_s = 0.05;     ///< following lag of the servo behind the profile [s]
+};
+
+/// One axis of the simulated table: a rate- and acceleration-limited motion profile (trapezoidal
+/// to a position, ramped to a rate) followed by the servo with a first-order lag, so the motion
+/// settles as a real axis does and never exceeds the limits. Unbounded (slip-ring) travel: the
+/// true angle is continuous, reported angles are wrapped to [-180, 180) and quantized to the
+/// encoder resolution. Not thread safe; owned by the simulated world.
+class TableAxisSim {
+ public:
+  explicit TableAxisSim(AxisLimits limits = {});
+
+  /// Moves to `angle_deg` (any wrap) along the shortest way round and holds it there.
+  Status command_position(double angle_deg);
+  /// Turns at `rate_dps` (signed, right-handed); refused beyond max_rate_dps.
+  Status command_rate(double rate_dps);
+  /// Decelerates at the acceleration limit and holds at rest (the safe state).
+  void stop();
+  /// A fault (e.g. amplifier trip): the axis brakes to rest at the acceleration limit, reports
+  /// the fault and refuses commands until clear_fault().
+  void inject_fault(std::string why);
+  void clear_fault();
+
+  /// Advances the axis by dt_s > 0.
+  void step(double dt_s);
+
+  double true_angle_deg() const { return angle_deg_; }   ///< continuous, unquantized [deg]
+  double true_rate_dps() const { return rate_dps_; }     ///< [deg/s]
+  double true_accel_dps2() const { return accel_dps2_; } ///< over the last step [deg/s^2]
+  /// What the controller reports: wrapped, quantized angle, mode, settling and fault.
+  core::AxisState state() const;
+  const AxisLimits& limits() const { return limits_; }
+
+ private:
+  AxisLimits limits_;
+  // ... implementation state (profile position/rate, servo state, settle timer, mode, fault).
+  core::AxisMode mode_ = core::AxisMode::kRest;
+  double angle_deg_ = 0.0;
+  double rate_dps_ = 0.0;
+  double accel_dps2_ = 0.0;
+  double profile_angle_deg_ = 0.0;
+  double profile_rate_dps_ = 0.0;
+  double target_angle_deg_ = 0.0;   // position mode, unwrapped
+  double target_rate_dps_ = 0.0;    // rate mode
+  double settled_for_s_ = 0.0;
+  bool in_position_ = true;
+  std::string fault_text_;
+};
+
+/// The dual-axis table: an outer and an inner axis.
+class TableSim {
+ public:
+  TableSim(AxisLimits outer, AxisLimits inner) : outer_(outer), inner_(inner) {}
+  TableAxisSim& outer() { return outer_; }
+  TableAxisSim& inner() { return inner_; }
+  const TableAxisSim& outer() const { return outer_; }
+  const TableAxisSim& inner() const { return inner_; }
+  void step(double dt_s) {
+    outer_.step(dt_s);
+    inner_.step(dt_s);
+  }
+  core::TableState state(double time_s) const { return {time_s, outer_.state(), inner_.state()}; }
+
+ private:
+  TableAxisSim outer_;
+  TableAxisSim inner_;
+};
+
+}  // namespace calstand::sim
