@@ -7,7 +7,9 @@ namespace calstand::cli {
 // Each subcommand lives in its own cmd_<name>.cpp and registers itself here. A command's
 // callback returns through CLI11; errors are reported as one line on stderr with exit code 2
 // (bad input) or 1 (failure), see main.cpp.
+void register_demo(CLI::App& app);
 void register_noise_study(CLI::App& app);
+void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);
 
 }  // namespace calstand::cli

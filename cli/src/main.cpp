@@ -10,7 +10,9 @@ int main(int argc, char** argv) {
   CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "calstand 0.1.0");
+  calstand::cli::register_demo(app);
   calstand::cli::register_noise_study(app);
+  calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);
   try {
     app.parse(argc, argv);

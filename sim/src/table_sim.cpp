@@ -1,1 +1,211 @@
-// placeholder: being written
+#include "sim/table_sim.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <fmt/format.h>
+
+namespace calstand::sim {
+namespace {
+
+/// `angle_deg` wrapped to [-180, 180) [deg].
+double wrap_180(double angle_deg) {
+  double wrapped = std::fmod(angle_deg + 180.0, 360.0);
+  if (wrapped < 0.0) wrapped += 360.0;
+  wrapped -= 180.0;
+  // fmod is exact, but the shifts round: a value a hair below -180 can come back as 180.
+  return wrapped >= 180.0 ? wrapped - 360.0 : wrapped;
+}
+
+/// The braking rate for a remaining distance: the largest rate from which a profile that
+/// slows by `dv` every step of `dt` (rates v, v - dv, v - 2 dv, ..., down to the last partial
+/// step) covers exactly `distance`. Following it step by step lands on the target exactly, with
+/// every rate change within dv; a continuous v = sqrt(2 a d) would leave a residue at the end
+/// that needs a jump beyond the acceleration limit. Signed like `distance`. `last_step` is set
+/// when a single step at this rate covers the whole distance.
+double braking_rate(double distance, double dv, double dt, bool& last_step) {
+  // With v = (m + f) dv, m integer, f in [0, 1), the steps cover
+  // dv dt [(m + 1) f + m (m + 1) / 2].
+  const double units = std::abs(distance) / (dv * dt);
+  double m = std::floor((std::sqrt(1.0 + 8.0 * units) - 1.0) / 2.0);
+  // The square root can round across an integer; put m back in its bracket.
+  if (m > 0.0 && m * (m + 1.0) / 2.0 > units) m -= 1.0;
+  if ((m + 1.0) * (m + 2.0) / 2.0 <= units) m += 1.0;
+  const double f = std::clamp((units - m * (m + 1.0) / 2.0) / (m + 1.0), 0.0, 1.0);
+  last_step = m == 0.0;
+  return std::copysign((m + f) * dv, distance);
+}
+
+}  // namespace
+
+TableAxisSim::TableAxisSim(AxisLimits limits) : limits_(limits) {}
+
+Status TableAxisSim::command_position(double angle_deg) {
+  if (mode_ == core::AxisMode::kFault) {
+    return Status::refused(fmt::format("axis in fault ({}): clear the fault first", fault_text_));
+  }
+  if (!std::isfinite(angle_deg)) {
+    return Status::refused(fmt::format("position {} deg is not a finite angle", angle_deg));
+  }
+  // Slip rings allow unbounded travel, so the equivalent angle nearest the profile is the
+  // shortest way round; exactly half a turn away goes the negative way.
+  target_angle_deg_ = profile_angle_deg_ + wrap_180(angle_deg - profile_angle_deg_);
+  mode_ = core::AxisMode::kPosition;
+  restart_settling();
+  return Status::success();
+}
+
+Status TableAxisSim::command_rate(double rate_dps) {
+  if (mode_ == core::AxisMode::kFault) {
+    return Status::refused(fmt::format("axis in fault ({}): clear the fault first", fault_text_));
+  }
+  if (!std::isfinite(rate_dps)) {
+    return Status::refused(fmt::format("rate {} deg/s is not finite", rate_dps));
+  }
+  if (std::abs(rate_dps) > limits_.max_rate_dps) {
+    return Status::refused(fmt::format("rate {} deg/s exceeds the axis limit {} deg/s", rate_dps,
+                                       limits_.max_rate_dps));
+  }
+  target_rate_dps_ = rate_dps;
+  mode_ = core::AxisMode::kRate;
+  restart_settling();
+  return Status::success();
+}
+
+void TableAxisSim::stop() {
+  // A fault already brakes to rest; stopping must not clear it.
+  if (mode_ == core::AxisMode::kFault) return;
+  mode_ = core::AxisMode::kRest;
+  restart_settling();
+}
+
+void TableAxisSim::inject_fault(std::string why) {
+  mode_ = core::AxisMode::kFault;
+  fault_text_ = why.empty() ? std::string("unspecified fault") : std::move(why);
+  restart_settling();
+}
+
+void TableAxisSim::clear_fault() {
+  if (mode_ != core::AxisMode::kFault) return;
+  // kRest keeps braking if the axis is still turning and then holds wherever it stops.
+  mode_ = core::AxisMode::kRest;
+  fault_text_.clear();
+  restart_settling();
+}
+
+void TableAxisSim::step(double dt_s) {
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  step_profile(dt_s);
+  step_servo(dt_s);
+  step_settling(dt_s);
+}
+
+void TableAxisSim::step_profile(double dt_s) {
+  const double dv = limits_.max_accel_dps2 * dt_s;  // largest rate change in one step
+  const double previous_rate = profile_rate_dps_;
+  const auto limit_rate = [&](double wanted) {
+    return std::clamp(std::clamp(wanted, previous_rate - dv, previous_rate + dv),
+                      -limits_.max_rate_dps, limits_.max_rate_dps);
+  };
+
+  switch (mode_) {
+    case core::AxisMode::kPosition: {
+      const double distance = target_angle_deg_ - profile_angle_deg_;
+      bool last_step = false;
+      const double wanted = braking_rate(distance, dv, dt_s, last_step);
+      const double rate = limit_rate(wanted);
+      profile_rate_dps_ = rate;
+      if (last_step && rate == wanted) {
+        // Land on the target itself rather than on target - distance + rate * dt, which
+        // rounding would leave a few ulps off for ever.
+        profile_angle_deg_ = target_angle_deg_;
+      } else {
+        // Either accelerating/cruising (rate below the braking rate) or, after a new target
+        // arrived too late to brake for, overshooting at full deceleration and coming back.
+        profile_angle_deg_ += rate * dt_s;
+      }
+      return;
+    }
+    case core::AxisMode::kRate:
+      profile_rate_dps_ = limit_rate(target_rate_dps_);
+      break;
+    case core::AxisMode::kRest:
+    case core::AxisMode::kFault:
+      profile_rate_dps_ = limit_rate(0.0);
+      break;
+  }
+  profile_angle_deg_ += profile_rate_dps_ * dt_s;
+}
+
+void TableAxisSim::step_servo(double dt_s) {
+  if (dt_s != servo_dt_s_) {
+    servo_dt_s_ = dt_s;
+    servo_gain_ = limits_.servo_time_constant_s > 0.0
+                      ? -std::expm1(-dt_s / limits_.servo_time_constant_s)
+                      : 1.0;
+  }
+  // The true angle is the profile angle through an exactly discretised first-order lag
+  // (profile held over the step). Its step rate is then the same lag applied to the profile
+  // rate, a convex combination of rates within the limit, and its step-to-step rate change is
+  // bounded by the profile's, so at a fixed dt the limits hold by construction; the true angle
+  // also converges to wherever the profile stops, including the snap onto the target. Only a
+  // change of dt between steps can push the lagged acceleration a little past the limit: the
+  // clamps below catch that, and the lag of the next steps absorbs the difference.
+  const double wanted_rate = (profile_angle_deg_ - angle_deg_) * servo_gain_ / dt_s;
+  const double max_dv = limits_.max_accel_dps2 * dt_s;
+  const double rate = std::clamp(std::clamp(wanted_rate, rate_dps_ - max_dv, rate_dps_ + max_dv),
+                                 -limits_.max_rate_dps, limits_.max_rate_dps);
+  accel_dps2_ = (rate - rate_dps_) / dt_s;
+  rate_dps_ = rate;
+  angle_deg_ += rate * dt_s;
+}
+
+void TableAxisSim::step_settling(double dt_s) {
+  bool within = false;
+  switch (mode_) {
+    case core::AxisMode::kPosition:
+      within = std::abs(angle_deg_ - target_angle_deg_) < limits_.position_tolerance_deg;
+      break;
+    case core::AxisMode::kRate:
+      within = std::abs(rate_dps_ - target_rate_dps_) < limits_.rate_tolerance_dps;
+      break;
+    case core::AxisMode::kRest:
+      within = std::abs(rate_dps_) < limits_.rate_tolerance_dps;
+      break;
+    case core::AxisMode::kFault:
+      within = false;  // a faulted axis is never "in position"
+      break;
+  }
+  settled_for_s_ = within ? settled_for_s_ + dt_s : 0.0;
+  // Summing a fixed dt drifts by ulps; without the slack a 0.5 s settle at 1 ms would take 501
+  // steps on some dt values and 500 on others.
+  in_position_ = within && settled_for_s_ >= limits_.settle_time_s * (1.0 - 1e-9);
+}
+
+void TableAxisSim::restart_settling() {
+  settled_for_s_ = 0.0;
+  in_position_ = false;
+}
+
+core::AxisState TableAxisSim::state() const {
+  core::AxisState s;
+  double angle = wrap_180(angle_deg_);
+  const double lsb = limits_.encoder_resolution_deg;
+  if (lsb > 0.0) {
+    angle = std::round(angle / lsb) * lsb;
+    // Rounding up near +180 reaches the excluded end of the range.
+    if (angle >= 180.0) angle -= 360.0;
+    // -180 itself is a code; lsb * round(-180 / lsb) can come back an ulp below it.
+    if (angle < -180.0) angle = -180.0;
+  }
+  s.angle_deg = angle;
+  s.rate_dps = rate_dps_;
+  s.mode = mode_;
+  s.in_position = in_position_;
+  s.fault = mode_ == core::AxisMode::kFault;
+  s.fault_text = s.fault ? fault_text_ : std::string();
+  return s;
+}
+
+}  // namespace calstand::sim

@@ -28,10 +28,16 @@ struct ChamberParams {
 /// The controller ramps its working setpoint linearly to the target at the requested rate
 /// (capped at max_ramp_c_per_min); the air follows the working setpoint with a first-order lag
 /// and never moves faster than max_ramp_c_per_min; a correlated controller noise rides on it.
-/// The IMU temperature follows (air + self-heating) with its own, slower time constant.
-/// Not thread safe; owned by the simulated world.
+/// The IMU temperature follows (air + self-heating) with its own, slower time constant; it
+/// feels the controller noise too, since that is a real fluctuation of the air.
+///
+/// Power-up: standby, air and setpoint at ambient, and the IMU at ambient as well, just
+/// switched on, so it warms up to ambient + self-heating over a few IMU time constants. While
+/// the controller is idle (standby, fault) the working setpoint tracks the air, so a new
+/// setpoint ramps from where the air is. Not thread safe; owned by the simulated world.
 class ChamberSim {
  public:
+  /// `seed` drives the controller noise only (derive it from the station seed).
   ChamberSim(ChamberParams params, std::uint64_t seed);
 
   /// Starts controlling to `target_c`, ramping at `ramp_c_per_min` (default and cap:
@@ -39,30 +45,46 @@ class ChamberSim {
   Status set_setpoint(double target_c, std::optional<double> ramp_c_per_min = std::nullopt);
   /// Stops controlling; the air drifts back to ambient (the safe state).
   void standby();
+  /// A controller alarm: control stops (the air drifts to ambient), setpoints are refused
+  /// until clear_fault(), which returns to standby.
   void inject_fault(std::string why);
   void clear_fault();
 
-  /// Advances by dt_s > 0.
+  /// Advances by dt_s > 0; any dt is modelled exactly (other values are ignored).
   void step(double dt_s);
 
   double air_temperature_c() const;         ///< includes the controller noise [degC]
   double imu_temperature_c() const { return imu_c_; }         ///< [degC]
+  /// Derivative of the IMU temperature at the end of the last step [degC/min].
   double imu_temperature_rate_c_per_min() const { return imu_rate_c_per_min_; }
   double working_setpoint_c() const { return working_setpoint_c_; }
   core::ChamberState state(double time_s) const;
   const ChamberParams& params() const { return params_; }
 
  private:
+  /// Recomputes the per-step factors when dt_s differs from the last step's.
+  void update_step_factors(double dt_s);
+
   ChamberParams params_;
   core::ChamberMode mode_ = core::ChamberMode::kStandby;
-  double target_c_;
-  double ramp_c_per_min_;
-  double working_setpoint_c_;
-  double air_c_;            // without noise
+  double target_c_;              // last accepted setpoint (ambient at power-up) [degC]
+  double ramp_c_per_min_;        // ramp in use, already capped at max_ramp_c_per_min
+  double working_setpoint_c_;    // the controller's ramped setpoint; tracks the air when idle
+  double air_c_;                 // without noise [degC]
   double imu_c_;
   double imu_rate_c_per_min_ = 0.0;
   std::string fault_text_;
-  GaussMarkov noise_;
+  // Controller noise as a Gauss-Markov process updated exactly for whatever dt step() gets
+  // (sim::GaussMarkov fixes dt at construction).
+  NormalSource normal_;
+  double noise_c_ = 0.0;
+  // exp() per step is avoided: the simulator steps at a fixed dt, so the factors are computed
+  // once per distinct dt.
+  double factors_dt_s_ = -1.0;
+  double air_keep_ = 0.0;        // exp(-dt / air_time_constant_s)
+  double imu_keep_ = 0.0;        // exp(-dt / imu_time_constant_s)
+  double noise_keep_ = 0.0;      // exp(-dt / control_noise_tau_s)
+  double noise_drive_c_ = 0.0;   // control_noise_c * sqrt(1 - noise_keep^2) [degC]
 };
 
 }  // namespace calstand::sim

@@ -22,21 +22,26 @@ struct NoiseStudyOptions {
 struct WhiteNoiseRow {
   double cutoff_hz;   ///< low-pass cutoff; the raw noise row uses sample_rate/2
   double rms;         ///< simulated RMS [deg/h]
-  double theory;      ///< sigma * sqrt(ENBW / (fs/2)) [deg/h]
+  double theory;      ///< sigma * sqrt(ENBW / (fs/2)), ENBW of the analog prototype [deg/h]
 };
 
 struct RandomWalkRow {
   double t_s;         ///< integration time [s]
   double sigma;       ///< std of the integrated angle across runs [deg]
-  double theory;      ///< sigma_rate * sqrt(dt * t) [deg]
+  double theory;      ///< sigma_rate * sqrt(dt * t), sigma_rate in deg/s [deg]
 };
 
+/// The raw white samples n_k drive x_k = phi x_{k-1} + c n_k, i.e. they are the increments of
+/// dx/dt = -x/tau + w(t), whose white noise w has PSD q = sigma_w^2 / dt (the seed notes'
+/// q_k ~= q dt); c ~= 1 is set so the stationary variance is exactly q tau / 2.
 struct GaussMarkovRow {
   double tau_s;       ///< correlation time [s]
-  double q;           ///< PSD of the driving white noise [(deg/h)^2/Hz... see noise_study.cpp]
-  double sigma;       ///< simulated stationary sigma [deg/h]
-  double theory;      ///< sqrt(q tau / 2) [deg/h]
-  double within_run_sigma;  ///< mean over runs of each run's own (de-meaned) sigma [deg/h]
+  double q;           ///< PSD of the driving white noise w [(deg/h)^2/s]
+  double sigma;       ///< RMS over all samples of all runs [deg/h]
+  double theory;      ///< stationary sigma sqrt(q tau / 2) [deg/h]
+  /// Mean over runs of each run's own de-meaned sigma [deg/h]: close to sigma when tau is much
+  /// shorter than a run (white-like), far below it when tau is much longer (random-walk-like).
+  double within_run_sigma;
 };
 
 struct NoiseStudyResult {
@@ -45,7 +50,10 @@ struct NoiseStudyResult {
   std::vector<GaussMarkovRow> gauss_markov;
 };
 
-/// Runs the study. Throws std::invalid_argument naming the option when one is out of range.
+/// Runs the study: each run draws one raw white sequence (seeded by derive_seed(seed,
+/// "noise_study.white", run)) and feeds it to every part, as the exercise does. Deterministic in
+/// the options. Single threaded; about 3.6e8 samples with the defaults.
+/// Throws std::invalid_argument naming the option when one is out of range.
 NoiseStudyResult run_noise_study(const NoiseStudyOptions& options);
 
 }  // namespace calstand::sim

@@ -23,8 +23,16 @@ struct AxisLimits {
 /// settles as a real axis does and never exceeds the limits. Unbounded (slip-ring) travel: the
 /// true angle is continuous, reported angles are wrapped to [-180, 180) and quantized to the
 /// encoder resolution. Not thread safe; owned by the simulated world.
+///
+/// The profile is planned per step: its rate changes by at most max_accel * dt each step and
+/// brakes along the discrete braking curve, so a move lands exactly on the target without
+/// overshoot; the true angle is the profile through an exactly discretised first-order lag,
+/// whose rate and acceleration stay within the limits at every step (re-clamped when dt varies).
+/// A new command takes effect from the current motion, so it may overshoot a target it can no
+/// longer brake for and come back.
 class TableAxisSim {
  public:
+  /// `limits` must have positive max_rate_dps and max_accel_dps2 (the station config validates).
   explicit TableAxisSim(AxisLimits limits = {});
 
   /// Moves to `angle_deg` (any wrap) along the shortest way round and holds it there.
@@ -49,19 +57,31 @@ class TableAxisSim {
   const AxisLimits& limits() const { return limits_; }
 
  private:
+  /// Advances the motion profile by one step of dt_s, honouring the limits per step.
+  void step_profile(double dt_s);
+  /// Advances the servo (true axis) behind the profile by one step of dt_s.
+  void step_servo(double dt_s);
+  /// Updates the settle timer and in_position_ after a step of dt_s.
+  void step_settling(double dt_s);
+  /// Forgets settling: a new command (or a fault) starts the settle timer again.
+  void restart_settling();
+
   AxisLimits limits_;
-  // ... implementation state (profile position/rate, servo state, settle timer, mode, fault).
   core::AxisMode mode_ = core::AxisMode::kRest;
-  double angle_deg_ = 0.0;
-  double rate_dps_ = 0.0;
-  double accel_dps2_ = 0.0;
-  double profile_angle_deg_ = 0.0;
-  double profile_rate_dps_ = 0.0;
-  double target_angle_deg_ = 0.0;   // position mode, unwrapped
-  double target_rate_dps_ = 0.0;    // rate mode
-  double settled_for_s_ = 0.0;
+  double angle_deg_ = 0.0;           // true axis, continuous (unwrapped) [deg]
+  double rate_dps_ = 0.0;            // true axis, mean over the last step [deg/s]
+  double accel_dps2_ = 0.0;          // true axis, over the last step [deg/s^2]
+  double profile_angle_deg_ = 0.0;   // where the profile is, unwrapped [deg]
+  double profile_rate_dps_ = 0.0;    // profile rate over the last step [deg/s]
+  double target_angle_deg_ = 0.0;    // position mode, unwrapped [deg]
+  double target_rate_dps_ = 0.0;     // rate mode [deg/s]
+  double settled_for_s_ = 0.0;       // how long the error has stayed in tolerance [s]
   bool in_position_ = true;
   std::string fault_text_;
+  // exp() is the only costly call in step(); the simulator steps at a fixed dt, so it is
+  // evaluated once per distinct dt.
+  double servo_dt_s_ = -1.0;
+  double servo_gain_ = 1.0;          // 1 - exp(-dt / servo_time_constant_s) for servo_dt_s_
 };
 
 /// The dual-axis table: an outer and an inner axis.

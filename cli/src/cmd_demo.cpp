@@ -1,0 +1,273 @@
+// `calstand demo`: the main job on the embedded simulator. For now a simulated IMU on the
+// simulated table, showing what it measures in the classic positions, a CW/CCW rate test and a
+// chamber temperature step; later issues grow it into a whole campaign with a fit and a report.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "core/rotation.hpp"
+#include "core/station_config.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::cli {
+namespace {
+
+using nlohmann::json;
+
+struct DemoOptions {
+  std::string station_file;
+  std::uint64_t seed = 0;
+  bool seed_given = false;
+  double capture_s = 10.0;
+  bool as_json = false;
+};
+
+// Means of one capture: what a static or constant-rate step measures.
+struct CaptureMean {
+  Eigen::Vector3d gyro_dps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();
+  double temperature_c = 0.0;
+  std::size_t samples = 0;
+  std::size_t sequence_gaps = 0;
+};
+
+CaptureMean capture(sim::SimWorld& world, double duration_s) {
+  world.take_samples(0);  // discard anything from the motion before
+  world.advance(duration_s);
+  CaptureMean m;
+  const auto samples = world.take_samples(0);
+  const auto modulus = world.imu(0).truth().sequence_modulus;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    m.gyro_dps += samples[k].gyro_dps;
+    m.accel_mps2 += samples[k].accel_mps2;
+    m.temperature_c += samples[k].temperature_c;
+    if (k > 0 && samples[k].sequence != (samples[k - 1].sequence + 1) % modulus) ++m.sequence_gaps;
+  }
+  m.samples = samples.size();
+  if (m.samples > 0) {
+    const double n = static_cast<double>(m.samples);
+    m.gyro_dps /= n;
+    m.accel_mps2 /= n;
+    m.temperature_c /= n;
+  }
+  return m;
+}
+
+// Commands a position and runs the world until both axes report in position.
+void move_and_settle(sim::SimWorld& world, double outer_deg, double inner_deg) {
+  auto ok = world.table().outer().command_position(outer_deg);
+  if (!ok) throw std::runtime_error("outer axis refused the move: " + ok.message);
+  ok = world.table().inner().command_position(inner_deg);
+  if (!ok) throw std::runtime_error("inner axis refused the move: " + ok.message);
+  const double deadline = world.now_s() + 120.0;
+  do {
+    world.advance(0.1);
+    const auto s = world.table_state();
+    if (s.outer.in_position && s.inner.in_position) return;
+  } while (world.now_s() < deadline);
+  throw std::runtime_error(fmt::format("table did not settle at ({}, {}) deg", outer_deg, inner_deg));
+}
+
+struct Position {
+  const char* label;
+  double outer_deg;
+  double inner_deg;
+  int axis;   // body axis along the vertical
+  int sign;   // +1 up, -1 down
+};
+
+// Default table (outer axis North, inner axis Up at outer 0): each body axis up and down.
+const Position kSixPositions[] = {
+    {"z up", 0.0, 0.0, 2, +1},    {"z down", 180.0, 0.0, 2, -1},
+    {"x up", -90.0, 0.0, 0, +1},  {"x down", 90.0, 0.0, 0, -1},
+    {"y up", 90.0, 90.0, 1, +1},  {"y down", 90.0, -90.0, 1, -1},
+};
+
+std::string vec_text(const Eigen::Vector3d& v, const char* format) {
+  return fmt::format(fmt::runtime(fmt::format("{0} {0} {0}", format)), v.x(), v.y(), v.z());
+}
+
+int run_demo(const DemoOptions& opt) {
+  core::StationConfig station =
+      opt.station_file.empty() ? sim::default_station() : core::StationConfig::load(opt.station_file);
+  if (opt.seed_given) station.seed = opt.seed;
+  if (!(opt.capture_s > 0.0)) throw core::InputError("--capture", "must be positive seconds");
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  sim::SimWorld world(station);
+  const sim::ImuTruth& truth = world.imu(0).truth();
+  const double g = station.site.gravity();
+  const Eigen::Vector3d earth_dph =
+      station.site.earth_rate_level_radps() * core::kRadToDeg * 3600.0;
+
+  json report;
+  report["station"] = station.name;
+  report["imu"] = {{"name", world.imu_name(0)}, {"sample_rate_hz", truth.sample_rate_hz}};
+  report["site"] = {{"latitude_deg", station.site.latitude_deg}, {"gravity_mps2", g}};
+
+  if (!opt.as_json) {
+    fmt::print("calstand demo: station \"{}\", IMU \"{}\" ({:.0f} Hz), latitude {:.4f} deg, "
+               "g = {:.5f} m/s^2, Earth rate N {:.3f} U {:.3f} deg/h\n\n",
+               station.name, world.imu_name(0), truth.sample_rate_hz, station.site.latitude_deg,
+               g, earth_dph.y(), earth_dph.z());
+    fmt::print("Six positions, {:.0f} s static capture each after the table settles\n", opt.capture_s);
+    fmt::print("{:<7} {:>6} {:>6}  {:>29}  {:>32}  {:>7}\n", "pos", "outer", "inner",
+               "gyro x y z [deg/h]", "accel x y z [m/s^2]", "T [degC]");
+  }
+
+  // 1. Six positions: each body axis up and down.
+  std::vector<CaptureMean> six;
+  json positions = json::array();
+  for (const Position& p : kSixPositions) {
+    move_and_settle(world, p.outer_deg, p.inner_deg);
+    const CaptureMean m = capture(world, opt.capture_s);
+    six.push_back(m);
+    const Eigen::Vector3d gyro_dph = m.gyro_dps * 3600.0;
+    positions.push_back({{"position", p.label},
+                         {"outer_deg", p.outer_deg},
+                         {"inner_deg", p.inner_deg},
+                         {"gyro_dph", {gyro_dph.x(), gyro_dph.y(), gyro_dph.z()}},
+                         {"accel_mps2", {m.accel_mps2.x(), m.accel_mps2.y(), m.accel_mps2.z()}},
+                         {"temperature_c", m.temperature_c},
+                         {"samples", m.samples}});
+    if (!opt.as_json) {
+      fmt::print("{:<7} {:>6.1f} {:>6.1f}  {:>29}  {:>32}  {:>7.2f}\n", p.label, p.outer_deg,
+                 p.inner_deg, vec_text(gyro_dph, "{:9.3f}"), vec_text(m.accel_mps2, "{:10.5f}"),
+                 m.temperature_c);
+    }
+  }
+  report["six_position"] = positions;
+
+  // What the up/down pairs say about each accelerometer (the seed's two-position method),
+  // beside the simulator's truth, which a real station would not know.
+  json accel_rows = json::array();
+  if (!opt.as_json) {
+    fmt::print("\nAccelerometers from the up/down pairs: bias = (up + down) / 2, "
+               "scale = (up - down) / 2g - 1\n");
+    fmt::print("{:<5} {:>14} {:>14} {:>12} {:>12}\n", "axis", "bias [mg]", "truth [mg]",
+               "scale [ppm]", "truth [ppm]");
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    const CaptureMean* up = nullptr;
+    const CaptureMean* down = nullptr;
+    for (std::size_t k = 0; k < six.size(); ++k) {
+      if (kSixPositions[k].axis != axis) continue;
+      (kSixPositions[k].sign > 0 ? up : down) = &six[k];
+    }
+    const double bias = 0.5 * (up->accel_mps2[axis] + down->accel_mps2[axis]);
+    const double scale_ppm = ((up->accel_mps2[axis] - down->accel_mps2[axis]) / (2.0 * g) - 1.0) * 1e6;
+    const double true_bias = truth.accel_bias[axis] + world.imu(0).turn_on_accel_bias()[axis];
+    const double mg = 1e3 / core::kStandardGravity;
+    const char name = static_cast<char>('x' + axis);
+    accel_rows.push_back({{"axis", std::string(1, name)},
+                          {"bias_mps2", bias},
+                          {"true_bias_mps2", true_bias},
+                          {"scale_ppm", scale_ppm},
+                          {"true_scale_ppm", truth.accel_scale[axis]}});
+    if (!opt.as_json) {
+      fmt::print("{:<5} {:>14.4f} {:>14.4f} {:>12.1f} {:>12.1f}\n", name, bias * mg,
+                 true_bias * mg, scale_ppm, truth.accel_scale[axis]);
+    }
+  }
+  report["accel_two_position"] = accel_rows;
+
+  // 2. Rate test about the inner axis, z up: CW and CCW, whole revolutions. The difference of
+  // the two mean rates cancels the bias and the Earth rate and leaves the scale factor.
+  move_and_settle(world, 0.0, 0.0);
+  const double rate_dps = 100.0;
+  const double revolutions_s = 10.0 * 360.0 / rate_dps;
+  json rate_rows = json::array();
+  double measured[2] = {0.0, 0.0};
+  const double signs[2] = {+1.0, -1.0};
+  for (int k = 0; k < 2; ++k) {
+    const auto ok = world.table().inner().command_rate(signs[k] * rate_dps);
+    if (!ok) throw std::runtime_error("inner axis refused the rate: " + ok.message);
+    // Let the rate settle before capturing.
+    const double deadline = world.now_s() + 60.0;
+    do world.advance(0.1);
+    while (!world.table_state().inner.in_position && world.now_s() < deadline);
+    const CaptureMean m = capture(world, revolutions_s);
+    measured[k] = m.gyro_dps.z();
+    const double expected = signs[k] * rate_dps + earth_dph.z() / 3600.0;
+    rate_rows.push_back({{"rate_dps", signs[k] * rate_dps},
+                         {"gyro_z_dps", m.gyro_dps.z()},
+                         {"expected_dps", expected}});
+  }
+  world.table().inner().stop();
+  const double scale_ppm = ((measured[0] - measured[1]) / (2.0 * rate_dps) - 1.0) * 1e6;
+  const double bias_dph = 0.5 * (measured[0] + measured[1]) * 3600.0 - earth_dph.z();
+  report["rate_test"] = {{"rows", rate_rows},
+                         {"gyro_z_scale_ppm", scale_ppm},
+                         {"true_gyro_z_scale_ppm", truth.gyro_scale.z()},
+                         {"gyro_z_bias_dph", bias_dph}};
+  if (!opt.as_json) {
+    fmt::print("\nRate test about the inner axis (z up), 10 revolutions each way\n");
+    fmt::print("{:>10} {:>18} {:>22}\n", "rate", "gyro z [deg/s]", "table+Earth [deg/s]");
+    for (const auto& r : rate_rows) {
+      fmt::print("{:>10.1f} {:>18.6f} {:>22.6f}\n", r["rate_dps"].get<double>(),
+                 r["gyro_z_dps"].get<double>(), r["expected_dps"].get<double>());
+    }
+    fmt::print("gyro z scale error from CW/CCW: {:.1f} ppm (truth {:.1f} ppm); "
+               "bias after removing Earth rate: {:.3f} deg/h\n",
+               scale_ppm, truth.gyro_scale.z(), bias_dph);
+  }
+
+  // 3. Chamber step: the IMU's own temperature lags the air.
+  const double target_c = std::min(45.0, station.chamber.max_c);
+  const auto ok = world.chamber().set_setpoint(target_c);
+  if (!ok) throw std::runtime_error("chamber refused the setpoint: " + ok.message);
+  json thermal = json::array();
+  if (!opt.as_json) {
+    fmt::print("\nChamber to {:.0f} degC at {:.1f} degC/min; the IMU follows the air with a lag\n",
+               target_c, station.chamber.max_ramp_c_per_min);
+    fmt::print("{:>8} {:>10} {:>10} {:>12}\n", "t [min]", "air [C]", "IMU [C]", "IMU [C/min]");
+  }
+  const double t0 = world.now_s();
+  for (double minutes : {0.0, 5.0, 10.0, 20.0, 40.0, 60.0, 90.0}) {
+    world.advance_to(t0 + minutes * 60.0);
+    world.take_samples(0);
+    const double air = world.chamber().air_temperature_c();
+    const double imu = world.chamber().imu_temperature_c();
+    const double rate = world.chamber().imu_temperature_rate_c_per_min();
+    thermal.push_back({{"t_min", minutes}, {"air_c", air}, {"imu_c", imu}, {"imu_rate_c_per_min", rate}});
+    if (!opt.as_json) fmt::print("{:>8.0f} {:>10.2f} {:>10.2f} {:>12.3f}\n", minutes, air, imu, rate);
+  }
+  world.chamber().standby();
+  report["thermal_step"] = thermal;
+
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  report["simulated_s"] = world.now_s();
+  report["wall_s"] = wall_s;
+  if (opt.as_json) {
+    fmt::print("{}\n", report.dump(2));
+  } else {
+    fmt::print("\nSimulated {:.2f} h of lab time in {:.2f} s of wall time ({:.0f}x real time).\n",
+               world.now_s() / 3600.0, wall_s, world.now_s() / std::max(wall_s, 1e-9));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_demo(CLI::App& app) {
+  auto opt = std::make_shared<DemoOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "demo", "Run the main job on the embedded simulator: a simulated IMU on the simulated "
+              "table in the six positions, a CW/CCW rate test and a chamber step");
+  cmd->add_option("--station", opt->station_file, "Station file (default: built-in simulator)");
+  cmd->add_option("--seed", opt->seed, "Override the station seed")
+      ->each([opt](const std::string&) { opt->seed_given = true; });
+  cmd->add_option("--capture", opt->capture_s, "Static capture per position [s]")
+      ->capture_default_str();
+  cmd->add_flag("--json", opt->as_json, "Machine-readable output");
+  cmd->callback([opt] { run_demo(*opt); });
+}
+
+}  // namespace calstand::cli

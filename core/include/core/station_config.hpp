@@ -1,0 +1,88 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/site.hpp"
+#include "core/table_geometry.hpp"
+
+namespace calstand::core {
+
+/// Limits and servo figures of one table axis (schemas/station.schema.json, `$defs/axis`).
+struct AxisConfig {
+  double max_rate_dps = 300.0;
+  double max_accel_dps2 = 200.0;
+  double encoder_resolution_deg = 1e-4;
+  double position_tolerance_deg = 1e-3;
+  double rate_tolerance_dps = 1e-3;
+  double settle_time_s = 0.5;
+  double servo_time_constant_s = 0.05;  ///< simulator only
+};
+
+struct TableConfig {
+  std::string backend = "sim";
+  Eigen::Vector3d outer_axis{0.0, 1.0, 0.0};  ///< in L
+  Eigen::Vector3d inner_axis{0.0, 0.0, 1.0};  ///< in L at outer = 0
+  AxisConfig outer;
+  AxisConfig inner;
+  nlohmann::json connection = nlohmann::json::object();
+};
+
+struct ChamberConfig {
+  std::string backend = "sim";
+  double min_c = -55.0;
+  double max_c = 125.0;
+  double max_ramp_c_per_min = 5.0;
+  double ambient_c = 23.0;
+  // Simulator thermal model (see sim::ChamberParams).
+  double air_time_constant_s = 90.0;
+  double control_noise_c = 0.02;
+  double control_noise_tau_s = 20.0;
+  double imu_time_constant_s = 600.0;
+  double imu_self_heating_c = 3.0;
+  nlohmann::json connection = nlohmann::json::object();
+};
+
+/// One IMU of the station. Exactly one truth source is set for a simulated IMU.
+struct ImuConfig {
+  std::string name;
+  std::string backend = "sim";
+  std::string model;        ///< built-in spec sheet name ("ln200", "adis16488")
+  std::string spec_file;    ///< absolute path (resolved against the station file)
+  std::string truth_file;   ///< absolute path
+  nlohmann::json truth;     ///< inline truth document, or null
+  Eigen::Vector3d mount_rpy_deg = Eigen::Vector3d::Zero();
+  nlohmann::json connection = nlohmann::json::object();
+};
+
+/// A whole station: site, table, chamber, IMUs and the simulator's settings.
+struct StationConfig {
+  std::string name = "sim-station";
+  std::string description;
+  std::uint64_t seed = 1;
+  Site site;
+  TableConfig table;
+  ChamberConfig chamber;
+  std::vector<ImuConfig> imus;
+  double sim_max_step_s = 0.01;
+  double sim_thermal_step_s = 0.1;
+
+  /// The table geometry with the mount of IMU `imu_index`.
+  TableGeometry geometry(std::size_t imu_index) const;
+
+  /// The JSON a station file holds (paths as resolved); from_json(to_json()) is identity.
+  nlohmann::json to_json() const;
+
+  /// Parses and validates a station document; every schema violation is listed in the thrown
+  /// SchemaError, other rule breaks (e.g. min_c >= max_c, non-unit axes, duplicate IMU names)
+  /// in an InputError naming the field. Relative paths resolve against `base_dir`.
+  static StationConfig from_json(const nlohmann::json& doc, const std::string& file_name,
+                                 const std::string& base_dir = ".");
+  /// Reads a station file (paths relative to its folder).
+  static StationConfig load(const std::string& path);
+};
+
+}  // namespace calstand::core

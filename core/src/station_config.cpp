@@ -1,0 +1,205 @@
+#include "core/station_config.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/error.hpp"
+#include "core/rotation.hpp"
+#include "core/schemas.hpp"
+
+namespace calstand::core {
+namespace {
+
+using nlohmann::json;
+
+Eigen::Vector3d vec3(const json& a) {
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+json vec3_json(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+AxisConfig axis_from_json(const json& j) {
+  AxisConfig a;
+  a.max_rate_dps = j.at("max_rate_dps").get<double>();
+  a.max_accel_dps2 = j.at("max_accel_dps2").get<double>();
+  a.encoder_resolution_deg = j.value("encoder_resolution_deg", a.encoder_resolution_deg);
+  a.position_tolerance_deg = j.value("position_tolerance_deg", a.position_tolerance_deg);
+  a.rate_tolerance_dps = j.value("rate_tolerance_dps", a.rate_tolerance_dps);
+  a.settle_time_s = j.value("settle_time_s", a.settle_time_s);
+  a.servo_time_constant_s = j.value("servo_time_constant_s", a.servo_time_constant_s);
+  return a;
+}
+
+json axis_to_json(const AxisConfig& a) {
+  return {{"max_rate_dps", a.max_rate_dps},
+          {"max_accel_dps2", a.max_accel_dps2},
+          {"encoder_resolution_deg", a.encoder_resolution_deg},
+          {"position_tolerance_deg", a.position_tolerance_deg},
+          {"rate_tolerance_dps", a.rate_tolerance_dps},
+          {"settle_time_s", a.settle_time_s},
+          {"servo_time_constant_s", a.servo_time_constant_s}};
+}
+
+std::string resolve(const std::string& base_dir, const std::string& path) {
+  const std::filesystem::path p(path);
+  if (p.is_absolute()) return p.lexically_normal().string();
+  return (std::filesystem::path(base_dir) / p).lexically_normal().string();
+}
+
+// Rules the schema cannot state: checked after it, each naming its field.
+void check_semantics(const StationConfig& c, const std::string& file) {
+  auto unit = [&](const Eigen::Vector3d& v, const char* field) {
+    if (std::abs(v.norm() - 1.0) > 1e-6) {
+      throw InputError(fmt::format("{}: {}", file, field),
+                       fmt::format("must be a unit vector (norm is {:.6g})", v.norm()));
+    }
+  };
+  unit(c.table.outer_axis, "table.outer_axis");
+  unit(c.table.inner_axis, "table.inner_axis");
+  if (c.table.outer_axis.cross(c.table.inner_axis).norm() < 1e-3) {
+    throw InputError(fmt::format("{}: table.inner_axis", file),
+                     "must not be parallel to table.outer_axis");
+  }
+  if (c.chamber.min_c >= c.chamber.max_c) {
+    throw InputError(fmt::format("{}: chamber.min_c", file),
+                     fmt::format("{} must be below chamber.max_c {}", c.chamber.min_c,
+                                 c.chamber.max_c));
+  }
+  if (c.chamber.ambient_c < c.chamber.min_c || c.chamber.ambient_c > c.chamber.max_c) {
+    throw InputError(fmt::format("{}: chamber.ambient_c", file),
+                     fmt::format("{} is outside the chamber range [{}, {}]", c.chamber.ambient_c,
+                                 c.chamber.min_c, c.chamber.max_c));
+  }
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < c.imus.size(); ++i) {
+    if (!names.insert(c.imus[i].name).second) {
+      throw InputError(fmt::format("{}: imus[{}].name", file, i),
+                       fmt::format("duplicate IMU name \"{}\"", c.imus[i].name));
+    }
+  }
+}
+
+}  // namespace
+
+TableGeometry StationConfig::geometry(std::size_t imu_index) const {
+  TableGeometry g;
+  g.outer_axis = table.outer_axis.normalized();
+  g.inner_axis = table.inner_axis.normalized();
+  if (imu_index < imus.size()) g.mount_C_PB = from_roll_pitch_yaw_deg(imus[imu_index].mount_rpy_deg);
+  return g;
+}
+
+StationConfig StationConfig::from_json(const json& doc, const std::string& file_name,
+                                       const std::string& base_dir) {
+  validate_or_throw(schema("station.schema.json"), doc, file_name);
+  StationConfig c;
+  c.name = doc.at("name").get<std::string>();
+  c.description = doc.value("description", std::string());
+  c.seed = doc.value("seed", std::uint64_t{1});
+
+  const json& site = doc.at("site");
+  c.site.latitude_deg = site.at("latitude_deg").get<double>();
+  c.site.longitude_deg = site.value("longitude_deg", 0.0);
+  c.site.height_m = site.at("height_m").get<double>();
+  if (site.contains("gravity_mps2")) c.site.gravity_mps2 = site.at("gravity_mps2").get<double>();
+
+  const json& table = doc.at("table");
+  c.table.backend = table.at("backend").get<std::string>();
+  c.table.outer_axis = vec3(table.at("outer_axis"));
+  c.table.inner_axis = vec3(table.at("inner_axis"));
+  c.table.outer = axis_from_json(table.at("outer"));
+  c.table.inner = axis_from_json(table.at("inner"));
+  c.table.connection = table.value("connection", json::object());
+
+  const json& ch = doc.at("chamber");
+  c.chamber.backend = ch.at("backend").get<std::string>();
+  c.chamber.min_c = ch.at("min_c").get<double>();
+  c.chamber.max_c = ch.at("max_c").get<double>();
+  c.chamber.max_ramp_c_per_min = ch.at("max_ramp_c_per_min").get<double>();
+  c.chamber.ambient_c = ch.value("ambient_c", c.chamber.ambient_c);
+  if (ch.contains("sim")) {
+    const json& s = ch.at("sim");
+    c.chamber.air_time_constant_s = s.value("air_time_constant_s", c.chamber.air_time_constant_s);
+    c.chamber.control_noise_c = s.value("control_noise_c", c.chamber.control_noise_c);
+    c.chamber.control_noise_tau_s = s.value("control_noise_tau_s", c.chamber.control_noise_tau_s);
+    c.chamber.imu_time_constant_s = s.value("imu_time_constant_s", c.chamber.imu_time_constant_s);
+    c.chamber.imu_self_heating_c = s.value("imu_self_heating_c", c.chamber.imu_self_heating_c);
+  }
+  c.chamber.connection = ch.value("connection", json::object());
+
+  for (const json& j : doc.at("imus")) {
+    ImuConfig imu;
+    imu.name = j.at("name").get<std::string>();
+    imu.backend = j.at("backend").get<std::string>();
+    imu.model = j.value("model", std::string());
+    if (j.contains("spec_file")) imu.spec_file = resolve(base_dir, j.at("spec_file"));
+    if (j.contains("truth_file")) imu.truth_file = resolve(base_dir, j.at("truth_file"));
+    if (j.contains("truth")) imu.truth = j.at("truth");
+    if (j.contains("mount_rpy_deg")) imu.mount_rpy_deg = vec3(j.at("mount_rpy_deg"));
+    imu.connection = j.value("connection", json::object());
+    c.imus.push_back(std::move(imu));
+  }
+  if (doc.contains("sim")) {
+    c.sim_max_step_s = doc.at("sim").value("max_step_s", c.sim_max_step_s);
+    c.sim_thermal_step_s = doc.at("sim").value("thermal_step_s", c.sim_thermal_step_s);
+  }
+  check_semantics(c, file_name);
+  return c;
+}
+
+StationConfig StationConfig::load(const std::string& path) {
+  const json doc = read_json_file(path);
+  const auto dir = std::filesystem::path(path).parent_path();
+  return from_json(doc, path, dir.empty() ? "." : dir.string());
+}
+
+json StationConfig::to_json() const {
+  json site_j = {{"latitude_deg", site.latitude_deg},
+                 {"longitude_deg", site.longitude_deg},
+                 {"height_m", site.height_m}};
+  if (site.gravity_mps2) site_j["gravity_mps2"] = *site.gravity_mps2;
+  json imus_j = json::array();
+  for (const auto& imu : imus) {
+    json j = {{"name", imu.name}, {"backend", imu.backend},
+              {"mount_rpy_deg", vec3_json(imu.mount_rpy_deg)}};
+    if (!imu.model.empty()) j["model"] = imu.model;
+    if (!imu.spec_file.empty()) j["spec_file"] = imu.spec_file;
+    if (!imu.truth_file.empty()) j["truth_file"] = imu.truth_file;
+    if (!imu.truth.is_null()) j["truth"] = imu.truth;
+    if (!imu.connection.empty()) j["connection"] = imu.connection;
+    imus_j.push_back(std::move(j));
+  }
+  json table_j = {{"backend", table.backend},
+                  {"outer_axis", vec3_json(table.outer_axis)},
+                  {"inner_axis", vec3_json(table.inner_axis)},
+                  {"outer", axis_to_json(table.outer)},
+                  {"inner", axis_to_json(table.inner)}};
+  if (!table.connection.empty()) table_j["connection"] = table.connection;
+  json chamber_j = {{"backend", chamber.backend},
+                    {"min_c", chamber.min_c},
+                    {"max_c", chamber.max_c},
+                    {"max_ramp_c_per_min", chamber.max_ramp_c_per_min},
+                    {"ambient_c", chamber.ambient_c},
+                    {"sim",
+                     {{"air_time_constant_s", chamber.air_time_constant_s},
+                      {"control_noise_c", chamber.control_noise_c},
+                      {"control_noise_tau_s", chamber.control_noise_tau_s},
+                      {"imu_time_constant_s", chamber.imu_time_constant_s},
+                      {"imu_self_heating_c", chamber.imu_self_heating_c}}}};
+  if (!chamber.connection.empty()) chamber_j["connection"] = chamber.connection;
+  json doc = {{"format", "calstand-station/1"},
+              {"name", name},
+              {"seed", seed},
+              {"site", site_j},
+              {"table", table_j},
+              {"chamber", chamber_j},
+              {"imus", imus_j},
+              {"sim", {{"max_step_s", sim_max_step_s}, {"thermal_step_s", sim_thermal_step_s}}}};
+  if (!description.empty()) doc["description"] = description;
+  return doc;
+}
+
+}  // namespace calstand::core

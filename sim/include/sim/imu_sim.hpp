@@ -1,0 +1,105 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "core/imu_sample.hpp"
+#include "core/site.hpp"
+#include "core/table_geometry.hpp"
+#include "sim/imu_truth.hpp"
+#include "sim/noise.hpp"
+
+namespace calstand::sim {
+
+/// True motion of the table at one instant (what the IMU feels, not what the encoders report).
+struct TableKinematics {
+  double outer_deg = 0.0;
+  double outer_rate_dps = 0.0;
+  double outer_accel_dps2 = 0.0;
+  double inner_deg = 0.0;
+  double inner_rate_dps = 0.0;
+  double inner_accel_dps2 = 0.0;
+};
+
+/// The physical inputs at the IMU for a table state, following error-model.md: rate in B is
+/// C_BL (w_table + w_ie) (the real world always turns with the Earth), specific force in B is
+/// C_BL (I - [t x]) f_L (exact rotation for the tilt t), plus the lever-arm acceleration
+/// wt x (wt x r) + dwt/dt x r. Everything that does not change with the table state (gravity,
+/// Earth rate, tilt, axes) is computed once at construction: this runs for every sample.
+class ImuInputModel {
+ public:
+  ImuInputModel(const ImuTruth& truth, const core::TableGeometry& geometry,
+                const core::Site& site);
+  ImuInputs operator()(const TableKinematics& table, double temperature_c) const;
+
+ private:
+  Eigen::Vector3d outer_axis_;        // unit, in the table base frame
+  Eigen::Vector3d inner_axis_;        // unit, at outer = 0
+  Eigen::Matrix3d mount_C_PB_;
+  Eigen::Vector3d force_base_mps2_;   // gravity's specific force in the (tilted) base frame
+  Eigen::Vector3d earth_base_dps_;    // Earth rate in the base frame [deg/s]
+  Eigen::Vector3d lever_arm_m_;
+};
+
+/// One-off form of ImuInputModel (for tests and tools; the simulator keeps a model).
+ImuInputs imu_inputs(const ImuTruth& truth, const core::TableGeometry& geometry,
+                     const core::Site& site, const TableKinematics& table, double temperature_c);
+
+/// One simulated IMU: truth terms, noise processes, output filter, quantization, sequence
+/// counter and device clock. Seeded: the same seed and the same calls give the same samples.
+/// Not thread safe; owned by the simulated world.
+class ImuSim {
+ public:
+  /// Throws std::invalid_argument when the truth's output settings are unusable.
+  ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site, std::uint64_t seed);
+
+  /// Powers the IMU up at `time_s`: a new turn-on bias per channel, the sequence counter and the
+  /// device clock restart, the output filter starts settled. Every power-up draws new values.
+  void power_on(double time_s);
+  void power_off() { powered_ = false; }
+  bool powered() const { return powered_; }
+  int power_cycles() const { return power_cycles_; }
+
+  double sample_period_s() const { return 1.0 / truth_.sample_rate_hz; }
+
+  /// The sample at station time `time_s` (the caller steps time at sample_period_s()).
+  core::ImuSample sample(double time_s, const TableKinematics& table, double temperature_c);
+
+  /// The turn-on bias in force since the last power_on() [deg/s, m/s^2].
+  const Eigen::Vector3d& turn_on_gyro_bias() const { return turn_on_gyro_; }
+  const Eigen::Vector3d& turn_on_accel_bias() const { return turn_on_accel_; }
+
+  const ImuTruth& truth() const { return truth_; }
+  const core::TableGeometry& geometry() const { return geometry_; }
+
+ private:
+  // Noise and output chain of one axis of one sensor.
+  struct Channel {
+    std::optional<WhiteNoise> white;
+    std::optional<BiasInstability> bias_instability;
+    std::optional<RandomWalk> random_walk;
+    std::optional<GaussMarkov> gauss_markov;
+    std::optional<ButterworthLowPass> low_pass;
+    Quantizer quantizer{0.0};
+    double noise();
+  };
+  void build_channels();
+
+  ImuTruth truth_;
+  core::TableGeometry geometry_;
+  core::Site site_;
+  ImuInputModel input_model_;
+  std::uint64_t seed_;
+  std::array<Channel, 6> channels_;  // gyro x y z, accel x y z
+  NormalSource turn_on_draw_;
+  Eigen::Vector3d turn_on_gyro_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d turn_on_accel_ = Eigen::Vector3d::Zero();
+  bool powered_ = false;
+  bool filter_primed_ = false;
+  int power_cycles_ = 0;
+  double power_on_time_s_ = 0.0;
+  std::uint32_t sequence_ = 0;
+};
+
+}  // namespace calstand::sim

@@ -1,0 +1,95 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/chamber_state.hpp"
+#include "core/clock.hpp"
+#include "core/imu_sample.hpp"
+#include "core/station_config.hpp"
+#include "core/table_state.hpp"
+#include "sim/chamber_sim.hpp"
+#include "sim/imu_sim.hpp"
+#include "sim/table_sim.hpp"
+
+namespace calstand::sim {
+
+/// The embedded default simulated station (sim/stations/default.json).
+core::StationConfig default_station();
+
+/// The truth of simulated IMU `index` of a station: drawn from its built-in model or spec file
+/// (seeded by the station seed and the index), read from its truth file, or inline.
+/// Throws core::InputError / core::SchemaError naming the file and field on bad input.
+ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_seed,
+                           std::size_t index);
+
+/// The simulated physical world of one station: table, chamber, the IMUs on the table, and the
+/// virtual clock they share. Time moves only through advance()/advance_to(), as fast as the CPU
+/// allows; the physics steps from one IMU sample instant to the next (at most max_step_s), the
+/// thermal model every thermal_step_s. Not thread safe: one owner drives it.
+class SimWorld {
+ public:
+  /// Receives every IMU sample as it is produced (imu index, sample).
+  using SampleSink = std::function<void(std::size_t, const core::ImuSample&)>;
+
+  /// Builds the world of `config` (every device backend must be "sim") and powers the IMUs on
+  /// at time 0. Throws core::InputError when a device is not simulated or a truth is invalid.
+  explicit SimWorld(const core::StationConfig& config);
+
+  /// Advances the world by dt_s (>= 0) of virtual time.
+  void advance(double dt_s) { advance_to(clock_.now_s() + dt_s); }
+  /// Advances the world to virtual time t_s (no-op when t_s is not later than now).
+  void advance_to(double t_s);
+
+  core::VirtualClock& clock() { return clock_; }
+  double now_s() const { return clock_.now_s(); }
+
+  TableSim& table() { return table_; }
+  ChamberSim& chamber() { return chamber_; }
+  std::size_t imu_count() const { return imus_.size(); }
+  ImuSim& imu(std::size_t i) { return *imus_.at(i).sim; }
+  const std::string& imu_name(std::size_t i) const { return imus_.at(i).name; }
+
+  /// Every sample goes to `sink` from now on instead of the buffers (nullptr: buffer again).
+  void set_sample_sink(SampleSink sink) { sink_ = std::move(sink); }
+  /// Buffered samples of IMU i since the last call, oldest first.
+  std::vector<core::ImuSample> take_samples(std::size_t i);
+
+  /// Device faults for rehearsing the engine's interlocks: the next `count` samples of IMU i
+  /// are generated (the sequence counter advances) but not delivered.
+  void drop_samples(std::size_t i, std::uint32_t count) { imus_.at(i).drop_remaining += count; }
+  /// A stalled IMU delivers nothing until released (its clock and counter keep running).
+  void set_imu_stalled(std::size_t i, bool stalled) { imus_.at(i).stalled = stalled; }
+  /// Powers IMU i off and on again now: a new turn-on bias (bias repeatability).
+  void power_cycle_imu(std::size_t i);
+
+  core::TableState table_state() const { return table_.state(clock_.now_s()); }
+  core::ChamberState chamber_state() const { return chamber_.state(clock_.now_s()); }
+  TableKinematics table_kinematics() const;
+  const core::StationConfig& config() const { return config_; }
+
+ private:
+  struct SimulatedImu {
+    std::string name;
+    std::unique_ptr<ImuSim> sim;
+    double first_sample_s = 0.0;
+    std::uint64_t next_index = 0;  // samples are due at first_sample_s + index * period
+    std::uint32_t drop_remaining = 0;
+    bool stalled = false;
+    std::vector<core::ImuSample> buffer;
+    double next_due_s() const { return first_sample_s + static_cast<double>(next_index) * sim->sample_period_s(); }
+  };
+
+  core::StationConfig config_;
+  core::VirtualClock clock_;
+  TableSim table_;
+  ChamberSim chamber_;
+  std::vector<SimulatedImu> imus_;
+  SampleSink sink_;
+  double thermal_pending_s_ = 0.0;
+};
+
+}  // namespace calstand::sim

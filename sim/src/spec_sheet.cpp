@@ -1,0 +1,176 @@
+#include "sim/spec_sheet.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/json_schema.hpp"
+#include "core/schemas.hpp"
+#include "core/site.hpp"
+#include "core/units.hpp"
+#include "sim/noise.hpp"
+
+namespace calstand::sim {
+namespace {
+
+using nlohmann::json;
+
+// Allan deviation floor of flicker noise relative to its coefficient: sqrt(2 ln2 / pi).
+constexpr double kFlickerFloor = 0.664;
+
+// Reads one figure of the sheet in `target_unit`, or 0 when absent.
+class SheetReader {
+ public:
+  SheetReader(const json& section, std::string file, std::string path)
+      : section_(section), file_(std::move(file)), path_(std::move(path)) {}
+
+  double get(const char* key, std::string_view target_unit) const {
+    if (!section_.contains(key)) return 0.0;
+    return convert_field(section_.at(key), fmt::format("{}.{}", path_, key), target_unit);
+  }
+  bool has(const char* key) const { return section_.contains(key); }
+  const json& at(const char* key) const { return section_.at(key); }
+
+  double convert_field(const json& field, const std::string& where,
+                       std::string_view target_unit) const {
+    try {
+      const core::Quantity q = core::parse_quantity(field.get<std::string>());
+      return core::convert(q.value, q.unit, core::parse_unit(target_unit));
+    } catch (const core::InputError& e) {
+      throw core::InputError(fmt::format("{}: {}", file_, where), e.what());
+    }
+  }
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  const json& section_;
+  std::string file_;
+  std::string path_;
+};
+
+Eigen::Vector3d draw3(NormalSource& n, double sigma) {
+  const double x = n.next(), y = n.next(), z = n.next();
+  return Eigen::Vector3d(x, y, z) * sigma;
+}
+
+Eigen::Matrix3d draw_off_diagonal(NormalSource& n, double sigma) {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (i != j) m(i, j) = n.next() * sigma;
+    }
+  }
+  return m;
+}
+
+Eigen::Matrix3d draw_full(NormalSource& n, double sigma) {
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) m(i, j) = n.next() * sigma;
+  }
+  return m;
+}
+
+// Noise figures common to both sensors; `rate` is "deg/s" or "m/s^2".
+void read_noise(const SheetReader& r, std::string_view rate, std::string_view white_density,
+                const char* rate_walk_key, TriadNoise& noise) {
+  // Angle/velocity random walk and noise density are the same quantity in different units.
+  double white = r.get("white_noise", white_density);
+  if (r.has("random_walk")) white = r.get("random_walk", white_density);
+  noise.white.setConstant(white);
+  noise.bias_instability.setConstant(r.get("in_run_bias_stability", rate) / kFlickerFloor);
+  noise.random_walk.setConstant(r.get(rate_walk_key, fmt::format("{}/sqrt(s)", rate)));
+  if (r.has("bias_variation")) {
+    const json& bv = r.at("bias_variation");
+    noise.gauss_markov_sigma.setConstant(
+        r.convert_field(bv.at("sigma"), r.path() + ".bias_variation.sigma", rate));
+    noise.gauss_markov_tau_s =
+        r.convert_field(bv.at("correlation_time"), r.path() + ".bias_variation.correlation_time",
+                        "s");
+  }
+  noise.turn_on_bias.setConstant(r.get("bias_repeatability", rate));
+  noise.quantization = r.get("quantization", rate);
+}
+
+}  // namespace
+
+ImuTruth truth_from_spec(const json& spec, const std::string& file_name, std::uint64_t seed) {
+  core::validate_or_throw(core::schema("spec-sheet.schema.json"), spec, file_name);
+  ImuTruth t;
+  t.name = spec.at("name").get<std::string>();
+  NormalSource draw(derive_seed(seed, "spec-sheet-draw", 0));
+
+  const SheetReader gyro(spec.at("gyro"), file_name, "gyro");
+  const SheetReader accel(spec.at("accel"), file_name, "accel");
+
+  // Gyro: rate unit deg/s, ratios in ppm.
+  read_noise(gyro, "deg/s", "deg/s/sqrt(Hz)", "rate_random_walk", t.gyro_noise);
+  const double gyro_bias_sigma =
+      gyro.has("bias") ? gyro.get("bias", "deg/s") : gyro.get("bias_repeatability", "deg/s");
+  t.gyro_bias = draw3(draw, gyro_bias_sigma);
+  const double gyro_scale_sigma = gyro.has("scale_factor_error")
+                                      ? gyro.get("scale_factor_error", "ppm")
+                                      : gyro.get("scale_factor_stability", "ppm");
+  t.gyro_scale = draw3(draw, gyro_scale_sigma);
+  t.gyro_misalignment = draw_off_diagonal(draw, gyro.get("nonorthogonality", "rad"));
+  t.gyro_scale_asymmetry = draw3(draw, gyro.get("scale_factor_asymmetry", "ppm"));
+  // g-sensitivity in (deg/s)/g: converting "deg/s/g" to "deg/s/g" checks the dimension.
+  t.gyro_g_sensitivity = draw_full(draw, gyro.get("g_sensitivity", "deg/s/g"));
+  const double gyro_tc = gyro.get("bias_temperature_coefficient_per_degc", "deg/s");
+  if (gyro_tc > 0.0) t.gyro_temp_bias = {draw3(draw, gyro_tc)};
+  t.gyro_temp_scale = draw3(draw, gyro.get("scale_temperature_coefficient_per_degc", "ppm"));
+
+  // Accelerometer: m/s^2, ppm, and ug/g^2 for the vibration (second-order) sensitivity.
+  read_noise(accel, "m/s^2", "m/s^2/sqrt(Hz)", "acceleration_random_walk", t.accel_noise);
+  const double accel_bias_sigma = accel.has("bias") ? accel.get("bias", "m/s^2")
+                                                    : accel.get("bias_repeatability", "m/s^2");
+  t.accel_bias = draw3(draw, accel_bias_sigma);
+  const double accel_scale_sigma = accel.has("scale_factor_error")
+                                       ? accel.get("scale_factor_error", "ppm")
+                                       : accel.get("scale_factor_stability", "ppm");
+  t.accel_scale = draw3(draw, accel_scale_sigma);
+  t.accel_misalignment = draw_off_diagonal(draw, accel.get("nonorthogonality", "rad"));
+  t.accel_scale_asymmetry = draw3(draw, accel.get("scale_factor_asymmetry", "ppm"));
+  // ug/g^2: a ratio per g, i.e. dimension 1/(m/s^2); convert to ug/g^2 itself.
+  t.accel_quadratic = draw3(draw, accel.get("vibration_sensitivity", "ug/g^2"));
+  const double accel_tc = accel.get("bias_temperature_coefficient_per_degc", "m/s^2");
+  if (accel_tc > 0.0) t.accel_temp_bias = {draw3(draw, accel_tc)};
+  t.accel_temp_scale = draw3(draw, accel.get("scale_temperature_coefficient_per_degc", "ppm"));
+
+  // Output: one sample rate; the output filter is the narrower of the two bandwidths.
+  if (spec.contains("output")) {
+    const SheetReader out(spec.at("output"), file_name, "output");
+    if (out.has("sample_rate")) t.sample_rate_hz = out.get("sample_rate", "Hz");
+    if (out.has("latency")) t.latency_s = out.get("latency", "s");
+    t.filter_order = spec.at("output").value("filter_order", t.filter_order);
+  }
+  double bandwidth = 0.0;
+  for (const SheetReader* r : {&gyro, &accel}) {
+    const double b = r->get("bandwidth", "Hz");
+    if (b > 0.0 && (bandwidth == 0.0 || b < bandwidth)) bandwidth = b;
+  }
+  t.bandwidth_hz = bandwidth < t.sample_rate_hz / 2.0 ? bandwidth : 0.0;
+  t.temperature_ref_c = 25.0;
+  return t;
+}
+
+std::optional<json> builtin_spec(std::string_view name) {
+  const auto text = builtin_file(fmt::format("{}.spec.json", name));
+  if (!text) return std::nullopt;
+  return core::parse_json_text(*text, fmt::format("<built-in {}.spec.json>", name));
+}
+
+std::vector<std::string> builtin_spec_names() {
+  std::vector<std::string> names;
+  constexpr std::string_view kSuffix = ".spec.json";
+  for (const auto f : builtin_file_names()) {
+    if (f.size() > kSuffix.size() && f.substr(f.size() - kSuffix.size()) == kSuffix) {
+      names.emplace_back(f.substr(0, f.size() - kSuffix.size()));
+    }
+  }
+  return names;
+}
+
+}  // namespace calstand::sim

@@ -1,0 +1,127 @@
+#include "core/station_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+#include "core/json_schema.hpp"
+
+namespace calstand::core {
+namespace {
+
+using nlohmann::json;
+
+json minimal_station() {
+  return json::parse(R"({
+    "format": "calstand-station/1",
+    "name": "lab-3",
+    "site": {"latitude_deg": 45.0, "height_m": 100.0},
+    "table": {"backend": "sim", "outer_axis": [0, 1, 0], "inner_axis": [0, 0, 1],
+              "outer": {"max_rate_dps": 200, "max_accel_dps2": 100},
+              "inner": {"max_rate_dps": 500, "max_accel_dps2": 300}},
+    "chamber": {"backend": "sim", "min_c": -40, "max_c": 85, "max_ramp_c_per_min": 3},
+    "imus": [{"name": "dut", "backend": "sim", "model": "ln200"}]
+  })");
+}
+
+TEST(StationConfig, ReadsAMinimalStationWithDefaults) {
+  const StationConfig c = StationConfig::from_json(minimal_station(), "lab-3.json");
+  EXPECT_EQ(c.name, "lab-3");
+  EXPECT_DOUBLE_EQ(c.site.latitude_deg, 45.0);
+  EXPECT_FALSE(c.site.gravity_mps2.has_value());
+  EXPECT_DOUBLE_EQ(c.table.outer.max_rate_dps, 200.0);
+  EXPECT_DOUBLE_EQ(c.table.inner.encoder_resolution_deg, 1e-4);  // default
+  EXPECT_DOUBLE_EQ(c.chamber.max_ramp_c_per_min, 3.0);
+  ASSERT_EQ(c.imus.size(), 1u);
+  EXPECT_EQ(c.imus[0].model, "ln200");
+  EXPECT_EQ(c.seed, 1u);
+}
+
+TEST(StationConfig, RoundTripsThroughJson) {
+  json doc = minimal_station();
+  doc["site"]["gravity_mps2"] = 9.80123;
+  doc["imus"][0]["mount_rpy_deg"] = {0, 0, 90};
+  const StationConfig a = StationConfig::from_json(doc, "a.json");
+  const StationConfig b = StationConfig::from_json(a.to_json(), "b.json");
+  EXPECT_EQ(a.to_json(), b.to_json());
+  EXPECT_DOUBLE_EQ(*b.site.gravity_mps2, 9.80123);
+  EXPECT_EQ(b.imus[0].mount_rpy_deg, Eigen::Vector3d(0, 0, 90));
+}
+
+TEST(StationConfig, ListsEverySchemaViolationWithItsPath) {
+  json doc = minimal_station();
+  doc["site"]["latitude_deg"] = 95.0;                  // above the maximum 90
+  doc["table"]["outer"].erase("max_accel_dps2");      // required
+  doc["imus"][0]["backend"] = "telepathy";             // not an allowed backend
+  doc["chamber"]["max_ramp"] = 2;                      // unknown key
+  try {
+    StationConfig::from_json(doc, "bad.json");
+    FAIL() << "expected a SchemaError";
+  } catch (const SchemaError& e) {
+    const std::string text = e.what();
+    EXPECT_GE(e.violations().size(), 4u) << text;
+    EXPECT_NE(text.find("site.latitude_deg"), std::string::npos) << text;
+    EXPECT_NE(text.find("table.outer"), std::string::npos) << text;
+    EXPECT_NE(text.find("max_accel_dps2"), std::string::npos) << text;
+    EXPECT_NE(text.find("imus[0].backend"), std::string::npos) << text;
+    EXPECT_NE(text.find("max_ramp"), std::string::npos) << text;
+    EXPECT_NE(text.find("bad.json"), std::string::npos) << text;
+  }
+}
+
+TEST(StationConfig, RejectsRulesTheSchemaCannotState) {
+  json doc = minimal_station();
+  doc["chamber"]["min_c"] = 90;
+  EXPECT_THROW(
+      {
+        try {
+          StationConfig::from_json(doc, "s.json");
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("chamber.min_c"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+
+  doc = minimal_station();
+  doc["table"]["inner_axis"] = {0, 1, 0};  // parallel to the outer axis
+  EXPECT_THROW(StationConfig::from_json(doc, "s.json"), InputError);
+
+  doc = minimal_station();
+  doc["table"]["outer_axis"] = {0, 0.5, 0};  // not a unit vector
+  EXPECT_THROW(StationConfig::from_json(doc, "s.json"), InputError);
+
+  doc = minimal_station();
+  doc["imus"].push_back(doc["imus"][0]);  // duplicate name
+  EXPECT_THROW(StationConfig::from_json(doc, "s.json"), InputError);
+
+  doc = minimal_station();
+  doc["imus"][0]["truth_file"] = "x.json";  // two truth sources: oneOf fails
+  EXPECT_THROW(StationConfig::from_json(doc, "s.json"), SchemaError);
+}
+
+TEST(StationConfig, ResolvesPathsAgainstTheStationFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "calstand_station_config_test";
+  std::filesystem::create_directories(dir);
+  json doc = minimal_station();
+  doc["imus"][0].erase("model");
+  doc["imus"][0]["truth_file"] = "truths/dut.json";
+  const auto path = dir / "station.json";
+  std::ofstream(path) << doc.dump();
+  const StationConfig c = StationConfig::load(path.string());
+  EXPECT_EQ(c.imus[0].truth_file, (dir / "truths/dut.json").lexically_normal().string());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(StationConfig, GeometryCarriesTheMount) {
+  json doc = minimal_station();
+  doc["imus"][0]["mount_rpy_deg"] = {180, 0, 0};
+  const StationConfig c = StationConfig::from_json(doc, "s.json");
+  const Eigen::Matrix3d C_LB = c.geometry(0).body_to_level(0.0, 0.0);
+  EXPECT_NEAR(C_LB(2, 2), -1.0, 1e-12);  // body z points down
+}
+
+}  // namespace
+}  // namespace calstand::core

@@ -1,0 +1,162 @@
+#include "sim/imu_sim.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "core/rotation.hpp"
+
+namespace calstand::sim {
+namespace {
+
+core::Site test_site() {
+  core::Site s;
+  s.latitude_deg = 30.0;
+  s.gravity_mps2 = 9.79;
+  return s;
+}
+
+ImuTruth quiet_truth() {
+  ImuTruth t;
+  t.sample_rate_hz = 100.0;
+  t.set_parameter("gyro_bias.x", 0.01);
+  t.set_parameter("accel_scale.z", 500.0);
+  return t;
+}
+
+TEST(ImuSim, NoiseFreeOutputIsInputPlusDeterministicErrors) {
+  const ImuTruth truth = quiet_truth();
+  ImuSim imu(truth, {}, test_site(), 7);
+  imu.power_on(0.0);
+  TableKinematics k;
+  k.outer_deg = 10.0;
+  k.inner_rate_dps = 20.0;
+  const auto s = imu.sample(1.0, k, 30.0);
+  const ImuInputs in = imu_inputs(truth, {}, test_site(), k, 30.0);
+  const auto [eg, ea] = deterministic_errors(truth, in);
+  EXPECT_NEAR((s.gyro_dps - (in.rate_dps + eg)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((s.accel_mps2 - (in.force_mps2 + ea)).norm(), 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(s.temperature_c, 30.0);
+}
+
+TEST(ImuSim, SequenceCounterWrapsAtItsModulus) {
+  ImuTruth truth = quiet_truth();
+  truth.sequence_modulus = 4;
+  ImuSim imu(truth, {}, test_site(), 7);
+  imu.power_on(0.0);
+  std::vector<std::uint32_t> seq;
+  for (int k = 0; k < 6; ++k) seq.push_back(imu.sample(k * 0.01, {}, 25.0).sequence);
+  EXPECT_EQ(seq, (std::vector<std::uint32_t>{0, 1, 2, 3, 0, 1}));
+}
+
+TEST(ImuSim, DeviceClockDriftsAndReceiveTimeLags) {
+  ImuTruth truth = quiet_truth();
+  truth.clock_drift_ppm = 50.0;
+  truth.latency_s = 0.004;
+  ImuSim imu(truth, {}, test_site(), 7);
+  imu.power_on(100.0);
+  const auto s = imu.sample(1100.0, {}, 25.0);
+  EXPECT_NEAR(s.device_time_s, 1000.0 * (1.0 + 50e-6), 1e-9);  // device clock starts at power-on
+  EXPECT_DOUBLE_EQ(s.receive_time_s, 1100.004);
+}
+
+TEST(ImuSim, TurnOnBiasIsConstantWithinAPowerUpAndNewAtEach) {
+  ImuTruth truth = quiet_truth();
+  truth.gyro_noise.turn_on_bias = Eigen::Vector3d(1e-3, 2e-3, 3e-3);  // deg/s
+  ImuSim imu(truth, {}, test_site(), 11);
+  const int cycles = 2000;
+  std::vector<double> z;
+  for (int c = 0; c < cycles; ++c) {
+    imu.power_on(0.0);
+    const double a = imu.sample(0.0, {}, 25.0).gyro_dps.z();
+    const double b = imu.sample(0.01, {}, 25.0).gyro_dps.z();
+    ASSERT_DOUBLE_EQ(a, b);  // no other noise: constant within the power-up
+    z.push_back(imu.turn_on_gyro_bias().z());
+  }
+  const double mean = std::accumulate(z.begin(), z.end(), 0.0) / cycles;
+  double var = 0.0;
+  for (double v : z) var += (v - mean) * (v - mean);
+  const double sigma = std::sqrt(var / (cycles - 1));
+  // Sample sigma of 2000 normal draws: relative standard error 1/sqrt(2*2000) = 1.6 %.
+  EXPECT_NEAR(sigma, 3e-3, 3e-3 * 0.06);
+  EXPECT_NEAR(mean, 0.0, 4.0 * 3e-3 / std::sqrt(cycles));
+  EXPECT_EQ(imu.power_cycles(), cycles);
+}
+
+TEST(ImuSim, WhiteNoiseDensityGivesTheDatasheetArw) {
+  ImuTruth truth;
+  truth.sample_rate_hz = 200.0;
+  truth.gyro_noise.white.setConstant(0.3 / 60.0);  // 0.3 deg/sqrt(h) in deg/s/sqrt(Hz)
+  ImuSim imu(truth, {}, test_site(), 3);
+  imu.power_on(0.0);
+  // Averages over 1 s have sigma N / sqrt(1 s) = 0.005 deg/s (the ARW definition).
+  const int seconds = 2000;
+  std::vector<double> means;
+  const Eigen::Vector3d truth_rate = imu_inputs(truth, {}, test_site(), {}, 25).rate_dps;
+  for (int s = 0; s < seconds; ++s) {
+    double sum = 0.0;
+    for (int k = 0; k < 200; ++k) sum += imu.sample(s + k / 200.0, {}, 25.0).gyro_dps.x();
+    means.push_back(sum / 200.0 - truth_rate.x());
+  }
+  double var = 0.0;
+  for (double m : means) var += m * m;
+  const double sigma = std::sqrt(var / seconds);
+  EXPECT_NEAR(sigma, 0.005, 0.005 * 0.05);  // 2000 samples: 1.6 % standard error
+}
+
+TEST(ImuSim, QuantizedOutputIsOnTheLsbGrid) {
+  ImuTruth truth;
+  truth.gyro_noise.white.setConstant(0.01);
+  truth.gyro_noise.quantization = 1e-3;
+  ImuSim imu(truth, {}, test_site(), 5);
+  imu.power_on(0.0);
+  for (int k = 0; k < 100; ++k) {
+    const double v = imu.sample(k * 0.01, {}, 25.0).gyro_dps.y();
+    EXPECT_NEAR(v / 1e-3, std::round(v / 1e-3), 1e-6);
+  }
+}
+
+TEST(ImuSim, OutputFilterLimitsTheBandwidth) {
+  ImuTruth truth;
+  truth.sample_rate_hz = 1000.0;
+  truth.bandwidth_hz = 20.0;
+  truth.accel_noise.white.setConstant(1e-3);
+  ImuSim filtered(truth, {}, test_site(), 9);
+  truth.bandwidth_hz = 0.0;
+  ImuSim raw(truth, {}, test_site(), 9);
+  filtered.power_on(0.0);
+  raw.power_on(0.0);
+  double var_f = 0.0, var_r = 0.0;
+  const int n = 20000;
+  for (int k = 0; k < n; ++k) {
+    var_f += std::pow(filtered.sample(k * 1e-3, {}, 25.0).accel_mps2.x(), 2);
+    var_r += std::pow(raw.sample(k * 1e-3, {}, 25.0).accel_mps2.x(), 2);
+  }
+  // A 2nd-order Butterworth passes ENBW = 1.11 fc of the 500 Hz band: variance ratio ~0.0444.
+  const double ratio = var_f / var_r;
+  EXPECT_NEAR(ratio, 1.1107 * 20.0 / 500.0, 0.01);
+}
+
+TEST(ImuSim, SameSeedSameSamplesOtherSeedOtherSamples) {
+  ImuTruth truth;
+  truth.gyro_noise.white.setConstant(1e-3);
+  truth.accel_noise.gauss_markov_sigma.setConstant(1e-3);
+  truth.gyro_noise.turn_on_bias.setConstant(1e-3);
+  auto run = [&](std::uint64_t seed) {
+    ImuSim imu(truth, {}, test_site(), seed);
+    imu.power_on(0.0);
+    std::vector<double> v;
+    for (int k = 0; k < 50; ++k) {
+      const auto s = imu.sample(k * 0.01, {}, 25.0);
+      v.push_back(s.gyro_dps.x());
+      v.push_back(s.accel_mps2.z());
+    }
+    return v;
+  };
+  EXPECT_EQ(run(42), run(42));
+  EXPECT_NE(run(42), run(43));
+}
+
+}  // namespace
+}  // namespace calstand::sim

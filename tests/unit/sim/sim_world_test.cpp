@@ -1,0 +1,177 @@
+#include "sim/sim_world.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/rotation.hpp"
+
+namespace calstand::sim {
+namespace {
+
+Eigen::Vector3d mean_accel(const std::vector<core::ImuSample>& s) {
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (const auto& x : s) m += x.accel_mps2;
+  return m / static_cast<double>(s.size());
+}
+
+void settle(SimWorld& w) {
+  for (int k = 0; k < 600; ++k) {
+    w.advance(0.1);
+    const auto s = w.table_state();
+    if (s.outer.in_position && s.inner.in_position) return;
+  }
+  FAIL() << "table did not settle";
+}
+
+TEST(SimWorld, DefaultStationDeliversSamplesOnTheirGrid) {
+  SimWorld w(default_station());
+  ASSERT_EQ(w.imu_count(), 1u);
+  EXPECT_EQ(w.imu_name(0), "imu0");
+  const double period = w.imu(0).sample_period_s();
+  w.advance(10.0);
+  const auto samples = w.take_samples(0);
+  EXPECT_EQ(samples.size(), static_cast<std::size_t>(std::lround(10.0 / period)));
+  for (std::size_t k = 1; k < samples.size(); ++k) {
+    ASSERT_NEAR(samples[k].receive_time_s - samples[k - 1].receive_time_s, period, 1e-9);
+    ASSERT_EQ(samples[k].sequence, (samples[k - 1].sequence + 1) % 65536);
+  }
+  EXPECT_DOUBLE_EQ(w.now_s(), 10.0);
+  EXPECT_TRUE(w.take_samples(0).empty());
+}
+
+TEST(SimWorld, GravityFollowsTheTablePosition) {
+  SimWorld w(default_station());
+  const double g = w.config().site.gravity();
+  w.advance(1.0);
+  w.take_samples(0);
+  w.advance(5.0);
+  EXPECT_NEAR(mean_accel(w.take_samples(0)).z(), g, 0.02);  // bias is a few mg at most
+  ASSERT_TRUE(w.table().outer().command_position(180.0));
+  settle(w);
+  w.take_samples(0);
+  w.advance(5.0);
+  const Eigen::Vector3d down = mean_accel(w.take_samples(0));
+  EXPECT_NEAR(down.z(), -g, 0.02);
+  EXPECT_NEAR(std::hypot(down.x(), down.y()), 0.0, 0.02);
+}
+
+TEST(SimWorld, UpDownPairsRecoverTheTrueAccelerometerBias) {
+  // The seed's two-position method on simulated data: (up + down) / 2 is the bias, within the
+  // noise of 20 s captures (LN200: 50 ug/sqrt(Hz) white, 50 ug Gauss-Markov with 60 s).
+  SimWorld w(default_station());
+  const ImuTruth& truth = w.imu(0).truth();
+  const double g = w.config().site.gravity();
+  auto capture_z = [&](double outer) {
+    EXPECT_TRUE(w.table().outer().command_position(outer));
+    settle(w);
+    w.take_samples(0);
+    w.advance(20.0);
+    return mean_accel(w.take_samples(0)).z();
+  };
+  const double up = capture_z(0.0);
+  const double down = capture_z(180.0);
+  const double bias = 0.5 * (up + down);
+  const double true_bias = truth.accel_bias.z() + w.imu(0).turn_on_accel_bias().z();
+  EXPECT_NEAR(bias, true_bias, 150e-6 * core::kStandardGravity);
+  // Scale: (up - down)/2g - 1 with the scale error, plus the quadratic term cancelling.
+  const double scale_ppm = ((up - down) / (2.0 * g) - 1.0) * 1e6;
+  EXPECT_NEAR(scale_ppm, truth.accel_scale.z(), 60.0);
+}
+
+TEST(SimWorld, SameSeedSameWorld) {
+  auto run = [](std::uint64_t seed) {
+    core::StationConfig c = default_station();
+    c.seed = seed;
+    SimWorld w(c);
+    EXPECT_TRUE(w.table().inner().command_rate(30.0));
+    w.advance(3.0);
+    std::vector<double> v;
+    for (const auto& s : w.take_samples(0)) v.push_back(s.gyro_dps.z() + s.accel_mps2.x());
+    return v;
+  };
+  EXPECT_EQ(run(3), run(3));
+  EXPECT_NE(run(3), run(4));
+}
+
+TEST(SimWorld, MixedSampleRatesEachKeepTheirGrid) {
+  core::StationConfig c = default_station();
+  core::ImuConfig second;
+  second.name = "mems";
+  second.model = "adis16488";
+  c.imus.push_back(second);
+  SimWorld w(c);
+  w.advance(2.0);
+  EXPECT_EQ(w.take_samples(0).size(), 800u);   // 400 Hz
+  EXPECT_EQ(w.take_samples(1).size(), 4920u);  // 2460 Hz
+}
+
+TEST(SimWorld, SinkReceivesEverySampleInsteadOfTheBuffer) {
+  SimWorld w(default_station());
+  std::size_t count = 0;
+  w.set_sample_sink([&](std::size_t imu, const core::ImuSample&) {
+    EXPECT_EQ(imu, 0u);
+    ++count;
+  });
+  w.advance(1.0);
+  EXPECT_EQ(count, 400u);
+  EXPECT_TRUE(w.take_samples(0).empty());
+}
+
+TEST(SimWorld, InjectedFaultsShowAsGapsAndStalls) {
+  SimWorld w(default_station());
+  w.advance(0.1);
+  w.take_samples(0);
+  w.drop_samples(0, 5);
+  w.advance(0.1);
+  auto s = w.take_samples(0);
+  ASSERT_EQ(s.size(), 35u);  // 40 due, 5 dropped
+  EXPECT_EQ(s.front().sequence, 40u + 5u);
+
+  w.set_imu_stalled(0, true);
+  w.advance(1.0);
+  EXPECT_TRUE(w.take_samples(0).empty());
+  w.set_imu_stalled(0, false);
+  w.advance(0.1);
+  EXPECT_EQ(w.take_samples(0).size(), 40u);
+}
+
+TEST(SimWorld, PowerCycleDrawsANewTurnOnBias) {
+  SimWorld w(default_station());
+  const Eigen::Vector3d first = w.imu(0).turn_on_gyro_bias();
+  w.advance(1.0);
+  w.power_cycle_imu(0);
+  EXPECT_NE(w.imu(0).turn_on_gyro_bias(), first);
+  w.take_samples(0);
+  w.advance(0.1);
+  const auto s = w.take_samples(0);
+  ASSERT_FALSE(s.empty());
+  EXPECT_EQ(s.front().sequence, 0u);  // counter restarts at power-up
+}
+
+TEST(SimWorld, ImuTemperatureFollowsTheChamberWithSelfHeating) {
+  SimWorld w(default_station());
+  ASSERT_TRUE(w.chamber().set_setpoint(40.0));
+  w.advance(4.0 * 3600.0);  // hours of lab time
+  const auto c = w.chamber_state();
+  EXPECT_NEAR(c.air_temperature_c, 40.0, 0.2);
+  EXPECT_NEAR(w.chamber().imu_temperature_c(), 40.0 + w.config().chamber.imu_self_heating_c, 0.2);
+  const auto s = w.take_samples(0);
+  EXPECT_NEAR(s.back().temperature_c, w.chamber().imu_temperature_c(), 0.05);
+}
+
+TEST(SimWorld, UnknownModelIsAnInputErrorNamingTheField) {
+  core::StationConfig c = default_station();
+  c.imus[0].model = "ln999";
+  try {
+    SimWorld w(c);
+    FAIL() << "expected an InputError";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("imus[0].model"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ln200"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace calstand::sim

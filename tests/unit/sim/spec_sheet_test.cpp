@@ -1,0 +1,95 @@
+#include "sim/spec_sheet.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/json_schema.hpp"
+#include "core/rotation.hpp"
+#include "core/site.hpp"
+
+namespace calstand::sim {
+namespace {
+
+TEST(SpecSheet, ShipsLn200AndAdis16488) {
+  const auto names = builtin_spec_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "ln200"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "adis16488"), names.end());
+  EXPECT_FALSE(builtin_spec("ln100").has_value());
+}
+
+TEST(SpecSheet, Ln200NoiseFiguresConvertToSimulatorUnits) {
+  const ImuTruth t = truth_from_spec(*builtin_spec("ln200"), "ln200", 1);
+  // Gyro: ARW 0.07 deg/sqrt(h) = 0.07/60 deg/s/sqrt(Hz); bias variation 0.35 deg/h, 100 s.
+  EXPECT_NEAR(t.gyro_noise.white.x(), 0.07 / 60.0, 1e-15);
+  EXPECT_NEAR(t.gyro_noise.gauss_markov_sigma.y(), 0.35 / 3600.0, 1e-15);
+  EXPECT_DOUBLE_EQ(t.gyro_noise.gauss_markov_tau_s, 100.0);
+  EXPECT_NEAR(t.gyro_noise.turn_on_bias.z(), 3.0 / 3600.0, 1e-15);
+  // Accel: 50 ug/sqrt(Hz) white; 50 ug bias variation with 60 s.
+  EXPECT_NEAR(t.accel_noise.white.x(), 50e-6 * core::kStandardGravity, 1e-15);
+  EXPECT_NEAR(t.accel_noise.gauss_markov_sigma.x(), 50e-6 * core::kStandardGravity, 1e-15);
+  EXPECT_DOUBLE_EQ(t.accel_noise.gauss_markov_tau_s, 60.0);
+  // Output: 400 Hz; the narrower bandwidth (accel 100 Hz) filters both.
+  EXPECT_DOUBLE_EQ(t.sample_rate_hz, 400.0);
+  EXPECT_DOUBLE_EQ(t.bandwidth_hz, 100.0);
+}
+
+TEST(SpecSheet, Adis16488InRunStabilityBecomesTheFlickerCoefficient) {
+  const ImuTruth t = truth_from_spec(*builtin_spec("adis16488"), "adis16488", 1);
+  // The Allan floor 5.1 deg/h is 0.664 B.
+  EXPECT_NEAR(t.gyro_noise.bias_instability.x() * 0.664 * 3600.0, 5.1, 1e-9);
+  EXPECT_NEAR(t.gyro_noise.white.x() * 60.0, 0.26, 1e-12);
+  EXPECT_EQ(t.gyro_temp_bias.size(), 1u);
+  EXPECT_GT(t.gyro_g_sensitivity.cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(SpecSheet, DrawnErrorsScatterAsTheFiguresSay) {
+  // Over many drawn units, the misalignment spread equals the nonorthogonality figure.
+  const auto spec = *builtin_spec("ln200");
+  const double sigma_rad = 20.0 * core::kPi / (180.0 * 3600.0);
+  double sum_sq = 0.0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 400; ++seed) {
+    const ImuTruth t = truth_from_spec(spec, "ln200", seed);
+    EXPECT_EQ(t.gyro_misalignment.diagonal(), Eigen::Vector3d::Zero());
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        if (i == j) continue;
+        sum_sq += t.gyro_misalignment(i, j) * t.gyro_misalignment(i, j);
+        ++n;
+      }
+    }
+  }
+  // 2400 draws: relative standard error of the RMS 1/sqrt(4800) = 1.4 %.
+  EXPECT_NEAR(std::sqrt(sum_sq / n), sigma_rad, sigma_rad * 0.06);
+}
+
+TEST(SpecSheet, SameSeedSameUnit) {
+  const auto spec = *builtin_spec("adis16488");
+  const ImuTruth a = truth_from_spec(spec, "a", 5);
+  const ImuTruth b = truth_from_spec(spec, "a", 5);
+  const ImuTruth c = truth_from_spec(spec, "a", 6);
+  EXPECT_EQ(a.nonzero_parameters(), b.nonzero_parameters());
+  EXPECT_NE(a.nonzero_parameters(), c.nonzero_parameters());
+}
+
+TEST(SpecSheet, WrongUnitNamesTheField) {
+  auto spec = *builtin_spec("ln200");
+  spec["gyro"]["random_walk"] = "0.07 m/sqrt(h)";
+  try {
+    truth_from_spec(spec, "mine.json", 1);
+    FAIL() << "expected an InputError";
+  } catch (const core::InputError& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("mine.json"), std::string::npos) << text;
+    EXPECT_NE(text.find("gyro.random_walk"), std::string::npos) << text;
+    EXPECT_NE(text.find("dimensions differ"), std::string::npos) << text;
+  }
+  spec = *builtin_spec("ln200");
+  spec["gyro"]["bias_repeatabilty"] = "1 deg/h";  // typo: unknown field
+  EXPECT_THROW(truth_from_spec(spec, "mine.json", 1), core::SchemaError);
+}
+
+}  // namespace
+}  // namespace calstand::sim
