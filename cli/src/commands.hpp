@@ -9,6 +9,7 @@ namespace calstand::cli {
 // (bad input) or 1 (failure), see main.cpp.
 void register_demo(CLI::App& app);
 void register_noise_study(CLI::App& app);
+void register_station(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);
 

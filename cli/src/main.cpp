@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "calstand 0.1.0");
   calstand::cli::register_demo(app);
   calstand::cli::register_noise_study(app);
+  calstand::cli::register_station(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);
   try {
