@@ -59,15 +59,14 @@ sim::NoiseStudyOptions to_options(const NoiseStudyArgs& args) {
   }
   o.runs = static_cast<int>(runs);
   if (!args.seed.empty() && args.seed.front() == '-') {
-    throw core::InputError("--seed", fmt::format("must be a non-negative integer, got '{}'",
-                                                 args.seed));
+    throw core::InputError("--seed",
+                           fmt::format("must be a non-negative integer, got '{}'", args.seed));
   }
   o.seed = parse_integer<std::uint64_t>(args.seed, "--seed");
   o.duration_s = parse_number(args.duration, "--duration");
   if (o.duration_s * o.sample_rate_hz < 1.0 || o.duration_s > 1e6) {
-    throw core::InputError("--duration",
-                           fmt::format("must be in [{}, 1e6] s, got {}", 1.0 / o.sample_rate_hz,
-                                       args.duration));
+    throw core::InputError("--duration", fmt::format("must be in [{}, 1e6] s, got {}",
+                                                     1.0 / o.sample_rate_hz, args.duration));
   }
   // A shorter run cannot show the later walk times; show the ones that fit, or the run's end.
   std::vector<double> walk_times;
@@ -88,7 +87,8 @@ void print_json(const sim::NoiseStudyResult& r) {
   nlohmann::ordered_json out;
   out["white"] = nlohmann::ordered_json::array();
   for (const auto& row : r.white) {
-    out["white"].push_back({{"cutoff_hz", row.cutoff_hz}, {"rms", row.rms}, {"theory", row.theory}});
+    out["white"].push_back(
+        {{"cutoff_hz", row.cutoff_hz}, {"rms", row.rms}, {"theory", row.theory}});
   }
   out["random_walk"] = nlohmann::ordered_json::array();
   for (const auto& row : r.random_walk) {
@@ -123,8 +123,8 @@ void print_tables(const sim::NoiseStudyOptions& o, const sim::NoiseStudyResult& 
 
   std::cout << "\nAngle random walk (raw white noise integrated; spread across runs)\n"
                "theory = sigma * dt * sqrt(t / dt), sigma in deg/s\n";
-  std::cout << fmt::format("{:>12} {:>14} {:>15} {:>8}\n", "t [s]", "sigma [deg]",
-                           "theory [deg]", "ratio");
+  std::cout << fmt::format("{:>12} {:>14} {:>15} {:>8}\n", "t [s]", "sigma [deg]", "theory [deg]",
+                           "ratio");
   for (const auto& row : r.random_walk) {
     std::cout << fmt::format("{:>12.1f} {:>14.4e} {:>15.4e} {:>8.4f}\n", row.t_s, row.sigma,
                              row.theory, ratio(row.sigma, row.theory));

@@ -31,7 +31,8 @@ long long sample_count(const NoiseStudyOptions& o) {
 
 void validate(const NoiseStudyOptions& o) {
   if (o.runs < 2) throw_option("runs", ">= 2 (a spread across runs needs two)", o.runs);
-  if (!finite_positive(o.white_sigma_dph)) throw_option("white_sigma_dph", "> 0", o.white_sigma_dph);
+  if (!finite_positive(o.white_sigma_dph))
+    throw_option("white_sigma_dph", "> 0", o.white_sigma_dph);
   if (!finite_positive(o.sample_rate_hz)) throw_option("sample_rate_hz", "> 0", o.sample_rate_hz);
   if (!finite_positive(o.duration_s)) throw_option("duration_s", "> 0", o.duration_s);
   // 1e12 samples per run is days of computing; anything above is a typo, and the bound keeps
@@ -60,9 +61,9 @@ void validate(const NoiseStudyOptions& o) {
 }
 
 struct GaussMarkovLane {
-  double phi;     // exp(-dt / tau)
-  double gain;    // c: scales the raw white sample into the drive
-  double sigma;   // stationary sigma [deg/h]
+  double phi;    // exp(-dt / tau)
+  double gain;   // c: scales the raw white sample into the drive
+  double sigma;  // stationary sigma [deg/h]
 };
 
 }  // namespace
@@ -82,7 +83,7 @@ NoiseStudyResult run_noise_study(const NoiseStudyOptions& options) {
   // The raw samples are the increments of the Gauss-Markov process: their variance sigma_w^2 is
   // q dt for a driving white noise of PSD q. The exact discretisation needs increments of
   // variance (q tau / 2)(1 - phi^2), hence c^2 = (tau / 2dt)(1 - phi^2) -> 1 for dt << tau.
-  const double q = sigma_w * sigma_w / dt;
+  const double q = sigma_w * sigma_w * fs;  // sigma_w^2 / dt
   std::vector<GaussMarkovLane> lanes;
   for (const double tau : o.gm_taus_s) {
     const double one_minus_phi2 = -std::expm1(-2.0 * dt / tau);

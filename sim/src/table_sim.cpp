@@ -139,7 +139,9 @@ void TableAxisSim::step_profile(double dt_s) {
 }
 
 void TableAxisSim::step_servo(double dt_s) {
-  if (dt_s != servo_dt_s_) {
+  // The world steps on a sample grid whose dt differs only by rounding from step to step;
+  // reuse the gain unless dt really changed (the gain error is then below 1e-9 relative).
+  if (std::abs(dt_s - servo_dt_s_) > 1e-9 * dt_s) {
     servo_dt_s_ = dt_s;
     servo_gain_ = limits_.servo_time_constant_s > 0.0
                       ? -std::expm1(-dt_s / limits_.servo_time_constant_s)

@@ -5,11 +5,13 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/random_engine.hpp"
+
 namespace calstand::sim {
 
 /// The simulator's random engine. Every noise source owns one, seeded from the station seed by
 /// derive_seed(), so adding a source never shifts the numbers another source draws.
-using Rng = std::mt19937_64;
+using Rng = Xoshiro256pp;
 
 /// Independent seed for the stream `name` number `index` under the station seed (splitmix64
 /// mixing of the seed, an FNV-1a hash of the name and the index; the same inputs always give the
@@ -28,7 +30,7 @@ const ZigguratTable& ziggurat_table();
 /// The rare part of a draw (about 1.2 % of them): the tail of layer 0 or the wedge of another
 /// layer. Returns true and sets `x` to the magnitude when the point is accepted, false when the
 /// draw must start again.
-bool ziggurat_edge(std::mt19937_64& rng, const ZigguratTable& table, unsigned layer, double& x);
+bool ziggurat_edge(Rng& rng, const ZigguratTable& table, unsigned layer, double& x);
 }  // namespace detail
 
 /// Standard normal draws from an owned, seeded engine, by the ziggurat method: one 64-bit draw
@@ -135,11 +137,15 @@ class BiasInstability {
  public:
   BiasInstability(double coefficient, double dt_s, std::uint64_t seed, double tau_min_s = 1.0,
                   double tau_max_s = 3000.0);
-  /// Advances one step and returns the new value [unit]. Costs one normal draw per component.
+  /// Advances one step and returns the new value [unit]. Slow components are updated every
+  /// few steps (see the constructor), so a step costs well under one normal draw on average.
   double next() {
     double sum = 0.0;
     for (Component& c : components_) {
-      c.value = c.phi * c.value + c.drive_sigma * normal_.next();
+      if (--c.countdown == 0) {
+        c.value = c.phi * c.value + c.drive_sigma * normal_.next();
+        c.countdown = c.stride;
+      }
       sum += c.value;
     }
     return sum;
@@ -153,15 +159,17 @@ class BiasInstability {
 
  private:
   struct Component {
-    double phi;
-    double drive_sigma;
+    double phi;          // exp(-stride dt / tau)
+    double drive_sigma;  // exact drive over one hold of `stride` steps
     double value;
+    std::uint32_t stride;     // steps between updates
+    std::uint32_t countdown;  // steps until the next update
   };
   double allan_floor_;
   std::vector<Component> components_;
-  std::vector<double> taus_s_;      // correlation time of each component [s]
-  std::vector<double> variances_;   // stationary variance of each component [unit^2]
-  NormalSource normal_;             // one engine for all components keeps next() cache-friendly
+  std::vector<double> taus_s_;     // correlation time of each component [s]
+  std::vector<double> variances_;  // stationary variance of each component [unit^2]
+  NormalSource normal_;            // one engine for all components keeps next() cache-friendly
 };
 
 /// Quantizer of a rate output with LSB `lsb` that carries the rounding residue to the next

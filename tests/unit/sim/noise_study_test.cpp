@@ -28,11 +28,6 @@ NoiseStudyOptions reduced_options() {
   return o;  // sigma 0.03 deg/h, 1 kHz, order 2, cutoffs 100/10/1 Hz, taus 4/40/400/4000 s
 }
 
-const NoiseStudyResult& reduced_result() {
-  static const NoiseStudyResult result = run_noise_study(reduced_options());
-  return result;
-}
-
 /// Relative variance of the time average of x^2 over a run of length D for a stationary
 /// Gauss-Markov x of correlation time tau: x^2 has autocovariance 2 sigma^4 exp(-2|t|/tau), and
 /// the average of an exponentially correlated process over D has variance
@@ -48,10 +43,7 @@ double gm_run_mean_rel_var(double tau, double d) {
   return (2.0 * tau / d) * (1.0 - tau / d * (-std::expm1(-d / tau)));
 }
 
-TEST(NoiseStudy, RawWhiteRowMatchesSigma) {
-  const NoiseStudyOptions o = reduced_options();
-  const NoiseStudyResult& r = reduced_result();
-  ASSERT_EQ(r.white.size(), o.cutoffs_hz.size() + 1);
+void check_raw_white_row(const NoiseStudyOptions& o, const NoiseStudyResult& r) {
   const WhiteNoiseRow& raw = r.white.front();
   EXPECT_EQ(raw.cutoff_hz, 0.5 * o.sample_rate_hz);
   EXPECT_EQ(raw.theory, o.white_sigma_dph);
@@ -60,10 +52,7 @@ TEST(NoiseStudy, RawWhiteRowMatchesSigma) {
   EXPECT_NEAR(raw.rms / raw.theory, 1.0, kZ / std::sqrt(2.0 * n));
 }
 
-TEST(NoiseStudy, BandLimitedRowsFollowTheNoiseBandwidth) {
-  const NoiseStudyOptions o = reduced_options();
-  const NoiseStudyResult& r = reduced_result();
-  ASSERT_EQ(r.white.size(), o.cutoffs_hz.size() + 1);
+void check_band_limited_rows(const NoiseStudyOptions& o, const NoiseStudyResult& r) {
   const double n = o.runs * o.duration_s * o.sample_rate_hz;
   const double half_fs = 0.5 * o.sample_rate_hz;
   for (std::size_t i = 0; i < o.cutoffs_hz.size(); ++i) {
@@ -91,10 +80,7 @@ TEST(NoiseStudy, BandLimitedRowsFollowTheNoiseBandwidth) {
   }
 }
 
-TEST(NoiseStudy, AngleRandomWalkGrowsAsRootT) {
-  const NoiseStudyOptions o = reduced_options();
-  const NoiseStudyResult& r = reduced_result();
-  ASSERT_EQ(r.random_walk.size(), o.walk_times_s.size());
+void check_random_walk_rows(const NoiseStudyOptions& o, const NoiseStudyResult& r) {
   const double dt = 1.0 / o.sample_rate_hz;
   for (std::size_t i = 0; i < o.walk_times_s.size(); ++i) {
     const RandomWalkRow& row = r.random_walk[i];
@@ -103,15 +89,11 @@ TEST(NoiseStudy, AngleRandomWalkGrowsAsRootT) {
     EXPECT_NEAR(row.theory / (o.white_sigma_dph / 3600.0 * dt * std::sqrt(row.t_s / dt)), 1.0,
                 1e-12);
     // Sample sd over R independent runs: relative sd 1/sqrt(2(R-1)) = 3.5 %.
-    EXPECT_NEAR(row.sigma / row.theory, 1.0, kZ / std::sqrt(2.0 * (o.runs - 1)))
-        << "t " << row.t_s;
+    EXPECT_NEAR(row.sigma / row.theory, 1.0, kZ / std::sqrt(2.0 * (o.runs - 1))) << "t " << row.t_s;
   }
 }
 
-TEST(NoiseStudy, GaussMarkovSigmaIsRootQTauOverTwo) {
-  const NoiseStudyOptions o = reduced_options();
-  const NoiseStudyResult& r = reduced_result();
-  ASSERT_EQ(r.gauss_markov.size(), o.gm_taus_s.size());
+void check_gauss_markov_rows(const NoiseStudyOptions& o, const NoiseStudyResult& r) {
   const double q = o.white_sigma_dph * o.white_sigma_dph * o.sample_rate_hz;  // sigma^2 / dt
   for (std::size_t i = 0; i < o.gm_taus_s.size(); ++i) {
     const GaussMarkovRow& row = r.gauss_markov[i];
@@ -125,14 +107,12 @@ TEST(NoiseStudy, GaussMarkovSigmaIsRootQTauOverTwo) {
   }
 }
 
-TEST(NoiseStudy, LongCorrelationLooksLikeRandomWalkWithinARun) {
+void check_within_run_sigma(const NoiseStudyOptions& o, const NoiseStudyResult& r) {
   // Within one run the de-meaned variance is sigma^2 (1 - v), v = var(run mean) / sigma^2.
   // The mean over runs of sqrt(s^2) lies below sqrt(E s^2) by the spread of s^2 (Jensen), up
   // to ~10 % when tau >> D where s^2 has few degrees of freedom, and within 4 sd of sampling
   // error above it; 15 % below covers both. The point of the row: tau = 4 s is white-like
   // (within-run sigma ~ sigma), tau = 4000 s random-walk-like (~13 % of sigma for D = 200 s).
-  const NoiseStudyOptions o = reduced_options();
-  const NoiseStudyResult& r = reduced_result();
   for (const GaussMarkovRow& row : r.gauss_markov) {
     const double expected =
         row.theory * std::sqrt(1.0 - gm_run_mean_rel_var(row.tau_s, o.duration_s));
@@ -142,6 +122,36 @@ TEST(NoiseStudy, LongCorrelationLooksLikeRandomWalkWithinARun) {
   }
   EXPECT_GT(r.gauss_markov.front().within_run_sigma / r.gauss_markov.front().theory, 0.95);
   EXPECT_LT(r.gauss_markov.back().within_run_sigma / r.gauss_markov.back().theory, 0.2);
+}
+
+// One study for all row checks: gtest_discover_tests runs every TEST in its own process, so
+// separate tests would each pay the few seconds the study takes.
+TEST(NoiseStudy, ReducedStudyRowsMatchTheory) {
+  const NoiseStudyOptions o = reduced_options();
+  const NoiseStudyResult r = run_noise_study(o);
+  ASSERT_EQ(r.white.size(), o.cutoffs_hz.size() + 1);
+  ASSERT_EQ(r.random_walk.size(), o.walk_times_s.size());
+  ASSERT_EQ(r.gauss_markov.size(), o.gm_taus_s.size());
+  {
+    SCOPED_TRACE("raw white noise");
+    check_raw_white_row(o, r);
+  }
+  {
+    SCOPED_TRACE("band-limited white noise");
+    check_band_limited_rows(o, r);
+  }
+  {
+    SCOPED_TRACE("angle random walk");
+    check_random_walk_rows(o, r);
+  }
+  {
+    SCOPED_TRACE("Gauss-Markov sigma");
+    check_gauss_markov_rows(o, r);
+  }
+  {
+    SCOPED_TRACE("Gauss-Markov within-run sigma");
+    check_within_run_sigma(o, r);
+  }
 }
 
 NoiseStudyOptions tiny_options(std::uint64_t seed) {
@@ -165,21 +175,21 @@ std::vector<double> flatten(const NoiseStudyResult& r) {
 }
 
 TEST(NoiseStudy, SameSeedSameResultOtherSeedOtherResult) {
-  const std::vector<double> a = flatten(run_noise_study(tiny_options(7)));
-  const std::vector<double> b = flatten(run_noise_study(tiny_options(7)));
-  const std::vector<double> c = flatten(run_noise_study(tiny_options(8)));
-  EXPECT_EQ(a, b);  // bit for bit
-  ASSERT_EQ(a.size(), c.size());
-  // Every simulated value differs (theory columns do not): rms of the raw row, walk sigmas and
-  // Gauss-Markov sigmas.
   const NoiseStudyResult ra = run_noise_study(tiny_options(7));
+  const NoiseStudyResult rb = run_noise_study(tiny_options(7));
   const NoiseStudyResult rc = run_noise_study(tiny_options(8));
-  for (std::size_t i = 0; i < ra.white.size(); ++i) EXPECT_NE(ra.white[i].rms, rc.white[i].rms);
+  EXPECT_EQ(flatten(ra), flatten(rb));  // bit for bit
+  // Every simulated value changes with the seed; the theory columns do not.
+  for (std::size_t i = 0; i < ra.white.size(); ++i) {
+    EXPECT_NE(ra.white[i].rms, rc.white[i].rms);
+    EXPECT_EQ(ra.white[i].theory, rc.white[i].theory);
+  }
   for (std::size_t i = 0; i < ra.random_walk.size(); ++i) {
     EXPECT_NE(ra.random_walk[i].sigma, rc.random_walk[i].sigma);
   }
   for (std::size_t i = 0; i < ra.gauss_markov.size(); ++i) {
     EXPECT_NE(ra.gauss_markov[i].sigma, rc.gauss_markov[i].sigma);
+    EXPECT_NE(ra.gauss_markov[i].within_run_sigma, rc.gauss_markov[i].within_run_sigma);
     EXPECT_EQ(ra.gauss_markov[i].theory, rc.gauss_markov[i].theory);
   }
 }
@@ -208,11 +218,20 @@ TEST(NoiseStudy, BadOptionsThrowNamingTheOption) {
       {[](NoiseStudyOptions& o) { o.duration_s = 0.0; }, "duration_s"},
       {[](NoiseStudyOptions& o) { o.duration_s = 1e-4; }, "duration_s"},  // < one sample
       {[](NoiseStudyOptions& o) { o.filter_order = 3; }, "filter_order"},
-      {[](NoiseStudyOptions& o) { o.cutoffs_hz = {10.0, 500.0}; }, "cutoffs_hz"},
+      {[](NoiseStudyOptions& o) {
+         o.cutoffs_hz = {10.0, 500.0};
+       },
+       "cutoffs_hz"},
       {[](NoiseStudyOptions& o) { o.cutoffs_hz = {0.0}; }, "cutoffs_hz"},
-      {[](NoiseStudyOptions& o) { o.walk_times_s = {5.0, 6.0}; }, "walk_times_s"},
+      {[](NoiseStudyOptions& o) {
+         o.walk_times_s = {5.0, 6.0};
+       },
+       "walk_times_s"},
       {[](NoiseStudyOptions& o) { o.walk_times_s = {0.0}; }, "walk_times_s"},
-      {[](NoiseStudyOptions& o) { o.gm_taus_s = {1.0, 0.0}; }, "gm_taus_s"},
+      {[](NoiseStudyOptions& o) {
+         o.gm_taus_s = {1.0, 0.0};
+       },
+       "gm_taus_s"},
   };
   for (const Case& c : cases) {
     NoiseStudyOptions o = tiny_options(1);

@@ -136,8 +136,8 @@ TEST(DeriveSeed, NeighbouringInputsGiveUnrelatedBits) {
   // Names differing in one character.
   int distinct = 0;
   for (char c = 'a'; c <= 'z'; ++c) {
-    const int d = std::popcount(derive_seed(7, std::string("accel.") + c, 0) ^
-                                derive_seed(7, "accel.x", 0));
+    const int d =
+        std::popcount(derive_seed(7, std::string("accel.") + c, 0) ^ derive_seed(7, "accel.x", 0));
     if (c != 'x') {
       EXPECT_GE(d, 12) << c;  // 5 sd below 32
       ++distinct;
@@ -178,8 +178,8 @@ TEST(NormalSource, MomentsAndDistributionAreStandardNormal) {
   // in the CDF at the matching abscissa. The fraction below z has sd sqrt(p (1-p) / n).
   constexpr int kN = 2'000'000;
   NormalSource normal(derive_seed(11, "normal-test"));
-  const std::vector<double> zs{-4.5, -3.6541528853610088, -3.0, -2.0, -1.0, -0.3,
-                               0.0,  0.3,                 1.0,  2.0,  3.0,  3.9, 4.5};
+  const std::vector<double> zs{
+      -4.5, -3.6541528853610088, -3.0, -2.0, -1.0, -0.3, 0.0, 0.3, 1.0, 2.0, 3.0, 3.9, 4.5};
   std::vector<int> below(zs.size(), 0);
   double s1 = 0.0, s2 = 0.0, s4 = 0.0;
   for (int i = 0; i < kN; ++i) {
@@ -256,7 +256,8 @@ TEST(RandomWalk, VarianceGrowsAsKSquaredT) {
   }
   for (std::size_t c = 0; c < checkpoints.size(); ++c) {
     const double t = checkpoints[c] * kDt;
-    EXPECT_NEAR(variance_about_zero(at[c]) / (kK * kK * t), 1.0, kZ * std::sqrt(2.0 / kRealisations))
+    EXPECT_NEAR(variance_about_zero(at[c]) / (kK * kK * t), 1.0,
+                kZ * std::sqrt(2.0 / kRealisations))
         << "t " << t;
   }
 }
@@ -321,27 +322,37 @@ TEST(GaussMarkov, StationaryVarianceAndAutocorrelation) {
   EXPECT_NEAR(c50 / c0, std::exp(-1.0), kZ * sd50);
 }
 
-TEST(GaussMarkov, VarianceGrowsFromZeroWhenNotStationary) {
+TEST(GaussMarkov, VarianceGrowsFromZeroOrStartsStationary) {
   // Relative sd of a variance about the known zero mean over R realisations: sqrt(2/R) = 2.2 %.
   constexpr double kSigma = 1.5, kTau = 1.0, kDt = 0.01;
   constexpr int kRealisations = 4000;
+  const double tol = kZ * std::sqrt(2.0 / kRealisations);
   const std::vector<int> checkpoints{10, 50, 100, 200};  // 0.1, 0.5, 1 and 2 tau
   std::vector<std::vector<double>> at(checkpoints.size(), std::vector<double>(kRealisations));
+  std::vector<double> stationary_start(kRealisations), stationary_later(kRealisations);
   for (int r = 0; r < kRealisations; ++r) {
-    GaussMarkov gm(kSigma, kTau, kDt, derive_seed(6, "gm", static_cast<std::uint64_t>(r)), false);
+    const auto index = static_cast<std::uint64_t>(r);
+    GaussMarkov gm(kSigma, kTau, kDt, derive_seed(6, "gm", index), false);
     EXPECT_EQ(gm.value(), 0.0);
     std::size_t c = 0;
     for (int k = 1; k <= checkpoints.back(); ++k) {
       gm.next();
       if (k == checkpoints[c]) at[c++][r] = gm.value();
     }
+    GaussMarkov stationary(kSigma, kTau, kDt, derive_seed(6, "gm-stationary", index));
+    stationary_start[r] = stationary.value();
+    for (int k = 0; k < 10; ++k) stationary.next();
+    stationary_later[r] = stationary.value();
   }
   for (std::size_t c = 0; c < checkpoints.size(); ++c) {
     const double t = checkpoints[c] * kDt;
     const double expected = kSigma * kSigma * (1.0 - std::exp(-2.0 * t / kTau));
-    EXPECT_NEAR(variance_about_zero(at[c]) / expected, 1.0, kZ * std::sqrt(2.0 / kRealisations))
-        << "t " << t;
+    EXPECT_NEAR(variance_about_zero(at[c]) / expected, 1.0, tol) << "t " << t;
   }
+  // Started stationary, the variance is sigma^2 from the first value on (a zero start would
+  // give 0 and 0.18 sigma^2 here).
+  EXPECT_NEAR(variance_about_zero(stationary_start) / (kSigma * kSigma), 1.0, tol);
+  EXPECT_NEAR(variance_about_zero(stationary_later) / (kSigma * kSigma), 1.0, tol);
 }
 
 TEST(GaussMarkovAllanVariance, ClosedFormLimitsAndPeak) {
@@ -349,8 +360,7 @@ TEST(GaussMarkovAllanVariance, ClosedFormLimitsAndPeak) {
   const double var = kSigma * kSigma;
   // T << tau: 2 sigma^2 T / (3 tau) to leading order (next term -3x/4 relative).
   for (const double x : {1e-6, 1e-4, 3e-3}) {
-    EXPECT_NEAR(gauss_markov_allan_variance(kSigma, kTau, x * kTau) / (2.0 * var * x / 3.0),
-                1.0, x)
+    EXPECT_NEAR(gauss_markov_allan_variance(kSigma, kTau, x * kTau) / (2.0 * var * x / 3.0), 1.0, x)
         << x;
   }
   // Against the bracket's Taylor series summed to convergence (independent of the closed form
@@ -366,8 +376,7 @@ TEST(GaussMarkovAllanVariance, ClosedFormLimitsAndPeak) {
     EXPECT_NEAR(gauss_markov_allan_variance(kSigma, kTau, x * kTau) / expected, 1.0, 1e-9) << x;
   }
   // T >> tau: 2 sigma^2 tau / T (1 - 3 tau / (2T)).
-  EXPECT_NEAR(gauss_markov_allan_variance(kSigma, kTau, 1e4 * kTau) / (2.0 * var / 1e4), 1.0,
-              2e-4);
+  EXPECT_NEAR(gauss_markov_allan_variance(kSigma, kTau, 1e4 * kTau) / (2.0 * var / 1e4), 1.0, 2e-4);
   // Peak near T = 1.89 tau at 0.3811 sigma^2 (the known maximum of the bracket).
   double best_t = 0.0, best = 0.0;
   for (double t = 0.5 * kTau; t < 5.0 * kTau; t += 0.001 * kTau) {
@@ -412,8 +421,8 @@ TEST(BiasInstability, FloorIsIeee952Coefficient) {
 TEST(BiasInstability, ModelIsFlatAcrossTheBand) {
   // Deterministic: the documented +-5 % model ripple over [2 tau_min, tau_max] for a short, the
   // default and a wide band; outside the band the flicker model must end (GM bank roll-off).
-  for (const auto& [tmin, tmax] : {std::pair{0.1, 20.0}, std::pair{1.0, 3000.0},
-                                   std::pair{0.01, 1e4}, std::pair{1.0, 2.0}}) {
+  for (const auto& [tmin, tmax] :
+       {std::pair{0.1, 20.0}, std::pair{1.0, 3000.0}, std::pair{0.01, 1e4}, std::pair{1.0, 2.0}}) {
     BiasInstability bi(1.0, 0.001, 1, tmin, tmax);
     for (int j = 0; j <= 100; ++j) {
       const double t = 2.0 * tmin * std::pow(tmax / (2.0 * tmin), j / 100.0);
@@ -560,8 +569,7 @@ TEST(ButterworthLowPass, NoiseEquivalentBandwidthFormula) {
     EXPECT_NEAR(lp.noise_equivalent_bandwidth_hz() / integral, 1.0, 1e-6) << "order " << order;
     // At fc/fs = 0.003 the bilinear warping is negligible (~(pi fc/fs)^2 = 1e-4), so the digital
     // power gain equals ENBW / (fs/2).
-    EXPECT_NEAR(lp.white_noise_power_gain() * 500.0 / lp.noise_equivalent_bandwidth_hz(), 1.0,
-                5e-4)
+    EXPECT_NEAR(lp.white_noise_power_gain() * 500.0 / lp.noise_equivalent_bandwidth_hz(), 1.0, 5e-4)
         << "order " << order;
   }
 }
