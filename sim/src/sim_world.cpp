@@ -12,18 +12,6 @@
 namespace calstand::sim {
 namespace {
 
-AxisLimits axis_limits(const core::AxisConfig& a) {
-  AxisLimits l;
-  l.max_rate_dps = a.max_rate_dps;
-  l.max_accel_dps2 = a.max_accel_dps2;
-  l.encoder_resolution_deg = a.encoder_resolution_deg;
-  l.position_tolerance_deg = a.position_tolerance_deg;
-  l.rate_tolerance_dps = a.rate_tolerance_dps;
-  l.settle_time_s = a.settle_time_s;
-  l.servo_time_constant_s = a.servo_time_constant_s;
-  return l;
-}
-
 ChamberParams chamber_params(const core::ChamberConfig& c) {
   ChamberParams p;
   p.min_c = c.min_c;
@@ -82,7 +70,7 @@ ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_see
 
 SimWorld::SimWorld(const core::StationConfig& config)
     : config_(config),
-      table_(axis_limits(config.table.outer), axis_limits(config.table.inner)),
+      table_(config.table.outer, config.table.inner),
       chamber_(chamber_params(config.chamber), derive_seed(config.seed, "chamber")) {
   require_sim(config.table.backend, "table.backend");
   require_sim(config.chamber.backend, "chamber.backend");

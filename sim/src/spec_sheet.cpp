@@ -94,6 +94,35 @@ void read_noise(const SheetReader& r, std::string_view rate, std::string_view wh
   noise.quantization = r.get("quantization", rate);
 }
 
+// Where one sensor's drawn errors go in ImuTruth.
+struct SensorTerms {
+  Eigen::Vector3d& bias;
+  Eigen::Vector3d& scale;
+  Eigen::Matrix3d& misalignment;
+  Eigen::Vector3d& scale_asymmetry;
+  std::vector<Eigen::Vector3d>& temp_bias;
+  Eigen::Vector3d& temp_scale;
+  TriadNoise& noise;
+};
+
+// The figures gyro and accelerometer sheets share; `rate` is the sensor's output unit
+// ("deg/s" or "m/s^2"), ratios are read in ppm.
+void draw_sensor(const SheetReader& r, std::string_view rate, const char* rate_walk_key,
+                 NormalSource& draw, SensorTerms out) {
+  read_noise(r, rate, fmt::format("{}/sqrt(Hz)", rate), rate_walk_key, out.noise);
+  // Without an initial-bias figure, the turn-on spread is the best guess of the fixed bias.
+  const double bias_sigma = r.has("bias") ? r.get("bias", rate) : r.get("bias_repeatability", rate);
+  out.bias = draw3(draw, bias_sigma);
+  const double scale_sigma = r.has("scale_factor_error") ? r.get("scale_factor_error", "ppm")
+                                                         : r.get("scale_factor_stability", "ppm");
+  out.scale = draw3(draw, scale_sigma);
+  out.misalignment = draw_off_diagonal(draw, r.get("nonorthogonality", "rad"));
+  out.scale_asymmetry = draw3(draw, r.get("scale_factor_asymmetry", "ppm"));
+  const double temp_coefficient = r.get("bias_temperature_coefficient_per_degc", rate);
+  if (temp_coefficient > 0.0) out.temp_bias = {draw3(draw, temp_coefficient)};
+  out.temp_scale = draw3(draw, r.get("scale_temperature_coefficient_per_degc", "ppm"));
+}
+
 }  // namespace
 
 ImuTruth truth_from_spec(const json& spec, const std::string& file_name, std::uint64_t seed) {
@@ -105,39 +134,17 @@ ImuTruth truth_from_spec(const json& spec, const std::string& file_name, std::ui
   const SheetReader gyro(spec.at("gyro"), file_name, "gyro");
   const SheetReader accel(spec.at("accel"), file_name, "accel");
 
-  // Gyro: rate unit deg/s, ratios in ppm.
-  read_noise(gyro, "deg/s", "deg/s/sqrt(Hz)", "rate_random_walk", t.gyro_noise);
-  const double gyro_bias_sigma =
-      gyro.has("bias") ? gyro.get("bias", "deg/s") : gyro.get("bias_repeatability", "deg/s");
-  t.gyro_bias = draw3(draw, gyro_bias_sigma);
-  const double gyro_scale_sigma = gyro.has("scale_factor_error")
-                                      ? gyro.get("scale_factor_error", "ppm")
-                                      : gyro.get("scale_factor_stability", "ppm");
-  t.gyro_scale = draw3(draw, gyro_scale_sigma);
-  t.gyro_misalignment = draw_off_diagonal(draw, gyro.get("nonorthogonality", "rad"));
-  t.gyro_scale_asymmetry = draw3(draw, gyro.get("scale_factor_asymmetry", "ppm"));
+  draw_sensor(gyro, "deg/s", "rate_random_walk", draw,
+              {t.gyro_bias, t.gyro_scale, t.gyro_misalignment, t.gyro_scale_asymmetry,
+               t.gyro_temp_bias, t.gyro_temp_scale, t.gyro_noise});
   // g-sensitivity in (deg/s)/g: converting "deg/s/g" to "deg/s/g" checks the dimension.
   t.gyro_g_sensitivity = draw_full(draw, gyro.get("g_sensitivity", "deg/s/g"));
-  const double gyro_tc = gyro.get("bias_temperature_coefficient_per_degc", "deg/s");
-  if (gyro_tc > 0.0) t.gyro_temp_bias = {draw3(draw, gyro_tc)};
-  t.gyro_temp_scale = draw3(draw, gyro.get("scale_temperature_coefficient_per_degc", "ppm"));
 
-  // Accelerometer: m/s^2, ppm, and ug/g^2 for the vibration (second-order) sensitivity.
-  read_noise(accel, "m/s^2", "m/s^2/sqrt(Hz)", "acceleration_random_walk", t.accel_noise);
-  const double accel_bias_sigma = accel.has("bias") ? accel.get("bias", "m/s^2")
-                                                    : accel.get("bias_repeatability", "m/s^2");
-  t.accel_bias = draw3(draw, accel_bias_sigma);
-  const double accel_scale_sigma = accel.has("scale_factor_error")
-                                       ? accel.get("scale_factor_error", "ppm")
-                                       : accel.get("scale_factor_stability", "ppm");
-  t.accel_scale = draw3(draw, accel_scale_sigma);
-  t.accel_misalignment = draw_off_diagonal(draw, accel.get("nonorthogonality", "rad"));
-  t.accel_scale_asymmetry = draw3(draw, accel.get("scale_factor_asymmetry", "ppm"));
-  // ug/g^2: a ratio per g, i.e. dimension 1/(m/s^2); convert to ug/g^2 itself.
+  draw_sensor(accel, "m/s^2", "acceleration_random_walk", draw,
+              {t.accel_bias, t.accel_scale, t.accel_misalignment, t.accel_scale_asymmetry,
+               t.accel_temp_bias, t.accel_temp_scale, t.accel_noise});
+  // Vibration (second-order) sensitivity, ug/g^2 as the contract's accel_quadratic.
   t.accel_quadratic = draw3(draw, accel.get("vibration_sensitivity", "ug/g^2"));
-  const double accel_tc = accel.get("bias_temperature_coefficient_per_degc", "m/s^2");
-  if (accel_tc > 0.0) t.accel_temp_bias = {draw3(draw, accel_tc)};
-  t.accel_temp_scale = draw3(draw, accel.get("scale_temperature_coefficient_per_degc", "ppm"));
 
   // Output: one sample rate; the output filter is the narrower of the two bandwidths.
   if (spec.contains("output")) {

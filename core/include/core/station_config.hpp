@@ -13,13 +13,13 @@ namespace calstand::core {
 
 /// Limits and servo figures of one table axis (schemas/station.schema.json, `$defs/axis`).
 struct AxisConfig {
-  double max_rate_dps = 300.0;
-  double max_accel_dps2 = 200.0;
-  double encoder_resolution_deg = 1e-4;
-  double position_tolerance_deg = 1e-3;
-  double rate_tolerance_dps = 1e-3;
-  double settle_time_s = 0.5;
-  double servo_time_constant_s = 0.05;  ///< simulator only
+  double max_rate_dps = 300.0;           ///< |rate| never exceeds this [deg/s]
+  double max_accel_dps2 = 200.0;         ///< |acceleration| never exceeds this [deg/s^2]
+  double encoder_resolution_deg = 1e-4;  ///< reported angles are multiples of this [deg]
+  double position_tolerance_deg = 1e-3;  ///< in position when |error| stays below this [deg]
+  double rate_tolerance_dps = 1e-3;      ///< rate settled when |rate error| below this [deg/s]
+  double settle_time_s = 0.5;            ///< the error must stay in tolerance this long [s]
+  double servo_time_constant_s = 0.05;   ///< simulator only: servo lag behind the profile [s]
 };
 
 struct TableConfig {

@@ -2,21 +2,15 @@
 
 #include <string>
 
+#include "core/station_config.hpp"
 #include "core/table_state.hpp"
 #include "sim/status.hpp"
 
 namespace calstand::sim {
 
-/// Limits and servo behaviour of one simulated table axis.
-struct AxisLimits {
-  double max_rate_dps = 300.0;             ///< |rate| never exceeds this [deg/s]
-  double max_accel_dps2 = 200.0;           ///< |acceleration| never exceeds this [deg/s^2]
-  double encoder_resolution_deg = 1e-4;    ///< reported angles are multiples of this [deg]
-  double position_tolerance_deg = 1e-3;    ///< in_position when |error| stays below this [deg]
-  double rate_tolerance_dps = 1e-3;        ///< rate settled when |rate error| below this [deg/s]
-  double settle_time_s = 0.5;              ///< error must stay in tolerance this long [s]
-  double servo_time_constant_s = 0.05;     ///< following lag of the servo behind the profile [s]
-};
+/// Limits and servo behaviour of one simulated table axis: the station file's axis figures
+/// (core::AxisConfig), used as they are.
+using AxisLimits = core::AxisConfig;
 
 /// One axis of the simulated table: a rate- and acceleration-limited motion profile (trapezoidal
 /// to a position, ramped to a rate) followed by the servo with a first-order lag, so the motion
