@@ -20,7 +20,8 @@ core::StationConfig station_with(const char* model, double rate_hz) {
   core::StationConfig c = default_station();
   ImuTruth truth = truth_from_spec(*builtin_spec(model), model, 1);
   truth.sample_rate_hz = rate_hz;
-  if (truth.bandwidth_hz >= rate_hz / 2.0) truth.bandwidth_hz = 0.0;
+  if (truth.gyro_bandwidth_hz >= rate_hz / 2.0) truth.gyro_bandwidth_hz = 0.0;
+  if (truth.accel_bandwidth_hz >= rate_hz / 2.0) truth.accel_bandwidth_hz = 0.0;
   truth.accel_lever_arm = {0.02, -0.01, 0.03};  // exercise the lever-arm kinematics too
   c.imus[0].model.clear();
   c.imus[0].truth = imu_truth_to_json(truth);
@@ -39,8 +40,8 @@ void run_world(benchmark::State& state, const char* model) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(samples));
   // Simulated seconds per wall second for a 1 kHz IMU: samples/s divided by 1000.
-  state.counters["realtime_factor"] = benchmark::Counter(
-      static_cast<double>(samples) / 1000.0, benchmark::Counter::kIsRate);
+  state.counters["realtime_factor"] =
+      benchmark::Counter(static_cast<double>(samples) / 1000.0, benchmark::Counter::kIsRate);
 }
 
 void BM_WorldLn200At1kHz(benchmark::State& state) { run_world(state, "ln200"); }
@@ -52,7 +53,7 @@ BENCHMARK(BM_WorldAdis16488At1kHz)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 void BM_ImuSampleLn200(benchmark::State& state) {
   ImuTruth truth = truth_from_spec(*builtin_spec("ln200"), "ln200", 1);
   truth.sample_rate_hz = 1000.0;
-  ImuSim imu(truth, {}, default_station().site, 1);
+  ImuSim imu(truth, {}, default_station().site, Eigen::Vector2d::Zero(), 1);
   imu.power_on(0.0);
   TableKinematics k;
   k.inner_rate_dps = 90.0;

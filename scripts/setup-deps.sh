@@ -8,6 +8,7 @@ packages=(
   build-essential cmake pkg-config ninja-build
   libeigen3-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
 )
 
 missing=()

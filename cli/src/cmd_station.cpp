@@ -33,12 +33,14 @@ void run(const StationOptions& opt) {
                                           : core::StationConfig::load(opt.station_file);
   const Eigen::Vector3d earth_dph =
       station.site.earth_rate_level_radps() * core::kRadToDeg * 3600.0;
+  // Build each simulated IMU as the simulated world would, so that a truth the simulator
+  // cannot run (not only one the schema rejects) fails here, before the station is called valid.
   nlohmann::json imus = nlohmann::json::array();
   for (std::size_t i = 0; i < station.imus.size(); ++i) {
     const auto& imu = station.imus[i];
     nlohmann::json entry = {{"name", imu.name}, {"backend", imu.backend}};
     if (imu.backend == "sim") {
-      entry["truth"] = sim::imu_truth_to_json(sim::resolve_imu_truth(imu, station.seed, i));
+      entry["truth"] = sim::imu_truth_to_json(sim::make_imu_sim(station, i)->truth());
     }
     imus.push_back(std::move(entry));
   }
@@ -58,14 +60,20 @@ void run(const StationOptions& opt) {
   fmt::print("          Earth rate north {:.4f} deg/h, up {:.4f} deg/h\n", earth_dph.y(),
              earth_dph.z());
   const auto& t = station.table;
-  fmt::print("table     {} backend; outer axis [{:g} {:g} {:g}] max {:g} deg/s, {:g} deg/s^2; "
-             "inner axis [{:g} {:g} {:g}] max {:g} deg/s, {:g} deg/s^2\n",
-             t.backend, t.outer_axis.x(), t.outer_axis.y(), t.outer_axis.z(),
-             t.outer.max_rate_dps, t.outer.max_accel_dps2, t.inner_axis.x(), t.inner_axis.y(),
-             t.inner_axis.z(), t.inner.max_rate_dps, t.inner.max_accel_dps2);
+  fmt::print(
+      "table     {} backend; outer axis [{:g} {:g} {:g}] max {:g} deg/s, {:g} deg/s^2; "
+      "inner axis [{:g} {:g} {:g}] max {:g} deg/s, {:g} deg/s^2\n",
+      t.backend, t.outer_axis.x(), t.outer_axis.y(), t.outer_axis.z(), t.outer.max_rate_dps,
+      t.outer.max_accel_dps2, t.inner_axis.x(), t.inner_axis.y(), t.inner_axis.z(),
+      t.inner.max_rate_dps, t.inner.max_accel_dps2);
+  if (!t.tilt_rad.isZero()) {
+    fmt::print("          base tilt east {:g} rad, north {:g} rad\n", t.tilt_rad.x(),
+               t.tilt_rad.y());
+  }
   const auto& c = station.chamber;
-  fmt::print("chamber   {} backend; {:g} to {:g} degC, ramp up to {:g} degC/min, ambient {:g} degC\n",
-             c.backend, c.min_c, c.max_c, c.max_ramp_c_per_min, c.ambient_c);
+  fmt::print(
+      "chamber   {} backend; {:g} to {:g} degC, ramp up to {:g} degC/min, ambient {:g} degC\n",
+      c.backend, c.min_c, c.max_c, c.max_ramp_c_per_min, c.ambient_c);
   for (const auto& entry : imus) {
     fmt::print("imu       {} ({} backend)", entry["name"].get<std::string>(),
                entry["backend"].get<std::string>());

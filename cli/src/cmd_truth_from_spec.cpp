@@ -1,11 +1,13 @@
 // `calstand truth-from-spec`: draws one simulated IMU from a datasheet-style spec sheet and
 // writes its truth file (every error parameter and noise figure the simulator will use).
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <system_error>
 
 #include "commands.hpp"
 #include "core/error.hpp"
@@ -43,15 +45,28 @@ void run(const TruthFromSpecOptions& opt) {
     fmt::print("{}", text);
     return;
   }
-  // Write beside the target and rename, so a failed write never leaves half a file.
-  const std::string tmp = opt.out + ".tmp";
+  // Write beside the target and rename, so a failed write never leaves half a file. The name
+  // is unique to this process, so two runs writing the same target do not share a temporary,
+  // and the temporary is removed whatever fails.
+  const std::string tmp = fmt::format("{}.tmp.{}", opt.out, static_cast<long>(::getpid()));
+  struct RemoveUnlessRenamed {
+    const std::string& path;
+    bool renamed = false;
+    ~RemoveUnlessRenamed() {
+      std::error_code ignored;
+      if (!renamed) std::filesystem::remove(path, ignored);
+    }
+  } guard{tmp};
   {
     std::ofstream f(tmp);
     if (!f || !(f << text) || !f.flush()) {
       throw core::InputError(opt.out, "cannot write the truth file");
     }
   }
-  std::filesystem::rename(tmp, opt.out);
+  std::error_code ec;
+  std::filesystem::rename(tmp, opt.out, ec);
+  if (ec) throw core::InputError(opt.out, "cannot write the truth file: " + ec.message());
+  guard.renamed = true;
 }
 
 }  // namespace

@@ -2,10 +2,13 @@
 // ug/sqrt(Hz), deg/h/sqrt(h), mGal, ppm, ...) so a spec sheet can be checked against results.
 #include <fmt/format.h>
 
+#include <array>
+#include <charconv>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <system_error>
 
 #include "commands.hpp"
 #include "core/units.hpp"
@@ -20,8 +23,17 @@ struct UnitsOptions {
 };
 
 // Scale factors such as pi/180/60 leave last-bit noise (0.0025000000000000005); 15 significant
-// digits drop it while keeping more precision than any datasheet figure carries.
-double without_rounding_noise(double v) { return std::stod(fmt::format("{:.15g}", v)); }
+// digits drop it while keeping more precision than any datasheet figure carries. to_chars and
+// from_chars take subnormals such as 1e-310 (std::stod throws on them) and ignore the locale.
+double without_rounding_noise(double v) {
+  std::array<char, 64> text{};
+  const auto written =
+      std::to_chars(text.data(), text.data() + text.size(), v, std::chars_format::general, 15);
+  if (written.ec != std::errc()) return v;
+  double rounded = v;
+  const auto read = std::from_chars(text.data(), written.ptr, rounded);
+  return read.ec == std::errc() ? rounded : v;
+}
 
 void run_units(const UnitsOptions& options, bool has_target) {
   const core::Quantity q = core::parse_quantity(options.quantity);

@@ -8,7 +8,11 @@ namespace calstand::cli {
 // callback returns through CLI11; errors are reported as one line on stderr with exit code 2
 // (bad input) or 1 (failure), see main.cpp.
 void register_demo(CLI::App& app);
+void register_import_export(CLI::App& app);  // import and export
 void register_noise_study(CLI::App& app);
+void register_plan(CLI::App& app);
+void register_run(CLI::App& app);
+void register_runs(CLI::App& app);  // runs and show
 void register_station(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);

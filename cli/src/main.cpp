@@ -11,12 +11,18 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "calstand 0.1.0");
   calstand::cli::register_demo(app);
+  calstand::cli::register_import_export(app);
   calstand::cli::register_noise_study(app);
+  calstand::cli::register_plan(app);
+  calstand::cli::register_run(app);
+  calstand::cli::register_runs(app);
   calstand::cli::register_station(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a command that already reported its outcome
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const calstand::core::InputError& e) {

@@ -206,6 +206,16 @@ struct PatternRule {
   const Node* schema = nullptr;  // unused for "pattern"
 };
 
+// std::regex_search recurses once per character for patterns such as "^[a-z]+$" and overflows
+// the stack on strings of some tens of thousands of characters; nothing a schema describes is
+// that long, so longer strings are reported instead of searched.
+constexpr std::size_t kMaxPatternChecked = 4096;
+
+std::string too_long_for_pattern(std::size_t length, const char* what) {
+  return std::string(what) + " of " + std::to_string(length) +
+         " characters is too long to check against the pattern";
+}
+
 struct Node {
   std::string pointer;      // JSON pointer of this subschema within the schema document
   std::string label;        // title, or $defs name: names a oneOf/anyOf branch in messages
@@ -622,6 +632,11 @@ class Validator {
         known = true;
         check(*it->second, value, child, out, depth + 1);
       }
+      if (!n.pattern_properties.empty() && utf8_length(key) > kMaxPatternChecked) {
+        // One finding for the key: not also "unknown property" or a propertyNames message.
+        out.push_back({child, too_long_for_pattern(utf8_length(key), "property name")});
+        continue;
+      }
       for (const auto& rule : n.pattern_properties) {
         if (std::regex_search(key, rule.regex)) {
           known = true;
@@ -725,7 +740,9 @@ class Validator {
       out.push_back(
           {path, shown + " is longer than the maximum length of " + chars(*n.max_length)});
     }
-    if (n.pattern && !std::regex_search(s, n.pattern->regex)) {
+    if (n.pattern && length > kMaxPatternChecked) {
+      out.push_back({path, too_long_for_pattern(length, "string")});
+    } else if (n.pattern && !std::regex_search(s, n.pattern->regex)) {
       out.push_back({path, shown + " does not match the pattern \"" + n.pattern->source + "\""});
     }
   }

@@ -51,22 +51,24 @@ std::string resolve(const std::string& base_dir, const std::string& path) {
 
 // Rules the schema cannot state: checked after it, each naming its field.
 void check_semantics(const StationConfig& c, const std::string& file) {
+  // Axes are usually typed with a few decimals ([0.7071, 0, 0.7071]); 1e-3 accepts those and
+  // still catches a vector that is not meant as a direction. from_json normalises them.
   auto unit = [&](const Eigen::Vector3d& v, const char* field) {
-    if (std::abs(v.norm() - 1.0) > 1e-6) {
+    if (!(std::abs(v.norm() - 1.0) <= 1e-3)) {
       throw InputError(fmt::format("{}: {}", file, field),
                        fmt::format("must be a unit vector (norm is {:.6g})", v.norm()));
     }
   };
   unit(c.table.outer_axis, "table.outer_axis");
   unit(c.table.inner_axis, "table.inner_axis");
-  if (c.table.outer_axis.cross(c.table.inner_axis).norm() < 1e-3) {
+  if (c.table.outer_axis.normalized().cross(c.table.inner_axis.normalized()).norm() < 1e-3) {
     throw InputError(fmt::format("{}: table.inner_axis", file),
                      "must not be parallel to table.outer_axis");
   }
   if (c.chamber.min_c >= c.chamber.max_c) {
-    throw InputError(fmt::format("{}: chamber.min_c", file),
-                     fmt::format("{} must be below chamber.max_c {}", c.chamber.min_c,
-                                 c.chamber.max_c));
+    throw InputError(
+        fmt::format("{}: chamber.min_c", file),
+        fmt::format("{} must be below chamber.max_c {}", c.chamber.min_c, c.chamber.max_c));
   }
   if (c.chamber.ambient_c < c.chamber.min_c || c.chamber.ambient_c > c.chamber.max_c) {
     throw InputError(fmt::format("{}: chamber.ambient_c", file),
@@ -88,7 +90,8 @@ TableGeometry StationConfig::geometry(std::size_t imu_index) const {
   TableGeometry g;
   g.outer_axis = table.outer_axis.normalized();
   g.inner_axis = table.inner_axis.normalized();
-  if (imu_index < imus.size()) g.mount_C_PB = from_roll_pitch_yaw_deg(imus[imu_index].mount_rpy_deg);
+  if (imu_index < imus.size())
+    g.mount_C_PB = from_roll_pitch_yaw_deg(imus[imu_index].mount_rpy_deg);
   return g;
 }
 
@@ -113,6 +116,10 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
   c.table.outer = axis_from_json(table.at("outer"));
   c.table.inner = axis_from_json(table.at("inner"));
   c.table.connection = table.value("connection", json::object());
+  if (table.contains("tilt_rad")) {
+    c.table.tilt_rad = {table.at("tilt_rad").value("east", 0.0),
+                        table.at("tilt_rad").value("north", 0.0)};
+  }
 
   const json& ch = doc.at("chamber");
   c.chamber.backend = ch.at("backend").get<std::string>();
@@ -147,6 +154,8 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.sim_thermal_step_s = doc.at("sim").value("thermal_step_s", c.sim_thermal_step_s);
   }
   check_semantics(c, file_name);
+  c.table.outer_axis.normalize();
+  c.table.inner_axis.normalize();
   return c;
 }
 
@@ -163,7 +172,8 @@ json StationConfig::to_json() const {
   if (site.gravity_mps2) site_j["gravity_mps2"] = *site.gravity_mps2;
   json imus_j = json::array();
   for (const auto& imu : imus) {
-    json j = {{"name", imu.name}, {"backend", imu.backend},
+    json j = {{"name", imu.name},
+              {"backend", imu.backend},
               {"mount_rpy_deg", vec3_json(imu.mount_rpy_deg)}};
     if (!imu.model.empty()) j["model"] = imu.model;
     if (!imu.spec_file.empty()) j["spec_file"] = imu.spec_file;
@@ -176,7 +186,8 @@ json StationConfig::to_json() const {
                   {"outer_axis", vec3_json(table.outer_axis)},
                   {"inner_axis", vec3_json(table.inner_axis)},
                   {"outer", axis_to_json(table.outer)},
-                  {"inner", axis_to_json(table.inner)}};
+                  {"inner", axis_to_json(table.inner)},
+                  {"tilt_rad", {{"east", table.tilt_rad.x()}, {"north", table.tilt_rad.y()}}}};
   if (!table.connection.empty()) table_j["connection"] = table.connection;
   json chamber_j = {{"backend", chamber.backend},
                     {"min_c", chamber.min_c},

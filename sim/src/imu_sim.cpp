@@ -9,18 +9,18 @@
 namespace calstand::sim {
 
 ImuInputModel::ImuInputModel(const ImuTruth& truth, const core::TableGeometry& geometry,
-                             const core::Site& site)
+                             const core::Site& site, const Eigen::Vector2d& table_tilt_rad)
     : outer_axis_(geometry.outer_axis.normalized()),
       inner_axis_(geometry.inner_axis.normalized()),
       mount_C_PB_(geometry.mount_C_PB),
       lever_arm_m_(truth.accel_lever_arm) {
   // The tilted base: a vector fixed in the base reads v_L = R_tilt v_base, so quantities given
   // in L (gravity, Earth rate) enter the table's frame through R_tilt^T.
-  const Eigen::Vector3d tilt_vector(truth.table_tilt.x(), truth.table_tilt.y(), 0.0);
+  const Eigen::Vector3d tilt_vector(table_tilt_rad.x(), table_tilt_rad.y(), 0.0);
   const double tilt = tilt_vector.norm();
-  const Eigen::Matrix3d R_tilt_T = tilt > 0.0
-                                       ? Eigen::Matrix3d(core::axis_angle(tilt_vector, tilt).transpose())
-                                       : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R_tilt_T =
+      tilt > 0.0 ? Eigen::Matrix3d(core::axis_angle(tilt_vector, tilt).transpose())
+                 : Eigen::Matrix3d::Identity();
   force_base_mps2_ = R_tilt_T * site.specific_force_level();
   earth_base_dps_ = R_tilt_T * site.earth_rate_level_radps() * core::kRadToDeg;
 }
@@ -33,7 +33,8 @@ ImuInputs ImuInputModel::operator()(const TableKinematics& k, double temperature
       Eigen::AngleAxisd(k.inner_deg * core::kDegToRad, inner_axis_).toRotationMatrix();
   const Eigen::Matrix3d C_BL = (R_outer * R_inner * mount_C_PB_).transpose();
   const Eigen::Vector3d inner_now = R_outer * inner_axis_;
-  const Eigen::Vector3d table_rate_dps = k.outer_rate_dps * outer_axis_ + k.inner_rate_dps * inner_now;
+  const Eigen::Vector3d table_rate_dps =
+      k.outer_rate_dps * outer_axis_ + k.inner_rate_dps * inner_now;
 
   ImuInputs in;
   in.rate_dps = C_BL * (table_rate_dps + earth_base_dps_);
@@ -51,8 +52,9 @@ ImuInputs ImuInputModel::operator()(const TableKinematics& k, double temperature
 }
 
 ImuInputs imu_inputs(const ImuTruth& truth, const core::TableGeometry& geometry,
-                     const core::Site& site, const TableKinematics& k, double temperature_c) {
-  return ImuInputModel(truth, geometry, site)(k, temperature_c);
+                     const core::Site& site, const Eigen::Vector2d& table_tilt_rad,
+                     const TableKinematics& k, double temperature_c) {
+  return ImuInputModel(truth, geometry, site, table_tilt_rad)(k, temperature_c);
 }
 
 double ImuSim::Channel::noise() {
@@ -64,11 +66,12 @@ double ImuSim::Channel::noise() {
   return n;
 }
 
-ImuSim::ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site, std::uint64_t seed)
+ImuSim::ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site,
+               const Eigen::Vector2d& table_tilt_rad, std::uint64_t seed)
     : truth_(std::move(truth)),
       geometry_(std::move(geometry)),
       site_(std::move(site)),
-      input_model_(truth_, geometry_, site_),
+      input_model_(truth_, geometry_, site_, table_tilt_rad),
       seed_(seed),
       turn_on_draw_(derive_seed(seed, "turn-on-bias")) {
   if (!(truth_.sample_rate_hz > 0.0) || !std::isfinite(truth_.sample_rate_hz)) {
@@ -82,15 +85,15 @@ ImuSim::ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site, st
 
 void ImuSim::build_channels() {
   const double dt = sample_period_s();
-  const bool filtered =
-      truth_.bandwidth_hz > 0.0 && truth_.bandwidth_hz < truth_.sample_rate_hz / 2.0;
   for (std::size_t c = 0; c < 6; ++c) {
     const TriadNoise& n = c < 3 ? truth_.gyro_noise : truth_.accel_noise;
+    const double bandwidth_hz = c < 3 ? truth_.gyro_bandwidth_hz : truth_.accel_bandwidth_hz;
     const int axis = static_cast<int>(c % 3);
     const std::string stream = c < 3 ? "gyro" : "accel";
     Channel& ch = channels_[c];
     if (n.white[axis] > 0.0) {
-      ch.white.emplace(n.white[axis], truth_.sample_rate_hz, derive_seed(seed_, stream + "-white", c));
+      ch.white.emplace(n.white[axis], truth_.sample_rate_hz,
+                       derive_seed(seed_, stream + "-white", c));
     }
     if (n.bias_instability[axis] > 0.0) {
       ch.bias_instability.emplace(n.bias_instability[axis], dt,
@@ -103,15 +106,16 @@ void ImuSim::build_channels() {
       ch.gauss_markov.emplace(n.gauss_markov_sigma[axis], n.gauss_markov_tau_s, dt,
                               derive_seed(seed_, stream + "-gauss-markov", c));
     }
-    if (filtered) {
-      ch.low_pass.emplace(truth_.filter_order, truth_.bandwidth_hz, truth_.sample_rate_hz);
+    if (bandwidth_hz > 0.0 && bandwidth_hz < truth_.sample_rate_hz / 2.0) {
+      ch.low_pass.emplace(truth_.filter_order, bandwidth_hz, truth_.sample_rate_hz);
     }
     ch.quantizer = Quantizer(n.quantization);
   }
 }
 
 void ImuSim::power_on(double time_s) {
-  for (int i = 0; i < 3; ++i) turn_on_gyro_[i] = turn_on_draw_.next() * truth_.gyro_noise.turn_on_bias[i];
+  for (int i = 0; i < 3; ++i)
+    turn_on_gyro_[i] = turn_on_draw_.next() * truth_.gyro_noise.turn_on_bias[i];
   for (int i = 0; i < 3; ++i) {
     turn_on_accel_[i] = turn_on_draw_.next() * truth_.accel_noise.turn_on_bias[i];
   }
@@ -129,8 +133,7 @@ core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, doub
   std::array<double, 6> value{};
   for (int i = 0; i < 3; ++i) {
     value[static_cast<std::size_t>(i)] = in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i];
-    value[static_cast<std::size_t>(i) + 3] =
-        in.force_mps2[i] + accel_error[i] + turn_on_accel_[i];
+    value[static_cast<std::size_t>(i) + 3] = in.force_mps2[i] + accel_error[i] + turn_on_accel_[i];
   }
   for (std::size_t c = 0; c < 6; ++c) {
     Channel& ch = channels_[c];

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <type_traits>
 
 #include "core/error.hpp"
 #include "core/error_terms.hpp"
@@ -17,8 +18,11 @@ using nlohmann::json;
 
 constexpr double kUgToMps2 = 1e-6 * core::kStandardGravity;
 
-// The storage slot of one parameter inside ImuTruth.
-double* slot(ImuTruth& t, const core::ParameterName& p) {
+// The storage slot of one parameter inside ImuTruth (const or not). A temperature order beyond
+// the stored ones is grown when writing and reads as no slot (value 0) when not; nullptr too
+// for terms that are not properties of the IMU (earth_rate, table_tilt).
+template <typename Truth>
+auto slot(Truth& t, const core::ParameterName& p) -> decltype(&t.gyro_bias[0]) {
   const std::string_view term = p.term->name;
   const int i = p.axis;
   const int j = p.second_axis;
@@ -36,12 +40,16 @@ double* slot(ImuTruth& t, const core::ParameterName& p) {
   if (term == "accel_quadratic") return &t.accel_quadratic[i];
   if (term == "accel_temp_scale") return &t.accel_temp_scale[i];
   if (term == "accel_lever_arm") return &t.accel_lever_arm[i];
-  if (term == "table_tilt") return &t.table_tilt[p.component == "east" ? 0 : 1];
-  auto poly = [&](std::vector<Eigen::Vector3d>& coeffs) {
-    if (coeffs.size() < static_cast<size_t>(p.order)) {
-      coeffs.resize(static_cast<size_t>(p.order), Eigen::Vector3d::Zero());
+  auto poly = [&](auto& coeffs) -> decltype(&t.gyro_bias[0]) {
+    const auto order = static_cast<std::size_t>(p.order);
+    if (coeffs.size() < order) {
+      if constexpr (std::is_const_v<Truth>) {
+        return nullptr;
+      } else {
+        coeffs.resize(order, Eigen::Vector3d::Zero());
+      }
     }
-    return &coeffs[static_cast<size_t>(p.order - 1)][i];
+    return &coeffs[order - 1][i];
   };
   if (term == "gyro_temp_bias") return poly(t.gyro_temp_bias);
   if (term == "accel_temp_bias") return poly(t.accel_temp_bias);
@@ -89,7 +97,7 @@ struct NoiseUnits {
 // is /(3600*60). m/s/sqrt(h) -> m/s^2/sqrt(Hz) is /60; ug/sqrt(h) -> m/s^2/sqrt(s) is ug/60.
 const NoiseUnits kGyroUnits{"arw_deg_per_sqrt_h",
                             1.0 / 60.0,
-                            "bias_instability_deg_per_h",
+                            "bias_instability_coefficient_deg_per_h",
                             1.0 / 3600.0,
                             "rate_random_walk_deg_per_h_per_sqrt_h",
                             1.0 / (3600.0 * 60.0),
@@ -100,7 +108,7 @@ const NoiseUnits kGyroUnits{"arw_deg_per_sqrt_h",
                             "quantization_deg_per_s"};
 const NoiseUnits kAccelUnits{"vrw_mps_per_sqrt_h",
                              1.0 / 60.0,
-                             "bias_instability_ug",
+                             "bias_instability_coefficient_ug",
                              kUgToMps2,
                              "random_walk_ug_per_sqrt_h",
                              kUgToMps2 / 60.0,
@@ -138,6 +146,11 @@ json noise_to_json(const TriadNoise& n, const NoiseUnits& u) {
 
 void ImuTruth::set_parameter(const std::string& full_name, double value) {
   const auto p = parse_or_throw(full_name, "parameters." + full_name);
+  if (p.term->name == "table_tilt") {
+    throw InputError("parameters." + full_name,
+                     "the table tilt is a property of the station, not of the IMU: it is set in "
+                     "the station file (table.tilt_rad)");
+  }
   double* s = slot(*this, p);
   if (!s) throw InputError("parameters." + full_name, "not a simulated parameter");
   *s = value;
@@ -145,8 +158,7 @@ void ImuTruth::set_parameter(const std::string& full_name, double value) {
 
 double ImuTruth::parameter(const std::string& full_name) const {
   const auto p = parse_or_throw(full_name, full_name);
-  ImuTruth copy = *this;  // slot() may grow the polynomial vectors; never touch *this
-  double* s = slot(copy, p);
+  const double* s = slot(*this, p);
   return s ? *s : 0.0;
 }
 
@@ -162,6 +174,79 @@ std::vector<std::pair<std::string, double>> ImuTruth::nonzero_parameters() const
     }
   }
   return out;
+}
+
+namespace {
+
+// Checks of ImuTruth::validate(): each names the field as the truth file spells it, with the
+// value in the file's unit.
+class TruthChecker {
+ public:
+  explicit TruthChecker(const std::string& file) : file_(file) {}
+
+  void finite(const std::string& field, double value) const {
+    if (!std::isfinite(value)) fail(field, value, "must be finite");
+  }
+  void non_negative(const std::string& field, double value) const {
+    finite(field, value);
+    if (value < 0.0) fail(field, value, "must not be negative");
+  }
+  void positive(const std::string& field, double value) const {
+    finite(field, value);
+    if (value <= 0.0) fail(field, value, "must be positive");
+  }
+  // A per-axis noise figure stored in simulator units; `scale` converts the file's unit to them.
+  void non_negative(const std::string& field, const Eigen::Vector3d& v, double scale) const {
+    const bool same = v.x() == v.y() && v.y() == v.z();
+    for (int i = 0; i < 3; ++i) {
+      non_negative(same ? field : fmt::format("{}[{}]", field, i), v[i] / scale);
+    }
+  }
+  [[noreturn]] void fail(const std::string& field, double value, const char* rule) const {
+    // 15 digits drop the last-bit noise of the unit conversion (-10.000000000000002 ug).
+    throw InputError(fmt::format("{}: {}", file_, field), fmt::format("{:.15g} {}", value, rule));
+  }
+
+ private:
+  const std::string& file_;
+};
+
+void check_noise(const TruthChecker& c, const TriadNoise& n, const NoiseUnits& u,
+                 const std::string& sensor) {
+  const std::string at = "noise." + sensor + ".";
+  c.non_negative(at + u.white, n.white, u.white_scale);
+  c.non_negative(at + u.bias_instability, n.bias_instability, u.bi_scale);
+  c.non_negative(at + u.random_walk, n.random_walk, u.rw_scale);
+  c.non_negative(at + u.gm_sigma, n.gauss_markov_sigma, u.gm_scale);
+  c.positive(at + "gauss_markov_tau_s", n.gauss_markov_tau_s);
+  c.non_negative(at + u.turn_on, n.turn_on_bias, u.turn_on_scale);
+  c.non_negative(at + u.quantization, n.quantization);
+}
+
+}  // namespace
+
+void ImuTruth::validate(const std::string& file_name) const {
+  const TruthChecker c(file_name);
+  c.finite("temperature_ref_c", temperature_ref_c);
+  for (const auto& term : core::error_term_catalogue()) {
+    int order = 1;
+    if (term.name == "gyro_temp_bias") order = static_cast<int>(gyro_temp_bias.size());
+    if (term.name == "accel_temp_bias") order = static_cast<int>(accel_temp_bias.size());
+    for (const auto& full_name : core::parameter_names(term, order)) {
+      c.finite("parameters." + full_name, parameter(full_name));
+    }
+  }
+  check_noise(c, gyro_noise, kGyroUnits, "gyro");
+  check_noise(c, accel_noise, kAccelUnits, "accel");
+  c.positive("output.sample_rate_hz", sample_rate_hz);
+  c.non_negative("output.gyro_bandwidth_hz", gyro_bandwidth_hz);
+  c.non_negative("output.accel_bandwidth_hz", accel_bandwidth_hz);
+  if (filter_order < 2 || filter_order > 8 || filter_order % 2 != 0) {
+    c.fail("output.filter_order", filter_order, "must be 2, 4, 6 or 8 (an even Butterworth order)");
+  }
+  if (sequence_modulus < 2) c.fail("output.sequence_modulus", sequence_modulus, "must be >= 2");
+  c.non_negative("output.latency_s", latency_s);
+  c.finite("output.clock_drift_ppm", clock_drift_ppm);
 }
 
 ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
@@ -186,16 +271,14 @@ ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
   if (doc.contains("output")) {
     const json& o = doc.at("output");
     t.sample_rate_hz = o.value("sample_rate_hz", t.sample_rate_hz);
-    t.bandwidth_hz = o.value("bandwidth_hz", t.bandwidth_hz);
+    t.gyro_bandwidth_hz = o.value("gyro_bandwidth_hz", t.gyro_bandwidth_hz);
+    t.accel_bandwidth_hz = o.value("accel_bandwidth_hz", t.accel_bandwidth_hz);
     t.filter_order = o.value("filter_order", t.filter_order);
     t.sequence_modulus = o.value("sequence_modulus", t.sequence_modulus);
     t.latency_s = o.value("latency_s", t.latency_s);
     t.clock_drift_ppm = o.value("clock_drift_ppm", t.clock_drift_ppm);
   }
-  if (t.bandwidth_hz > 0.0 && t.bandwidth_hz < t.sample_rate_hz / 2.0 &&
-      t.filter_order % 2 != 0) {
-    throw InputError(file_name + ": output.filter_order", "must be even (2, 4, 6 or 8)");
-  }
+  t.validate(file_name);
   return t;
 }
 
@@ -212,7 +295,8 @@ json imu_truth_to_json(const ImuTruth& t) {
         {"accel", noise_to_json(t.accel_noise, kAccelUnits)}}},
       {"output",
        {{"sample_rate_hz", t.sample_rate_hz},
-        {"bandwidth_hz", t.bandwidth_hz},
+        {"gyro_bandwidth_hz", t.gyro_bandwidth_hz},
+        {"accel_bandwidth_hz", t.accel_bandwidth_hz},
         {"filter_order", t.filter_order},
         {"sequence_modulus", t.sequence_modulus},
         {"latency_s", t.latency_s},
@@ -227,12 +311,11 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> deterministic_errors(const ImuTruth&
   const double dT = in.temperature_c - t.temperature_ref_c;
   const double g0 = core::kStandardGravity;
 
-  Eigen::Vector3d gyro = t.gyro_bias + 1e-6 * t.gyro_scale.cwiseProduct(w) +
-                         t.gyro_misalignment * w +
-                         1e-6 * t.gyro_scale_asymmetry.cwiseProduct(w.cwiseAbs()) +
-                         1e-6 * t.gyro_quadratic.cwiseProduct(w.cwiseAbs2()) +
-                         t.gyro_g_sensitivity * (f / g0) +
-                         1e-6 * dT * t.gyro_temp_scale.cwiseProduct(w);
+  Eigen::Vector3d gyro =
+      t.gyro_bias + 1e-6 * t.gyro_scale.cwiseProduct(w) + t.gyro_misalignment * w +
+      1e-6 * t.gyro_scale_asymmetry.cwiseProduct(w.cwiseAbs()) +
+      1e-6 * t.gyro_quadratic.cwiseProduct(w.cwiseAbs2()) + t.gyro_g_sensitivity * (f / g0) +
+      1e-6 * dT * t.gyro_temp_scale.cwiseProduct(w);
   double power = 1.0;
   for (const auto& c : t.gyro_temp_bias) {
     power *= dT;

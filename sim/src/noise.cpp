@@ -168,7 +168,7 @@ BiasInstability::BiasInstability(double coefficient, double dt_s, std::uint64_t 
   if (!std::isfinite(tau_max_s) || !(tau_max_s >= 2.0 * tau_min_s)) {
     throw_bad("BiasInstability", "tau_max_s", tau_max_s, "finite and >= 2 * tau_min_s");
   }
-  allan_floor_ = coefficient * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
+  allan_floor_ = coefficient * kFlickerAllanFloorPerCoefficient;
 
   // Two components per decade: the Allan variance of one Gauss-Markov process is a bump about
   // a decade and a half wide in log T, so at this spacing the interior ripple of the sum is

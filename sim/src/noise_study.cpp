@@ -199,11 +199,12 @@ NoiseStudyResult run_noise_study(const NoiseStudyOptions& options) {
   const double total = static_cast<double>(n) * static_cast<double>(runs);
   const double runs_d = static_cast<double>(runs);
   NoiseStudyResult result;
-  result.white.push_back({0.5 * fs, std::sqrt(raw_sum_sq / total), sigma_w});
+  result.white.push_back({0.5 * fs, std::sqrt(raw_sum_sq / total), sigma_w, sigma_w});
   for (std::size_t f = 0; f < filter_prototypes.size(); ++f) {
-    const double enbw = filter_prototypes[f].noise_equivalent_bandwidth_hz();
+    const ButterworthLowPass& lp = filter_prototypes[f];
     result.white.push_back({o.cutoffs_hz[f], std::sqrt(filtered_sum_sq[f] / total),
-                            sigma_w * std::sqrt(enbw / (0.5 * fs))});
+                            sigma_w * std::sqrt(lp.white_noise_power_gain()),
+                            sigma_w * std::sqrt(lp.noise_equivalent_bandwidth_hz() / (0.5 * fs))});
   }
 
   const double to_deg = dt / kSecondsPerHour;  // sum of deg/h samples -> deg

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "core/json_schema.hpp"
@@ -52,9 +53,9 @@ ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_see
     if (!spec) {
       std::string known;
       for (const auto& n : builtin_spec_names()) known += (known.empty() ? "" : ", ") + n;
-      throw core::InputError(fmt::format("imus[{}].model", index),
-                             fmt::format("unknown built-in model \"{}\" (known: {})", imu.model,
-                                         known));
+      throw core::InputError(
+          fmt::format("imus[{}].model", index),
+          fmt::format("unknown built-in model \"{}\" (known: {})", imu.model, known));
     }
     truth = truth_from_spec(*spec, "<built-in " + imu.model + ">", draw_seed);
   } else if (!imu.spec_file.empty()) {
@@ -68,8 +69,20 @@ ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_see
   return truth;
 }
 
-SimWorld::SimWorld(const core::StationConfig& config)
+std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index) {
+  ImuTruth truth = resolve_imu_truth(config.imus.at(index), config.seed, index);
+  try {
+    return std::make_unique<ImuSim>(std::move(truth), config.geometry(index), config.site,
+                                    config.table.tilt_rad,
+                                    derive_seed(config.seed, "imu-noise", index));
+  } catch (const std::invalid_argument& e) {
+    throw core::InputError(fmt::format("imus[{}]", index), e.what());
+  }
+}
+
+SimWorld::SimWorld(const core::StationConfig& config, double start_time_s)
     : config_(config),
+      clock_(start_time_s),
       table_(config.table.outer, config.table.inner),
       chamber_(chamber_params(config.chamber), derive_seed(config.seed, "chamber")) {
   require_sim(config.table.backend, "table.backend");
@@ -79,12 +92,11 @@ SimWorld::SimWorld(const core::StationConfig& config)
     require_sim(c.backend, fmt::format("imus[{}].backend", i));
     SimulatedImu imu;
     imu.name = c.name;
-    imu.sim = std::make_unique<ImuSim>(resolve_imu_truth(c, config.seed, i), config.geometry(i),
-                                       config.site, derive_seed(config.seed, "imu-noise", i));
-    imu.sim->power_on(0.0);
+    imu.sim = make_imu_sim(config, i);
+    imu.sim->power_on(start_time_s);
     // A sample stands for the interval that ends at its time stamp: the first is one period
     // after power-up, so advancing by T delivers T * rate samples.
-    imu.first_sample_s = imu.sim->sample_period_s();
+    imu.first_sample_s = start_time_s + imu.sim->sample_period_s();
     imus_.push_back(std::move(imu));
   }
 }

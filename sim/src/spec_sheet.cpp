@@ -16,30 +16,54 @@ namespace {
 
 using nlohmann::json;
 
-// Allan deviation floor of flicker noise relative to its coefficient: sqrt(2 ln2 / pi).
-constexpr double kFlickerFloor = 0.664;
+std::string_view trimmed(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+}
 
-// Reads one figure of the sheet in `target_unit`, or 0 when absent.
+// What a figure may be. Every figure of a sheet is a 1-sigma spread or a physical size, so
+// none is negative; rates and correlation times must also be non-zero.
+enum class Sign { kNonNegative, kPositive };
+
+// Reads one figure of the sheet in `target_unit`, or 0 when absent. Errors name the file and
+// the sheet's field with the value as written, e.g. `gyro.random_walk: -0.07 deg/sqrt(h) must
+// not be negative`.
 class SheetReader {
  public:
   SheetReader(const json& section, std::string file, std::string path)
       : section_(section), file_(std::move(file)), path_(std::move(path)) {}
 
-  double get(const char* key, std::string_view target_unit) const {
+  double get(const char* key, std::string_view target_unit, Sign sign = Sign::kNonNegative) const {
     if (!section_.contains(key)) return 0.0;
-    return convert_field(section_.at(key), fmt::format("{}.{}", path_, key), target_unit);
+    return convert_field(section_.at(key), fmt::format("{}.{}", path_, key), target_unit, sign);
   }
   bool has(const char* key) const { return section_.contains(key); }
   const json& at(const char* key) const { return section_.at(key); }
 
-  double convert_field(const json& field, const std::string& where,
-                       std::string_view target_unit) const {
+  double convert_field(const json& field, const std::string& where, std::string_view target_unit,
+                       Sign sign = Sign::kNonNegative) const {
+    const std::string text = field.get<std::string>();
+    double value = 0.0;
     try {
-      const core::Quantity q = core::parse_quantity(field.get<std::string>());
-      return core::convert(q.value, q.unit, core::parse_unit(target_unit));
+      const core::Quantity q = core::parse_quantity(text);
+      value = core::convert(q.value, q.unit, core::parse_unit(target_unit));
     } catch (const core::InputError& e) {
       throw core::InputError(fmt::format("{}: {}", file_, where), e.what());
     }
+    const char* broken = nullptr;
+    if (!std::isfinite(value)) {
+      broken = "must be finite";
+    } else if (value < 0.0) {
+      broken = "must not be negative";
+    } else if (sign == Sign::kPositive && value == 0.0) {
+      broken = "must be positive";
+    }
+    if (broken) {
+      throw core::InputError(fmt::format("{}: {}", file_, where),
+                             fmt::format("{} {}", trimmed(text), broken));
+    }
+    return value;
   }
   const std::string& file() const { return file_; }
   const std::string& path() const { return path_; }
@@ -80,7 +104,9 @@ void read_noise(const SheetReader& r, std::string_view rate, std::string_view wh
   double white = r.get("white_noise", white_density);
   if (r.has("random_walk")) white = r.get("random_walk", white_density);
   noise.white.setConstant(white);
-  noise.bias_instability.setConstant(r.get("in_run_bias_stability", rate) / kFlickerFloor);
+  // Datasheets quote the Allan deviation floor; the simulator holds the flicker coefficient.
+  noise.bias_instability.setConstant(r.get("in_run_bias_stability", rate) /
+                                     kFlickerAllanFloorPerCoefficient);
   noise.random_walk.setConstant(r.get(rate_walk_key, fmt::format("{}/sqrt(s)", rate)));
   if (r.has("bias_variation")) {
     const json& bv = r.at("bias_variation");
@@ -88,7 +114,7 @@ void read_noise(const SheetReader& r, std::string_view rate, std::string_view wh
         r.convert_field(bv.at("sigma"), r.path() + ".bias_variation.sigma", rate));
     noise.gauss_markov_tau_s =
         r.convert_field(bv.at("correlation_time"), r.path() + ".bias_variation.correlation_time",
-                        "s");
+                        "s", Sign::kPositive);
   }
   noise.turn_on_bias.setConstant(r.get("bias_repeatability", rate));
   noise.quantization = r.get("quantization", rate);
@@ -146,20 +172,24 @@ ImuTruth truth_from_spec(const json& spec, const std::string& file_name, std::ui
   // Vibration (second-order) sensitivity, ug/g^2 as the contract's accel_quadratic.
   t.accel_quadratic = draw3(draw, accel.get("vibration_sensitivity", "ug/g^2"));
 
-  // Output: one sample rate; the output filter is the narrower of the two bandwidths.
+  // Output: one sample rate for both sensors.
   if (spec.contains("output")) {
     const SheetReader out(spec.at("output"), file_name, "output");
-    if (out.has("sample_rate")) t.sample_rate_hz = out.get("sample_rate", "Hz");
+    if (out.has("sample_rate")) t.sample_rate_hz = out.get("sample_rate", "Hz", Sign::kPositive);
     if (out.has("latency")) t.latency_s = out.get("latency", "s");
     t.filter_order = spec.at("output").value("filter_order", t.filter_order);
   }
-  double bandwidth = 0.0;
-  for (const SheetReader* r : {&gyro, &accel}) {
-    const double b = r->get("bandwidth", "Hz");
-    if (b > 0.0 && (bandwidth == 0.0 || b < bandwidth)) bandwidth = b;
-  }
-  t.bandwidth_hz = bandwidth < t.sample_rate_hz / 2.0 ? bandwidth : 0.0;
+  // Each sensor's bandwidth is its own output filter; one at or above Nyquist filters nothing.
+  const auto output_filter = [&](const SheetReader& r) {
+    const double b = r.get("bandwidth", "Hz");
+    return b < t.sample_rate_hz / 2.0 ? b : 0.0;
+  };
+  t.gyro_bandwidth_hz = output_filter(gyro);
+  t.accel_bandwidth_hz = output_filter(accel);
   t.temperature_ref_c = 25.0;
+  // Every figure was checked above under its sheet name; this catches what a combination of
+  // them could still break, named as the truth file would name it.
+  t.validate(file_name);
   return t;
 }
 

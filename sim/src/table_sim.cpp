@@ -96,8 +96,9 @@ void TableAxisSim::clear_fault() {
 
 void TableAxisSim::step(double dt_s) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return;
+  const double profile_before_deg = profile_angle_deg_;
   step_profile(dt_s);
-  step_servo(dt_s);
+  step_servo(dt_s, profile_before_deg);
   step_settling(dt_s);
 }
 
@@ -138,29 +139,35 @@ void TableAxisSim::step_profile(double dt_s) {
   profile_angle_deg_ += profile_rate_dps_ * dt_s;
 }
 
-void TableAxisSim::step_servo(double dt_s) {
+void TableAxisSim::step_servo(double dt_s, double profile_before_deg) {
   // The world steps on a sample grid whose dt differs only by rounding from step to step;
-  // reuse the gain unless dt really changed (the gain error is then below 1e-9 relative).
+  // reuse the decay unless dt really changed.
   if (std::abs(dt_s - servo_dt_s_) > 1e-9 * dt_s) {
     servo_dt_s_ = dt_s;
-    servo_gain_ = limits_.servo_time_constant_s > 0.0
-                      ? -std::expm1(-dt_s / limits_.servo_time_constant_s)
-                      : 1.0;
+    servo_decay_ = limits_.servo_time_constant_s > 0.0
+                       ? std::exp(-dt_s / limits_.servo_time_constant_s)
+                       : 0.0;
   }
-  // The true angle is the profile angle through an exactly discretised first-order lag
-  // (profile held over the step). Its step rate is then the same lag applied to the profile
-  // rate, a convex combination of rates within the limit, and its step-to-step rate change is
-  // bounded by the profile's, so at a fixed dt the limits hold by construction; the true angle
-  // also converges to wherever the profile stops, including the snap onto the target. Only a
-  // change of dt between steps can push the lagged acceleration a little past the limit: the
-  // clamps below catch that, and the lag of the next steps absorbs the difference.
-  const double wanted_rate = (profile_angle_deg_ - angle_deg_) * servo_gain_ / dt_s;
+  // The true angle is the profile angle through a first-order lag, solved exactly for a
+  // profile that moves linearly over the step (first-order hold): with the profile going from
+  // p0 to p1 at rate v, y1 = p1 - v tau + (y0 - p0 + v tau) exp(-dt/tau). At a constant profile
+  // rate the lag settles at v tau and the axis turns at exactly v whatever the step lengths,
+  // which a zero-order hold does not do (its rate then ripples with every change of dt). The
+  // axis rate over the step is a weighted mean of the lagged profile rates, so it stays within
+  // the rate limit, and its changes within the acceleration limit; the clamps below only catch
+  // rounding and the rare dt change right after a profile corner.
+  const double tau = limits_.servo_time_constant_s;
+  const double v = (profile_angle_deg_ - profile_before_deg) / dt_s;
+  const double lag_term = v * tau;
+  const double wanted_angle = profile_angle_deg_ - lag_term +
+                              (angle_deg_ - profile_before_deg + lag_term) * servo_decay_;
+  const double wanted_rate = (wanted_angle - angle_deg_) / dt_s;
   const double max_dv = limits_.max_accel_dps2 * dt_s;
   const double rate = std::clamp(std::clamp(wanted_rate, rate_dps_ - max_dv, rate_dps_ + max_dv),
                                  -limits_.max_rate_dps, limits_.max_rate_dps);
   accel_dps2_ = (rate - rate_dps_) / dt_s;
   rate_dps_ = rate;
-  angle_deg_ += rate * dt_s;
+  angle_deg_ = rate == wanted_rate ? wanted_angle : angle_deg_ + rate * dt_s;
 }
 
 void TableAxisSim::step_settling(double dt_s) {

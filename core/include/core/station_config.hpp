@@ -24,8 +24,11 @@ struct AxisConfig {
 
 struct TableConfig {
   std::string backend = "sim";
-  Eigen::Vector3d outer_axis{0.0, 1.0, 0.0};  ///< in L
-  Eigen::Vector3d inner_axis{0.0, 0.0, 1.0};  ///< in L at outer = 0
+  Eigen::Vector3d outer_axis{0.0, 1.0, 0.0};  ///< unit, in L (normalised on load)
+  Eigen::Vector3d inner_axis{0.0, 0.0, 1.0};  ///< unit, in L at outer = 0 (normalised on load)
+  /// True tilt of the table base about L's East (x) and North (y) axes [rad]: the contract's
+  /// `table_tilt` term. A property of the station, not of an IMU; zero unless configured.
+  Eigen::Vector2d tilt_rad = Eigen::Vector2d::Zero();
   AxisConfig outer;
   AxisConfig inner;
   nlohmann::json connection = nlohmann::json::object();
@@ -50,10 +53,10 @@ struct ChamberConfig {
 struct ImuConfig {
   std::string name;
   std::string backend = "sim";
-  std::string model;        ///< built-in spec sheet name ("ln200", "adis16488")
-  std::string spec_file;    ///< absolute path (resolved against the station file)
-  std::string truth_file;   ///< absolute path
-  nlohmann::json truth;     ///< inline truth document, or null
+  std::string model;       ///< built-in spec sheet name ("ln200", "adis16488")
+  std::string spec_file;   ///< absolute path (resolved against the station file)
+  std::string truth_file;  ///< absolute path
+  nlohmann::json truth;    ///< inline truth document, or null
   Eigen::Vector3d mount_rpy_deg = Eigen::Vector3d::Zero();
   nlohmann::json connection = nlohmann::json::object();
 };

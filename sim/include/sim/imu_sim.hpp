@@ -25,34 +25,41 @@ struct TableKinematics {
 /// The physical inputs at the IMU for a table state, following error-model.md: rate in B is
 /// C_BL (w_table + w_ie) (the real world always turns with the Earth), specific force in B is
 /// C_BL (I - [t x]) f_L (exact rotation for the tilt t), plus the lever-arm acceleration
-/// wt x (wt x r) + dwt/dt x r. Everything that does not change with the table state (gravity,
-/// Earth rate, tilt, axes) is computed once at construction: this runs for every sample.
+/// wt x (wt x r) + dwt/dt x r. `table_tilt_rad` is the tilt t of the table base about L's East
+/// and North axes [rad] (the station's table.tilt_rad); the whole table, axes included, is
+/// tilted, so the Earth rate enters the table frame through the same rotation as gravity.
+/// Everything that does not change with the table state (gravity, Earth rate, tilt, axes) is
+/// computed once at construction: this runs for every sample.
 class ImuInputModel {
  public:
-  ImuInputModel(const ImuTruth& truth, const core::TableGeometry& geometry,
-                const core::Site& site);
+  ImuInputModel(const ImuTruth& truth, const core::TableGeometry& geometry, const core::Site& site,
+                const Eigen::Vector2d& table_tilt_rad);
   ImuInputs operator()(const TableKinematics& table, double temperature_c) const;
 
  private:
-  Eigen::Vector3d outer_axis_;        // unit, in the table base frame
-  Eigen::Vector3d inner_axis_;        // unit, at outer = 0
+  Eigen::Vector3d outer_axis_;  // unit, in the table base frame
+  Eigen::Vector3d inner_axis_;  // unit, at outer = 0
   Eigen::Matrix3d mount_C_PB_;
-  Eigen::Vector3d force_base_mps2_;   // gravity's specific force in the (tilted) base frame
-  Eigen::Vector3d earth_base_dps_;    // Earth rate in the base frame [deg/s]
+  Eigen::Vector3d force_base_mps2_;  // gravity's specific force in the (tilted) base frame
+  Eigen::Vector3d earth_base_dps_;   // Earth rate in the base frame [deg/s]
   Eigen::Vector3d lever_arm_m_;
 };
 
 /// One-off form of ImuInputModel (for tests and tools; the simulator keeps a model).
 ImuInputs imu_inputs(const ImuTruth& truth, const core::TableGeometry& geometry,
-                     const core::Site& site, const TableKinematics& table, double temperature_c);
+                     const core::Site& site, const Eigen::Vector2d& table_tilt_rad,
+                     const TableKinematics& table, double temperature_c);
 
 /// One simulated IMU: truth terms, noise processes, output filter, quantization, sequence
 /// counter and device clock. Seeded: the same seed and the same calls give the same samples.
 /// Not thread safe; owned by the simulated world.
 class ImuSim {
  public:
-  /// Throws std::invalid_argument when the truth's output settings are unusable.
-  ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site, std::uint64_t seed);
+  /// `table_tilt_rad`: see ImuInputModel. Each sensor's output filter follows its own
+  /// bandwidth (ImuTruth::gyro_bandwidth_hz, accel_bandwidth_hz).
+  /// Throws std::invalid_argument when the truth's output settings or noise are unusable.
+  ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site,
+         const Eigen::Vector2d& table_tilt_rad, std::uint64_t seed);
 
   /// Powers the IMU up at `time_s`: a new turn-on bias per channel, the sequence counter and the
   /// device clock restart, the output filter starts settled. Every power-up draws new values.

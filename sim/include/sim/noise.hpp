@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <random>
 #include <string_view>
 #include <vector>
@@ -125,6 +127,11 @@ class GaussMarkov {
 /// It rises as 2 sigma^2 T / (3 tau_c) for T << tau_c, peaks near T = 1.89 tau_c and falls as
 /// 2 sigma^2 tau_c / T. A sampled process follows it while dt << tau_c.
 double gauss_markov_allan_variance(double sigma, double tau_c_s, double averaging_time_s);
+
+/// Allan deviation floor of flicker (bias instability) noise per unit of its IEEE Std 952
+/// coefficient B: sqrt(2 ln2 / pi) ~= 0.664. Datasheets quote the floor; truth files hold B.
+inline const double kFlickerAllanFloorPerCoefficient =
+    std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
 
 /// Bias instability (flicker, 1/f) noise of coefficient B [unit], as IEEE Std 952 defines it:
 /// the Allan deviation floor is B * sqrt(2 ln2 / pi) ~= 0.664 B. Approximated by a sum of

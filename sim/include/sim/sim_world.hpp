@@ -26,6 +26,12 @@ core::StationConfig default_station();
 ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_seed,
                            std::size_t index);
 
+/// The simulator of IMU `index` of a station as SimWorld builds it (truth from
+/// resolve_imu_truth(), the station's geometry with the IMU's mount, the site and the table
+/// tilt, seeded by the station seed), not yet powered. Throws core::InputError naming
+/// `imus[index]` when the truth cannot be simulated (std::invalid_argument from ImuSim).
+std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index);
+
 /// The simulated physical world of one station: table, chamber, the IMUs on the table, and the
 /// virtual clock they share. Time moves only through advance()/advance_to(), as fast as the CPU
 /// allows; the physics steps from one IMU sample instant to the next (at most max_step_s), the
@@ -36,8 +42,10 @@ class SimWorld {
   using SampleSink = std::function<void(std::size_t, const core::ImuSample&)>;
 
   /// Builds the world of `config` (every device backend must be "sim") and powers the IMUs on
-  /// at time 0. Throws core::InputError when a device is not simulated or a truth is invalid.
-  explicit SimWorld(const core::StationConfig& config);
+  /// at `start_time_s` (the virtual clock starts there: a run resumed after a crash continues
+  /// its station time instead of going back to 0). Throws core::InputError when a device is
+  /// not simulated or a truth is invalid.
+  explicit SimWorld(const core::StationConfig& config, double start_time_s = 0.0);
 
   /// Advances the world by dt_s (>= 0) of virtual time.
   void advance(double dt_s) { advance_to(clock_.now_s() + dt_s); }
@@ -80,7 +88,9 @@ class SimWorld {
     std::uint32_t drop_remaining = 0;
     bool stalled = false;
     std::vector<core::ImuSample> buffer;
-    double next_due_s() const { return first_sample_s + static_cast<double>(next_index) * sim->sample_period_s(); }
+    double next_due_s() const {
+      return first_sample_s + static_cast<double>(next_index) * sim->sample_period_s();
+    }
   };
 
   core::StationConfig config_;

@@ -17,12 +17,16 @@ namespace calstand::sim {
 /// temperature coefficients, asymmetry, vibration sensitivity) are drawn once from N(0, figure)
 /// with `seed`; noise figures become the noise processes:
 ///   random_walk / white_noise      -> white noise (ARW, VRW)
-///   in_run_bias_stability          -> bias instability B = figure / 0.664 (Allan floor)
+///   in_run_bias_stability          -> bias instability B = figure / 0.664 (the figure is the
+///                                     Allan floor; kFlickerAllanFloorPerCoefficient)
+///   bandwidth (gyro, accel)        -> that sensor's output low-pass filter
 ///   bias_variation {sigma, tau}    -> first-order Gauss-Markov
 ///   rate/acceleration random walk  -> random walk
 ///   bias_repeatability             -> turn-on bias (new at each power-up); also the spread of
 ///                                     the fixed bias when no `bias` figure is given
-/// Throws core::SchemaError / core::InputError naming the file and field on bad input.
+/// Throws core::SchemaError / core::InputError naming the file and field on bad input; a
+/// negative figure (or a zero sample rate or correlation time) is an InputError naming the
+/// sheet's field, e.g. `mine.json: gyro.random_walk: -0.07 deg/sqrt(h) must not be negative`.
 ImuTruth truth_from_spec(const nlohmann::json& spec, const std::string& file_name,
                          std::uint64_t seed);
 

@@ -54,7 +54,7 @@ class TableAxisSim {
   /// Advances the motion profile by one step of dt_s, honouring the limits per step.
   void step_profile(double dt_s);
   /// Advances the servo (true axis) behind the profile by one step of dt_s.
-  void step_servo(double dt_s);
+  void step_servo(double dt_s, double profile_before_deg);
   /// Updates the settle timer and in_position_ after a step of dt_s.
   void step_settling(double dt_s);
   /// Forgets settling: a new command (or a fault) starts the settle timer again.
@@ -75,7 +75,7 @@ class TableAxisSim {
   // exp() is the only costly call in step(); the simulator steps at a fixed dt, so it is
   // evaluated once per distinct dt.
   double servo_dt_s_ = -1.0;
-  double servo_gain_ = 1.0;          // 1 - exp(-dt / servo_time_constant_s) for servo_dt_s_
+  double servo_decay_ = 0.0;         // exp(-dt / servo_time_constant_s) for servo_dt_s_
 };
 
 /// The dual-axis table: an outer and an inner axis.

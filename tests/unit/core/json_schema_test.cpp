@@ -220,6 +220,68 @@ TEST(JsonSchemaString, LongValuesAreShortenedInMessages) {
   EXPECT_NE(lines[0].find("..."), std::string::npos);
 }
 
+TEST(JsonSchemaString, OverlongStringIsReportedNotSearched) {
+  // std::regex_search recurses per character and overflows the stack on strings like this one
+  // (a segfault before the cap); the validator reports them instead.
+  const json p = {{"pattern", "^[a-z]+$"}};
+  EXPECT_EQ(check(p, std::string(50000, 'a')),
+            Lines{"string of 50000 characters is too long to check against the pattern"});
+  EXPECT_EQ(check(p, std::string(4096, 'a')), Lines{});  // at the cap: still checked
+  EXPECT_EQ(check(p, std::string(4096, 'A')).size(), 1u);
+  const json keys = {{"type", "object"},
+                     {"patternProperties", {{"^[a-z]+$", {{"type", "number"}}}}},
+                     {"additionalProperties", false}};
+  EXPECT_EQ(check(keys, json{{std::string(50000, 'k'), 1}}),
+            Lines{std::string(50000, 'k') +
+                  ": property name of 50000 characters is too long to check against the pattern"});
+}
+
+// A document for `node` (resolving local $refs in `root`) with `big` in every place a string
+// can go and as a key wherever patternProperties allow keys, to depth `depth`.
+json fill_with(const json& root, const json& node, const std::string& big, int depth) {
+  if (depth <= 0 || !node.is_object()) return big;
+  if (auto ref = node.find("$ref"); ref != node.end()) {
+    const std::string pointer = ref->get<std::string>().substr(1);  // "#/$defs/x" -> "/$defs/x"
+    return fill_with(root, root.at(json::json_pointer(pointer)), big, depth - 1);
+  }
+  for (const char* combinator : {"oneOf", "anyOf", "allOf"}) {
+    if (auto it = node.find(combinator); it != node.end() && !it->empty()) {
+      return fill_with(root, it->front(), big, depth - 1);
+    }
+  }
+  if (node.contains("properties") || node.contains("patternProperties")) {
+    json obj = json::object();
+    if (auto it = node.find("properties"); it != node.end()) {
+      for (const auto& [key, sub] : it->items()) obj[key] = fill_with(root, sub, big, depth - 1);
+    }
+    if (auto it = node.find("patternProperties"); it != node.end() && !it->empty()) {
+      obj[big] = fill_with(root, it->begin().value(), big, depth - 1);
+    }
+    return obj;
+  }
+  if (auto it = node.find("items"); it != node.end()) {
+    return json::array({fill_with(root, *it, big, depth - 1)});
+  }
+  return big;
+}
+
+TEST(JsonSchemaString, ShippedSchemasSurviveAOneMegabyteString) {
+  const std::string big(1 << 20, '7');
+  const auto names = schema_text_names();
+  ASSERT_FALSE(names.empty());
+  for (const auto name : names) {
+    const json root = parse_json_text(*schema_text(name), std::string(name));
+    const JsonSchema schema = JsonSchema::parse(root, std::string(name));
+    const json doc = fill_with(root, root, big, 12);
+    ASSERT_TRUE(doc.is_object()) << name;
+    std::vector<SchemaViolation> violations;
+    EXPECT_NO_THROW(violations = schema.validate(doc)) << name;
+    EXPECT_FALSE(violations.empty()) << name;  // "format" alone cannot be a megabyte of 7s
+    for (const auto& v : violations) EXPECT_LT(v.message.size(), 300u) << name << " " << v.path;
+    EXPECT_NO_THROW(schema.validate(json(big))) << name;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Combinators
 

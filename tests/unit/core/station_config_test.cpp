@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -50,12 +51,41 @@ TEST(StationConfig, RoundTripsThroughJson) {
   EXPECT_EQ(b.imus[0].mount_rpy_deg, Eigen::Vector3d(0, 0, 90));
 }
 
+TEST(StationConfig, TableTiltIsOptionalAndRoundTrips) {
+  EXPECT_EQ(StationConfig::from_json(minimal_station(), "s.json").table.tilt_rad,
+            Eigen::Vector2d::Zero());
+  json doc = minimal_station();
+  doc["table"]["tilt_rad"] = {{"east", 2e-4}, {"north", -3e-4}};
+  const StationConfig a = StationConfig::from_json(doc, "a.json");
+  EXPECT_EQ(a.table.tilt_rad, Eigen::Vector2d(2e-4, -3e-4));
+  const StationConfig b = StationConfig::from_json(a.to_json(), "b.json");
+  EXPECT_EQ(b.table.tilt_rad, a.table.tilt_rad);
+  doc["table"]["tilt_rad"] = {{"east", 0.5}};  // not a small angle
+  EXPECT_THROW(StationConfig::from_json(doc, "s.json"), SchemaError);
+}
+
+TEST(StationConfig, AxesTypedWithFewDecimalsAreAcceptedAndNormalised) {
+  json doc = minimal_station();
+  doc["table"]["inner_axis"] = {0.7071, 0, 0.7071};  // norm 0.99999 (off by 1e-5)
+  const StationConfig c = StationConfig::from_json(doc, "s.json");
+  EXPECT_NEAR(c.table.inner_axis.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(c.table.inner_axis.x(), std::sqrt(0.5), 1e-15);
+  doc["table"]["inner_axis"] = {0, 0, 0.998};  // off by 2e-3: not meant as a unit vector
+  try {
+    StationConfig::from_json(doc, "s.json");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.json: table.inner_axis"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(StationConfig, ListsEverySchemaViolationWithItsPath) {
   json doc = minimal_station();
-  doc["site"]["latitude_deg"] = 95.0;                  // above the maximum 90
-  doc["table"]["outer"].erase("max_accel_dps2");      // required
-  doc["imus"][0]["backend"] = "telepathy";             // not an allowed backend
-  doc["chamber"]["max_ramp"] = 2;                      // unknown key
+  doc["site"]["latitude_deg"] = 95.0;             // above the maximum 90
+  doc["table"]["outer"].erase("max_accel_dps2");  // required
+  doc["imus"][0]["backend"] = "telepathy";        // not an allowed backend
+  doc["chamber"]["max_ramp"] = 2;                 // unknown key
   try {
     StationConfig::from_json(doc, "bad.json");
     FAIL() << "expected a SchemaError";

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <vector>
 
 #include "core/rotation.hpp"
 
@@ -17,6 +18,8 @@ core::Site test_site() {
   return s;
 }
 
+const Eigen::Vector2d kLevel = Eigen::Vector2d::Zero();
+
 ImuTruth quiet_truth() {
   ImuTruth t;
   t.sample_rate_hz = 100.0;
@@ -27,13 +30,13 @@ ImuTruth quiet_truth() {
 
 TEST(ImuSim, NoiseFreeOutputIsInputPlusDeterministicErrors) {
   const ImuTruth truth = quiet_truth();
-  ImuSim imu(truth, {}, test_site(), 7);
+  ImuSim imu(truth, {}, test_site(), kLevel, 7);
   imu.power_on(0.0);
   TableKinematics k;
   k.outer_deg = 10.0;
   k.inner_rate_dps = 20.0;
   const auto s = imu.sample(1.0, k, 30.0);
-  const ImuInputs in = imu_inputs(truth, {}, test_site(), k, 30.0);
+  const ImuInputs in = imu_inputs(truth, {}, test_site(), kLevel, k, 30.0);
   const auto [eg, ea] = deterministic_errors(truth, in);
   EXPECT_NEAR((s.gyro_dps - (in.rate_dps + eg)).norm(), 0.0, 1e-12);
   EXPECT_NEAR((s.accel_mps2 - (in.force_mps2 + ea)).norm(), 0.0, 1e-12);
@@ -43,7 +46,7 @@ TEST(ImuSim, NoiseFreeOutputIsInputPlusDeterministicErrors) {
 TEST(ImuSim, SequenceCounterWrapsAtItsModulus) {
   ImuTruth truth = quiet_truth();
   truth.sequence_modulus = 4;
-  ImuSim imu(truth, {}, test_site(), 7);
+  ImuSim imu(truth, {}, test_site(), kLevel, 7);
   imu.power_on(0.0);
   std::vector<std::uint32_t> seq;
   for (int k = 0; k < 6; ++k) seq.push_back(imu.sample(k * 0.01, {}, 25.0).sequence);
@@ -54,7 +57,7 @@ TEST(ImuSim, DeviceClockDriftsAndReceiveTimeLags) {
   ImuTruth truth = quiet_truth();
   truth.clock_drift_ppm = 50.0;
   truth.latency_s = 0.004;
-  ImuSim imu(truth, {}, test_site(), 7);
+  ImuSim imu(truth, {}, test_site(), kLevel, 7);
   imu.power_on(100.0);
   const auto s = imu.sample(1100.0, {}, 25.0);
   EXPECT_NEAR(s.device_time_s, 1000.0 * (1.0 + 50e-6), 1e-9);  // device clock starts at power-on
@@ -64,7 +67,7 @@ TEST(ImuSim, DeviceClockDriftsAndReceiveTimeLags) {
 TEST(ImuSim, TurnOnBiasIsConstantWithinAPowerUpAndNewAtEach) {
   ImuTruth truth = quiet_truth();
   truth.gyro_noise.turn_on_bias = Eigen::Vector3d(1e-3, 2e-3, 3e-3);  // deg/s
-  ImuSim imu(truth, {}, test_site(), 11);
+  ImuSim imu(truth, {}, test_site(), kLevel, 11);
   const int cycles = 2000;
   std::vector<double> z;
   for (int c = 0; c < cycles; ++c) {
@@ -88,12 +91,12 @@ TEST(ImuSim, WhiteNoiseDensityGivesTheDatasheetArw) {
   ImuTruth truth;
   truth.sample_rate_hz = 200.0;
   truth.gyro_noise.white.setConstant(0.3 / 60.0);  // 0.3 deg/sqrt(h) in deg/s/sqrt(Hz)
-  ImuSim imu(truth, {}, test_site(), 3);
+  ImuSim imu(truth, {}, test_site(), kLevel, 3);
   imu.power_on(0.0);
   // Averages over 1 s have sigma N / sqrt(1 s) = 0.005 deg/s (the ARW definition).
   const int seconds = 2000;
   std::vector<double> means;
-  const Eigen::Vector3d truth_rate = imu_inputs(truth, {}, test_site(), {}, 25).rate_dps;
+  const Eigen::Vector3d truth_rate = imu_inputs(truth, {}, test_site(), kLevel, {}, 25).rate_dps;
   for (int s = 0; s < seconds; ++s) {
     double sum = 0.0;
     for (int k = 0; k < 200; ++k) sum += imu.sample(s + k / 200.0, {}, 25.0).gyro_dps.x();
@@ -109,7 +112,7 @@ TEST(ImuSim, QuantizedOutputIsOnTheLsbGrid) {
   ImuTruth truth;
   truth.gyro_noise.white.setConstant(0.01);
   truth.gyro_noise.quantization = 1e-3;
-  ImuSim imu(truth, {}, test_site(), 5);
+  ImuSim imu(truth, {}, test_site(), kLevel, 5);
   imu.power_on(0.0);
   for (int k = 0; k < 100; ++k) {
     const double v = imu.sample(k * 0.01, {}, 25.0).gyro_dps.y();
@@ -117,25 +120,59 @@ TEST(ImuSim, QuantizedOutputIsOnTheLsbGrid) {
   }
 }
 
-TEST(ImuSim, OutputFilterLimitsTheBandwidth) {
+// Sum over all lags of the squared autocorrelation of a filter's output for white input:
+// the mean square of n output samples then has relative variance 2 * this / n.
+double squared_autocorrelation_sum(const ButterworthLowPass& prototype) {
+  ButterworthLowPass lp = prototype;
+  lp.reset(0.0);
+  std::vector<double> h;
+  for (int k = 0; k < 20000; ++k) h.push_back(lp.filter(k == 0 ? 1.0 : 0.0));
+  double r0 = 0.0;
+  for (const double v : h) r0 += v * v;
+  double sum = 0.0;
+  for (std::size_t lag = 0; lag < h.size(); ++lag) {
+    double r = 0.0;
+    for (std::size_t i = 0; i + lag < h.size(); ++i) r += h[i] * h[i + lag];
+    if (lag > 0 && std::abs(r) < 1e-9 * r0) break;
+    sum += (lag == 0 ? 1.0 : 2.0) * (r / r0) * (r / r0);
+  }
+  return sum;
+}
+
+TEST(ImuSim, EachSensorsOutputFilterHasItsOwnBandwidth) {
   ImuTruth truth;
   truth.sample_rate_hz = 1000.0;
-  truth.bandwidth_hz = 20.0;
-  truth.accel_noise.white.setConstant(1e-3);
-  ImuSim filtered(truth, {}, test_site(), 9);
-  truth.bandwidth_hz = 0.0;
-  ImuSim raw(truth, {}, test_site(), 9);
-  filtered.power_on(0.0);
-  raw.power_on(0.0);
-  double var_f = 0.0, var_r = 0.0;
-  const int n = 20000;
+  truth.gyro_bandwidth_hz = 50.0;
+  truth.accel_bandwidth_hz = 20.0;
+  truth.gyro_noise.white.setConstant(1e-3);   // deg/s/sqrt(Hz)
+  truth.accel_noise.white.setConstant(2e-3);  // m/s^2/sqrt(Hz)
+  ImuSim imu(truth, {}, test_site(), kLevel, 9);
+  imu.power_on(0.0);
+  const Eigen::Vector3d reference = imu_inputs(truth, {}, test_site(), kLevel, {}, 25.0).rate_dps;
+  const int n = 200000;
+  double gyro_sq = 0.0, accel_sq = 0.0;
   for (int k = 0; k < n; ++k) {
-    var_f += std::pow(filtered.sample(k * 1e-3, {}, 25.0).accel_mps2.x(), 2);
-    var_r += std::pow(raw.sample(k * 1e-3, {}, 25.0).accel_mps2.x(), 2);
+    const auto s = imu.sample(k * 1e-3, {}, 25.0);
+    gyro_sq += std::pow(s.gyro_dps.x() - reference.x(), 2);
+    accel_sq += std::pow(s.accel_mps2.x(), 2);  // body x is level: no gravity
   }
-  // A 2nd-order Butterworth passes ENBW = 1.11 fc of the 500 Hz band: variance ratio ~0.0444.
-  const double ratio = var_f / var_r;
-  EXPECT_NEAR(ratio, 1.1107 * 20.0 / 500.0, 0.01);
+  // Filtered white noise of per-sample sigma N sqrt(fs) has variance sigma^2 * sum h_k^2.
+  struct Case {
+    const char* sensor;
+    double mean_square, density, bandwidth_hz;
+  };
+  for (const Case& c :
+       {Case{"gyro", gyro_sq / n, 1e-3, 50.0}, Case{"accel", accel_sq / n, 2e-3, 20.0}}) {
+    const ButterworthLowPass lp(truth.filter_order, c.bandwidth_hz, truth.sample_rate_hz);
+    const double want = c.density * c.density * truth.sample_rate_hz * lp.white_noise_power_gain();
+    // Statistical tolerance: 4 standard errors of the mean square of n correlated samples, plus
+    // the settling of the filter primed on the first (noisy) sample, at most ~1/ENBW seconds of
+    // one sample's variance.
+    const double sd = std::sqrt(2.0 * squared_autocorrelation_sum(lp) / n);
+    const double priming = truth.sample_rate_hz / lp.noise_equivalent_bandwidth_hz() /
+                           (n * lp.white_noise_power_gain());
+    EXPECT_NEAR(c.mean_square / want, 1.0, 4.0 * sd + priming) << c.sensor;
+  }
 }
 
 TEST(ImuSim, SameSeedSameSamplesOtherSeedOtherSamples) {
@@ -144,7 +181,7 @@ TEST(ImuSim, SameSeedSameSamplesOtherSeedOtherSamples) {
   truth.accel_noise.gauss_markov_sigma.setConstant(1e-3);
   truth.gyro_noise.turn_on_bias.setConstant(1e-3);
   auto run = [&](std::uint64_t seed) {
-    ImuSim imu(truth, {}, test_site(), seed);
+    ImuSim imu(truth, {}, test_site(), kLevel, seed);
     imu.power_on(0.0);
     std::vector<double> v;
     for (int k = 0; k < 50; ++k) {

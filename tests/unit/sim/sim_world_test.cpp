@@ -16,6 +16,35 @@ Eigen::Vector3d mean_accel(const std::vector<core::ImuSample>& s) {
   return m / static_cast<double>(s.size());
 }
 
+// How far a mean of accel axis `i` over `capture_s` may lie from the ideal reading (+-g on the
+// vertical axis, 0 on the others) for this IMU: what its truth can add at |f| = g (bias,
+// turn-on bias, scale, asymmetry, quadratic, cross-axis misalignment, temperature terms at the
+// present IMU temperature) plus 4 standard deviations of the capture's noise (white over the
+// capture, Gauss-Markov and flicker at most their sigma, random walk grown since power-up).
+double accel_tolerance(SimWorld& w, int i, bool vertical, double capture_s) {
+  const ImuTruth& t = w.imu(0).truth();
+  const double g = w.config().site.gravity();
+  const double g0 = core::kStandardGravity;
+  const double dT = w.chamber().imu_temperature_c() - t.temperature_ref_c;
+  double bound = std::abs(t.accel_bias[i]) + std::abs(w.imu(0).turn_on_accel_bias()[i]);
+  if (vertical) {
+    bound += 1e-6 * g *
+             (std::abs(t.accel_scale[i]) + std::abs(t.accel_scale_asymmetry[i]) +
+              std::abs(t.accel_temp_scale[i] * dT));
+    bound += 1e-6 * g0 * std::abs(t.accel_quadratic[i]) * (g / g0) * (g / g0);
+  }
+  bound += g * t.accel_misalignment.row(i).cwiseAbs().maxCoeff();
+  double power = 1.0;
+  for (const auto& c : t.accel_temp_bias) {
+    power *= std::abs(dT);
+    bound += std::abs(c[i]) * power;
+  }
+  const TriadNoise& n = t.accel_noise;
+  const double noise = n.white[i] / std::sqrt(capture_s) + n.gauss_markov_sigma[i] +
+                       n.bias_instability[i] + n.random_walk[i] * std::sqrt(w.now_s());
+  return bound + 4.0 * noise;
+}
+
 void settle(SimWorld& w) {
   for (int k = 0; k < 600; ++k) {
     w.advance(0.1);
@@ -47,14 +76,52 @@ TEST(SimWorld, GravityFollowsTheTablePosition) {
   w.advance(1.0);
   w.take_samples(0);
   w.advance(5.0);
-  EXPECT_NEAR(mean_accel(w.take_samples(0)).z(), g, 0.02);  // bias is a few mg at most
+  const Eigen::Vector3d up = mean_accel(w.take_samples(0));
   ASSERT_TRUE(w.table().outer().command_position(180.0));
   settle(w);
   w.take_samples(0);
   w.advance(5.0);
   const Eigen::Vector3d down = mean_accel(w.take_samples(0));
-  EXPECT_NEAR(down.z(), -g, 0.02);
-  EXPECT_NEAR(std::hypot(down.x(), down.y()), 0.0, 0.02);
+  for (int i = 0; i < 3; ++i) {
+    const double tolerance = accel_tolerance(w, i, i == 2, 5.0);
+    EXPECT_LT(tolerance, 0.02) << "axis " << i;  // never wider than the old blanket 20 mm/s^2
+    EXPECT_NEAR(up[i], i == 2 ? g : 0.0, tolerance) << "axis " << i;
+    EXPECT_NEAR(down[i], i == 2 ? -g : 0.0, tolerance) << "axis " << i;
+  }
+}
+
+TEST(SimWorld, StationTableTiltReachesEveryImu) {
+  // A quiet IMU on a level table top whose base is tilted 1 mrad about East: the specific
+  // force (I - [t x]) (0, 0, g) has a North part g t_east, which body y (North at zero) reads.
+  core::StationConfig c = default_station();
+  c.table.tilt_rad = {1e-3, 0.0};
+  c.imus[0].model.clear();
+  c.imus[0].truth = {{"format", "calstand-truth/1"}, {"output", {{"sample_rate_hz", 100}}}};
+  SimWorld w(c);
+  w.advance(1.0);
+  const Eigen::Vector3d f = mean_accel(w.take_samples(0));
+  const double g = c.site.gravity();
+  EXPECT_NEAR(f.y(), g * std::sin(1e-3), 1e-12);  // the exact rotation; ~ g t to first order
+  EXPECT_NEAR(f.x(), 0.0, 1e-12);
+  EXPECT_NEAR(f.z(), g * std::cos(1e-3), 1e-12);
+}
+
+TEST(SimWorld, TruthTheSimulatorCannotRunIsAnInputErrorNamingTheImu) {
+  // Valid by the schema and ImuTruth::validate(), but the flicker model needs samples faster
+  // than its shortest correlation time (1 s): ImuSim's std::invalid_argument becomes an
+  // InputError naming the IMU.
+  core::StationConfig c = default_station();
+  c.imus[0].model.clear();
+  c.imus[0].truth = {{"format", "calstand-truth/1"},
+                     {"noise", {{"gyro", {{"bias_instability_coefficient_deg_per_h", 1.0}}}}},
+                     {"output", {{"sample_rate_hz", 0.5}}}};
+  try {
+    SimWorld w(c);
+    FAIL() << "expected an InputError";
+  } catch (const core::InputError& e) {
+    EXPECT_EQ(e.where(), "imus[0]") << e.what();
+    EXPECT_NE(std::string(e.what()).find("BiasInstability"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SimWorld, UpDownPairsRecoverTheTrueAccelerometerBias) {
@@ -170,6 +237,31 @@ TEST(SimWorld, UnknownModelIsAnInputErrorNamingTheField) {
   } catch (const core::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("imus[0].model"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("ln200"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace calstand::sim
+
+namespace calstand::sim {
+namespace {
+
+// Regression: nine hours into a campaign the control ticks (0.1 s added up) had drifted 1e-7 s
+// off the IMU sample grid, so one physics step per tick was that much longer or shorter; the
+// servo, then discretised with the profile held over a step, turned such a step into a rate
+// ripple of 1.3e-3 deg/s at 300 deg/s and the rate never "settled". Long runs must settle.
+TEST(SimWorld, RateSettlesAtLateStationTimes) {
+  for (double start : {0.0, 33000.0, 400000.0}) {
+    SimWorld w(default_station(), start);
+    w.advance(0.1 + 3.3e-7);  // put the ticks off the sample grid, as hours of ticks do
+    ASSERT_TRUE(w.table().outer().command_rate(300.0));
+    bool settled = false;
+    for (int k = 0; k < 600 && !settled; ++k) {
+      w.advance(0.1);
+      settled = w.table_state().outer.in_position;
+    }
+    EXPECT_TRUE(settled) << "start " << start;
+    EXPECT_NEAR(w.table().outer().true_rate_dps(), 300.0, 1e-4) << "start " << start;
   }
 }
 

@@ -30,15 +30,25 @@ TEST(SpecSheet, Ln200NoiseFiguresConvertToSimulatorUnits) {
   EXPECT_NEAR(t.accel_noise.white.x(), 50e-6 * core::kStandardGravity, 1e-15);
   EXPECT_NEAR(t.accel_noise.gauss_markov_sigma.x(), 50e-6 * core::kStandardGravity, 1e-15);
   EXPECT_DOUBLE_EQ(t.accel_noise.gauss_markov_tau_s, 60.0);
-  // Output: 400 Hz; the narrower bandwidth (accel 100 Hz) filters both.
+  // Output: 400 Hz; each sensor has its own filter: accel 100 Hz, while the gyro's 500 Hz is
+  // above Nyquist (200 Hz) and filters nothing.
   EXPECT_DOUBLE_EQ(t.sample_rate_hz, 400.0);
-  EXPECT_DOUBLE_EQ(t.bandwidth_hz, 100.0);
+  EXPECT_DOUBLE_EQ(t.accel_bandwidth_hz, 100.0);
+  EXPECT_DOUBLE_EQ(t.gyro_bandwidth_hz, 0.0);
 }
 
 TEST(SpecSheet, Adis16488InRunStabilityBecomesTheFlickerCoefficient) {
   const ImuTruth t = truth_from_spec(*builtin_spec("adis16488"), "adis16488", 1);
-  // The Allan floor 5.1 deg/h is 0.664 B.
-  EXPECT_NEAR(t.gyro_noise.bias_instability.x() * 0.664 * 3600.0, 5.1, 1e-9);
+  // The sheet's 5.1 deg/h is the Allan deviation floor, which IEEE Std 952 puts at
+  // sqrt(2 ln2 / pi) B for flicker of coefficient B; computed here independently.
+  const double floor_per_coefficient = std::sqrt(2.0 * std::log(2.0) / std::acos(-1.0));
+  EXPECT_NEAR(floor_per_coefficient, 0.6643, 1e-4);
+  EXPECT_NEAR(t.gyro_noise.bias_instability.x() * 3600.0, 5.1 / floor_per_coefficient, 1e-12);
+  EXPECT_NEAR(t.accel_noise.bias_instability.y() / (1e-3 * core::kStandardGravity),
+              0.1 / floor_per_coefficient, 1e-12);  // 0.1 mg floor
+  // Both sensors at 330 Hz, below Nyquist of 2460 Hz.
+  EXPECT_DOUBLE_EQ(t.gyro_bandwidth_hz, 330.0);
+  EXPECT_DOUBLE_EQ(t.accel_bandwidth_hz, 330.0);
   EXPECT_NEAR(t.gyro_noise.white.x() * 60.0, 0.26, 1e-12);
   EXPECT_EQ(t.gyro_temp_bias.size(), 1u);
   EXPECT_GT(t.gyro_g_sensitivity.cwiseAbs().maxCoeff(), 0.0);
@@ -88,6 +98,41 @@ TEST(SpecSheet, WrongUnitNamesTheField) {
   }
   spec = *builtin_spec("ln200");
   spec["gyro"]["bias_repeatabilty"] = "1 deg/h";  // typo: unknown field
+  EXPECT_THROW(truth_from_spec(spec, "mine.json", 1), core::SchemaError);
+}
+
+// The text of the error truth_from_spec throws for `spec`, or "" when it draws a unit.
+std::string spec_error(const nlohmann::json& spec) {
+  try {
+    truth_from_spec(spec, "mine.json", 1);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SpecSheet, NegativeOrZeroFiguresNameTheSheetField) {
+  auto spec = *builtin_spec("ln200");
+  spec["gyro"]["random_walk"] = "-0.07 deg/sqrt(h)";
+  EXPECT_EQ(spec_error(spec),
+            "mine.json: gyro.random_walk: -0.07 deg/sqrt(h) must not be negative");
+  spec = *builtin_spec("ln200");
+  spec["accel"]["bias_variation"]["sigma"] = "-50 ug";
+  EXPECT_EQ(spec_error(spec), "mine.json: accel.bias_variation.sigma: -50 ug must not be negative");
+  spec = *builtin_spec("ln200");
+  spec["accel"]["bias_variation"]["correlation_time"] = "0 s";
+  EXPECT_EQ(spec_error(spec),
+            "mine.json: accel.bias_variation.correlation_time: 0 s must be positive");
+  spec = *builtin_spec("ln200");
+  spec["output"]["sample_rate"] = "0 Hz";
+  EXPECT_EQ(spec_error(spec), "mine.json: output.sample_rate: 0 Hz must be positive");
+  spec = *builtin_spec("ln200");
+  spec["gyro"]["bias_repeatability"] = "1e400 deg/h";  // overflows to infinity
+  EXPECT_NE(spec_error(spec).find("gyro.bias_repeatability"), std::string::npos)
+      << spec_error(spec);
+  // Rates and times cannot carry a sign at all: the schema already refuses it.
+  spec = *builtin_spec("ln200");
+  spec["output"]["sample_rate"] = "-400 Hz";
   EXPECT_THROW(truth_from_spec(spec, "mine.json", 1), core::SchemaError);
 }
 

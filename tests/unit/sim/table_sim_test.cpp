@@ -1,5 +1,7 @@
 #include "sim/table_sim.hpp"
 
+#include "sim/noise.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -383,6 +385,60 @@ TEST(TableSim, StepsBothAxesAndReportsThem) {
   EXPECT_NEAR(s.outer.angle_deg, -30.0, 1e-3);
   EXPECT_NEAR(s.inner.rate_dps, 10.0, 1e-3);
   EXPECT_EQ(s.inner.mode, core::AxisMode::kRate);
+}
+
+}  // namespace
+}  // namespace calstand::sim
+
+namespace calstand::sim {
+namespace {
+
+// After hours at 300 deg/s the continuous angle is in the millions of degrees; rates and
+// moves must still settle to their tolerances there.
+TEST(TableAxisSim, RateStaysSettledAfterHoursOfTurning) {
+  AxisLimits limits;
+  limits.max_rate_dps = 400.0;
+  limits.max_accel_dps2 = 300.0;
+  TableAxisSim axis(limits);
+  ASSERT_TRUE(axis.command_rate(300.0));
+  const double dt = 1.0 / 400.0;
+  for (int k = 0; k < 400 * 3600 * 3; ++k) axis.step(dt);  // 3 h: 3.2e6 deg of travel
+  ASSERT_TRUE(axis.command_rate(-300.0));
+  for (int k = 0; k < 400 * 10; ++k) axis.step(dt);
+  EXPECT_TRUE(axis.state().in_position);
+  EXPECT_NEAR(axis.true_rate_dps(), -300.0, 1e-6);
+  ASSERT_TRUE(axis.command_position(45.0));
+  for (int k = 0; k < 400 * 20; ++k) axis.step(dt);
+  EXPECT_TRUE(axis.state().in_position);
+  EXPECT_NEAR(axis.state().angle_deg, 45.0, 1e-3);
+}
+
+}  // namespace
+}  // namespace calstand::sim
+
+namespace calstand::sim {
+namespace {
+
+// Whatever the step lengths, a steady rate is exactly the command: the servo's discretisation
+// must not turn uneven steps into rate ripple (it once did, by 4e-6 relative per 1e-7 s).
+TEST(TableAxisSim, SteadyRateIsExactWithUnevenSteps) {
+  AxisLimits limits;
+  limits.max_rate_dps = 400.0;
+  limits.max_accel_dps2 = 300.0;
+  limits.servo_time_constant_s = 0.02;
+  TableAxisSim axis(limits);
+  ASSERT_TRUE(axis.command_rate(300.0));
+  for (int k = 0; k < 4000; ++k) axis.step(0.0025);
+  NormalSource jitter(3);
+  double worst = 0.0;
+  for (int k = 0; k < 4000; ++k) {
+    // Steps from 1 us to 5 ms, as a control tick that splits a sample period would make.
+    const double dt = k % 2 ? 1e-6 + 1e-3 * std::abs(jitter.next()) : 0.0025;
+    axis.step(dt);
+    worst = std::max(worst, std::abs(axis.true_rate_dps() - 300.0));
+  }
+  EXPECT_LT(worst, 1e-6);
+  EXPECT_TRUE(axis.state().in_position);
 }
 
 }  // namespace

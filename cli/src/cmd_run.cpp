@@ -1,0 +1,190 @@
+// `calstand run`: runs a procedure in the foreground on a station (the embedded simulated one
+// by default), recording everything in a SQLite file; `--resume RUN_ID` continues a run that
+// was cut off (power loss, kill -9) at its first unfinished step.
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "core/station_config.hpp"
+#include "daemon/run_engine.hpp"
+#include "daemon/store_journal.hpp"
+#include "drivers/station.hpp"
+#include "procedures/plan.hpp"
+#include "procedures/procedure.hpp"
+#include "progress_bar.hpp"
+#include "sim/sim_world.hpp"
+#include "store/capture_writer.hpp"
+#include "store/database.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::cli {
+namespace {
+
+struct RunOptions {
+  std::string procedure;
+  std::string station_file;
+  std::string db = "calstand.db";
+  std::vector<std::string> set_args;
+  std::int64_t resume_run = 0;
+  bool quiet = false;
+};
+
+// Set by SIGINT/SIGTERM; the engine thread sees it at its next tick and aborts to safe state.
+std::atomic<int> g_stop_signal{0};
+extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
+
+std::vector<store::NewStep> steps_for_store(const procedures::Plan& plan) {
+  std::vector<store::NewStep> steps;
+  for (const auto& s : plan.steps) {
+    steps.push_back({std::string(procedures::to_string(s.kind)), s.label, s.to_json(), s.origin_path});
+  }
+  return steps;
+}
+
+// Runs `plan` as run `run_id`, from `first_step`; returns the process exit code.
+int execute(const core::StationConfig& station_config, const procedures::Plan& plan,
+            const std::string& db_path, store::Database& db, std::int64_t run_id,
+            std::size_t first_step, int first_attempt, double start_time_s, bool quiet) {
+  store::RunStore run_store(db);
+  store::CaptureWriter writer(db_path);
+  daemon::StoreJournal journal(run_store, writer, run_id);
+  auto station = drivers::make_station(station_config, start_time_s);
+
+  ProgressBar bar;
+  daemon::EngineOptions options;
+  daemon::RunEngine* engine_ptr = nullptr;
+  options.on_progress = [&](const daemon::Progress& p) {
+    if (const int sig = g_stop_signal.exchange(0); sig != 0 && engine_ptr) {
+      engine_ptr->abort(sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", "signal");
+    }
+    if (!quiet) bar.update(p);
+  };
+  daemon::RunEngine engine(*station, journal, plan, options);
+  engine_ptr = &engine;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  const daemon::RunState final_state = engine.run(first_step, first_attempt);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  bar.finish();
+
+  const auto summary = run_store.load_run(run_id).summary;
+  fmt::print("run {} {}: {}/{} steps, station time {}{}\n", run_id, to_string(final_state),
+             summary.steps_done, summary.steps_total,
+             format_duration(station->clock().now_s()),
+             engine.exit_reason().empty() ? "" : " (" + engine.exit_reason() + ")");
+  return final_state == daemon::RunState::kCompleted ? 0 : 1;
+}
+
+int run_new(const RunOptions& opt) {
+  const core::StationConfig station = opt.station_file.empty()
+                                          ? sim::default_station()
+                                          : core::StationConfig::load(opt.station_file);
+  const procedures::Procedure procedure = procedures::load_procedure(opt.procedure);
+  const procedures::Plan plan =
+      procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));
+  procedures::require_valid(plan);  // every violation, before anything is written or moves
+
+  store::Database db(opt.db);
+  store::RunStore run_store(db);
+  std::vector<store::DeviceRecord> devices{{"table", "table", station.table.backend},
+                                           {"chamber", "chamber", station.chamber.backend}};
+  for (const auto& imu : station.imus) devices.push_back({"imu", imu.name, imu.backend});
+  store::NewRun run;
+  run.station_id = run_store.upsert_station(station.name, station.to_json(), devices);
+  run.procedure_name = procedure.name;
+  run.procedure_text = procedure.source_text;
+  run.parameters = plan.parameters;
+  run.station_snapshot = station.to_json();
+  const std::int64_t run_id = run_store.create_run(run);
+  run_store.add_steps(run_id, steps_for_store(plan));
+  fmt::print("run {}: {} ({} steps, estimated {}) into {}\n", run_id, procedure.name,
+             plan.steps.size(), format_duration(plan.total_s), opt.db);
+  std::fflush(stdout);
+  return execute(station, plan, opt.db, db, run_id, 0, 1, 0.0, opt.quiet);
+}
+
+int run_resume(const RunOptions& opt) {
+  store::Database db(opt.db);
+  store::RunStore run_store(db);
+  const store::RunRecord record = run_store.load_run(opt.resume_run);
+  const auto& status = record.summary.status;
+  if (status == "completed" || status == "aborted" || status == "failed") {
+    throw core::InputError(fmt::format("--resume {}", opt.resume_run),
+                           fmt::format("the run is {}; only an interrupted run can resume", status));
+  }
+  const auto first = run_store.first_unfinished_step(opt.resume_run);
+  if (!first) throw core::InputError("--resume", "every step of the run is already done");
+
+  // The run's own procedure text, parameters and station, exactly as they were at its start.
+  const core::StationConfig station =
+      core::StationConfig::from_json(record.station_snapshot, fmt::format("run {} station", opt.resume_run));
+  const procedures::Procedure procedure =
+      procedures::parse_procedure(record.procedure_text, record.summary.procedure_name);
+  procedures::Overrides overrides;
+  for (const auto& [k, v] : record.parameters.items()) overrides[k] = v;
+  const procedures::Plan plan = procedures::make_plan(procedure, station, overrides);
+  procedures::require_valid(plan);
+  if (plan.steps.size() != record.steps.size()) {
+    throw core::InputError(fmt::format("run {}", opt.resume_run),
+                           "the stored procedure no longer expands to the stored steps");
+  }
+
+  // Whatever the cut-off attempts of unfinished steps left behind is discarded; the station
+  // clock continues from the last recorded time.
+  int next_attempt = 1;
+  double last_time_s = 0.0;
+  for (const auto& s : record.steps) {
+    if (s.ended_clock_s) last_time_s = std::max(last_time_s, *s.ended_clock_s);
+    if (s.started_clock_s) last_time_s = std::max(last_time_s, *s.started_clock_s);
+    if (s.index < *first) continue;
+    if (s.status == store::StepStatus::kCompleted || s.status == store::StepStatus::kSkipped) continue;
+    for (int a = 1; a <= s.attempts; ++a) run_store.discard_attempt(opt.resume_run, s.index, a);
+    if (s.index == *first) next_attempt = s.attempts + 1;
+  }
+  for (const auto& e : record.events) last_time_s = std::max(last_time_s, e.time_s);
+  store::EventRecord e;
+  e.run_id = opt.resume_run;
+  e.time_s = last_time_s;
+  e.kind = store::EventKind::kOperator;
+  e.source = "operator";
+  e.message = fmt::format("resume requested at step {}", *first);
+  run_store.add_event(e);
+  fmt::print("run {}: resuming {} at step {}/{}\n", opt.resume_run, procedure.name, *first + 1,
+             plan.steps.size());
+  std::fflush(stdout);
+  return execute(station, plan, opt.db, db, opt.resume_run, *first, next_attempt, last_time_s,
+                 opt.quiet);
+}
+
+}  // namespace
+
+void register_run(CLI::App& app) {
+  auto opt = std::make_shared<RunOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "run", "Run a procedure (library name or file) on the station, recording into SQLite");
+  cmd->add_option("procedure", opt->procedure, "Library name or procedure file");
+  cmd->add_option("--station", opt->station_file, "Station file (default: built-in simulator)");
+  cmd->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
+  cmd->add_option("--set", opt->set_args, "Override a parameter: NAME=VALUE (JSON)");
+  cmd->add_option("--resume", opt->resume_run, "Resume the interrupted run RUN_ID");
+  cmd->add_flag("--quiet", opt->quiet, "No progress bar");
+  cmd->callback([opt] {
+    int code = 0;
+    if (opt->resume_run > 0) {
+      code = run_resume(*opt);
+    } else {
+      if (opt->procedure.empty()) throw core::InputError("run", "a PROCEDURE or --resume RUN_ID is needed");
+      code = run_new(*opt);
+    }
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace calstand::cli

@@ -1,0 +1,123 @@
+// `calstand runs` and `calstand show`: what a database holds, for people and for scripts.
+#include <fmt/format.h>
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "commands.hpp"
+#include "store/database.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::cli {
+namespace {
+
+struct RunsOptions {
+  std::string db = "calstand.db";
+  std::int64_t run = 0;
+  bool as_json = false;
+};
+
+nlohmann::json summary_json(const store::RunSummary& r) {
+  return {{"id", r.id},
+          {"procedure", r.procedure_name},
+          {"status", r.status},
+          {"steps_done", r.steps_done},
+          {"steps_total", r.steps_total},
+          {"created", r.created_utc},
+          {"start", r.started_utc},
+          {"end", r.ended_utc},
+          {"exit_reason", r.exit_reason}};
+}
+
+void list_runs(const RunsOptions& opt) {
+  store::Database db(opt.db);
+  store::RunStore runs(db);
+  const auto list = runs.list_runs();
+  if (opt.as_json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& r : list) out.push_back(summary_json(r));
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  fmt::print("{:>5}  {:<22} {:<10} {:>11}  {:<24} {:<24}\n", "id", "procedure", "status", "steps",
+             "start", "end");
+  for (const auto& r : list) {
+    fmt::print("{:>5}  {:<22} {:<10} {:>5}/{:<5}  {:<24} {:<24}{}\n", r.id, r.procedure_name,
+               r.status, r.steps_done, r.steps_total, r.started_utc, r.ended_utc,
+               r.exit_reason.empty() ? "" : "  " + r.exit_reason);
+  }
+}
+
+void show_run(const RunsOptions& opt) {
+  store::Database db(opt.db);
+  store::RunStore runs(db);
+  const store::RunRecord r = runs.load_run(opt.run);
+  if (opt.as_json) {
+    nlohmann::json steps = nlohmann::json::array();
+    for (const auto& s : r.steps) {
+      steps.push_back({{"index", s.index},
+                       {"kind", s.kind},
+                       {"label", s.label},
+                       {"status", std::string(store::to_string(s.status))},
+                       {"attempts", s.attempts},
+                       {"commanded", s.commanded},
+                       {"start_s", s.started_clock_s ? nlohmann::json(*s.started_clock_s) : nlohmann::json()},
+                       {"end_s", s.ended_clock_s ? nlohmann::json(*s.ended_clock_s) : nlohmann::json()},
+                       {"reason", s.reason}});
+    }
+    nlohmann::json events = nlohmann::json::array();
+    for (const auto& e : r.events) {
+      events.push_back({{"time_s", e.time_s},
+                        {"wall", e.wall_utc},
+                        {"kind", std::string(store::to_string(e.kind))},
+                        {"source", e.source},
+                        {"message", e.message}});
+    }
+    nlohmann::json out = summary_json(r.summary);
+    out["parameters"] = r.parameters;
+    out["procedure_sha256"] = r.procedure_sha256;
+    out["steps"] = steps;
+    out["events"] = events;
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  const auto& s = r.summary;
+  fmt::print("run {}: {} [{}], {}/{} steps, started {}, ended {}{}\n", s.id, s.procedure_name,
+             s.status, s.steps_done, s.steps_total, s.started_utc.empty() ? "-" : s.started_utc,
+             s.ended_utc.empty() ? "-" : s.ended_utc,
+             s.exit_reason.empty() ? "" : "\n  exit reason: " + s.exit_reason);
+  fmt::print("parameters: {}\n\n", r.parameters.dump());
+  fmt::print("{:>5}  {:<16} {:<11} {:>3}  {:>10} {:>10}  {}\n", "step", "kind", "status", "try",
+             "start [s]", "end [s]", "label");
+  for (const auto& st : r.steps) {
+    fmt::print("{:>5}  {:<16} {:<11} {:>3}  {:>10} {:>10}  {}{}\n", st.index, st.kind,
+               store::to_string(st.status), st.attempts,
+               st.started_clock_s ? fmt::format("{:.1f}", *st.started_clock_s) : "-",
+               st.ended_clock_s ? fmt::format("{:.1f}", *st.ended_clock_s) : "-", st.label,
+               st.reason.empty() ? "" : "  (" + st.reason + ")");
+  }
+  fmt::print("\nevents:\n");
+  for (const auto& e : r.events) {
+    fmt::print("{:>10.1f}  {:<9} {:<15} {}\n", e.time_s, store::to_string(e.kind), e.source,
+               e.message);
+  }
+}
+
+}  // namespace
+
+void register_runs(CLI::App& app) {
+  auto opt = std::make_shared<RunsOptions>();
+  CLI::App* runs = app.add_subcommand("runs", "List the runs of a database");
+  runs->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
+  runs->add_flag("--json", opt->as_json, "Machine-readable output");
+  runs->callback([opt] { list_runs(*opt); });
+
+  CLI::App* show = app.add_subcommand("show", "Show one run: its steps and events");
+  show->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
+  show->add_option("--run", opt->run, "Run id")->required();
+  show->add_flag("--json", opt->as_json, "Machine-readable output");
+  show->callback([opt] { show_run(*opt); });
+}
+
+}  // namespace calstand::cli

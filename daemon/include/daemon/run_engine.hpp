@@ -1,0 +1,151 @@
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "daemon/run_journal.hpp"
+#include "daemon/run_state.hpp"
+#include "drivers/station.hpp"
+#include "procedures/plan.hpp"
+#include "procedures/procedure.hpp"
+
+namespace calstand::daemon {
+
+/// What to do when an IMU's sequence counter skips (samples lost on the way).
+enum class GapPolicy {
+  kRecord,         ///< record an event and keep the capture
+  kRepeatCapture,  ///< invalidate the capture and repeat it
+  kAbort,          ///< abort the run to the safe state
+};
+
+/// Where the run is, for progress bars and status requests.
+struct Progress {
+  RunState state = RunState::kIdle;
+  std::size_t step = 0;           ///< index of the current step
+  std::size_t steps = 0;          ///< number of steps in the run
+  std::string label;              ///< the current step's label
+  std::string phase;              ///< e.g. "soaking", "moving", "settling", "capturing"
+  double station_time_s = 0.0;
+  double eta_s = 0.0;             ///< estimated station time still needed [s]
+};
+
+/// Options of the engine, with defaults a lab would pick.
+struct EngineOptions {
+  double tick_s = 0.1;                  ///< control-loop period in station time [s]
+  double telemetry_period_s = 1.0;      ///< table/chamber telemetry recording period [s]
+  double move_timeout_s = 600.0;        ///< a move must settle within this [s]
+  double rate_settle_timeout_s = 120.0; ///< a rate must settle within this [s]
+  double capture_band_factor = 2.0;     ///< capture invalid when |air - setpoint| exceeds this
+                                        ///< times the soak tolerance
+  double imu_stale_s = 1.0;             ///< no sample for this long is a stale stream [s]
+  GapPolicy gap_policy = GapPolicy::kRecord;
+  int max_capture_attempts = 3;         ///< repeats of an invalidated capture before failing
+  /// Called from the engine's thread at most once per tick.
+  std::function<void(const Progress&)> on_progress;
+  /// Real seconds to sleep per tick while paused on a virtual clock (keeps a paused simulated
+  /// run from spinning the CPU).
+  double paused_real_sleep_s = 0.01;
+};
+
+/// Runs the expanded steps of a procedure on a station, recording everything in a journal.
+///
+/// Safety: any abort, failure or completion leaves the station safe (table at rest, chamber
+/// in standby); device calls never throw (drivers return Result), journal (storage) errors
+/// propagate after the station has been made safe.
+/// pause()/resume()/abort() may be called from any thread; run() runs on the caller's thread.
+class RunEngine {
+ public:
+  RunEngine(drivers::Station& station, RunJournal& journal, procedures::Plan plan,
+            EngineOptions options = {});
+
+  /// Runs from step `first_step` (0 for a new run; the first unfinished step when resuming
+  /// after a crash, in which case the temperature and table state that step needs are
+  /// re-established first). Blocks until the run is completed, aborted or failed.
+  /// `first_attempt` numbers the first step's attempt (after a crash: one more than the
+  /// attempts already recorded, whose samples the caller discarded).
+  RunState run(std::size_t first_step = 0, int first_attempt = 1);
+
+  /// Pause at the next step boundary, or at once (`immediate`: an interrupted capture is
+  /// discarded and repeated on resume).
+  void pause(bool immediate, const std::string& who = "operator");
+  void resume(const std::string& who = "operator");
+  /// Abort: the station goes to its safe state and the reason is recorded.
+  void abort(const std::string& why, const std::string& who = "operator");
+
+  RunState state() const { return state_.load(); }
+  Progress progress() const;
+  /// Why the run ended aborted or failed (empty otherwise).
+  std::string exit_reason() const;
+
+ private:
+  struct Interrupted {};  // unwinds a step on an immediate pause
+  struct Aborted {
+    std::string why;
+  };
+  struct StepFailed {
+    std::string why;
+  };
+
+  void execute(std::size_t index);
+  void set_temperature(const procedures::Step& step, std::size_t index);
+  void soak(const procedures::Step& step, std::size_t index);
+  void move(const procedures::Step& step, std::size_t index);
+  void rate(const procedures::Step& step, std::size_t index);
+  /// Records the IMUs for `duration_s`; repeats invalidated attempts; returns the good attempt.
+  int capture(std::size_t index, double duration_s, int first_attempt);
+  void wait_for(double duration_s, const char* phase);
+  void reestablish(std::size_t first_step);
+  void tick();
+  void poll_imus();
+  void check_interlocks();
+  void handle_pause_at_boundary();
+  void finish(RunState final_state, const std::string& reason);
+  void set_phase(const char* phase);
+  void record_event(EventKind kind, const std::string& source, const std::string& message);
+
+  drivers::Station& station_;
+  RunJournal& journal_;
+  procedures::Plan plan_;
+  EngineOptions options_;
+
+  std::atomic<RunState> state_{RunState::kIdle};
+  std::atomic<bool> pause_requested_{false};
+  std::atomic<bool> pause_immediate_{false};
+  std::atomic<bool> resume_requested_{false};
+  std::atomic<bool> abort_requested_{false};
+  mutable std::mutex mutex_;  // guards progress_, abort_reason_, exit_reason_
+  Progress progress_;
+  std::string abort_reason_;
+  std::string exit_reason_;
+
+  // Capture in progress (nullopt between captures).
+  struct Capturing {
+    std::size_t step;
+    int attempt;
+    std::optional<std::string> invalid_reason;
+  };
+  std::optional<Capturing> capturing_;
+  int attempt_ = 1;  // attempt number of the current step
+
+  // Temperature band of the last set_temperature step (captures must stay in it).
+  std::optional<double> setpoint_c_;
+  procedures::SoakCriterion soak_;
+  double band_c_ = 0.0;
+
+  // IMU stream health, per device.
+  struct ImuHealth {
+    std::optional<std::uint32_t> last_sequence;
+    double last_sample_s = 0.0;
+    bool stale = false;
+  };
+  std::vector<ImuHealth> imu_health_;
+  double last_telemetry_s_ = -1e300;
+};
+
+}  // namespace calstand::daemon

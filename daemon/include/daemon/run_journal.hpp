@@ -1,0 +1,39 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/chamber_state.hpp"
+#include "core/imu_sample.hpp"
+#include "core/table_state.hpp"
+#include "daemon/run_state.hpp"
+
+namespace calstand::daemon {
+
+/// Where the engine records what happens during a run. The store implements it on SQLite
+/// (StoreJournal); tests use an in-memory one. Times are station-clock seconds.
+///
+/// Contract the engine relies on for crash resume: after step_completed() returns, that step
+/// and every sample of its final attempt are durable; samples of other attempts are discarded.
+class RunJournal {
+ public:
+  virtual ~RunJournal() = default;
+  virtual void step_started(std::size_t step, int attempt, double t_s) = 0;
+  /// Queues the samples of one capture attempt of `device`; false when they could not be
+  /// queued (writer overflow), which the engine records as a fault.
+  virtual bool add_samples(std::size_t step, int attempt, const std::string& device,
+                           const std::vector<core::ImuSample>& samples) = 0;
+  /// Drops every sample of that attempt (an invalidated or interrupted capture).
+  virtual void discard_attempt(std::size_t step, int attempt, const std::string& why) = 0;
+  /// Makes the step and the samples of `attempt` durable, then returns.
+  virtual void step_completed(std::size_t step, int attempt, double t_s) = 0;
+  virtual void step_failed(std::size_t step, int attempt, double t_s, const std::string& why) = 0;
+  virtual void event(double t_s, EventKind kind, const std::string& source,
+                     const std::string& message) = 0;
+  virtual void table_telemetry(const core::TableState& state) = 0;
+  virtual void chamber_telemetry(const core::ChamberState& state) = 0;
+  virtual void run_state(RunState state, double t_s, const std::string& reason) = 0;
+};
+
+}  // namespace calstand::daemon

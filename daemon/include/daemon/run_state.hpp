@@ -1,0 +1,18 @@
+#pragma once
+
+#include <string_view>
+
+#include "store/records.hpp"
+
+namespace calstand::daemon {
+
+/// The states of a run. Terminal: completed, aborted, failed.
+enum class RunState { kIdle, kRunning, kPaused, kAborting, kCompleted, kAborted, kFailed };
+
+std::string_view to_string(RunState state);
+bool is_terminal(RunState state);
+
+/// What kind of thing an event records (the store's kinds: info, fault, interlock, operator).
+using EventKind = store::EventKind;
+
+}  // namespace calstand::daemon

@@ -1,0 +1,424 @@
+#include "daemon/run_engine.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+namespace calstand::daemon {
+
+using procedures::Step;
+using procedures::StepKind;
+
+RunEngine::RunEngine(drivers::Station& station, RunJournal& journal, procedures::Plan plan,
+                     EngineOptions options)
+    : station_(station),
+      journal_(journal),
+      plan_(std::move(plan)),
+      options_(std::move(options)),
+      imu_health_(station.imu_count()) {
+  progress_.steps = plan_.steps.size();
+}
+
+Progress RunEngine::progress() const {
+  std::lock_guard lock(mutex_);
+  return progress_;
+}
+
+std::string RunEngine::exit_reason() const {
+  std::lock_guard lock(mutex_);
+  return exit_reason_;
+}
+
+void RunEngine::pause(bool immediate, const std::string& who) {
+  pause_immediate_ = immediate;
+  pause_requested_ = true;
+  record_event(EventKind::kOperator, who,
+               immediate ? "pause requested (at once)" : "pause requested (at step boundary)");
+}
+
+void RunEngine::resume(const std::string& who) {
+  resume_requested_ = true;
+  record_event(EventKind::kOperator, who, "resume requested");
+}
+
+void RunEngine::abort(const std::string& why, const std::string& who) {
+  {
+    std::lock_guard lock(mutex_);
+    abort_reason_ = fmt::format("aborted by {}: {}", who, why);
+  }
+  abort_requested_ = true;
+  record_event(EventKind::kOperator, who, "abort requested: " + why);
+}
+
+void RunEngine::record_event(EventKind kind, const std::string& source,
+                             const std::string& message) {
+  journal_.event(station_.clock().now_s(), kind, source, message);
+}
+
+void RunEngine::set_phase(const char* phase) {
+  Progress snapshot;
+  {
+    std::lock_guard lock(mutex_);
+    progress_.phase = phase;
+    progress_.state = state_.load();
+    snapshot = progress_;
+  }
+  if (options_.on_progress) options_.on_progress(snapshot);
+}
+
+RunState RunEngine::run(std::size_t first_step, int first_attempt) {
+  state_ = RunState::kRunning;
+  attempt_ = first_attempt;
+  journal_.run_state(RunState::kRunning, station_.clock().now_s(), "");
+  try {
+    if (auto r = station_.bring_up(); !r) throw StepFailed{"station bring-up: " + r.message};
+    if (first_step > 0) reestablish(first_step);
+    std::size_t i = first_step;
+    while (i < plan_.steps.size()) {
+      handle_pause_at_boundary();
+      try {
+        execute(i);
+        attempt_ = 1;
+        ++i;
+      } catch (const Interrupted&) {
+        // Paused mid-step: wait for resume, then redo the step from its start with a new
+        // attempt number (the interrupted attempt's samples were discarded).
+        ++attempt_;
+        handle_pause_at_boundary();
+      }
+    }
+    finish(RunState::kCompleted, "");
+  } catch (const Aborted& a) {
+    finish(RunState::kAborted, a.why);
+  } catch (const StepFailed& f) {
+    finish(RunState::kFailed, f.why);
+  } catch (...) {
+    // Storage or programming error: the station is made safe before the error propagates.
+    station_.make_safe();
+    state_ = RunState::kFailed;
+    throw;
+  }
+  return state_.load();
+}
+
+void RunEngine::finish(RunState final_state, const std::string& reason) {
+  if (final_state != RunState::kCompleted) {
+    state_ = RunState::kAborting;
+    set_phase("making safe");
+  }
+  const auto safe = station_.make_safe();
+  if (!safe) record_event(EventKind::kFault, "engine", "making the station safe: " + safe.message);
+  {
+    std::lock_guard lock(mutex_);
+    exit_reason_ = reason;
+  }
+  state_ = final_state;
+  journal_.run_state(final_state, station_.clock().now_s(), reason);
+  set_phase(to_string(final_state).data());
+}
+
+void RunEngine::handle_pause_at_boundary() {
+  if (!pause_requested_) return;
+  pause_requested_ = false;
+  resume_requested_ = false;
+  state_ = RunState::kPaused;
+  journal_.run_state(RunState::kPaused, station_.clock().now_s(), "paused");
+  set_phase("paused");
+  while (!resume_requested_) {
+    if (abort_requested_) {
+      std::lock_guard lock(mutex_);
+      throw Aborted{abort_reason_};
+    }
+    // Time passes while paused (the chamber keeps holding); on a virtual clock the loop would
+    // otherwise run as fast as the CPU allows, so it also sleeps a little real time.
+    station_.wait_until(station_.clock().now_s() + options_.tick_s);
+    poll_imus();
+    if (station_.clock().is_virtual()) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(options_.paused_real_sleep_s));
+    }
+  }
+  resume_requested_ = false;
+  state_ = RunState::kRunning;
+  journal_.run_state(RunState::kRunning, station_.clock().now_s(), "resumed");
+}
+
+void RunEngine::execute(std::size_t index) {
+  const Step& step = plan_.steps[index];
+  {
+    std::lock_guard lock(mutex_);
+    progress_.step = index;
+    progress_.label = step.label;
+  }
+  journal_.step_started(index, attempt_, station_.clock().now_s());
+  switch (step.kind) {
+    case StepKind::kSetTemperature:
+      set_temperature(step, index);
+      break;
+    case StepKind::kMove:
+      move(step, index);
+      break;
+    case StepKind::kRate:
+      rate(step, index);
+      return;  // rate() commits its own capture attempt
+    case StepKind::kCapture:
+      attempt_ = capture(index, step.duration_s, attempt_);
+      return;
+    case StepKind::kWait:
+      wait_for(step.duration_s, "waiting");
+      break;
+  }
+  journal_.step_completed(index, attempt_, station_.clock().now_s());
+}
+
+void RunEngine::set_temperature(const Step& step, std::size_t index) {
+  if (auto r = station_.chamber().set_temperature(step.target_c, step.ramp_c_per_min); !r) {
+    throw StepFailed{fmt::format("step {} ({}): chamber refused {} degC: {}", index, step.label,
+                                 step.target_c, r.message)};
+  }
+  if (!step.wait_for_soak) {
+    // A ramp the following captures record: no band to hold them to.
+    setpoint_c_.reset();
+    return;
+  }
+  setpoint_c_ = step.target_c;
+  soak_ = step.soak;
+  band_c_ = options_.capture_band_factor * step.soak.tolerance_c;
+  soak(step, index);
+}
+
+void RunEngine::soak(const Step& step, std::size_t index) {
+  set_phase("soaking");
+  const double start = station_.clock().now_s();
+  double stable_since = -1.0;
+  for (;;) {
+    tick();
+    const double now = station_.clock().now_s();
+    const double air = station_.chamber().read_state().air_temperature_c;
+    if (std::abs(air - step.target_c) <= step.soak.tolerance_c) {
+      if (stable_since < 0.0) stable_since = now;
+      if (now - stable_since >= step.soak.stable_s) return;
+    } else {
+      stable_since = -1.0;
+    }
+    if (now - start > step.soak.timeout_s) {
+      throw StepFailed{fmt::format(
+          "step {} ({}): soak timeout after {:.0f} s: air {:.2f} degC, target {:.2f} +/- {:.2f}",
+          index, step.label, step.soak.timeout_s, air, step.target_c, step.soak.tolerance_c)};
+    }
+  }
+}
+
+void RunEngine::move(const Step& step, std::size_t index) {
+  if (auto r = station_.table().move_to(step.outer_deg, step.inner_deg); !r) {
+    throw StepFailed{fmt::format("step {} ({}): table refused the move: {}", index, step.label,
+                                 r.message)};
+  }
+  set_phase("moving");
+  const double start = station_.clock().now_s();
+  for (;;) {
+    tick();
+    const auto s = station_.table().read_state();
+    if (s.outer.in_position && s.inner.in_position) return;
+    if (station_.clock().now_s() - start > options_.move_timeout_s) {
+      throw StepFailed{fmt::format("step {} ({}): table did not settle within {:.0f} s", index,
+                                   step.label, options_.move_timeout_s)};
+    }
+  }
+}
+
+void RunEngine::rate(const Step& step, std::size_t index) {
+  const auto axis = step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
+  if (auto r = station_.table().set_rate(axis, step.rate_dps); !r) {
+    throw StepFailed{fmt::format("step {} ({}): table refused the rate: {}", index, step.label,
+                                 r.message)};
+  }
+  set_phase("settling");
+  const double start = station_.clock().now_s();
+  for (;;) {
+    tick();
+    const auto s = station_.table().read_state();
+    const auto& a = axis == drivers::TableAxis::kOuter ? s.outer : s.inner;
+    if (a.in_position) break;
+    if (station_.clock().now_s() - start > options_.rate_settle_timeout_s) {
+      throw StepFailed{fmt::format(
+          "step {} ({}): rate did not settle within {:.0f} s (axis at {:.6f} deg/s, mode {})",
+          index, step.label, options_.rate_settle_timeout_s, a.rate_dps, core::to_string(a.mode))};
+    }
+  }
+  wait_for(step.settle_s, "settling");
+  attempt_ = capture(index, step.duration_s, attempt_);
+  // The table comes to rest after a rate step unless the next step turns the same axis on.
+  if (step.rest_after) station_.table().set_rate(axis, 0.0);
+}
+
+int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) {
+  int attempt = first_attempt;
+  for (int tries = 0; tries < options_.max_capture_attempts; ++tries, ++attempt) {
+    if (tries > 0) journal_.step_started(index, attempt, station_.clock().now_s());
+    poll_imus();  // samples from before the capture belong to no step
+    capturing_ = Capturing{index, attempt, std::nullopt};
+    set_phase("capturing");
+    const double end = station_.clock().now_s() + duration_s;
+    try {
+      while (station_.clock().now_s() < end - 1e-9 && !capturing_->invalid_reason) tick();
+    } catch (...) {
+      // Interrupted, aborted or failed mid-capture: the partial attempt is worthless.
+      journal_.discard_attempt(index, attempt, "capture interrupted");
+      capturing_.reset();
+      throw;
+    }
+    const auto invalid = capturing_->invalid_reason;
+    capturing_.reset();
+    if (!invalid) {
+      journal_.step_completed(index, attempt, station_.clock().now_s());
+      return attempt;
+    }
+    journal_.discard_attempt(index, attempt, *invalid);
+    record_event(EventKind::kInterlock, "engine",
+                 fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
+    // Before repeating, command the setpoint again (the controller may have been upset) and
+    // let the chamber come back into its band (re-soak).
+    if (setpoint_c_) {
+      Step resoak;
+      resoak.label = "re-soak";
+      resoak.target_c = *setpoint_c_;
+      resoak.soak = soak_;
+      if (auto r = station_.chamber().set_temperature(resoak.target_c, std::nullopt); !r) {
+        throw StepFailed{fmt::format("step {}: re-soak: chamber refused {} degC: {}", index,
+                                     resoak.target_c, r.message)};
+      }
+      soak(resoak, index);
+    }
+  }
+  journal_.step_failed(index, attempt - 1, station_.clock().now_s(), "capture invalidated too often");
+  throw StepFailed{fmt::format("step {}: capture invalidated {} times", index,
+                               options_.max_capture_attempts)};
+}
+
+void RunEngine::wait_for(double duration_s, const char* phase) {
+  set_phase(phase);
+  const double end = station_.clock().now_s() + duration_s;
+  while (station_.clock().now_s() < end - 1e-9) tick();
+}
+
+void RunEngine::reestablish(std::size_t first_step) {
+  // Resuming after a crash: the step about to run needs the temperature and the table
+  // position the steps before it left. Re-run the last temperature step (with its soak) and
+  // the last move; a rate step sets its own rate.
+  std::optional<std::size_t> last_temperature, last_move;
+  for (std::size_t i = 0; i < first_step && i < plan_.steps.size(); ++i) {
+    if (plan_.steps[i].kind == StepKind::kSetTemperature) last_temperature = i;
+    if (plan_.steps[i].kind == StepKind::kMove) last_move = i;
+  }
+  record_event(EventKind::kInfo, "engine",
+               fmt::format("resuming at step {}: re-establishing temperature and position", first_step));
+  if (last_temperature) set_temperature(plan_.steps[*last_temperature], *last_temperature);
+  if (last_move) move(plan_.steps[*last_move], *last_move);
+}
+
+void RunEngine::tick() {
+  if (abort_requested_) {
+    std::lock_guard lock(mutex_);
+    throw Aborted{abort_reason_};
+  }
+  if (pause_requested_ && pause_immediate_) throw Interrupted{};
+  const double now = station_.clock().now_s();
+  station_.wait_until(now + options_.tick_s);
+  poll_imus();
+  check_interlocks();
+  const double t = station_.clock().now_s();
+  if (t - last_telemetry_s_ >= options_.telemetry_period_s) {
+    journal_.table_telemetry(station_.table().read_state());
+    journal_.chamber_telemetry(station_.chamber().read_state());
+    last_telemetry_s_ = t;
+  }
+  Progress snapshot;
+  {
+    std::lock_guard lock(mutex_);
+    progress_.state = state_.load();
+    progress_.station_time_s = t;
+    double remaining = 0.0;
+    for (std::size_t i = progress_.step + 1; i < plan_.step_duration_s.size(); ++i) {
+      remaining += plan_.step_duration_s[i];
+    }
+    progress_.eta_s = remaining;
+    snapshot = progress_;
+  }
+  if (options_.on_progress) options_.on_progress(snapshot);
+}
+
+void RunEngine::poll_imus() {
+  const double now = station_.clock().now_s();
+  for (std::size_t i = 0; i < station_.imu_count(); ++i) {
+    drivers::Imu& imu = station_.imu(i);
+    ImuHealth& health = imu_health_[i];
+    const auto samples = imu.poll();
+    if (samples.empty()) {
+      if (!health.stale && now - health.last_sample_s > options_.imu_stale_s) {
+        health.stale = true;
+        record_event(EventKind::kFault, imu.name(),
+                     fmt::format("stream stale: no sample for {:.1f} s", now - health.last_sample_s));
+        if (capturing_) capturing_->invalid_reason = imu.name() + " stream stale";
+      }
+      continue;
+    }
+    if (health.stale) {
+      health.stale = false;
+      record_event(EventKind::kInfo, imu.name(), "stream back");
+    }
+    health.last_sample_s = now;
+    const std::uint32_t modulus = imu.sequence_modulus();
+    std::uint64_t missing = 0;
+    for (const auto& s : samples) {
+      if (health.last_sequence) {
+        const std::uint32_t expected = (*health.last_sequence + 1) % modulus;
+        if (s.sequence != expected) {
+          missing += (s.sequence + modulus - expected) % modulus;
+        }
+      }
+      health.last_sequence = s.sequence;
+    }
+    if (missing > 0) {
+      record_event(EventKind::kFault, imu.name(),
+                   fmt::format("sequence gap: {} samples missing", missing));
+      if (capturing_) {
+        if (options_.gap_policy == GapPolicy::kRepeatCapture) {
+          capturing_->invalid_reason = fmt::format("{}: {} samples missing", imu.name(), missing);
+        } else if (options_.gap_policy == GapPolicy::kAbort) {
+          throw Aborted{fmt::format("{}: sequence gap of {} samples", imu.name(), missing)};
+        }
+      }
+    }
+    if (capturing_ && !capturing_->invalid_reason) {
+      if (!journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples)) {
+        record_event(EventKind::kFault, "writer", "capture queue overflow: samples not stored");
+        capturing_->invalid_reason = "capture writer overflow";
+      }
+    }
+  }
+}
+
+void RunEngine::check_interlocks() {
+  const auto table = station_.table().read_state();
+  if (table.outer.fault || table.inner.fault) {
+    const std::string why = table.outer.fault ? "outer axis: " + table.outer.fault_text
+                                              : "inner axis: " + table.inner.fault_text;
+    record_event(EventKind::kInterlock, "table", "table fault: " + why);
+    throw Aborted{"table fault: " + why};
+  }
+  const auto chamber = station_.chamber().read_state();
+  if (chamber.fault) {
+    record_event(EventKind::kInterlock, "chamber", "chamber fault: " + chamber.fault_text);
+    throw Aborted{"chamber fault: " + chamber.fault_text};
+  }
+  if (capturing_ && setpoint_c_ && !capturing_->invalid_reason &&
+      std::abs(chamber.air_temperature_c - *setpoint_c_) > band_c_) {
+    capturing_->invalid_reason = fmt::format(
+        "chamber air {:.2f} degC left the band {:.2f} +/- {:.2f} degC", chamber.air_temperature_c,
+        *setpoint_c_, band_c_);
+  }
+}
+
+}  // namespace calstand::daemon

@@ -1,0 +1,89 @@
+#include "daemon/store_journal.hpp"
+
+namespace calstand::daemon {
+
+StoreJournal::StoreJournal(store::RunStore& store, store::CaptureWriter& writer,
+                           std::int64_t run_id, double telemetry_period_s)
+    : store_(store),
+      writer_(writer),
+      run_id_(run_id),
+      table_decimator_(telemetry_period_s),
+      chamber_decimator_(telemetry_period_s) {}
+
+std::int64_t StoreJournal::step_id(std::size_t step) {
+  auto it = step_ids_.find(step);
+  if (it == step_ids_.end()) it = step_ids_.emplace(step, store_.step_id(run_id_, step)).first;
+  return it->second;
+}
+
+void StoreJournal::step_started(std::size_t step, int attempt, double t_s) {
+  store_.mark_step_running(run_id_, step, attempt, store::Stamp::now(t_s));
+}
+
+bool StoreJournal::add_samples(std::size_t step, int attempt, const std::string& device,
+                               const std::vector<core::ImuSample>& samples) {
+  const std::int64_t id = step_id(step);
+  const auto key = std::make_tuple(id, attempt, device);
+  auto it = streams_.find(key);
+  if (it == streams_.end()) {
+    it = streams_.emplace(key, writer_.open_stream(run_id_, id, attempt, device)).first;
+  }
+  return writer_.push(it->second, samples);
+}
+
+void StoreJournal::discard_attempt(std::size_t step, int attempt, const std::string& why) {
+  const std::int64_t id = step_id(step);
+  writer_.discard_attempt(id, attempt);
+  store_.discard_attempt(run_id_, step, attempt);
+  std::erase_if(streams_, [&](const auto& entry) {
+    return std::get<0>(entry.first) == id && std::get<1>(entry.first) == attempt;
+  });
+  store_.mark_step_invalidated(run_id_, step, why);
+}
+
+void StoreJournal::step_completed(std::size_t step, int attempt, double t_s) {
+  const std::int64_t id = step_id(step);
+  // Durable samples first, then the step's status: a crash in between leaves the step
+  // unfinished and its attempt is redone, never a completed step without its data.
+  writer_.commit_step(id, attempt);
+  std::erase_if(streams_, [&](const auto& entry) { return std::get<0>(entry.first) == id; });
+  store_.mark_step_completed(run_id_, step, attempt, store::Stamp::now(t_s));
+}
+
+void StoreJournal::step_failed(std::size_t step, int /*attempt*/, double t_s,
+                               const std::string& why) {
+  store_.mark_step_failed(run_id_, step, store::Stamp::now(t_s), why);
+}
+
+void StoreJournal::event(double t_s, EventKind kind, const std::string& source,
+                         const std::string& message) {
+  store::EventRecord e;
+  e.run_id = run_id_;
+  e.time_s = t_s;
+  e.kind = kind;
+  e.source = source;
+  e.message = message;
+  store_.add_event(e);
+}
+
+void StoreJournal::table_telemetry(const core::TableState& state) {
+  if (table_decimator_.accept(state.time_s)) store_.add_table_telemetry(run_id_, state);
+}
+
+void StoreJournal::chamber_telemetry(const core::ChamberState& state) {
+  if (chamber_decimator_.accept(state.time_s)) store_.add_chamber_telemetry(run_id_, state);
+}
+
+void StoreJournal::run_state(RunState state, double t_s, const std::string& reason) {
+  const auto stamp = store::Stamp::now(t_s);
+  std::optional<store::Stamp> started;
+  std::optional<store::Stamp> ended;
+  if (state == RunState::kRunning && !started_) {
+    started = stamp;
+    started_ = true;
+  }
+  if (is_terminal(state)) ended = stamp;
+  store_.set_run_status(run_id_, std::string(to_string(state)), started, ended, reason);
+}
+
+}  // namespace calstand::daemon

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+
+namespace calstand::drivers {
+
+/// Outcome of a device call. The cyclic driver path returns this and never throws: a refused
+/// command or a lost link says why, and the engine decides what follows.
+struct Result {
+  bool ok = true;
+  std::string message;  ///< why it failed; empty when ok
+
+  static Result success() { return {}; }
+  static Result failure(std::string why) { return {false, std::move(why)}; }
+  explicit operator bool() const { return ok; }
+};
+
+/// Lifecycle of a device (as ros2_control's hardware components): constructed with no I/O,
+/// configured (connection opened, identity checked), activated (accepting commands),
+/// deactivated (safe, still connected). A failure moves it to kError.
+enum class DeviceState { kUnconfigured, kInactive, kActive, kError };
+
+std::string_view to_string(DeviceState state);
+
+/// What every device has: a name, a lifecycle and named fault counters for `status`.
+class Device {
+ public:
+  virtual ~Device() = default;
+  virtual const std::string& name() const = 0;
+  virtual Result configure() = 0;
+  virtual Result activate() = 0;
+  virtual Result deactivate() = 0;
+  virtual DeviceState state() const = 0;
+  /// Named counters of faults seen since construction (e.g. "sequence_gaps", "timeouts").
+  virtual std::map<std::string, std::uint64_t> fault_counters() const = 0;
+};
+
+}  // namespace calstand::drivers

@@ -1,0 +1,22 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/imu_sample.hpp"
+#include "drivers/device.hpp"
+
+namespace calstand::drivers {
+
+/// An IMU streaming samples. The driver buffers what arrives; the engine drains it.
+class Imu : public Device {
+ public:
+  /// Every sample received since the last call, oldest first (never blocks).
+  virtual std::vector<core::ImuSample> poll() = 0;
+  /// The device's nominal output rate [Hz].
+  virtual double sample_rate_hz() const = 0;
+  /// The sequence counter wraps to 0 at this value (gap detection needs it).
+  virtual std::uint32_t sequence_modulus() const = 0;
+};
+
+}  // namespace calstand::drivers

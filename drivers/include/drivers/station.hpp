@@ -1,0 +1,40 @@
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/clock.hpp"
+#include "core/station_config.hpp"
+#include "drivers/chamber.hpp"
+#include "drivers/imu.hpp"
+#include "drivers/turntable.hpp"
+
+namespace calstand::drivers {
+
+/// A whole station: its devices and the clock they share. The engine talks only to this.
+class Station {
+ public:
+  virtual ~Station() = default;
+  virtual const core::StationConfig& config() const = 0;
+  virtual core::Clock& clock() = 0;
+  virtual Turntable& table() = 0;
+  virtual Chamber& chamber() = 0;
+  virtual std::size_t imu_count() const = 0;
+  virtual Imu& imu(std::size_t index) = 0;
+  /// Lets station time pass until `t_s`: a simulated station advances its world (as fast as
+  /// the CPU allows), a real one sleeps.
+  virtual void wait_until(double t_s) = 0;
+  /// configure() and activate() every device; the first failure is returned.
+  Result bring_up();
+  /// Table to rest, chamber to standby (the safe state); best effort on every device, the
+  /// first failure is returned.
+  Result make_safe();
+};
+
+/// The station of `config`. Every backend must be "sim" for now (the real drivers arrive with
+/// their own issue); throws core::InputError naming the device otherwise. A simulated station's
+/// clock starts at `start_time_s` (a real station's clock is the steady clock).
+std::unique_ptr<Station> make_station(const core::StationConfig& config,
+                                      double start_time_s = 0.0);
+
+}  // namespace calstand::drivers

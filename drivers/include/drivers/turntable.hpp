@@ -1,0 +1,23 @@
+#pragma once
+
+#include "core/table_state.hpp"
+#include "drivers/device.hpp"
+
+namespace calstand::drivers {
+
+enum class TableAxis { kOuter, kInner };
+
+/// A dual-axis rate table. Angles and rates follow error-model.md (right-handed about each
+/// axis, deg and deg/s). Commands return at once; read_state() tells when motion has settled.
+class Turntable : public Device {
+ public:
+  /// Both axes to these angles (any wrap; the shortest way round), then hold.
+  virtual Result move_to(double outer_deg, double inner_deg) = 0;
+  /// One axis turning at a signed rate; the other axis keeps its mode.
+  virtual Result set_rate(TableAxis axis, double rate_dps) = 0;
+  /// Both axes to rest at their acceleration limits and hold: the safe state.
+  virtual Result stop() = 0;
+  virtual core::TableState read_state() = 0;
+};
+
+}  // namespace calstand::drivers

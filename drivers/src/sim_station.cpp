@@ -1,0 +1,163 @@
+#include "drivers/sim_station.hpp"
+
+#include <fmt/format.h>
+
+namespace calstand::drivers {
+namespace {
+
+// Lifecycle bookkeeping shared by the simulated devices (they have no link to open).
+class SimLifecycle {
+ public:
+  Result configure() {
+    state_ = DeviceState::kInactive;
+    return Result::success();
+  }
+  Result activate() {
+    if (state_ == DeviceState::kUnconfigured) return Result::failure("not configured");
+    state_ = DeviceState::kActive;
+    return Result::success();
+  }
+  Result deactivate() {
+    if (state_ == DeviceState::kActive) state_ = DeviceState::kInactive;
+    return Result::success();
+  }
+  DeviceState state() const { return state_; }
+  Result require_active(const std::string& name) const {
+    if (state_ == DeviceState::kActive) return Result::success();
+    return Result::failure(fmt::format("{} is {}, not active", name, to_string(state_)));
+  }
+
+ private:
+  DeviceState state_ = DeviceState::kUnconfigured;
+};
+
+Result from_sim(const sim::Status& s) { return s.ok ? Result::success() : Result::failure(s.message); }
+
+}  // namespace
+
+class SimStation::SimTurntable final : public Turntable {
+ public:
+  explicit SimTurntable(sim::SimWorld& world) : world_(world) {}
+  const std::string& name() const override { return name_; }
+  Result configure() override { return life_.configure(); }
+  Result activate() override { return life_.activate(); }
+  Result deactivate() override {
+    world_.table().outer().stop();
+    world_.table().inner().stop();
+    return life_.deactivate();
+  }
+  DeviceState state() const override { return life_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override {
+    return {{"refused_commands", refused_}};
+  }
+  Result move_to(double outer_deg, double inner_deg) override {
+    if (auto r = life_.require_active(name_); !r) return r;
+    auto r = count(from_sim(world_.table().outer().command_position(outer_deg)));
+    if (!r) return Result::failure("outer axis: " + r.message);
+    r = count(from_sim(world_.table().inner().command_position(inner_deg)));
+    if (!r) return Result::failure("inner axis: " + r.message);
+    return r;
+  }
+  Result set_rate(TableAxis axis, double rate_dps) override {
+    if (auto r = life_.require_active(name_); !r) return r;
+    auto& a = axis == TableAxis::kOuter ? world_.table().outer() : world_.table().inner();
+    const auto r = count(from_sim(a.command_rate(rate_dps)));
+    if (!r) return Result::failure(fmt::format("{} axis: {}", axis == TableAxis::kOuter ? "outer" : "inner", r.message));
+    return r;
+  }
+  Result stop() override {
+    // Stopping is the safe state: allowed in every lifecycle state.
+    world_.table().outer().stop();
+    world_.table().inner().stop();
+    return Result::success();
+  }
+  core::TableState read_state() override { return world_.table_state(); }
+
+ private:
+  Result count(Result r) {
+    if (!r) ++refused_;
+    return r;
+  }
+  sim::SimWorld& world_;
+  std::string name_ = "table";
+  SimLifecycle life_;
+  std::uint64_t refused_ = 0;
+};
+
+class SimStation::SimChamber final : public Chamber {
+ public:
+  explicit SimChamber(sim::SimWorld& world) : world_(world) {}
+  const std::string& name() const override { return name_; }
+  Result configure() override { return life_.configure(); }
+  Result activate() override { return life_.activate(); }
+  Result deactivate() override {
+    world_.chamber().standby();
+    return life_.deactivate();
+  }
+  DeviceState state() const override { return life_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override {
+    return {{"refused_commands", refused_}};
+  }
+  Result set_temperature(double target_c, std::optional<double> ramp_c_per_min) override {
+    if (auto r = life_.require_active(name_); !r) return r;
+    const auto r = from_sim(world_.chamber().set_setpoint(target_c, ramp_c_per_min));
+    if (!r) ++refused_;
+    return r;
+  }
+  Result standby() override {
+    world_.chamber().standby();
+    return Result::success();
+  }
+  core::ChamberState read_state() override { return world_.chamber_state(); }
+
+ private:
+  sim::SimWorld& world_;
+  std::string name_ = "chamber";
+  SimLifecycle life_;
+  std::uint64_t refused_ = 0;
+};
+
+class SimStation::SimImu final : public Imu {
+ public:
+  SimImu(sim::SimWorld& world, std::size_t index)
+      : world_(world), index_(index), name_(world.imu_name(index)) {}
+  const std::string& name() const override { return name_; }
+  Result configure() override { return life_.configure(); }
+  Result activate() override { return life_.activate(); }
+  Result deactivate() override { return life_.deactivate(); }
+  DeviceState state() const override { return life_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override { return {}; }
+  std::vector<core::ImuSample> poll() override {
+    auto samples = world_.take_samples(index_);
+    // An inactive device delivers nothing, as a closed port would.
+    if (life_.state() != DeviceState::kActive) samples.clear();
+    return samples;
+  }
+  double sample_rate_hz() const override { return world_.imu(index_).truth().sample_rate_hz; }
+  std::uint32_t sequence_modulus() const override {
+    return world_.imu(index_).truth().sequence_modulus;
+  }
+
+ private:
+  sim::SimWorld& world_;
+  std::size_t index_;
+  std::string name_;
+  SimLifecycle life_;
+};
+
+SimStation::SimStation(const core::StationConfig& config, double start_time_s)
+    : world_(config, start_time_s),
+      table_(std::make_unique<SimTurntable>(world_)),
+      chamber_(std::make_unique<SimChamber>(world_)) {
+  for (std::size_t i = 0; i < world_.imu_count(); ++i) {
+    imus_.push_back(std::make_unique<SimImu>(world_, i));
+  }
+}
+
+SimStation::~SimStation() = default;
+
+Turntable& SimStation::table() { return *table_; }
+Chamber& SimStation::chamber() { return *chamber_; }
+Imu& SimStation::imu(std::size_t index) { return *imus_.at(index); }
+
+}  // namespace calstand::drivers

@@ -1,0 +1,44 @@
+#include "drivers/station.hpp"
+
+#include "core/error.hpp"
+#include "drivers/sim_station.hpp"
+
+namespace calstand::drivers {
+
+std::string_view to_string(DeviceState state) {
+  switch (state) {
+    case DeviceState::kUnconfigured: return "unconfigured";
+    case DeviceState::kInactive: return "inactive";
+    case DeviceState::kActive: return "active";
+    case DeviceState::kError: return "error";
+  }
+  return "unknown";
+}
+
+Result Station::bring_up() {
+  std::vector<Device*> devices{&table(), &chamber()};
+  for (std::size_t i = 0; i < imu_count(); ++i) devices.push_back(&imu(i));
+  for (Device* d : devices) {
+    if (auto r = d->configure(); !r) return Result::failure(d->name() + ": " + r.message);
+    if (auto r = d->activate(); !r) return Result::failure(d->name() + ": " + r.message);
+  }
+  return Result::success();
+}
+
+Result Station::make_safe() {
+  Result first = Result::success();
+  auto keep_first = [&](Result r, const std::string& who) {
+    if (!r && first) first = Result::failure(who + ": " + r.message);
+  };
+  keep_first(table().stop(), table().name());
+  keep_first(chamber().standby(), chamber().name());
+  return first;
+}
+
+std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s) {
+  // The station schema admits only simulated devices until the real drivers land; the world
+  // refuses anything else with an error naming the device.
+  return std::make_unique<SimStation>(config, start_time_s);
+}
+
+}  // namespace calstand::drivers

@@ -1,0 +1,106 @@
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace calstand::store {
+
+/// Status of a step (column steps.status).
+enum class StepStatus { kPending, kRunning, kCompleted, kFailed, kSkipped, kInvalidated };
+std::string_view to_string(StepStatus status);
+/// Inverse of to_string; throws StoreError on an unknown name (a corrupt database).
+StepStatus parse_step_status(std::string_view text);
+
+/// Kind of an event (column events.kind).
+enum class EventKind { kInfo, kFault, kInterlock, kOperator };
+std::string_view to_string(EventKind kind);
+/// Inverse of to_string; throws StoreError on an unknown name.
+EventKind parse_event_kind(std::string_view text);
+
+/// A device of a station as registered in table devices.
+struct DeviceRecord {
+  std::string kind;     ///< "table", "chamber" or "imu"
+  std::string name;     ///< e.g. "imu0"
+  std::string backend;  ///< e.g. "sim", "modbus"
+};
+
+/// What a new run records about itself.
+struct NewRun {
+  std::optional<std::int64_t> station_id;  ///< from RunStore::upsert_station, or none
+  std::string procedure_name;
+  std::string procedure_text;              ///< exact text; its SHA-256 is stored beside it
+  nlohmann::json parameters = nlohmann::json::object();        ///< values after --set overrides
+  nlohmann::json station_snapshot = nlohmann::json::object();  ///< station config at start
+  std::string status = "idle";             ///< run engine state name
+};
+
+/// One expanded step as the plan gives it.
+struct NewStep {
+  std::string kind;    ///< e.g. "capture", "move", "rate", "set_temperature"
+  std::string label;
+  nlohmann::json commanded = nlohmann::json::object();  ///< commanded state, with units in keys
+  std::string origin;  ///< JSON path in the procedure, e.g. "steps[3].steps[1]"
+};
+
+/// A step as stored.
+struct StepRecord {
+  std::int64_t id = 0;
+  std::size_t index = 0;
+  std::string kind;
+  std::string label;
+  nlohmann::json commanded;
+  std::string origin;
+  StepStatus status = StepStatus::kPending;
+  std::string reason;                    ///< why failed/invalidated/skipped ("" otherwise)
+  int attempts = 0;                      ///< attempts started
+  std::optional<int> good_attempt;       ///< the attempt holding the step's data
+  std::optional<double> started_clock_s; ///< station clock [s]
+  std::optional<double> ended_clock_s;   ///< station clock [s]
+  std::string started_utc;
+  std::string ended_utc;
+};
+
+/// An event to record or as stored.
+struct EventRecord {
+  std::int64_t id = 0;                   ///< set by the store
+  std::optional<std::int64_t> run_id;    ///< none: station-wide
+  double time_s = 0.0;                   ///< station clock [s]
+  std::string wall_utc;                  ///< empty: the store stamps the wall clock now
+  EventKind kind = EventKind::kInfo;
+  std::string source;                    ///< e.g. "engine", "table", "capture_writer", "operator"
+  std::string message;
+  nlohmann::json detail;                 ///< null or any JSON
+};
+
+/// One line of a run listing.
+struct RunSummary {
+  std::int64_t id = 0;
+  std::string procedure_name;
+  std::string status;
+  std::size_t steps_done = 0;   ///< completed steps
+  std::size_t steps_total = 0;
+  std::string created_utc;
+  std::string started_utc;      ///< empty when not started
+  std::string ended_utc;        ///< empty while running
+  std::string exit_reason;
+};
+
+/// A whole run as stored, without samples and telemetry.
+struct RunRecord {
+  RunSummary summary;
+  std::optional<std::int64_t> station_id;
+  std::string procedure_text;
+  std::string procedure_sha256;
+  nlohmann::json parameters;
+  nlohmann::json station_snapshot;
+  std::optional<double> started_clock_s;
+  std::optional<double> ended_clock_s;
+  std::vector<StepRecord> steps;
+  std::vector<EventRecord> events;
+};
+
+}  // namespace calstand::store

@@ -1,0 +1,97 @@
+#include "store/database.hpp"
+
+#include <SQLiteCpp/Statement.h>
+#include <SQLiteCpp/Transaction.h>
+
+#include <stdexcept>
+#include <string>
+
+#include "sql_util.hpp"
+
+namespace calstand::store {
+namespace {
+
+constexpr int kApplicationId = 0x43534442;  // 'CSDB', set by migration 1
+
+const std::vector<detail::Migration>& migrations() {
+  static const std::vector<detail::Migration> m = [] {
+    const auto text = detail::schema_file("schema.sql");
+    if (!text) throw std::logic_error("schema.sql is not compiled in");
+    return detail::parse_migrations(*text);
+  }();
+  return m;
+}
+
+int pragma_int(SQLite::Database& db, const char* pragma) {
+  return db.execAndGet(std::string("PRAGMA ") + pragma).getInt();
+}
+
+SQLite::Database open_connection(const std::string& path, int busy_timeout_ms) {
+  return detail::guarded("open " + path, [&] {
+    return SQLite::Database(path, SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE | SQLite::OPEN_URI,
+                            busy_timeout_ms);
+  });
+}
+
+// Refuses files that are not (or not yet) calstand databases, before anything is written.
+void check_identity(SQLite::Database& db, const std::string& path) {
+  const int app_id = pragma_int(db, "application_id");
+  const int version = pragma_int(db, "user_version");
+  if (app_id != 0 && app_id != kApplicationId) {
+    throw StoreError("open " + path, "not a calstand database (application_id " +
+                                         std::to_string(app_id) + ")");
+  }
+  if (app_id == 0 && version == 0) {
+    const int tables =
+        db.execAndGet("SELECT COUNT(*) FROM sqlite_schema WHERE type = 'table'").getInt();
+    if (tables != 0) {
+      throw StoreError("open " + path,
+                       "not a calstand database (it has tables but no calstand schema)");
+    }
+  }
+  if (version > latest_schema_version()) {
+    throw StoreError("open " + path,
+                     "database schema version " + std::to_string(version) +
+                         " is newer than this calstand's " +
+                         std::to_string(latest_schema_version()) + "; use a newer calstand");
+  }
+}
+
+void migrate(SQLite::Database& db, const std::string& path) {
+  for (const auto& m : migrations()) {
+    if (pragma_int(db, "user_version") >= m.version) continue;
+    detail::guarded("migrate " + path + " to version " + std::to_string(m.version), [&] {
+      SQLite::Transaction tx(db, SQLite::TransactionBehavior::IMMEDIATE);
+      // Another process may have migrated while this one waited for the write lock.
+      if (pragma_int(db, "user_version") >= m.version) return;
+      db.exec(m.sql);
+      db.exec("PRAGMA user_version = " + std::to_string(m.version));
+      tx.commit();
+    });
+  }
+}
+
+}  // namespace
+
+int latest_schema_version() { return static_cast<int>(migrations().size()); }
+
+Database::Database(const std::string& path, DatabaseOptions options)
+    : path_(path), db_(open_connection(path, options.busy_timeout_ms)) {
+  detail::guarded("open " + path, [&] {
+    check_identity(db_, path_);
+    // journal_mode cannot change inside a transaction, and sticks to the file; an in-memory
+    // database answers "memory", which is fine.
+    db_.exec("PRAGMA journal_mode = WAL");
+    db_.exec("PRAGMA synchronous = NORMAL");
+    db_.exec("PRAGMA foreign_keys = ON");
+  });
+  migrate(db_, path_);
+}
+
+int Database::schema_version() const {
+  return detail::guarded("read user_version", [&] {
+    return const_cast<SQLite::Database&>(db_).execAndGet("PRAGMA user_version").getInt();
+  });
+}
+
+}  // namespace calstand::store

@@ -1,0 +1,195 @@
+// Whole campaigns through the `calstand` command on the embedded simulator, as a lab engineer
+// runs them: an uninterrupted run, and runs killed with SIGKILL at several points and resumed.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sqlite3.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+
+#include "store/database.hpp"
+#include "store/run_store.hpp"
+#include "store/sample_reader.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A reduced thermal calibration: two plateaus, six orientations, two rates, short captures.
+const char* kSetArgs =
+    " --set 'temperatures=[15,35]' --set soak_s=600 --set capture_s=4"
+    " --set 'outer_angles=[0,90,180]' --set 'inner_angles=[0,90]' --set 'rates=[20,90]'"
+    " --set revolutions=1 --set ramp_c_per_min=2";
+
+std::string db_path(const std::string& name) {
+  const auto p = fs::path(::testing::TempDir()) / name;
+  fs::remove(p);
+  fs::remove(p.string() + "-wal");
+  fs::remove(p.string() + "-shm");
+  return p.string();
+}
+
+int run_command(const std::string& args, std::string* out = nullptr) {
+  const std::string command = std::string(CALSTAND_BIN) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return -1;
+  std::string text;
+  std::array<char, 4096> buf{};
+  while (std::size_t n = fread(buf.data(), 1, buf.size(), pipe)) text.append(buf.data(), n);
+  const int status = pclose(pipe);
+  if (out) *out = text;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Completed steps of run 1, read by a separate read-only connection while the run goes on.
+int completed_steps(const std::string& db) {
+  sqlite3* h = nullptr;
+  if (sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    sqlite3_close(h);
+    return -1;
+  }
+  sqlite3_busy_timeout(h, 1000);
+  sqlite3_stmt* st = nullptr;
+  int n = -1;
+  if (sqlite3_prepare_v2(h, "SELECT count(*) FROM steps WHERE run_id = 1 AND status = 'completed'",
+                         -1, &st, nullptr) == SQLITE_OK &&
+      sqlite3_step(st) == SQLITE_ROW) {
+    n = sqlite3_column_int(st, 0);
+  }
+  sqlite3_finalize(st);
+  sqlite3_close(h);
+  return n;
+}
+
+// Starts a run in a child process and SIGKILLs it once `kill_after` steps are completed.
+// Returns false when the run finished before the kill.
+bool run_and_kill(const std::string& db, int kill_after) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string cmd = std::string(CALSTAND_BIN) + " run thermal-calibration --quiet --db " +
+                            db + kSetArgs + " > /dev/null 2>&1";
+    execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
+  while (std::chrono::steady_clock::now() < deadline) {
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == pid) return false;  // finished on its own
+    if (completed_steps(db) >= kill_after) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  kill(pid, SIGKILL);
+  waitpid(pid, nullptr, 0);
+  return false;
+}
+
+struct StepData {
+  std::string kind, label, status;
+  std::size_t samples = 0;
+};
+
+// Every step of run 1 with its status and stored sample count; checks each recording step's
+// samples are contiguous (no duplicate or missing sequence numbers, times increasing).
+std::vector<StepData> check_run(const std::string& db_file) {
+  calstand::store::Database db(db_file);
+  calstand::store::RunStore runs(db);
+  const auto run = runs.load_run(1);
+  std::vector<StepData> out;
+  for (const auto& s : run.steps) {
+    StepData d{s.kind, s.label, std::string(calstand::store::to_string(s.status)), 0};
+    const auto samples = calstand::store::read_samples(db, 1, s.index, "imu0");
+    d.samples = samples.size();
+    for (std::size_t k = 1; k < samples.size(); ++k) {
+      EXPECT_EQ(samples[k].sequence, (samples[k - 1].sequence + 1) % 65536)
+          << "step " << s.index << " sample " << k;
+      EXPECT_GT(samples[k].receive_time_s, samples[k - 1].receive_time_s) << "step " << s.index;
+      if (::testing::Test::HasFailure()) return out;
+    }
+    out.push_back(d);
+  }
+  sqlite3* h = nullptr;
+  sqlite3_open_v2(db_file.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(h, "PRAGMA integrity_check", -1, &st, nullptr);
+  EXPECT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)), "ok");
+  sqlite3_finalize(st);
+  sqlite3_close(h);
+  return out;
+}
+
+class Campaign : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    reference_db_ = new std::string(db_path("campaign_reference.db"));
+    std::string out;
+    const int code = run_command("run thermal-calibration --quiet --db " + *reference_db_ + kSetArgs, &out);
+    ASSERT_EQ(code, 0) << out;
+    reference_ = new std::vector<StepData>(check_run(*reference_db_));
+  }
+  static void TearDownTestSuite() {
+    delete reference_;
+    delete reference_db_;
+  }
+  static std::string* reference_db_;
+  static std::vector<StepData>* reference_;
+};
+std::string* Campaign::reference_db_ = nullptr;
+std::vector<StepData>* Campaign::reference_ = nullptr;
+
+TEST_F(Campaign, UninterruptedThermalCalibrationCompletesEveryStep) {
+  ASSERT_FALSE(reference_->empty());
+  for (const auto& s : *reference_) {
+    EXPECT_EQ(s.status, "completed") << s.label;
+    if (s.kind == "capture") {
+      EXPECT_NEAR(static_cast<double>(s.samples), 4.0 * 400.0, 41.0) << s.label;
+    }
+    if (s.kind == "move" || s.kind == "set_temperature") {
+      EXPECT_EQ(s.samples, 0u) << s.label;
+    }
+  }
+  std::string out;
+  ASSERT_EQ(run_command("runs --json --db " + *reference_db_, &out), 0) << out;
+  const auto runs = nlohmann::json::parse(out);
+  EXPECT_EQ(runs[0]["status"], "completed");
+  EXPECT_EQ(runs[0]["steps_done"], runs[0]["steps_total"]);
+}
+
+class KilledCampaign : public Campaign, public ::testing::WithParamInterface<int> {};
+
+TEST_P(KilledCampaign, ResumesToTheSameStepsWithNoLostOrDuplicatedSamples) {
+  const int kill_after = GetParam();
+  const std::string db = db_path("campaign_killed_" + std::to_string(kill_after) + ".db");
+  ASSERT_TRUE(run_and_kill(db, kill_after)) << "the run finished before it could be killed";
+  std::string out;
+  ASSERT_EQ(run_command("runs --json --db " + db, &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)[0]["status"], "running");  // cut off, not ended
+  ASSERT_EQ(run_command("run --quiet --resume 1 --db " + db, &out), 0) << out;
+  const auto resumed = check_run(db);
+  ASSERT_EQ(resumed.size(), reference_->size());
+  for (std::size_t i = 0; i < resumed.size(); ++i) {
+    EXPECT_EQ(resumed[i].label, (*reference_)[i].label);
+    EXPECT_EQ(resumed[i].status, "completed") << resumed[i].label;
+    // Same amount of data per step as the uninterrupted run (a tick of slack at each end).
+    EXPECT_NEAR(static_cast<double>(resumed[i].samples), static_cast<double>((*reference_)[i].samples), 41.0)
+        << resumed[i].label;
+  }
+}
+
+// Killed after the first soak, in the middle of the static test, and in the rate ladder.
+INSTANTIATE_TEST_SUITE_P(AtSeveralPoints, KilledCampaign, ::testing::Values(1, 5, 16));
+
+}  // namespace

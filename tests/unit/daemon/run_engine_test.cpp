@@ -1,0 +1,305 @@
+#include "daemon/run_engine.hpp"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "drivers/sim_station.hpp"
+#include "procedures/plan.hpp"
+#include "procedures/procedure.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::daemon {
+namespace {
+
+using procedures::Step;
+using procedures::StepKind;
+
+// Records what the engine tells it, in memory.
+class MemoryJournal final : public RunJournal {
+ public:
+  struct Attempt {
+    std::size_t samples = 0;
+    double first_time_s = 0.0;
+    double last_time_s = 0.0;
+  };
+  void step_started(std::size_t step, int attempt, double) override { started.push_back({step, attempt}); }
+  bool add_samples(std::size_t step, int attempt, const std::string& device,
+                   const std::vector<core::ImuSample>& s) override {
+    Attempt& a = attempts[{step, attempt, device}];
+    if (a.samples == 0) a.first_time_s = s.front().receive_time_s;
+    a.samples += s.size();
+    a.last_time_s = s.back().receive_time_s;
+    return !refuse_samples;
+  }
+  void discard_attempt(std::size_t step, int attempt, const std::string& why) override {
+    discarded.push_back({step, attempt});
+    discard_reasons.push_back(why);
+    std::erase_if(attempts, [&](const auto& e) {
+      return std::get<0>(e.first) == step && std::get<1>(e.first) == attempt;
+    });
+  }
+  void step_completed(std::size_t step, int attempt, double) override { completed.push_back({step, attempt}); }
+  void step_failed(std::size_t step, int, double, const std::string& why) override {
+    failed.push_back({step, why});
+  }
+  void event(double, EventKind kind, const std::string& source, const std::string& message) override {
+    events.push_back({kind, source + ": " + message});
+  }
+  void table_telemetry(const core::TableState&) override { ++table_rows; }
+  void chamber_telemetry(const core::ChamberState&) override { ++chamber_rows; }
+  void run_state(RunState state, double, const std::string&) override { states.push_back(state); }
+
+  bool has_event(EventKind kind, const std::string& text) const {
+    for (const auto& [k, m] : events) {
+      if (k == kind && m.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+
+  std::vector<std::pair<std::size_t, int>> started, completed, discarded;
+  std::vector<std::string> discard_reasons;
+  std::vector<std::pair<std::size_t, std::string>> failed;
+  std::map<std::tuple<std::size_t, int, std::string>, Attempt> attempts;
+  std::vector<std::pair<EventKind, std::string>> events;
+  std::vector<RunState> states;
+  int table_rows = 0, chamber_rows = 0;
+  bool refuse_samples = false;
+};
+
+Step temperature(double c) {
+  Step s;
+  s.kind = StepKind::kSetTemperature;
+  s.label = "to " + std::to_string(c);
+  s.target_c = c;
+  s.wait_for_soak = true;
+  s.soak = {0.5, 120.0, 7200.0};
+  return s;
+}
+Step move(double outer, double inner) {
+  Step s;
+  s.kind = StepKind::kMove;
+  s.label = "move";
+  s.outer_deg = outer;
+  s.inner_deg = inner;
+  return s;
+}
+Step capture(double seconds) {
+  Step s;
+  s.kind = StepKind::kCapture;
+  s.label = "capture";
+  s.duration_s = seconds;
+  return s;
+}
+Step rate(const char* axis, double dps, double seconds) {
+  Step s;
+  s.kind = StepKind::kRate;
+  s.label = "rate";
+  s.axis = axis;
+  s.rate_dps = dps;
+  s.settle_s = 1.0;
+  s.duration_s = seconds;
+  s.rest_after = true;
+  return s;
+}
+
+procedures::Plan plan_of(std::vector<Step> steps) {
+  procedures::Plan p;
+  for (std::size_t i = 0; i < steps.size(); ++i) steps[i].index = i;
+  p.steps = std::move(steps);
+  p.step_duration_s.assign(p.steps.size(), 10.0);
+  return p;
+}
+
+struct Fixture {
+  drivers::SimStation station{sim::default_station()};
+  MemoryJournal journal;
+};
+
+std::size_t samples_of(const MemoryJournal& j, std::size_t step) {
+  std::size_t n = 0;
+  for (const auto& [key, a] : j.attempts) {
+    if (std::get<0>(key) == step) n += a.samples;
+  }
+  return n;
+}
+
+TEST(RunEngine, RunsEveryStepAndEndsSafe) {
+  Fixture f;
+  RunEngine engine(f.station, f.journal,
+                   plan_of({temperature(30.0), move(180.0, 0.0), capture(5.0),
+                            rate("inner", 90.0, 4.0), capture(2.0)}));
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.completed.size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(f.journal.completed[i].first, i);
+  // 400 Hz IMU: a 5 s capture holds 2000 samples (one tick of slack at each end).
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 2)), 2000.0, 40.0);
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 3)), 1600.0, 40.0);
+  EXPECT_EQ(samples_of(f.journal, 0), 0u);  // only recording steps keep samples
+  EXPECT_EQ(f.journal.states.front(), RunState::kRunning);
+  EXPECT_EQ(f.journal.states.back(), RunState::kCompleted);
+  EXPECT_GT(f.journal.chamber_rows, 10);
+  // Safe at the end: table at rest, chamber in standby.
+  const auto table = f.station.table().read_state();
+  EXPECT_NEAR(table.inner.rate_dps, 0.0, 1e-6);
+  EXPECT_EQ(f.station.chamber().read_state().mode, core::ChamberMode::kStandby);
+  // Capture at outer 180: the IMU is upside down.
+  EXPECT_EQ(engine.progress().state, RunState::kCompleted);
+}
+
+TEST(RunEngine, PauseAtBoundaryThenResume) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool paused_once = false;
+  EngineOptions opt;
+  opt.paused_real_sleep_s = 0.0;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && !paused_once) {
+      paused_once = true;
+      e->pause(false);
+    }
+    if (p.state == RunState::kPaused) e->resume();
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(1.0), capture(1.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_TRUE(std::find(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused) !=
+              f.journal.states.end());
+  EXPECT_TRUE(f.journal.discarded.empty());  // a boundary pause interrupts nothing
+  EXPECT_EQ(f.journal.completed.size(), 3u);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kOperator, "pause requested"));
+}
+
+TEST(RunEngine, ImmediatePauseDiscardsAndRepeatsTheCapture) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool paused_once = false;
+  EngineOptions opt;
+  opt.paused_real_sleep_s = 0.0;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing" && p.station_time_s > 2.5 && !paused_once) {
+      paused_once = true;
+      e->pause(true);
+    }
+    if (p.state == RunState::kPaused) e->resume();
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(3.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.discarded.size(), 1u);
+  EXPECT_EQ(f.journal.discarded[0], std::make_pair(std::size_t{1}, 1));
+  EXPECT_EQ(f.journal.completed.back(), std::make_pair(std::size_t{1}, 2));
+  // The repeated capture is whole: 3 s at 400 Hz.
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 1)), 1200.0, 40.0);
+}
+
+TEST(RunEngine, AbortTakesTheStationSafeAndRecordsWhy) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 2 && p.phase == "capturing") e->abort("operator saw smoke", "alice");
+  };
+  RunEngine engine(f.station, f.journal,
+                   plan_of({temperature(40.0), rate("inner", 100.0, 30.0), capture(60.0), capture(1.0)}),
+                   opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  EXPECT_NE(engine.exit_reason().find("operator saw smoke"), std::string::npos);
+  EXPECT_NE(engine.exit_reason().find("alice"), std::string::npos);
+  EXPECT_EQ(f.journal.completed.size(), 2u);
+  EXPECT_EQ(f.journal.discarded.size(), 1u);  // the cut capture
+  EXPECT_EQ(f.station.chamber().read_state().mode, core::ChamberMode::kStandby);
+  EXPECT_EQ(f.journal.states.back(), RunState::kAborted);
+}
+
+TEST(RunEngine, ChamberLeavingItsBandInvalidatesTheCaptureWhichIsRepeatedAfterResoak) {
+  Fixture f;
+  bool upset = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing" && !upset) {
+      upset = true;  // a controller upset: the air heads 5 degC away
+      f.station.world().chamber().set_setpoint(35.0);
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({temperature(30.0), capture(300.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.discarded.size(), 1u);
+  EXPECT_NE(f.journal.discard_reasons[0].find("left the band"), std::string::npos);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kInterlock, "invalidated"));
+  EXPECT_EQ(f.journal.completed.back(), std::make_pair(std::size_t{1}, 2));
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 1)), 120000.0, 100.0);
+}
+
+TEST(RunEngine, TableFaultAbortsToSafeState) {
+  Fixture f;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 0 && p.phase == "capturing") {
+      f.station.world().table().outer().inject_fault("amplifier trip");
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({rate("inner", 50.0, 20.0), capture(1.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  EXPECT_NE(engine.exit_reason().find("amplifier trip"), std::string::npos);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kInterlock, "table fault"));
+  f.station.world().advance(10.0);
+  EXPECT_NEAR(f.station.table().read_state().inner.rate_dps, 0.0, 1e-6);
+}
+
+TEST(RunEngine, SequenceGapIsRecordedOrRepeatsTheCaptureByPolicy) {
+  for (GapPolicy policy : {GapPolicy::kRecord, GapPolicy::kRepeatCapture}) {
+    Fixture f;
+    bool dropped = false;
+    EngineOptions opt;
+    opt.gap_policy = policy;
+    opt.on_progress = [&](const Progress& p) {
+      if (p.phase == "capturing" && p.station_time_s > 1.0 && !dropped) {
+        dropped = true;
+        f.station.world().drop_samples(0, 7);
+      }
+    };
+    RunEngine engine(f.station, f.journal, plan_of({capture(3.0)}), opt);
+    EXPECT_EQ(engine.run(), RunState::kCompleted);
+    EXPECT_TRUE(f.journal.has_event(EventKind::kFault, "7 samples missing"));
+    if (policy == GapPolicy::kRecord) {
+      EXPECT_TRUE(f.journal.discarded.empty());
+    } else {
+      EXPECT_EQ(f.journal.discarded.size(), 1u);
+      EXPECT_EQ(f.journal.completed.back().second, 2);
+    }
+  }
+}
+
+TEST(RunEngine, StaleStreamIsAFaultAndInvalidatesTheCapture) {
+  Fixture f;
+  bool stalled = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.phase == "capturing" && !stalled) {
+      stalled = true;
+      f.station.world().set_imu_stalled(0, true);
+    }
+    if (stalled && p.station_time_s > 5.0) f.station.world().set_imu_stalled(0, false);
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(4.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kFault, "stream stale"));
+  EXPECT_FALSE(f.journal.discarded.empty());
+}
+
+TEST(RunEngine, ResumeReestablishesTemperatureAndPositionThenSkipsDoneSteps) {
+  Fixture f;
+  RunEngine engine(f.station, f.journal,
+                   plan_of({temperature(35.0), move(180.0, 0.0), capture(2.0), capture(2.0)}));
+  EXPECT_EQ(engine.run(2, 3), RunState::kCompleted);
+  // Steps 0 and 1 are not started again, but their state is: captures at 35 degC, upside down.
+  for (const auto& [step, attempt] : f.journal.started) EXPECT_GE(step, 2u);
+  EXPECT_EQ(f.journal.completed.front(), std::make_pair(std::size_t{2}, 3));
+  EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "resuming at step 2"));
+}
+
+}  // namespace
+}  // namespace calstand::daemon

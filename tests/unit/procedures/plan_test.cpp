@@ -1,0 +1,191 @@
+// Plan: durations on hand-worked cases, envelope, station-limit rules.
+#include "procedures/plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_util.hpp"
+
+namespace calstand::procedures {
+namespace {
+
+using nlohmann::json;
+using test::doc_with;
+using test::parse;
+
+// Round figures so that every duration below can be worked by hand.
+core::StationConfig station() {
+  core::StationConfig s;
+  s.table.outer.max_rate_dps = 100.0;
+  s.table.outer.max_accel_dps2 = 50.0;
+  s.table.outer.settle_time_s = 0.5;
+  s.table.inner.max_rate_dps = 200.0;
+  s.table.inner.max_accel_dps2 = 100.0;
+  s.table.inner.settle_time_s = 0.25;
+  s.chamber.min_c = -40.0;
+  s.chamber.max_c = 85.0;
+  s.chamber.max_ramp_c_per_min = 2.0;
+  s.chamber.ambient_c = 20.0;
+  return s;
+}
+
+Plan plan_of(const std::string& steps, const std::string& parameters = "{}",
+             const Overrides& overrides = {}) {
+  return make_plan(parse(doc_with(steps, parameters)), station(), overrides);
+}
+
+TEST(TrapezoidMove, TriangularWhenShortTrapezoidalWhenLong) {
+  EXPECT_DOUBLE_EQ(trapezoid_move_s(0.0, 100.0, 50.0), 0.0);
+  EXPECT_DOUBLE_EQ(trapezoid_move_s(50.0, 100.0, 50.0), 2.0);   // 2 sqrt(50/50)
+  EXPECT_DOUBLE_EQ(trapezoid_move_s(200.0, 100.0, 50.0), 4.0);  // both forms agree at d = v^2/a
+  EXPECT_DOUBLE_EQ(trapezoid_move_s(400.0, 100.0, 50.0), 6.0);  // 400/100 + 100/50
+}
+
+TEST(PlanDurations, MovesTakeTheSlowerAxisPlusSettleTheShortestWayRound) {
+  const Plan p = plan_of(R"([
+    {"kind": "move", "outer_deg": 90, "inner_deg": -90},
+    {"kind": "move", "outer_deg": 90, "inner_deg": -90},
+    {"kind": "move", "outer_deg": 170, "inner_deg": -90},
+    {"kind": "move", "outer_deg": -170, "inner_deg": -90}])");
+  ASSERT_TRUE(p.ok()) << test::lines(p.violations);
+  ASSERT_EQ(p.step_duration_s.size(), 4u);
+  // outer 90 deg: 2 sqrt(90/50) = 2.683 s; inner 90 deg: 2 sqrt(90/100) = 1.897 s; settle 0.5.
+  EXPECT_NEAR(p.step_duration_s[0], 2.0 * std::sqrt(1.8) + 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(p.step_duration_s[1], 0.0);  // already there
+  EXPECT_NEAR(p.step_duration_s[2], 2.0 * std::sqrt(80.0 / 50.0) + 0.5, 1e-12);
+  EXPECT_NEAR(p.step_duration_s[3], 2.0 * std::sqrt(20.0 / 50.0) + 0.5, 1e-12);  // 170 -> 190
+  EXPECT_NEAR(p.envelope.outer.max_move_rate_dps, std::sqrt(90.0 * 50.0), 1e-12);
+  EXPECT_DOUBLE_EQ(p.envelope.inner.max_accel_dps2, 100.0);
+  EXPECT_DOUBLE_EQ(p.envelope.outer.max_rate_dps, 0.0);  // no rate step
+}
+
+TEST(PlanDurations, RateStepsAccelerateSettleRecordAndStop) {
+  const Plan p = plan_of(R"([
+    {"kind": "rate", "axis": "outer", "rate_dps": 50, "settle_s": 2, "duration_s": 10},
+    {"kind": "rate", "axis": "outer", "rate_dps": 50, "settle_s": 2, "duration_s": 10},
+    {"kind": "rate", "axis": "outer", "rate_dps": -50, "settle_s": 2, "duration_s": 10},
+    {"kind": "rate", "axis": "inner", "rate_dps": 100, "settle_s": 0, "revolutions": 1}])");
+  ASSERT_TRUE(p.ok()) << test::lines(p.violations);
+  EXPECT_DOUBLE_EQ(p.step_duration_s[0], 1.0 + 2.0 + 10.0);        // 0 -> 50 at 50 deg/s^2
+  EXPECT_DOUBLE_EQ(p.step_duration_s[1], 0.0 + 2.0 + 10.0);        // already at 50
+  EXPECT_DOUBLE_EQ(p.step_duration_s[2], 2.0 + 2.0 + 10.0 + 1.0);  // 50 -> -50, then to rest
+  EXPECT_DOUBLE_EQ(p.step_duration_s[3], 1.0 + 0.0 + 3.6 + 1.0);   // 360 deg at 100 deg/s
+  EXPECT_DOUBLE_EQ(p.step_start_s[3], 13.0 + 12.0 + 15.0);
+  EXPECT_DOUBLE_EQ(p.total_s, 13.0 + 12.0 + 15.0 + 5.6);
+  EXPECT_DOUBLE_EQ(p.envelope.outer.max_rate_dps, 50.0);
+  EXPECT_DOUBLE_EQ(p.envelope.inner.max_rate_dps, 100.0);
+  EXPECT_EQ(p.envelope.captures, 4u);
+  EXPECT_DOUBLE_EQ(p.envelope.capture_s, 33.6);
+}
+
+TEST(PlanDurations, AMoveAfterARateStepStartsFromWhereTheAxisStopped) {
+  // 0 -> 50 deg/s in 1 s (25 deg), 1 s at rate (50 deg), 1 s to rest (25 deg): stops at 100 deg.
+  const Plan p = plan_of(R"([
+    {"kind": "rate", "axis": "outer", "rate_dps": 50, "settle_s": 0, "duration_s": 1},
+    {"kind": "move", "outer_deg": 0, "inner_deg": 0}])");
+  EXPECT_NEAR(p.step_duration_s[1], trapezoid_move_s(100.0, 100.0, 50.0) + 0.5, 1e-12);
+}
+
+TEST(PlanDurations, SoakIsRampPlusStableTimeAndTheChamberKeepsRampingWithoutSoak) {
+  const Plan p = plan_of(R"([
+    {"kind": "set_temperature", "target_c": -40,
+     "soak": {"tolerance_c": 0.5, "stable_s": 600, "timeout_s": 3600}},
+    {"kind": "set_temperature", "target_c": 80, "ramp_c_per_min": 1,
+     "soak": {"tolerance_c": 0.5, "stable_s": 600, "timeout_s": 3600}},
+    {"kind": "set_temperature", "target_c": 20},
+    {"kind": "capture", "duration_s": 1200, "label": "ramping"},
+    {"kind": "set_temperature", "target_c": 20,
+     "soak": {"tolerance_c": 0.5, "stable_s": 300, "timeout_s": 3600}}])");
+  ASSERT_TRUE(p.ok()) << test::lines(p.violations);
+  EXPECT_DOUBLE_EQ(p.step_duration_s[0], 60.0 / 2.0 * 60.0 + 600.0);   // 20 -> -40 at 2 degC/min
+  EXPECT_DOUBLE_EQ(p.step_duration_s[1], 120.0 / 1.0 * 60.0 + 600.0);  // -40 -> 80 at 1 degC/min
+  EXPECT_DOUBLE_EQ(p.step_duration_s[2], 0.0);                         // commands, ends at once
+  // 80 -> 20 at 2 degC/min takes 1800 s; 1200 s of it pass in the capture, 600 s remain.
+  EXPECT_DOUBLE_EQ(p.step_duration_s[4], 600.0 + 300.0);
+  EXPECT_DOUBLE_EQ(*p.envelope.min_temperature_c, -40.0);
+  EXPECT_DOUBLE_EQ(*p.envelope.max_temperature_c, 80.0);
+  EXPECT_DOUBLE_EQ(p.envelope.max_ramp_c_per_min, 2.0);
+  EXPECT_DOUBLE_EQ(p.envelope.outer.max_accel_dps2, 0.0);  // table never moves
+}
+
+TEST(PlanDurations, CapturesAndWaitsTakeTheirDuration) {
+  const Plan p = plan_of(
+      R"([{"kind": "wait", "duration_s": 7}, {"kind": "capture", "duration_s": 3, "label": "a"}])");
+  EXPECT_DOUBLE_EQ(p.step_start_s[1], 7.0);
+  EXPECT_DOUBLE_EQ(p.total_s, 10.0);
+  EXPECT_EQ(p.envelope.captures, 1u);
+  EXPECT_FALSE(p.envelope.min_temperature_c.has_value());
+}
+
+// --- Station limits ----------------------------------------------------------------------------
+
+TEST(StationRules, RateAboveTheAxisLimit) {
+  core::StationConfig s = station();
+  s.table.outer.max_rate_dps = 200.0;
+  const Plan p = make_plan(parse(doc_with(R"([
+      {"kind": "wait", "duration_s": 1}, {"kind": "wait", "duration_s": 1}, {"kind": "wait", "duration_s": 1},
+      {"kind": "rate", "axis": "outer", "rate_dps": 220, "duration_s": 1}])")),
+                           s);
+  EXPECT_ONE_VIOLATION(p.violations, "steps[3].rate_dps", "220 exceeds the outer axis limit 200");
+}
+
+TEST(StationRules, NegatedReferencedRateAboveTheLimitNamesTheReference) {
+  const Plan p =
+      plan_of(R"([{"kind": "for_each", "var": "r", "values": "${rates}", "steps": [
+      {"kind": "rate", "axis": "inner", "rate_dps": "-${r}", "duration_s": 1}]}])",
+              R"({"rates": {"default": [10], "description": "d"}})", {{"rates", json({150, 300})}});
+  EXPECT_ONE_VIOLATION(p.violations, "steps[0].steps[0].rate_dps",
+                       "-${r} = -300 exceeds the inner axis limit 200");
+}
+
+TEST(StationRules, TemperatureOutsideTheChamberRange) {
+  EXPECT_ONE_VIOLATION(plan_of(R"([{"kind": "set_temperature", "target_c": 100}])").violations,
+                       "steps[0].target_c", "100 is outside the chamber range [-40, 85]");
+}
+
+TEST(StationRules, RampAboveTheChamberLimit) {
+  EXPECT_ONE_VIOLATION(
+      plan_of(R"([{"kind": "set_temperature", "target_c": 0, "ramp_c_per_min": 10}])").violations,
+      "steps[0].ramp_c_per_min", "10 exceeds the chamber ramp limit 2");
+}
+
+TEST(StationRules, PlanListsOverrideValueAndStationViolationsTogether) {
+  const Plan p =
+      plan_of(R"([
+      {"kind": "capture", "duration_s": "${c}", "label": "a"},
+      {"kind": "wait", "duration_s": 0},
+      {"kind": "rate", "axis": "outer", "rate_dps": 500, "duration_s": 1}])",
+              R"({"c": {"default": 1, "min": 0.5, "description": "d"}})", {{"c", -1}, {"nope", 1}});
+  ASSERT_EQ(p.violations.size(), 4u) << test::lines(p.violations);
+  EXPECT_FALSE(p.ok());
+  try {
+    require_valid(p);
+    FAIL();
+  } catch (const ProcedureError& e) {
+    EXPECT_EQ(e.violations().size(), 4u);
+    // The rejected override leaves the default, so the capture itself is fine.
+    EXPECT_EQ(std::string(e.what()),
+              "t.json: --set c: -1 is below the minimum 0.5\n"
+              "t.json: --set nope: nope is not a parameter of t (it has c)\n"
+              "t.json: steps[1].duration_s: 0 must be greater than 0\n"
+              "t.json: steps[2].rate_dps: 500 exceeds the outer axis limit 100");
+  }
+}
+
+TEST(PlanJson, HoldsStepsEstimatesEnvelopeAndViolations) {
+  const Plan p = plan_of(R"([{"kind": "move", "outer_deg": 0, "inner_deg": 90},
+                              {"kind": "rate", "axis": "inner", "rate_dps": 250, "duration_s": 2}])");
+  const json j = p.to_json();
+  EXPECT_EQ(j["procedure"], "t");
+  ASSERT_EQ(j["steps"].size(), 2u);
+  EXPECT_EQ(j["steps"][1]["kind"], "rate");
+  EXPECT_EQ(j["steps"][1]["rate_dps"], 250.0);
+  EXPECT_DOUBLE_EQ(j["steps"][1]["estimated_start_s"].get<double>(), p.step_start_s[1]);
+  EXPECT_EQ(j["envelope"]["inner"]["max_rate_dps"], 250.0);
+  EXPECT_EQ(j["ok"], false);
+  EXPECT_EQ(j["violations"][0]["path"], "steps[1].rate_dps");
+}
+
+}  // namespace
+}  // namespace calstand::procedures
