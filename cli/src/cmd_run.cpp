@@ -1,6 +1,8 @@
 // `calstand run`: runs a procedure in the foreground on a station (the embedded simulated one
 // by default), recording everything in a SQLite file; `--resume RUN_ID` continues a run that
-// was cut off (power loss, kill -9) at its first unfinished step.
+// was cut off (power loss, kill -9) at its first unfinished step. Ctrl-C aborts to the safe
+// state; `kill -USR1` pauses at the next step boundary, `kill -USR2` at once, `kill -CONT`
+// resumes.
 #include <fmt/format.h>
 
 #include <atomic>
@@ -35,9 +37,15 @@ struct RunOptions {
   bool quiet = false;
 };
 
-// Set by SIGINT/SIGTERM; the engine thread sees it at its next tick and aborts to safe state.
+// Operator signals, seen by the engine thread at its next tick (a handler may only set flags):
+// SIGINT/SIGTERM abort to the safe state, SIGUSR1 pauses at the next step boundary, SIGUSR2
+// pauses at once (the capture in progress is repeated), SIGCONT resumes.
 std::atomic<int> g_stop_signal{0};
+std::atomic<int> g_pause_signal{0};
+std::atomic<bool> g_resume_signal{false};
 extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
+extern "C" void on_pause_signal(int sig) { g_pause_signal = sig; }
+extern "C" void on_resume_signal(int) { g_resume_signal = true; }
 
 std::vector<store::NewStep> steps_for_store(const procedures::Plan& plan) {
   std::vector<store::NewStep> steps;
@@ -57,11 +65,18 @@ int execute(const core::StationConfig& station_config, const procedures::Plan& p
   auto station = drivers::make_station(station_config, start_time_s);
 
   ProgressBar bar;
-  daemon::EngineOptions options;
+  daemon::EngineOptions options = daemon::EngineOptions::from_policy(station_config.policy);
   daemon::RunEngine* engine_ptr = nullptr;
   options.on_progress = [&](const daemon::Progress& p) {
-    if (const int sig = g_stop_signal.exchange(0); sig != 0 && engine_ptr) {
+    if (!engine_ptr) return;
+    if (const int sig = g_stop_signal.exchange(0); sig != 0) {
       engine_ptr->abort(sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", "signal");
+    }
+    if (const int sig = g_pause_signal.exchange(0); sig != 0) {
+      engine_ptr->pause(sig == SIGUSR2, sig == SIGUSR2 ? "signal SIGUSR2" : "signal SIGUSR1");
+    }
+    if (g_resume_signal.exchange(false) && p.state == daemon::RunState::kPaused) {
+      engine_ptr->resume("signal SIGCONT");
     }
     if (!quiet) bar.update(p);
   };
@@ -69,9 +84,11 @@ int execute(const core::StationConfig& station_config, const procedures::Plan& p
   engine_ptr = &engine;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
+  std::signal(SIGUSR1, on_pause_signal);
+  std::signal(SIGUSR2, on_pause_signal);
+  std::signal(SIGCONT, on_resume_signal);
   const daemon::RunState final_state = engine.run(first_step, first_attempt);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  for (int sig : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2, SIGCONT}) std::signal(sig, SIG_DFL);
   bar.finish();
 
   const auto summary = run_store.load_run(run_id).summary;

@@ -149,6 +149,14 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     imu.connection = j.value("connection", json::object());
     c.imus.push_back(std::move(imu));
   }
+  if (doc.contains("policy")) {
+    const json& p = doc.at("policy");
+    c.policy.on_sequence_gap = p.value("on_sequence_gap", c.policy.on_sequence_gap);
+    c.policy.on_stale_stream = p.value("on_stale_stream", c.policy.on_stale_stream);
+    c.policy.stale_after_s = p.value("stale_after_s", c.policy.stale_after_s);
+    c.policy.capture_band_factor = p.value("capture_band_factor", c.policy.capture_band_factor);
+    c.policy.max_capture_attempts = p.value("max_capture_attempts", c.policy.max_capture_attempts);
+  }
   if (doc.contains("sim")) {
     c.sim_max_step_s = doc.at("sim").value("max_step_s", c.sim_max_step_s);
     c.sim_thermal_step_s = doc.at("sim").value("thermal_step_s", c.sim_thermal_step_s);
@@ -208,6 +216,12 @@ json StationConfig::to_json() const {
               {"table", table_j},
               {"chamber", chamber_j},
               {"imus", imus_j},
+              {"policy",
+               {{"on_sequence_gap", policy.on_sequence_gap},
+                {"on_stale_stream", policy.on_stale_stream},
+                {"stale_after_s", policy.stale_after_s},
+                {"capture_band_factor", policy.capture_band_factor},
+                {"max_capture_attempts", policy.max_capture_attempts}}},
               {"sim", {{"max_step_s", sim_max_step_s}, {"thermal_step_s", sim_thermal_step_s}}}};
   if (!description.empty()) doc["description"] = description;
   return doc;

@@ -4,12 +4,30 @@
 
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 #include <thread>
 
 namespace calstand::daemon {
 
 using procedures::Step;
 using procedures::StepKind;
+
+GapPolicy parse_gap_policy(const std::string& name) {
+  if (name == "record") return GapPolicy::kRecord;
+  if (name == "repeat_capture") return GapPolicy::kRepeatCapture;
+  if (name == "abort") return GapPolicy::kAbort;
+  throw std::invalid_argument("unknown fault policy \"" + name + "\"");
+}
+
+EngineOptions EngineOptions::from_policy(const core::FaultPolicy& policy) {
+  EngineOptions o;
+  o.gap_policy = parse_gap_policy(policy.on_sequence_gap);
+  o.stale_policy = parse_gap_policy(policy.on_stale_stream);
+  o.imu_stale_s = policy.stale_after_s;
+  o.capture_band_factor = policy.capture_band_factor;
+  o.max_capture_attempts = policy.max_capture_attempts;
+  return o;
+}
 
 RunEngine::RunEngine(drivers::Station& station, RunJournal& journal, procedures::Plan plan,
                      EngineOptions options)
@@ -135,6 +153,7 @@ void RunEngine::handle_pause_at_boundary() {
     // otherwise run as fast as the CPU allows, so it also sleeps a little real time.
     station_.wait_until(station_.clock().now_s() + options_.tick_s);
     poll_imus();
+    set_phase("paused");  // lets the progress callback see (and pass on) a resume request
     if (station_.clock().is_virtual()) {
       std::this_thread::sleep_for(std::chrono::duration<double>(options_.paused_real_sleep_s));
     }
@@ -360,7 +379,11 @@ void RunEngine::poll_imus() {
         health.stale = true;
         record_event(EventKind::kFault, imu.name(),
                      fmt::format("stream stale: no sample for {:.1f} s", now - health.last_sample_s));
-        if (capturing_) capturing_->invalid_reason = imu.name() + " stream stale";
+        if (capturing_ && options_.stale_policy == GapPolicy::kRepeatCapture) {
+          capturing_->invalid_reason = imu.name() + " stream stale";
+        } else if (capturing_ && options_.stale_policy == GapPolicy::kAbort) {
+          throw Aborted{imu.name() + ": stream stale"};
+        }
       }
       continue;
     }

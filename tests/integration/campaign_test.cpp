@@ -30,8 +30,9 @@ const char* kSetArgs =
     " --set 'outer_angles=[0,90,180]' --set 'inner_angles=[0,90]' --set 'rates=[20,90]'"
     " --set revolutions=1 --set ramp_c_per_min=2";
 
+// ctest runs every test in its own process, two at a time: each process has its own files.
 std::string db_path(const std::string& name) {
-  const auto p = fs::path(::testing::TempDir()) / name;
+  const auto p = fs::path(::testing::TempDir()) / (std::to_string(getpid()) + "_" + name);
   fs::remove(p);
   fs::remove(p.string() + "-wal");
   fs::remove(p.string() + "-shm");
@@ -191,5 +192,71 @@ TEST_P(KilledCampaign, ResumesToTheSameStepsWithNoLostOrDuplicatedSamples) {
 
 // Killed after the first soak, in the middle of the static test, and in the rate ladder.
 INSTANTIATE_TEST_SUITE_P(AtSeveralPoints, KilledCampaign, ::testing::Values(1, 5, 16));
+
+}  // namespace
+
+namespace {
+
+// The foreground run obeys the operator's signals: pause at once mid-capture, resume, and the
+// interrupted capture is repeated whole.
+TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
+  const std::string db = db_path("campaign_signals.db");
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string cmd = std::string(CALSTAND_BIN) + " run static-allan --quiet --db " + db +
+                            " --set duration_s=20000 > /dev/null 2>&1";
+    execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // Wait until the capture is under way, then pause at once.
+  auto query = [&](const char* sql) {
+    sqlite3* h = nullptr;
+    sqlite3_open_v2(db.c_str(), &h, SQLITE_OPEN_READONLY, nullptr);
+    sqlite3_busy_timeout(h, 1000);
+    sqlite3_stmt* st = nullptr;
+    std::string value;
+    if (sqlite3_prepare_v2(h, sql, -1, &st, nullptr) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW &&
+        sqlite3_column_text(st, 0)) {
+      value = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
+    }
+    sqlite3_finalize(st);
+    sqlite3_close(h);
+    return value;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (query("SELECT count(*) FROM steps WHERE run_id = 1 AND kind = 'capture' AND "
+               "status = 'running'") != "1" &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  kill(pid, SIGUSR2);
+  bool paused = false;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (query("SELECT status FROM runs WHERE id = 1") == "paused") {
+      paused = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_TRUE(paused) << "the run never reported paused";
+  kill(pid, SIGCONT);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  calstand::store::Database handle(db);
+  calstand::store::RunStore runs(handle);
+  const auto run = runs.load_run(1);
+  EXPECT_EQ(run.summary.status, "completed");
+  bool repeated = false;
+  for (const auto& s : run.steps) {
+    if (s.kind == "capture") {
+      repeated |= s.attempts >= 2;
+      EXPECT_NEAR(static_cast<double>(calstand::store::read_samples(handle, 1, s.index, "imu0").size()),
+                  20000.0 * 400.0, 41.0);
+    }
+  }
+  EXPECT_TRUE(repeated) << "the interrupted capture was not repeated";
+}
 
 }  // namespace

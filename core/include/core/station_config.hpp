@@ -61,6 +61,16 @@ struct ImuConfig {
   nlohmann::json connection = nlohmann::json::object();
 };
 
+/// How the run engine treats stream faults and invalid captures (station file `policy`).
+struct FaultPolicy {
+  /// "record" (event, keep the capture), "repeat_capture" or "abort".
+  std::string on_sequence_gap = "record";
+  std::string on_stale_stream = "repeat_capture";
+  double stale_after_s = 1.0;         ///< silence that makes a stream stale [s]
+  double capture_band_factor = 2.0;   ///< band = factor * soak tolerance around the setpoint
+  int max_capture_attempts = 3;
+};
+
 /// A whole station: site, table, chamber, IMUs and the simulator's settings.
 struct StationConfig {
   std::string name = "sim-station";
@@ -70,6 +80,7 @@ struct StationConfig {
   TableConfig table;
   ChamberConfig chamber;
   std::vector<ImuConfig> imus;
+  FaultPolicy policy;
   double sim_max_step_s = 0.01;
   double sim_thermal_step_s = 0.1;
 

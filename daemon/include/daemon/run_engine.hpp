@@ -17,12 +17,16 @@
 
 namespace calstand::daemon {
 
-/// What to do when an IMU's sequence counter skips (samples lost on the way).
+/// What to do when an IMU stream misbehaves during a capture (sequence gap, stale stream).
 enum class GapPolicy {
   kRecord,         ///< record an event and keep the capture
   kRepeatCapture,  ///< invalidate the capture and repeat it
   kAbort,          ///< abort the run to the safe state
 };
+
+/// "record", "repeat_capture", "abort" (station file names); throws std::invalid_argument
+/// for anything else.
+GapPolicy parse_gap_policy(const std::string& name);
 
 /// Where the run is, for progress bars and status requests.
 struct Progress {
@@ -45,9 +49,12 @@ struct EngineOptions {
                                         ///< times the soak tolerance
   double imu_stale_s = 1.0;             ///< no sample for this long is a stale stream [s]
   GapPolicy gap_policy = GapPolicy::kRecord;
+  GapPolicy stale_policy = GapPolicy::kRepeatCapture;
   int max_capture_attempts = 3;         ///< repeats of an invalidated capture before failing
   /// Called from the engine's thread at most once per tick.
   std::function<void(const Progress&)> on_progress;
+  /// The options a station's fault policy (station file `policy`) sets; the rest default.
+  static EngineOptions from_policy(const core::FaultPolicy& policy);
   /// Real seconds to sleep per tick while paused on a virtual clock (keeps a paused simulated
   /// run from spinning the CPU).
   double paused_real_sleep_s = 0.01;

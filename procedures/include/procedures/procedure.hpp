@@ -151,7 +151,8 @@ std::map<std::string, nlohmann::json> resolve_parameters(const Procedure& proced
 std::vector<Step> expand(const Procedure& procedure, const Overrides& overrides = {});
 
 /// Like expand() but never throws for rule breaks: appends them to `violations` and returns
-/// the steps it could resolve (steps with a bad value are still listed, with that field 0).
+/// every step (a value that breaks a rule is kept as given; a reference to something that is
+/// not a number leaves its field 0). make_plan() uses it so that one call lists every problem.
 std::vector<Step> expand_collecting(const Procedure& procedure, const Overrides& overrides,
                                     std::vector<Violation>& violations);
 

@@ -155,3 +155,24 @@ TEST(StationConfig, GeometryCarriesTheMount) {
 
 }  // namespace
 }  // namespace calstand::core
+
+namespace calstand::core {
+namespace {
+
+TEST(StationConfig, FaultPolicyDefaultsAndRoundTrips) {
+  json doc = minimal_station();
+  StationConfig c = StationConfig::from_json(doc, "p.json");
+  EXPECT_EQ(c.policy.on_sequence_gap, "record");
+  EXPECT_EQ(c.policy.on_stale_stream, "repeat_capture");
+  doc["policy"] = {{"on_sequence_gap", "abort"}, {"stale_after_s", 0.5}, {"max_capture_attempts", 5}};
+  c = StationConfig::from_json(doc, "p.json");
+  EXPECT_EQ(c.policy.on_sequence_gap, "abort");
+  EXPECT_DOUBLE_EQ(c.policy.stale_after_s, 0.5);
+  EXPECT_EQ(c.policy.max_capture_attempts, 5);
+  EXPECT_EQ(StationConfig::from_json(c.to_json(), "q.json").to_json(), c.to_json());
+  doc["policy"]["on_sequence_gap"] = "ignore";
+  EXPECT_THROW(StationConfig::from_json(doc, "p.json"), SchemaError);
+}
+
+}  // namespace
+}  // namespace calstand::core

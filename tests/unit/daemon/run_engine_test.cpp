@@ -290,11 +290,40 @@ TEST(RunEngine, StaleStreamIsAFaultAndInvalidatesTheCapture) {
   EXPECT_FALSE(f.journal.discarded.empty());
 }
 
+TEST(RunEngine, StaleStreamOnlyRecordedWhenThePolicySaysSo) {
+  Fixture f;
+  bool stalled = false;
+  core::FaultPolicy policy;
+  policy.on_stale_stream = "record";
+  EngineOptions opt = EngineOptions::from_policy(policy);
+  opt.on_progress = [&](const Progress& p) {
+    if (p.phase == "capturing" && !stalled) {
+      stalled = true;
+      f.station.world().set_imu_stalled(0, true);
+    }
+    if (stalled && p.station_time_s > 3.0) f.station.world().set_imu_stalled(0, false);
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(4.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kFault, "stream stale"));
+  EXPECT_TRUE(f.journal.discarded.empty());
+  EXPECT_THROW(parse_gap_policy("ignore"), std::invalid_argument);
+}
+
 TEST(RunEngine, ResumeReestablishesTemperatureAndPositionThenSkipsDoneSteps) {
   Fixture f;
+  bool checked = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.phase != "capturing" || checked) return;
+    checked = true;
+    EXPECT_NEAR(std::abs(f.station.table().read_state().outer.angle_deg), 180.0, 1e-3);
+    EXPECT_NEAR(f.station.chamber().read_state().air_temperature_c, 35.0, 0.5);
+  };
   RunEngine engine(f.station, f.journal,
-                   plan_of({temperature(35.0), move(180.0, 0.0), capture(2.0), capture(2.0)}));
+                   plan_of({temperature(35.0), move(180.0, 0.0), capture(2.0), capture(2.0)}), opt);
   EXPECT_EQ(engine.run(2, 3), RunState::kCompleted);
+  EXPECT_TRUE(checked);
   // Steps 0 and 1 are not started again, but their state is: captures at 35 degC, upside down.
   for (const auto& [step, attempt] : f.journal.started) EXPECT_GE(step, 2u);
   EXPECT_EQ(f.journal.completed.front(), std::make_pair(std::size_t{2}, 3));
