@@ -14,14 +14,12 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/station_config.hpp"
+#include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
-#include "daemon/store_journal.hpp"
-#include "drivers/station.hpp"
 #include "procedures/plan.hpp"
 #include "procedures/procedure.hpp"
 #include "progress_bar.hpp"
 #include "sim/sim_world.hpp"
-#include "store/capture_writer.hpp"
 #include "store/database.hpp"
 #include "store/run_store.hpp"
 
@@ -47,56 +45,40 @@ extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
 extern "C" void on_pause_signal(int sig) { g_pause_signal = sig; }
 extern "C" void on_resume_signal(int) { g_resume_signal = true; }
 
-std::vector<store::NewStep> steps_for_store(const procedures::Plan& plan) {
-  std::vector<store::NewStep> steps;
-  for (const auto& s : plan.steps) {
-    steps.push_back({std::string(procedures::to_string(s.kind)), s.label, s.to_json(), s.origin_path});
-  }
-  return steps;
-}
-
-// Runs `plan` as run `run_id`, from `first_step`; returns the process exit code.
+// Runs `plan` as run `run_id` from `start`; returns the process exit code.
 int execute(const core::StationConfig& station_config, const procedures::Plan& plan,
-            const std::string& db_path, store::Database& db, std::int64_t run_id,
-            std::size_t first_step, int first_attempt, double start_time_s, bool quiet) {
-  store::RunStore run_store(db);
-  store::CaptureWriter writer(db_path);
-  daemon::StoreJournal journal(run_store, writer, run_id);
-  auto station = drivers::make_station(station_config, start_time_s);
-
+            const std::string& db_path, std::int64_t run_id, const daemon::CampaignStart& start,
+            bool quiet) {
   ProgressBar bar;
-  daemon::EngineOptions options = daemon::EngineOptions::from_policy(station_config.policy);
-  daemon::RunEngine* engine_ptr = nullptr;
-  options.on_progress = [&](const daemon::Progress& p) {
-    if (!engine_ptr) return;
-    if (const int sig = g_stop_signal.exchange(0); sig != 0) {
-      engine_ptr->abort(sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", "signal");
-    }
-    if (const int sig = g_pause_signal.exchange(0); sig != 0) {
-      engine_ptr->pause(sig == SIGUSR2, sig == SIGUSR2 ? "signal SIGUSR2" : "signal SIGUSR1");
-    }
-    if (g_resume_signal.exchange(false) && p.state == daemon::RunState::kPaused) {
-      engine_ptr->resume("signal SIGCONT");
-    }
-    if (!quiet) bar.update(p);
-  };
-  daemon::RunEngine engine(*station, journal, plan, options);
-  engine_ptr = &engine;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   std::signal(SIGUSR1, on_pause_signal);
   std::signal(SIGUSR2, on_pause_signal);
   std::signal(SIGCONT, on_resume_signal);
-  const daemon::RunState final_state = engine.run(first_step, first_attempt);
+  const auto result = daemon::run_campaign(
+      station_config, plan, db_path, run_id, start,
+      [&](daemon::RunEngine& engine, const daemon::Progress& p) {
+        if (const int sig = g_stop_signal.exchange(0); sig != 0) {
+          engine.abort(sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", "signal");
+        }
+        if (const int sig = g_pause_signal.exchange(0); sig != 0) {
+          engine.pause(sig == SIGUSR2, sig == SIGUSR2 ? "signal SIGUSR2" : "signal SIGUSR1");
+        }
+        if (g_resume_signal.exchange(false) && p.state == daemon::RunState::kPaused) {
+          engine.resume("signal SIGCONT");
+        }
+        if (!quiet) bar.update(p);
+      });
   for (int sig : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2, SIGCONT}) std::signal(sig, SIG_DFL);
   bar.finish();
 
+  store::Database db(db_path);
+  store::RunStore run_store(db);
   const auto summary = run_store.load_run(run_id).summary;
-  fmt::print("run {} {}: {}/{} steps, station time {}{}\n", run_id, to_string(final_state),
-             summary.steps_done, summary.steps_total,
-             format_duration(station->clock().now_s()),
-             engine.exit_reason().empty() ? "" : " (" + engine.exit_reason() + ")");
-  return final_state == daemon::RunState::kCompleted ? 0 : 1;
+  fmt::print("run {} {}: {}/{} steps, station time {}{}\n", run_id, to_string(result.state),
+             summary.steps_done, summary.steps_total, format_duration(result.station_time_s),
+             result.exit_reason.empty() ? "" : " (" + result.exit_reason + ")");
+  return result.state == daemon::RunState::kCompleted ? 0 : 1;
 }
 
 int run_new(const RunOptions& opt) {
@@ -108,23 +90,16 @@ int run_new(const RunOptions& opt) {
       procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));
   procedures::require_valid(plan);  // every violation, before anything is written or moves
 
-  store::Database db(opt.db);
-  store::RunStore run_store(db);
-  std::vector<store::DeviceRecord> devices{{"table", "table", station.table.backend},
-                                           {"chamber", "chamber", station.chamber.backend}};
-  for (const auto& imu : station.imus) devices.push_back({"imu", imu.name, imu.backend});
-  store::NewRun run;
-  run.station_id = run_store.upsert_station(station.name, station.to_json(), devices);
-  run.procedure_name = procedure.name;
-  run.procedure_text = procedure.source_text;
-  run.parameters = plan.parameters;
-  run.station_snapshot = station.to_json();
-  const std::int64_t run_id = run_store.create_run(run);
-  run_store.add_steps(run_id, steps_for_store(plan));
+  std::int64_t run_id = 0;
+  {
+    store::Database db(opt.db);
+    store::RunStore run_store(db);
+    run_id = daemon::create_run_record(run_store, station, procedure, plan);
+  }
   fmt::print("run {}: {} ({} steps, estimated {}) into {}\n", run_id, procedure.name,
              plan.steps.size(), format_duration(plan.total_s), opt.db);
   std::fflush(stdout);
-  return execute(station, plan, opt.db, db, run_id, 0, 1, 0.0, opt.quiet);
+  return execute(station, plan, opt.db, run_id, {}, opt.quiet);
 }
 
 int run_resume(const RunOptions& opt) {
@@ -176,7 +151,7 @@ int run_resume(const RunOptions& opt) {
   fmt::print("run {}: resuming {} at step {}/{}\n", opt.resume_run, procedure.name, *first + 1,
              plan.steps.size());
   std::fflush(stdout);
-  return execute(station, plan, opt.db, db, opt.resume_run, *first, next_attempt, last_time_s,
+  return execute(station, plan, opt.db, opt.resume_run, {*first, next_attempt, last_time_s},
                  opt.quiet);
 }
 

@@ -415,7 +415,13 @@ void RunEngine::poll_imus() {
       }
     }
     if (capturing_ && !capturing_->invalid_reason) {
-      if (!journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples)) {
+      bool queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples);
+      if (!queued && station_.clock().is_virtual()) {
+        // Simulated time waits for the disk: back-pressure, not loss.
+        journal_.wait_for_writer();
+        queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples);
+      }
+      if (!queued) {
         record_event(EventKind::kFault, "writer", "capture queue overflow: samples not stored");
         capturing_->invalid_reason = "capture writer overflow";
       }

@@ -3,12 +3,15 @@
 namespace calstand::daemon {
 
 StoreJournal::StoreJournal(store::RunStore& store, store::CaptureWriter& writer,
-                           std::int64_t run_id, double telemetry_period_s)
+                           std::int64_t run_id, double telemetry_period_s,
+                           bool wait_when_busy, std::size_t writer_queue_capacity)
     : store_(store),
       writer_(writer),
       run_id_(run_id),
       table_decimator_(telemetry_period_s),
-      chamber_decimator_(telemetry_period_s) {}
+      chamber_decimator_(telemetry_period_s),
+      wait_when_busy_(wait_when_busy),
+      queue_capacity_(writer_queue_capacity) {}
 
 std::int64_t StoreJournal::step_id(std::size_t step) {
   auto it = step_ids_.find(step);
@@ -27,6 +30,10 @@ bool StoreJournal::add_samples(std::size_t step, int attempt, const std::string&
   auto it = streams_.find(key);
   if (it == streams_.end()) {
     it = streams_.emplace(key, writer_.open_stream(run_id_, id, attempt, device)).first;
+  }
+  if (wait_when_busy_) {
+    const auto c = writer_.counters();
+    if (c.pushed - c.written + samples.size() > queue_capacity_ / 2) writer_.flush();
   }
   return writer_.push(it->second, samples);
 }

@@ -24,6 +24,10 @@ class RunJournal {
   /// queued (writer overflow), which the engine records as a fault.
   virtual bool add_samples(std::size_t step, int attempt, const std::string& device,
                            const std::vector<core::ImuSample>& samples) = 0;
+  /// Blocks until the sample writer has caught up with everything queued. A simulated station
+  /// produces samples as fast as the CPU allows, so on a virtual clock the engine waits for the
+  /// writer instead of overflowing it; on a real clock an overflow stays a recorded fault.
+  virtual void wait_for_writer() {}
   /// Drops every sample of that attempt (an invalidated or interrupted capture).
   virtual void discard_attempt(std::size_t step, int attempt, const std::string& why) = 0;
   /// Makes the step and the samples of `attempt` durable, then returns.

@@ -17,12 +17,17 @@ namespace calstand::daemon {
 class StoreJournal final : public RunJournal {
  public:
   /// `store` and `writer` must outlive the journal; `run_id` exists with its steps added.
+  /// `wait_when_busy`: before the writer's queue is half full, wait for it (for simulated
+  /// stations, whose samples come as fast as the CPU allows); otherwise a full queue is an
+  /// overflow fault, as it must be for real devices.
   StoreJournal(store::RunStore& store, store::CaptureWriter& writer, std::int64_t run_id,
-               double telemetry_period_s = 0.1);
+               double telemetry_period_s = 0.1, bool wait_when_busy = false,
+               std::size_t writer_queue_capacity = store::CaptureWriterOptions{}.queue_capacity);
 
   void step_started(std::size_t step, int attempt, double t_s) override;
   bool add_samples(std::size_t step, int attempt, const std::string& device,
                    const std::vector<core::ImuSample>& samples) override;
+  void wait_for_writer() override { writer_.flush(); }
   void discard_attempt(std::size_t step, int attempt, const std::string& why) override;
   void step_completed(std::size_t step, int attempt, double t_s) override;
   void step_failed(std::size_t step, int attempt, double t_s, const std::string& why) override;
@@ -45,6 +50,8 @@ class StoreJournal final : public RunJournal {
   store::TelemetryDecimator table_decimator_;
   store::TelemetryDecimator chamber_decimator_;
   bool started_ = false;
+  bool wait_when_busy_;
+  std::size_t queue_capacity_;
 };
 
 }  // namespace calstand::daemon

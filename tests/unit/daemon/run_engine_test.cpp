@@ -31,8 +31,10 @@ class MemoryJournal final : public RunJournal {
     if (a.samples == 0) a.first_time_s = s.front().receive_time_s;
     a.samples += s.size();
     a.last_time_s = s.back().receive_time_s;
+    if (refuse_samples_until_wait && waits == 0) return false;
     return !refuse_samples;
   }
+  void wait_for_writer() override { ++waits; }
   void discard_attempt(std::size_t step, int attempt, const std::string& why) override {
     discarded.push_back({step, attempt});
     discard_reasons.push_back(why);
@@ -66,6 +68,8 @@ class MemoryJournal final : public RunJournal {
   std::vector<RunState> states;
   int table_rows = 0, chamber_rows = 0;
   bool refuse_samples = false;
+  bool refuse_samples_until_wait = false;
+  int waits = 0;
 };
 
 Step temperature(double c) {
@@ -308,6 +312,27 @@ TEST(RunEngine, StaleStreamOnlyRecordedWhenThePolicySaysSo) {
   EXPECT_TRUE(f.journal.has_event(EventKind::kFault, "stream stale"));
   EXPECT_TRUE(f.journal.discarded.empty());
   EXPECT_THROW(parse_gap_policy("ignore"), std::invalid_argument);
+}
+
+TEST(RunEngine, SimulatedTimeWaitsForTheWriterInsteadOfOverflowing) {
+  Fixture f;
+  f.journal.refuse_samples_until_wait = true;
+  RunEngine engine(f.station, f.journal, plan_of({capture(2.0)}));
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_EQ(f.journal.waits, 1);
+  EXPECT_TRUE(f.journal.discarded.empty());
+  EXPECT_FALSE(f.journal.has_event(EventKind::kFault, "overflow"));
+}
+
+TEST(RunEngine, WriterOverflowIsAFaultThatInvalidatesTheCapture) {
+  Fixture f;
+  f.journal.refuse_samples = true;
+  EngineOptions opt;
+  opt.max_capture_attempts = 2;
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kFailed);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kFault, "overflow"));
+  EXPECT_EQ(f.journal.discarded.size(), 2u);
 }
 
 TEST(RunEngine, ResumeReestablishesTemperatureAndPositionThenSkipsDoneSteps) {

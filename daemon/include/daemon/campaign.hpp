@@ -1,0 +1,45 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "core/station_config.hpp"
+#include "daemon/run_engine.hpp"
+#include "procedures/plan.hpp"
+#include "procedures/procedure.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::daemon {
+
+/// Records a new run of `plan` (procedure text and hash, parameters, station snapshot, the
+/// expanded steps) and returns its id. Nothing runs.
+std::int64_t create_run_record(store::RunStore& runs, const core::StationConfig& station,
+                               const procedures::Procedure& procedure,
+                               const procedures::Plan& plan);
+
+/// How a campaign ended.
+struct CampaignResult {
+  RunState state = RunState::kIdle;
+  std::string exit_reason;
+  double station_time_s = 0.0;  ///< station clock at the end [s]
+};
+
+/// Where to start and how: a new run starts at step 0, attempt 1, time 0; a resumed run at its
+/// first unfinished step, one attempt past those recorded, at the last recorded station time.
+struct CampaignStart {
+  std::size_t first_step = 0;
+  int first_attempt = 1;
+  double start_time_s = 0.0;
+};
+
+/// Runs run `run_id` (already recorded in the database at `db_path`) on the station of
+/// `station`: the station's devices, a capture writer and the engine with the station's fault
+/// policy. `on_tick` is called from the engine thread on every progress update, with the engine
+/// (for operator requests such as pause or abort). Blocks until the run ends.
+CampaignResult run_campaign(const core::StationConfig& station, const procedures::Plan& plan,
+                            const std::string& db_path, std::int64_t run_id,
+                            const CampaignStart& start = {},
+                            std::function<void(RunEngine&, const Progress&)> on_tick = {});
+
+}  // namespace calstand::daemon
