@@ -141,8 +141,9 @@ void TableAxisSim::step_profile(double dt_s) {
 
 void TableAxisSim::step_servo(double dt_s, double profile_before_deg) {
   // The world steps on a sample grid whose dt differs only by rounding from step to step;
-  // reuse the decay unless dt really changed.
-  if (std::abs(dt_s - servo_dt_s_) > 1e-9 * dt_s) {
+  // reuse the decay unless dt really changed. The first-order-hold solution below keeps a
+  // steady rate exact whatever decay it is given, so a decay from a dt 1e-6 off costs nothing.
+  if (std::abs(dt_s - servo_dt_s_) > 1e-6 * dt_s) {
     servo_dt_s_ = dt_s;
     servo_decay_ = limits_.servo_time_constant_s > 0.0
                        ? std::exp(-dt_s / limits_.servo_time_constant_s)
