@@ -1,6 +1,9 @@
 // The calstand command as a user runs it: exit codes, error text and the demo's results.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
 
 #include <algorithm>
 #include <array>
@@ -360,6 +363,48 @@ TEST(CliStation, ATruthTheSimulatorCannotRunIsNotCalledValid) {
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_EQ(r.out.find("valid"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("imus[0]"), std::string::npos) << r.out;
+}
+
+}  // namespace
+
+namespace {
+
+// A recorded simulator run goes out as calstand-import/1, comes back in, and goes out again
+// byte for byte; a malformed folder is refused with its line and column and writes nothing.
+TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
+  const std::string dir = ::testing::TempDir() + "cli_roundtrip_" + std::to_string(getpid());
+  std::system(("rm -rf " + dir + " && mkdir -p " + dir).c_str());
+  const std::string db1 = dir + "/recorded.db", db2 = dir + "/imported.db";
+  Result r = run("run six-position --quiet --set capture_s=2 --db " + db1);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("export --db " + db1 + " --run 1 --out " + dir + "/first");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("import " + dir + "/first --json --db " + db2);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto imported = nlohmann::json::parse(r.out);
+  EXPECT_EQ(imported["steps"].get<int>(), 6);  // the six captures
+  EXPECT_NEAR(imported["samples"].get<double>(), 6 * 2 * 400.0, 6 * 41.0);
+  r = run("export --db " + db2 + " --run " + std::to_string(imported["run"].get<int>()) +
+          " --out " + dir + "/second");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string first = read_text(dir + "/first/samples.csv");
+  ASSERT_GT(first.size(), 1000u);
+  EXPECT_EQ(first, read_text(dir + "/second/samples.csv"));
+
+  // Break one number on one row: exit 2 naming the line and column, and no run written.
+  std::string broken = first;
+  const auto line3 = broken.find('\n', broken.find('\n', broken.find('\n') + 1) + 1) + 1;
+  const auto comma = broken.find(',', broken.find(',', line3) + 1);
+  broken.insert(comma + 1, "x");
+  std::system(("mkdir -p " + dir + "/broken && cp " + dir + "/first/meta.json " + dir + "/broken/").c_str());
+  write_text(dir + "/broken/samples.csv", broken);
+  const std::string db3 = dir + "/refused.db";
+  r = run("import " + dir + "/broken --db " + db3);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("samples.csv:4"), std::string::npos) << r.out;
+  r = run("runs --json --db " + db3);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_TRUE(nlohmann::json::parse(r.out).empty()) << r.out;
 }
 
 }  // namespace
