@@ -26,13 +26,20 @@ ImuInputModel::ImuInputModel(const ImuTruth& truth, const core::TableGeometry& g
 }
 
 ImuInputs ImuInputModel::operator()(const TableKinematics& k, double temperature_c) const {
-  // Same formulas as core::TableGeometry, with each axis rotation computed once.
-  const Eigen::Matrix3d R_outer =
-      Eigen::AngleAxisd(k.outer_deg * core::kDegToRad, outer_axis_).toRotationMatrix();
-  const Eigen::Matrix3d R_inner =
-      Eigen::AngleAxisd(k.inner_deg * core::kDegToRad, inner_axis_).toRotationMatrix();
-  const Eigen::Matrix3d C_BL = (R_outer * R_inner * mount_C_PB_).transpose();
-  const Eigen::Vector3d inner_now = R_outer * inner_axis_;
+  // Same formulas as core::TableGeometry, with each axis rotation computed once (and not at
+  // all while the angles stay the same).
+  if (k.outer_deg != cache_.outer_deg || k.inner_deg != cache_.inner_deg) {
+    const Eigen::Matrix3d R_outer =
+        Eigen::AngleAxisd(k.outer_deg * core::kDegToRad, outer_axis_).toRotationMatrix();
+    const Eigen::Matrix3d R_inner =
+        Eigen::AngleAxisd(k.inner_deg * core::kDegToRad, inner_axis_).toRotationMatrix();
+    cache_.C_BL = (R_outer * R_inner * mount_C_PB_).transpose();
+    cache_.inner_now = R_outer * inner_axis_;
+    cache_.outer_deg = k.outer_deg;
+    cache_.inner_deg = k.inner_deg;
+  }
+  const Eigen::Matrix3d& C_BL = cache_.C_BL;
+  const Eigen::Vector3d& inner_now = cache_.inner_now;
   const Eigen::Vector3d table_rate_dps =
       k.outer_rate_dps * outer_axis_ + k.inner_rate_dps * inner_now;
 

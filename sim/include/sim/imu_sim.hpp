@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "core/imu_sample.hpp"
@@ -43,6 +44,15 @@ class ImuInputModel {
   Eigen::Vector3d force_base_mps2_;  // gravity's specific force in the (tilted) base frame
   Eigen::Vector3d earth_base_dps_;   // Earth rate in the base frame [deg/s]
   Eigen::Vector3d lever_arm_m_;
+  // The rotations of the last table angles: a static table (most of a campaign) reuses them
+  // instead of two sin/cos pairs per sample. Not thread safe, like the simulator that owns it.
+  struct RotationCache {
+    double outer_deg = std::numeric_limits<double>::quiet_NaN();
+    double inner_deg = std::numeric_limits<double>::quiet_NaN();
+    Eigen::Matrix3d C_BL;
+    Eigen::Vector3d inner_now;
+  };
+  mutable RotationCache cache_;
 };
 
 /// One-off form of ImuInputModel (for tests and tools; the simulator keeps a model).
