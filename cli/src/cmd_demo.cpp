@@ -139,9 +139,7 @@ int run_demo(const DemoOptions& opt) {
     throw core::InputError("--capture",
                            fmt::format("must be in (0, 3600] s, got {}", opt.capture_s));
   }
-  core::StationConfig station = opt.station_file.empty()
-                                    ? sim::default_station()
-                                    : core::StationConfig::load(opt.station_file);
+  core::StationConfig station = sim::load_station_or_default(opt.station_file);
   if (opt.seed_given) station.seed = opt.seed;
   const core::TableGeometry geometry = station.geometry(0);
   const std::vector<Position> six_pos = six_positions(geometry);  // before any lab time

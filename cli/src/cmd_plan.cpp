@@ -129,9 +129,7 @@ void print_text(const procedures::Plan& plan, const core::StationConfig& station
 }
 
 void run(const PlanOptions& opt) {
-  const core::StationConfig station = opt.station_file.empty()
-                                          ? sim::default_station()
-                                          : core::StationConfig::load(opt.station_file);
+  const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const procedures::Overrides overrides = procedures::parse_overrides(opt.set_args);
   const procedures::Procedure procedure = procedures::load_procedure(opt.procedure);
   const procedures::Plan plan = procedures::make_plan(procedure, station, overrides);

@@ -82,9 +82,7 @@ int execute(const core::StationConfig& station_config, const procedures::Plan& p
 }
 
 int run_new(const RunOptions& opt) {
-  const core::StationConfig station = opt.station_file.empty()
-                                          ? sim::default_station()
-                                          : core::StationConfig::load(opt.station_file);
+  const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const procedures::Procedure procedure = procedures::load_procedure(opt.procedure);
   const procedures::Plan plan =
       procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));

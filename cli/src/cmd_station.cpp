@@ -28,9 +28,7 @@ std::string figure(const nlohmann::json& v) {
 }
 
 void run(const StationOptions& opt) {
-  const core::StationConfig station = opt.station_file.empty()
-                                          ? sim::default_station()
-                                          : core::StationConfig::load(opt.station_file);
+  const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const Eigen::Vector3d earth_dph =
       station.site.earth_rate_level_radps() * core::kRadToDeg * 3600.0;
   // Build each simulated IMU as the simulated world would, so that a truth the simulator

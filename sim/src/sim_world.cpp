@@ -44,6 +44,10 @@ core::StationConfig default_station() {
                                         "<built-in station>");
 }
 
+core::StationConfig load_station_or_default(const std::string& path) {
+  return path.empty() ? default_station() : core::StationConfig::load(path);
+}
+
 ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_seed,
                            std::size_t index) {
   const std::uint64_t draw_seed = derive_seed(station_seed, "imu-unit-" + imu.name, index);

@@ -20,6 +20,10 @@ namespace calstand::sim {
 /// The embedded default simulated station (sim/stations/default.json).
 core::StationConfig default_station();
 
+/// The station file at `path`, or the embedded default station when `path` is empty (what
+/// every `--station` option means).
+core::StationConfig load_station_or_default(const std::string& path);
+
 /// The truth of simulated IMU `index` of a station: drawn from its built-in model or spec file
 /// (seeded by the station seed and the index), read from its truth file, or inline.
 /// Throws core::InputError / core::SchemaError naming the file and field on bad input.
