@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
+  libmuparser-dev libfftw3-dev libboost-math-dev
 )
 
 missing=()

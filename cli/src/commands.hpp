@@ -7,7 +7,10 @@ namespace calstand::cli {
 // Each subcommand lives in its own cmd_<name>.cpp and registers itself here. A command's
 // callback returns through CLI11; errors are reported as one line on stderr with exit code 2
 // (bad input) or 1 (failure), see main.cpp.
+void register_allan(CLI::App& app);      // allan and noise
+void register_calibrate(CLI::App& app);  // calibrate and apply
 void register_demo(CLI::App& app);
+void register_fit(CLI::App& app);
 void register_import_export(CLI::App& app);  // import and export
 void register_noise_study(CLI::App& app);
 void register_plan(CLI::App& app);

@@ -10,7 +10,10 @@ int main(int argc, char** argv) {
   CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "calstand 0.1.0");
+  calstand::cli::register_allan(app);
+  calstand::cli::register_calibrate(app);
   calstand::cli::register_demo(app);
+  calstand::cli::register_fit(app);
   calstand::cli::register_import_export(app);
   calstand::cli::register_noise_study(app);
   calstand::cli::register_plan(app);

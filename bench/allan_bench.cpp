@@ -1,0 +1,1 @@
+// Benchmark of the Allan deviation (issue 4); see allan_bench notes.

@@ -1,0 +1,1 @@
+// Benchmark of the fit and diagnosis (issue 4).

@@ -1,0 +1,7 @@
+#include "commands.hpp"
+
+namespace calstand::cli {
+
+void register_calibrate(CLI::App& app) { (void)app; }
+
+}  // namespace calstand::cli

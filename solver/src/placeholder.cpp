@@ -1,0 +1,2 @@
+// Keeps the library non-empty until the first solver sources land.
+namespace calstand::solver {}
