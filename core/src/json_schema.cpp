@@ -1,4 +1,5 @@
 #include "core/json_schema.hpp"
+#include "core/suggest.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -135,39 +136,12 @@ std::string got_phrase(const json& v, unsigned expected) {
   }
 }
 
-/// Optimal string alignment distance: edits, with a swap of neighbours counting as one.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  const std::size_t n = a.size(), m = b.size();
-  std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1));
-  for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
-  for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
-  for (std::size_t i = 1; i <= n; ++i) {
-    for (std::size_t j = 1; j <= m; ++j) {
-      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
-        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    }
-  }
-  return d[n][m];
-}
-
-/// ` (did you mean "x"?)` for the closest candidate within 2 edits, else empty. A candidate no
-/// longer than the distance shares nothing with the word, so it is no suggestion.
+/// ` (did you mean "x"?)` for the closest candidate within 2 edits, else empty.
 template <typename Range>
 std::string did_you_mean(const std::string& word, const Range& candidates) {
-  constexpr std::size_t kMaxDistance = 2;
-  std::string best;
-  std::size_t best_distance = kMaxDistance + 1;
-  for (const auto& candidate : candidates) {
-    const std::string c(candidate);
-    const std::size_t dist = edit_distance(word, c);
-    if (dist < best_distance && dist < c.size()) {
-      best = c;
-      best_distance = dist;
-    }
-  }
+  std::vector<std::string> owned(std::begin(candidates), std::end(candidates));
+  const std::vector<std::string_view> views(owned.begin(), owned.end());
+  const std::string best = closest_name(word, views);
   return best.empty() ? std::string() : " (did you mean " + quote(best) + "?)";
 }
 

@@ -13,85 +13,10 @@
 #include "store/import_export.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
+#include "store/step_data.hpp"
 
 namespace calstand::store {
 namespace {
-
-/// Table columns of one exported row.
-struct TableRow {
-  double time_s = 0.0;
-  double outer_deg = 0.0;
-  double inner_deg = 0.0;
-  double outer_rate_dps = 0.0;
-  double inner_rate_dps = 0.0;
-};
-
-std::vector<TableRow> read_table(SQLite::Database& db, const char* where, std::int64_t id) {
-  SQLite::Statement q(db, fmt::format("SELECT time_s, outer_deg, inner_deg, outer_rate_dps, "
-                                      "inner_rate_dps FROM table_telemetry WHERE {} = ? "
-                                      "ORDER BY {}",
-                                      where, std::string_view(where) == "step_id" ? "id" : "time_s, id"));
-  q.bind(1, id);
-  std::vector<TableRow> out;
-  while (q.executeStep()) {
-    out.push_back({q.getColumn(0).getDouble(), q.getColumn(1).getDouble(),
-                   q.getColumn(2).getDouble(), q.getColumn(3).getDouble(),
-                   q.getColumn(4).getDouble()});
-  }
-  return out;
-}
-
-double wrap180(double deg) {
-  double w = std::fmod(deg + 180.0, 360.0);
-  if (w < 0.0) w += 360.0;
-  return w - 180.0;
-}
-
-// Table state at `t_s` from time-ordered telemetry: linear between neighbours (angles along the
-// shorter arc), the nearest row outside the recorded span.
-TableRow interpolate(const std::vector<TableRow>& rows, double t_s) {
-  const auto after = std::lower_bound(rows.begin(), rows.end(), t_s,
-                                      [](const TableRow& r, double t) { return r.time_s < t; });
-  if (after == rows.begin()) return *after;
-  if (after == rows.end()) return rows.back();
-  const TableRow& a = *std::prev(after);
-  const TableRow& b = *after;
-  const double span = b.time_s - a.time_s;
-  const double f = span > 0.0 ? (t_s - a.time_s) / span : 0.0;
-  TableRow r;
-  r.time_s = t_s;
-  r.outer_deg = wrap180(a.outer_deg + f * wrap180(b.outer_deg - a.outer_deg));
-  r.inner_deg = wrap180(a.inner_deg + f * wrap180(b.inner_deg - a.inner_deg));
-  r.outer_rate_dps = a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps);
-  r.inner_rate_dps = a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps);
-  return r;
-}
-
-TableRow commanded_table(const nlohmann::json& c) {
-  TableRow r;
-  r.outer_deg = c.value("outer_deg", c.value("outer_start_deg", 0.0));
-  r.inner_deg = c.value("inner_deg", c.value("inner_start_deg", 0.0));
-  r.outer_rate_dps = c.value("outer_rate_dps", 0.0);
-  r.inner_rate_dps = c.value("inner_rate_dps", 0.0);
-  return r;
-}
-
-std::string choose_device(Database& db, std::int64_t run, const ExportOptions& options) {
-  const std::vector<std::string> devices = sample_devices(db, run);
-  const std::string where = "run " + std::to_string(run);
-  if (!options.device.empty()) {
-    if (std::find(devices.begin(), devices.end(), options.device) == devices.end()) {
-      throw core::InputError(where, "has no samples of device '" + options.device + "'");
-    }
-    return options.device;
-  }
-  if (devices.empty()) throw core::InputError(where, "has no samples to export");
-  if (devices.size() > 1) {
-    throw core::InputError(where, fmt::format("has samples of several IMUs ({}): choose one",
-                                              fmt::join(devices, ", ")));
-  }
-  return devices.front();
-}
 
 // Samples per second of the longest step, rounded to 6 significant digits (a recorded run's
 // station snapshot does not state the IMU's rate).
@@ -143,7 +68,7 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
                 const ExportOptions& options) {
   RunStore runs(db);
   const RunRecord record = runs.load_run(run);
-  const std::string device = choose_device(db, run, options);
+  const std::string device = choose_device(db, run, options.device);
   const nlohmann::json meta =
       record.station_snapshot.value("format", "") == detail::kImportFormat
           ? record.station_snapshot
@@ -152,25 +77,14 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
 
   fmt::memory_buffer csv;
   fmt::format_to(std::back_inserter(csv), "{}\n", detail::kImportCsvHeader);
-  const std::vector<TableRow> run_table =
-      detail::guarded("read table telemetry", [&] { return read_table(db.sql(), "run_id", run); });
-  for (const StepRecord& step : record.steps) {
-    if (step.status != StepStatus::kCompleted) continue;
-    const std::vector<core::ImuSample> samples = read_samples(db, run, step.index, device);
-    if (samples.empty()) continue;
-    const std::vector<TableRow> step_table = detail::guarded(
-        "read table telemetry", [&] { return read_table(db.sql(), "step_id", step.id); });
-    // Imported runs hold one table row per sample, in sample order.
-    const bool per_sample = step_table.size() == samples.size();
-    const auto& c = step.commanded;
+  for (const StepData& data : read_step_data(db, run, device)) {
+    const auto& c = data.step.commanded;
     const std::int64_t step_value = c.contains("import_step") && c["import_step"].is_number_integer()
                                         ? c["import_step"].get<std::int64_t>()
-                                        : static_cast<std::int64_t>(step.index);
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const core::ImuSample& s = samples[i];
-      const TableRow t = per_sample           ? step_table[i]
-                         : !run_table.empty() ? interpolate(run_table, s.receive_time_s)
-                                              : commanded_table(c);
+                                        : static_cast<std::int64_t>(data.step.index);
+    for (std::size_t i = 0; i < data.samples.size(); ++i) {
+      const core::ImuSample& s = data.samples[i];
+      const TableSample& t = data.table[i];
       fmt::format_to(std::back_inserter(csv),
                      "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
                      "{:.17g},{:.17g},{:.17g}\n",

@@ -1,0 +1,84 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "solver/model.hpp"
+#include "solver/step_summary.hpp"
+
+namespace calstand::solver {
+
+/// Which sensors' rows a fit uses.
+enum class SensorRows { kBoth, kGyro, kAccel };
+
+struct FitOptions {
+  SensorRows rows = SensorRows::kBoth;
+  /// A parameter whose weighted regressor column lies within this sine of the span of the
+  /// parameters before it is not determined by the run (exact collinearity up to rounding).
+  double collinear_sine = 1e-6;
+  /// ... and below this it is nearly so: its variance would be inflated by more than
+  /// 1/sine^2 (1e6), i.e. it would be fitted to noise. Both are reported, neither fitted.
+  double near_collinear_sine = 1e-3;
+  /// Inflate the sigmas by sqrt(chi2/dof) when that exceeds 1 (the model misses something,
+  /// so the noise floor alone understates the uncertainty).
+  bool inflate_sigma_by_chi2 = true;
+};
+
+struct FittedParameter {
+  std::string name;
+  std::string unit;
+  double value = 0.0;
+  double sigma = 0.0;  ///< 1-sigma
+};
+
+/// A parameter the run cannot determine, and why.
+struct Unidentifiable {
+  std::string name;
+  std::string reason;                ///< one sentence
+  std::vector<std::string> related;  ///< parameters it is (nearly) collinear with
+};
+
+/// Step-mean residual (measured - model) of one step.
+struct StepResidual {
+  std::size_t index = 0;
+  std::string label;
+  Vector6d residual = Vector6d::Zero();  ///< [deg/s, m/s^2]
+  Vector6d sigma = Vector6d::Zero();     ///< the noise floor of this step's mean
+  Vector6d z() const { return residual.cwiseQuotient(sigma); }
+};
+
+struct FitResult {
+  std::string model;  ///< Model::text()
+  std::vector<std::string> terms;
+  std::vector<FittedParameter> parameters;  ///< identified ones, in model order
+  std::vector<Unidentifiable> unidentifiable;
+  Eigen::VectorXd values;         ///< every model parameter (0 for unidentifiable ones)
+  Eigen::MatrixXd covariance;     ///< of `parameters`, in their order (sigma inflation applied)
+  double chi2 = 0.0;
+  int dof = 0;
+  double chi2_dof = 0.0;
+  double residual_rms_gyro_dps = 0.0;    ///< over step-mean residuals of all steps and axes
+  double residual_rms_accel_mps2 = 0.0;
+  Vector6d noise_floor = Vector6d::Zero();  ///< rms of the steps' mean sigmas, per channel
+  NoiseFloor floor;
+  std::vector<StepResidual> steps;
+  SensorRows rows = SensorRows::kBoth;
+};
+
+/// Weighted linear least squares of `model` on step summaries built for it, weights from
+/// `floor`. Parameters the run cannot determine (temperature orders at or above the number of
+/// temperature plateaus, columns collinear or nearly collinear with earlier ones, columns with
+/// no excitation) are reported in `unidentifiable` and held at zero. Throws core::InputError
+/// when there are fewer rows than parameters.
+FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
+                    const NoiseFloor& floor, const FitOptions& options = {});
+
+/// Temperature plateaus of a run: step mean temperatures clustered with gaps over 2 degC.
+std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps);
+
+/// The fit as the `calstand fit --json` document.
+nlohmann::json fit_to_json(const FitResult& fit);
+
+}  // namespace calstand::solver

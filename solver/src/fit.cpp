@@ -1,0 +1,234 @@
+#include "solver/fit.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace calstand::solver {
+namespace {
+
+constexpr double kPlateauGapC = 2.0;
+
+bool uses_channel(SensorRows rows, int channel) {
+  if (rows == SensorRows::kGyro) return channel < kAx;
+  if (rows == SensorRows::kAccel) return channel >= kAx;
+  return true;
+}
+
+/// Parameters the rules of the physics exclude before any numerics: a temperature polynomial of
+/// order k needs k + 1 plateaus, a temperature scale two.
+void temperature_rules(const Model& model, std::size_t plateaus, std::vector<bool>& excluded,
+                       std::vector<Unidentifiable>& out) {
+  for (std::size_t t = 0; t < model.terms().size(); ++t) {
+    const ModelTerm& term = model.terms()[t];
+    if (!term.info) continue;
+    const std::string_view n = term.info->name;
+    const auto [first, count] = model.parameter_range(t);
+    for (std::size_t p = first; p < first + count; ++p) {
+      int order = 0;
+      if (term.info->polynomial_order) order = static_cast<int>((p - first) / 3) + 1;
+      if (n == "gyro_temp_scale" || n == "accel_temp_scale") order = 1;
+      if (order == 0 || static_cast<std::size_t>(order) < plateaus) continue;
+      excluded[p] = true;
+      out.push_back({model.parameters()[p].name,
+                     fmt::format("temperature order {} needs at least {} temperature plateaus; "
+                                 "the run has {}",
+                                 order, order + 1, plateaus),
+                     {}});
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) {
+  std::vector<double> temps;
+  for (const auto& s : steps) temps.push_back(s.signals[0]);
+  std::sort(temps.begin(), temps.end());
+  std::vector<double> plateaus;
+  std::size_t start = 0;
+  for (std::size_t i = 1; i <= temps.size(); ++i) {
+    if (i == temps.size() || temps[i] - temps[i - 1] > kPlateauGapC) {
+      double sum = 0.0;
+      for (std::size_t k = start; k < i; ++k) sum += temps[k];
+      plateaus.push_back(sum / static_cast<double>(i - start));
+      start = i;
+    }
+  }
+  return plateaus;
+}
+
+FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
+                    const NoiseFloor& floor, const FitOptions& options) {
+  const std::size_t P = model.size();
+  std::vector<int> channels;
+  for (int c = 0; c < kChannels; ++c) {
+    if (uses_channel(options.rows, c)) channels.push_back(c);
+  }
+  const auto rows = static_cast<Eigen::Index>(steps.size() * channels.size());
+  // Weighted design and observation: row (step, channel) divided by its step-mean sigma.
+  Eigen::MatrixXd A(rows, static_cast<Eigen::Index>(P));
+  Eigen::VectorXd y(rows);
+  Eigen::Index r = 0;
+  for (const StepSummary& s : steps) {
+    const Vector6d sigma = floor.step_sigma(s.count);
+    for (int c : channels) {
+      y[r] = (s.measured[c] - s.reference[c]) / sigma[c];
+      for (std::size_t p = 0; p < P; ++p) {
+        A(r, static_cast<Eigen::Index>(p)) = s.regressors(c, static_cast<Eigen::Index>(p)) / sigma[c];
+      }
+      ++r;
+    }
+  }
+
+  FitResult fit;
+  fit.model = model.text();
+  for (const auto& t : model.terms()) fit.terms.push_back(t.name);
+  fit.floor = floor;
+  fit.rows = options.rows;
+
+  // Identifiability: rules first, then columns in model order against the span of the ones
+  // accepted before them (Gram-Schmidt on normalised columns, orthogonalised twice).
+  std::vector<bool> excluded(P, false);
+  temperature_rules(model, temperature_plateaus(steps).size(), excluded, fit.unidentifiable);
+  std::vector<Eigen::Index> accepted;
+  Eigen::MatrixXd basis(rows, 0);
+  for (std::size_t p = 0; p < P; ++p) {
+    const auto col = static_cast<Eigen::Index>(p);
+    const std::string& name = model.parameters()[p].name;
+    if (excluded[p]) continue;
+    const double norm = A.col(col).norm();
+    if (!(norm > 0.0)) {
+      fit.unidentifiable.push_back(
+          {name, "the run does not excite it (its regressor is zero in every step)", {}});
+      continue;
+    }
+    Eigen::VectorXd v = A.col(col) / norm;
+    for (int pass = 0; pass < 2; ++pass) v -= basis * (basis.transpose() * v);
+    const double sine = v.norm();
+    if (sine < options.near_collinear_sine) {
+      // Which accepted parameters it leans on: the largest contributions of its projection.
+      Unidentifiable u;
+      u.name = name;
+      if (!accepted.empty()) {
+        Eigen::MatrixXd Aa(rows, static_cast<Eigen::Index>(accepted.size()));
+        for (std::size_t k = 0; k < accepted.size(); ++k) Aa.col(static_cast<Eigen::Index>(k)) = A.col(accepted[k]);
+        const Eigen::VectorXd coef = Aa.colPivHouseholderQr().solve(A.col(col));
+        Eigen::VectorXd contribution(coef.size());
+        for (Eigen::Index k = 0; k < coef.size(); ++k) contribution[k] = std::abs(coef[k]) * Aa.col(k).norm();
+        const double biggest = contribution.maxCoeff();
+        for (Eigen::Index k = 0; k < coef.size(); ++k) {
+          if (contribution[k] >= 0.1 * biggest) {
+            u.related.push_back(model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])].name);
+          }
+        }
+      }
+      const std::string with = u.related.empty() ? std::string("the other parameters")
+                                                 : fmt::format("{}", fmt::join(u.related, ", "));
+      u.reason = sine < options.collinear_sine
+                     ? fmt::format("not determined by this run: its effect equals that of {}", with)
+                     : fmt::format("nearly collinear with {} (sine {:.1e}): it would be fitted to "
+                                   "noise",
+                                   with, sine);
+      fit.unidentifiable.push_back(std::move(u));
+      continue;
+    }
+    basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
+    basis.col(basis.cols() - 1) = v / sine;
+    accepted.push_back(col);
+  }
+
+  const auto k = static_cast<Eigen::Index>(accepted.size());
+  if (rows < k) {
+    throw core::InputError("fit", fmt::format("{} parameters but only {} step-mean rows: the run "
+                                              "has too few steps for this model",
+                                              k, rows));
+  }
+  Eigen::MatrixXd Ak(rows, k);
+  Eigen::VectorXd scale(k);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    scale[j] = A.col(accepted[static_cast<std::size_t>(j)]).norm();
+    Ak.col(j) = A.col(accepted[static_cast<std::size_t>(j)]) / scale[j];
+  }
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(k);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(k, k);
+  if (k > 0) {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Ak);
+    const Eigen::MatrixXd R = qr.matrixQR().topLeftCorner(k, k).triangularView<Eigen::Upper>();
+    theta = qr.solve(y);
+    const Eigen::MatrixXd Rinv =
+        R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
+    cov = Rinv * Rinv.transpose();
+    theta = theta.cwiseQuotient(scale);
+    cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
+  }
+  const Eigen::VectorXd wres = y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
+                                          : Eigen::VectorXd::Zero(rows));
+  fit.chi2 = wres.squaredNorm();
+  fit.dof = static_cast<int>(rows - k);
+  fit.chi2_dof = fit.dof > 0 ? fit.chi2 / fit.dof : std::numeric_limits<double>::quiet_NaN();
+  if (options.inflate_sigma_by_chi2 && fit.dof > 0 && fit.chi2_dof > 1.0) cov *= fit.chi2_dof;
+  fit.covariance = cov;
+  fit.values = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(P));
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const auto p = static_cast<std::size_t>(accepted[static_cast<std::size_t>(j)]);
+    fit.values[static_cast<Eigen::Index>(p)] = theta[j];
+    fit.parameters.push_back({model.parameters()[p].name, model.parameters()[p].unit, theta[j],
+                              std::sqrt(cov(j, j))});
+  }
+
+  // Step-mean residuals in physical units.
+  double sum_g = 0.0, sum_a = 0.0;
+  Vector6d sum_sigma2 = Vector6d::Zero();
+  for (const StepSummary& s : steps) {
+    StepResidual sr;
+    sr.index = s.index;
+    sr.label = s.label;
+    sr.sigma = floor.step_sigma(s.count);
+    sr.residual = s.measured - s.reference - s.regressors * fit.values;
+    sum_g += sr.residual.head<3>().squaredNorm();
+    sum_a += sr.residual.tail<3>().squaredNorm();
+    sum_sigma2 += sr.sigma.cwiseProduct(sr.sigma);
+    fit.steps.push_back(std::move(sr));
+  }
+  const double n = static_cast<double>(steps.size());
+  fit.residual_rms_gyro_dps = std::sqrt(sum_g / (3.0 * n));
+  fit.residual_rms_accel_mps2 = std::sqrt(sum_a / (3.0 * n));
+  fit.noise_floor = (sum_sigma2 / n).cwiseSqrt();
+  return fit;
+}
+
+nlohmann::json fit_to_json(const FitResult& fit) {
+  nlohmann::json j;
+  j["model"] = fit.terms;
+  j["chi2_dof"] = fit.chi2_dof;
+  j["chi2"] = fit.chi2;
+  j["dof"] = fit.dof;
+  j["residual_rms"] = {{"gyro", fit.residual_rms_gyro_dps}, {"accel", fit.residual_rms_accel_mps2}};
+  j["noise_floor"] = {{"gyro", {fit.noise_floor[0], fit.noise_floor[1], fit.noise_floor[2]}},
+                      {"accel", {fit.noise_floor[3], fit.noise_floor[4], fit.noise_floor[5]}}};
+  j["parameters"] = nlohmann::json::array();
+  for (const auto& p : fit.parameters) {
+    j["parameters"].push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}, {"unit", p.unit}});
+  }
+  j["unidentifiable"] = nlohmann::json::array();
+  for (const auto& u : fit.unidentifiable) {
+    j["unidentifiable"].push_back({{"name", u.name}, {"reason", u.reason}, {"related", u.related}});
+  }
+  j["steps"] = nlohmann::json::array();
+  for (const auto& s : fit.steps) {
+    const Vector6d z = s.z();
+    j["steps"].push_back({{"step", s.index},
+                          {"label", s.label},
+                          {"residual", std::vector<double>(s.residual.data(), s.residual.data() + 6)},
+                          {"z", std::vector<double>(z.data(), z.data() + 6)}});
+  }
+  return j;
+}
+
+}  // namespace calstand::solver

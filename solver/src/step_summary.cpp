@@ -1,0 +1,142 @@
+#include "solver/step_summary.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::solver {
+namespace {
+
+// Blocks per step for the batch-means estimate of the step mean's variance: enough blocks for a
+// usable estimate (9 degrees of freedom per step, pooled over steps), long enough blocks that
+// the output filter's short correlation does not matter.
+constexpr int kBatchBlocks = 10;
+constexpr int kMinSamplesPerBlock = 4;
+// A table axis slower than this is at rest (encoder noise at rest is far below it) [deg/s].
+constexpr double kStaticRateDps = 1e-3;
+
+}  // namespace
+
+RunData load_run_data(store::Database& db, std::int64_t run, const std::string& device) {
+  store::RunStore runs(db);
+  const store::RunRecord record = runs.load_run(run);
+  const std::string chosen = store::choose_device(db, run, device);
+  RunData data;
+  data.setup = run_setup(record, run, chosen);
+  data.steps = store::read_step_data(db, run, chosen);
+  if (data.steps.empty()) {
+    throw core::InputError(fmt::format("run {}", run), "has no completed steps with samples");
+  }
+  return data;
+}
+
+std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model) {
+  const SignalBuilder build(data.setup, model.earth_rate());
+  const double run_start_s = data.steps.front().samples.front().receive_time_s;
+  const auto P = static_cast<Eigen::Index>(model.size());
+  Eigen::MatrixXd g(kChannels, P);
+  std::vector<StepSummary> out;
+  out.reserve(data.steps.size());
+  for (const store::StepData& step : data.steps) {
+    const std::size_t n = step.samples.size();
+    const std::vector<double> temperature_rates = step_temperature_rates(step.samples);
+    StepSummary s;
+    s.index = step.step.index;
+    s.label = step.step.label;
+    s.count = static_cast<std::int64_t>(n);
+    s.duration_s = step.samples.back().receive_time_s - step.samples.front().receive_time_s;
+    s.regressors = Eigen::MatrixXd::Zero(kChannels, P);
+    // Block means of measurement - reference for the batch-means variance.
+    const int blocks = n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock)
+                           ? kBatchBlocks
+                           : 0;
+    std::vector<Vector6d> block_sum(static_cast<std::size_t>(blocks), Vector6d::Zero());
+    std::vector<double> block_count(static_cast<std::size_t>(blocks), 0.0);
+    double max_rate = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const core::ImuSample& sample = step.samples[i];
+      const store::TableSample& table = step.table[i];
+      max_rate = std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
+      const Signals sig = build(sample, table, temperature_rates[i],
+                                sample.receive_time_s - run_start_s);
+      Vector6d meas;
+      meas << sample.gyro_dps, sample.accel_mps2;
+      const Vector6d ref = model.reference(sig);
+      s.measured += meas;
+      s.reference += ref;
+      if (P > 0) {
+        model.regressors(sig, g);
+        s.regressors += g;
+      }
+      const auto values = signal_values(sig);
+      for (std::size_t k = 0; k < kSignalCount; ++k) s.signals[k] += values[k];
+      if (blocks > 0) {
+        const auto b = std::min<std::size_t>(i * static_cast<std::size_t>(blocks) / n,
+                                             static_cast<std::size_t>(blocks - 1));
+        block_sum[b] += meas - ref;
+        block_count[b] += 1.0;
+      }
+    }
+    const double inv_n = 1.0 / static_cast<double>(n);
+    s.measured *= inv_n;
+    s.reference *= inv_n;
+    s.regressors *= inv_n;
+    for (double& v : s.signals) v *= inv_n;
+    s.is_static = max_rate < kStaticRateDps;
+    if (blocks > 1) {
+      // Allan variance of the block means (half the mean squared difference of neighbours)
+      // estimates one block mean's variance without being inflated by a slow drift; the step
+      // mean averages `blocks` of them.
+      Vector6d avar = Vector6d::Zero();
+      for (int b = 0; b + 1 < blocks; ++b) {
+        const Vector6d d = block_sum[static_cast<std::size_t>(b + 1)] / block_count[static_cast<std::size_t>(b + 1)] -
+                           block_sum[static_cast<std::size_t>(b)] / block_count[static_cast<std::size_t>(b)];
+        avar += 0.5 * d.cwiseProduct(d);
+      }
+      avar /= static_cast<double>(blocks - 1);
+      s.mean_variance = avar / static_cast<double>(blocks);
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps) {
+  NoiseFloor floor;
+  for (const bool static_only : {true, false}) {
+    floor.density.setZero();
+    floor.steps_used = 0;
+    for (const StepSummary& s : steps) {
+      if ((static_only && !s.is_static) || std::isnan(s.mean_variance[0])) continue;
+      floor.density += s.mean_variance * static_cast<double>(s.count);
+      ++floor.steps_used;
+    }
+    if (floor.steps_used > 0) {
+      floor.density /= static_cast<double>(floor.steps_used);
+      floor.from_static_steps = static_only;
+      // A channel with no scatter at all (a constant column in imported data) would get an
+      // infinite weight; give it the smallest non-zero floor of its sensor instead.
+      for (int sensor = 0; sensor < 2; ++sensor) {
+        double smallest = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3; ++i) {
+          if (floor.density[3 * sensor + i] > 0.0) smallest = std::min(smallest, floor.density[3 * sensor + i]);
+        }
+        for (int i = 0; i < 3; ++i) {
+          if (!(floor.density[3 * sensor + i] > 0.0)) {
+            floor.density[3 * sensor + i] = std::isfinite(smallest) ? smallest : 1e-30;
+          }
+        }
+      }
+      return floor;
+    }
+  }
+  throw core::InputError("noise floor",
+                         fmt::format("no step has the {} samples needed to measure the scatter "
+                                     "inside a step",
+                                     kBatchBlocks * kMinSamplesPerBlock));
+}
+
+}  // namespace calstand::solver

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/imu_sample.hpp"
+#include "store/database.hpp"
+#include "store/records.hpp"
+
+namespace calstand::store {
+
+/// The table state at one sample instant, as the encoders report it.
+struct TableSample {
+  double outer_deg = 0.0;
+  double inner_deg = 0.0;
+  double outer_rate_dps = 0.0;
+  double inner_rate_dps = 0.0;
+};
+
+/// One completed step's data: its record, the samples of its data attempt, and the table
+/// state at each sample (table[i] belongs to samples[i]).
+struct StepData {
+  StepRecord step;
+  std::vector<core::ImuSample> samples;
+  std::vector<TableSample> table;
+};
+
+/// Every completed step of `run` with samples of `device`, by step index. The table state per
+/// sample is the stored one when the step holds one table row per sample (imported runs), else
+/// interpolated in the run's table telemetry at the sample's receive time (linear, angles along
+/// the shorter arc), else the step's commanded state. Throws core::InputError for an unknown
+/// run, StoreError when reading fails.
+std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device);
+
+/// The device of `run` to analyse: `device` when given (an error when it has no samples), else
+/// the run's only IMU with samples (an error when it has none or several). Throws
+/// core::InputError naming the run.
+std::string choose_device(Database& db, std::int64_t run, const std::string& device);
+
+}  // namespace calstand::store

@@ -1,0 +1,116 @@
+#include "store/step_data.hpp"
+
+#include <SQLiteCpp/Statement.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+
+#include "core/error.hpp"
+#include "sql_util.hpp"
+#include "store/run_store.hpp"
+#include "store/sample_reader.hpp"
+
+namespace calstand::store {
+namespace {
+
+struct TimedTable {
+  double time_s = 0.0;
+  TableSample state;
+};
+
+std::vector<TimedTable> read_table(SQLite::Database& db, const char* where, std::int64_t id) {
+  SQLite::Statement q(db, fmt::format("SELECT time_s, outer_deg, inner_deg, outer_rate_dps, "
+                                      "inner_rate_dps FROM table_telemetry WHERE {} = ? "
+                                      "ORDER BY {}",
+                                      where,
+                                      std::string_view(where) == "step_id" ? "id" : "time_s, id"));
+  q.bind(1, id);
+  std::vector<TimedTable> out;
+  while (q.executeStep()) {
+    out.push_back({q.getColumn(0).getDouble(),
+                   {q.getColumn(1).getDouble(), q.getColumn(2).getDouble(),
+                    q.getColumn(3).getDouble(), q.getColumn(4).getDouble()}});
+  }
+  return out;
+}
+
+double wrap180(double deg) {
+  double w = std::fmod(deg + 180.0, 360.0);
+  if (w < 0.0) w += 360.0;
+  return w - 180.0;
+}
+
+// Table state at `t_s` from time-ordered telemetry: linear between neighbours (angles along the
+// shorter arc, which holds while an axis turns less than 180 degrees between rows: 1800 deg/s at
+// the engine's 10 Hz), the nearest row outside the recorded span.
+TableSample interpolate(const std::vector<TimedTable>& rows, double t_s) {
+  const auto after = std::lower_bound(rows.begin(), rows.end(), t_s,
+                                      [](const TimedTable& r, double t) { return r.time_s < t; });
+  if (after == rows.begin()) return after->state;
+  if (after == rows.end()) return rows.back().state;
+  const TableSample& a = std::prev(after)->state;
+  const TableSample& b = after->state;
+  const double span = after->time_s - std::prev(after)->time_s;
+  const double f = span > 0.0 ? (t_s - std::prev(after)->time_s) / span : 0.0;
+  return {wrap180(a.outer_deg + f * wrap180(b.outer_deg - a.outer_deg)),
+          wrap180(a.inner_deg + f * wrap180(b.inner_deg - a.inner_deg)),
+          a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps),
+          a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps)};
+}
+
+TableSample commanded_table(const nlohmann::json& c) {
+  return {c.value("outer_deg", c.value("outer_start_deg", 0.0)),
+          c.value("inner_deg", c.value("inner_start_deg", 0.0)), c.value("outer_rate_dps", 0.0),
+          c.value("inner_rate_dps", 0.0)};
+}
+
+}  // namespace
+
+std::string choose_device(Database& db, std::int64_t run, const std::string& device) {
+  const std::vector<std::string> devices = sample_devices(db, run);
+  const std::string where = "run " + std::to_string(run);
+  if (!device.empty()) {
+    if (std::find(devices.begin(), devices.end(), device) == devices.end()) {
+      throw core::InputError(where, "has no samples of device '" + device + "'");
+    }
+    return device;
+  }
+  if (devices.empty()) throw core::InputError(where, "has no samples");
+  if (devices.size() > 1) {
+    throw core::InputError(where, fmt::format("has samples of several IMUs ({}): choose one",
+                                              fmt::join(devices, ", ")));
+  }
+  return devices.front();
+}
+
+std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device) {
+  RunStore runs(db);
+  const std::vector<StepRecord> steps = runs.load_steps(run);
+  const std::vector<TimedTable> run_table = detail::guarded(
+      "read table telemetry", [&] { return read_table(db.sql(), "run_id", run); });
+  std::vector<StepData> out;
+  for (const StepRecord& step : steps) {
+    if (step.status != StepStatus::kCompleted) continue;
+    StepData data;
+    data.samples = read_samples(db, run, step.index, device);
+    if (data.samples.empty()) continue;
+    const std::vector<TimedTable> step_table = detail::guarded(
+        "read table telemetry", [&] { return read_table(db.sql(), "step_id", step.id); });
+    // Imported runs hold one table row per sample, in sample order.
+    const bool per_sample = step_table.size() == data.samples.size();
+    data.table.reserve(data.samples.size());
+    for (std::size_t i = 0; i < data.samples.size(); ++i) {
+      data.table.push_back(per_sample           ? step_table[i].state
+                           : !run_table.empty() ? interpolate(run_table, data.samples[i].receive_time_s)
+                                                : commanded_table(step.commanded));
+    }
+    data.step = step;
+    out.push_back(std::move(data));
+  }
+  return out;
+}
+
+}  // namespace calstand::store
