@@ -6,6 +6,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/error.hpp"
 
@@ -28,7 +29,7 @@ bool is_identifier(std::string_view s) {
   return true;
 }
 
-void bind(mu::Parser& p, std::array<double, kSignalCount>& vars, const std::string& expr) {
+void bind_signals(mu::Parser& p, std::array<double, kSignalCount>& vars, const std::string& expr) {
   for (std::size_t i = 0; i < kSignalCount; ++i) {
     p.DefineVar(std::string(signal_names()[i]), &vars[i]);
   }
@@ -75,7 +76,7 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
     mu::Parser p;
     const std::string expr = expand_axis(spec.expression, axis);
     try {
-      bind(p, vars, expr);
+      bind_signals(p, vars, expr);
       p.Eval();
     } catch (const mu::Parser::exception_type& e) {
       throw core::InputError(
@@ -93,14 +94,23 @@ struct CustomTermEvaluator::Parsers {
 CustomTermEvaluator::CustomTermEvaluator(const CustomTermSpec& spec)
     : parsers_(std::make_unique<Parsers>()) {
   const char axes[3] = {'x', 'y', 'z'};
-  for (int i = 0; i < 3; ++i) bind(parsers_->axis[i], vars_, expand_axis(spec.expression, axes[i]));
+  try {
+    for (int i = 0; i < 3; ++i) bind_signals(parsers_->axis[i], vars_, expand_axis(spec.expression, axes[i]));
+  } catch (const mu::Parser::exception_type& e) {
+    throw core::InputError("custom term " + spec.text(), e.GetMsg());
+  }
 }
 
 CustomTermEvaluator::~CustomTermEvaluator() = default;
 
 Eigen::Vector3d CustomTermEvaluator::operator()(const Signals& s) {
   vars_ = signal_values(s);
-  return {parsers_->axis[0].Eval(), parsers_->axis[1].Eval(), parsers_->axis[2].Eval()};
+  try {
+    return {parsers_->axis[0].Eval(), parsers_->axis[1].Eval(), parsers_->axis[2].Eval()};
+  } catch (const mu::Parser::exception_type& e) {
+    // muParser's errors are not std::exceptions; give the caller one it can report.
+    throw std::runtime_error("custom term expression \"" + e.GetExpr() + "\": " + e.GetMsg());
+  }
 }
 
 }  // namespace calstand::solver

@@ -144,9 +144,10 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   }
 
   const auto k = static_cast<Eigen::Index>(accepted.size());
-  if (rows < k) {
-    throw core::InputError("fit", fmt::format("{} parameters but only {} step-mean rows: the run "
-                                              "has too few steps for this model",
+  if (rows <= k) {
+    throw core::InputError("fit", fmt::format("{} determinable parameters need more than {} "
+                                              "step-mean rows to judge the fit: the run has too "
+                                              "few steps for this model",
                                               k, rows));
   }
   Eigen::MatrixXd Ak(rows, k);
