@@ -1,7 +1,69 @@
+// `calstand fit`: fit an error model to a recorded (or imported) run and show how well it fits.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
 #include "commands.hpp"
+#include "core/error.hpp"
+#include "fit_printer.hpp"
+#include "open_database.hpp"
+#include "solver/fit.hpp"
 
 namespace calstand::cli {
+namespace {
 
-void register_fit(CLI::App& app) { (void)app; }
+struct FitCommandOptions {
+  std::string db;
+  std::int64_t run = 0;
+  std::string model = kDefaultModel;
+  std::vector<std::string> customs;
+  std::string device;
+  std::string sensor = "both";
+  bool as_json = false;
+};
+
+void run_fit(const FitCommandOptions& opt) {
+  const solver::Model model = solver::Model::parse(opt.model, opt.customs);
+  store::Database db = open_existing_database(opt.db);
+  const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
+  const auto steps = solver::summarize_steps(data, model);
+  solver::FitOptions fit_options;
+  fit_options.rows = parse_sensor_rows(opt.sensor);
+  const solver::FitResult fit =
+      solver::fit_model(steps, model, solver::measure_noise_floor(steps), fit_options);
+  if (opt.as_json) {
+    fmt::print("{}\n", solver::fit_to_json(fit).dump(2));
+    return;
+  }
+  fmt::print("run {} ({}), device {}, {} steps\n", opt.run, data.setup.procedure_name,
+             data.setup.device, steps.size());
+  print_fit(fit);
+}
+
+}  // namespace
+
+void register_fit(CLI::App& app) {
+  auto opt = std::make_shared<FitCommandOptions>();
+  auto* cmd = app.add_subcommand(
+      "fit", "Fit an error model to a run by weighted least squares on step means");
+  cmd->add_option("--db", opt->db, "Database file")->required();
+  cmd->add_option("--run", opt->run, "Run id")->required();
+  cmd->add_option("--model", opt->model,
+                  "Comma-separated terms of error-model.md (gyro_temp_bias:2 for order 2)")
+      ->capture_default_str();
+  cmd->add_option("--custom", opt->customs,
+                  "A custom term NAME=SENSOR:EXPR (muParser; signals as in error-model.md), "
+                  "repeatable");
+  cmd->add_option("--device", opt->device, "IMU (default: the run's only IMU)");
+  cmd->add_option("--sensor", opt->sensor, "Rows to fit: both, gyro or accel")
+      ->check(CLI::IsMember({"both", "gyro", "accel"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", opt->as_json, "Print the fit as JSON");
+  cmd->footer(catalogue_help());
+  cmd->callback([opt] { run_fit(*opt); });
+}
 
 }  // namespace calstand::cli

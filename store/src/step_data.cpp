@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <span>
 
 #include "core/error.hpp"
 #include "sql_util.hpp"
@@ -43,14 +44,21 @@ double wrap180(double deg) {
   return w - 180.0;
 }
 
-// Table state at `t_s` from time-ordered telemetry: linear between neighbours (angles along the
-// shorter arc, which holds while an axis turns less than 180 degrees between rows: 1800 deg/s at
-// the engine's 10 Hz), the nearest row outside the recorded span.
-TableSample interpolate(const std::vector<TimedTable>& rows, double t_s) {
+// Table state at `t_s` from time-ordered telemetry of one step: linear between neighbours
+// (angles along the shorter arc, which holds while an axis turns less than 180 degrees between
+// rows: 1800 deg/s at the engine's 10 Hz); outside the rows' span the nearest row, its angles
+// advanced at its rates (a rate step's angles keep turning; a position step's rates are zero).
+TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
   const auto after = std::lower_bound(rows.begin(), rows.end(), t_s,
                                       [](const TimedTable& r, double t) { return r.time_s < t; });
-  if (after == rows.begin()) return after->state;
-  if (after == rows.end()) return rows.back().state;
+  const auto hold = [t_s](const TimedTable& r) {
+    TableSample s = r.state;
+    s.outer_deg = wrap180(s.outer_deg + s.outer_rate_dps * (t_s - r.time_s));
+    s.inner_deg = wrap180(s.inner_deg + s.inner_rate_dps * (t_s - r.time_s));
+    return s;
+  };
+  if (after == rows.begin()) return hold(*after);
+  if (after == rows.end()) return hold(rows.back());
   const TableSample& a = std::prev(after)->state;
   const TableSample& b = after->state;
   const double span = after->time_s - std::prev(after)->time_s;
@@ -59,6 +67,21 @@ TableSample interpolate(const std::vector<TimedTable>& rows, double t_s) {
           wrap180(a.inner_deg + f * wrap180(b.inner_deg - a.inner_deg)),
           a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps),
           a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps)};
+}
+
+// The rows of `run_table` (time-ordered) recorded while the step ran. Rows of the move before
+// a capture must not leak into it: samples between the move's last row and the capture's first
+// would get angles half-way through the move.
+std::span<const TimedTable> rows_of_step(const std::vector<TimedTable>& run_table,
+                                         const StepRecord& step) {
+  if (!step.started_clock_s || !step.ended_clock_s) return {};
+  const auto first = std::lower_bound(
+      run_table.begin(), run_table.end(), *step.started_clock_s,
+      [](const TimedTable& r, double t) { return r.time_s < t; });
+  const auto last = std::upper_bound(
+      first, run_table.end(), *step.ended_clock_s,
+      [](double t, const TimedTable& r) { return t < r.time_s; });
+  return {first, last};
 }
 
 TableSample commanded_table(const nlohmann::json& c) {
@@ -101,11 +124,12 @@ std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::
         "read table telemetry", [&] { return read_table(db.sql(), "step_id", step.id); });
     // Imported runs hold one table row per sample, in sample order.
     const bool per_sample = step_table.size() == data.samples.size();
+    const std::span<const TimedTable> rows = rows_of_step(run_table, step);
     data.table.reserve(data.samples.size());
     for (std::size_t i = 0; i < data.samples.size(); ++i) {
-      data.table.push_back(per_sample           ? step_table[i].state
-                           : !run_table.empty() ? interpolate(run_table, data.samples[i].receive_time_s)
-                                                : commanded_table(step.commanded));
+      data.table.push_back(per_sample      ? step_table[i].state
+                           : !rows.empty() ? interpolate(rows, data.samples[i].receive_time_s)
+                                           : commanded_table(step.commanded));
     }
     data.step = step;
     out.push_back(std::move(data));

@@ -284,6 +284,7 @@ TEST(Export, RecordedRunUsesStationSnapshotAndTelemetry) {
   t1.time_s = 1.0;
   t1.outer.angle_deg = -170.0;  // crossed the wrap: 20 deg forward
   runs.add_table_telemetry(run, std::vector<core::TableState>{t0, t1});
+  runs.mark_step_running(run, 0, 1, {0.0, "t"});
   {
     CaptureWriter w(db.path());
     const auto s = w.open_stream(run, step, 1, "imu0");

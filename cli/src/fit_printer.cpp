@@ -1,0 +1,61 @@
+#include "fit_printer.hpp"
+
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "core/error_terms.hpp"
+
+namespace calstand::cli {
+
+solver::SensorRows parse_sensor_rows(const std::string& sensor) {
+  if (sensor == "gyro") return solver::SensorRows::kGyro;
+  if (sensor == "accel") return solver::SensorRows::kAccel;
+  if (sensor == "both") return solver::SensorRows::kBoth;
+  throw core::InputError("--sensor", "must be both, gyro or accel");
+}
+
+void print_fit(const solver::FitResult& fit) {
+  fmt::print("model: {}\n\n", fit.model);
+  fmt::print("{:<28} {:>15} {:>12}  {}\n", "parameter", "value", "sigma", "unit");
+  for (const auto& p : fit.parameters) {
+    fmt::print("{:<28} {:>15.6g} {:>12.3g}  {}\n", p.name, p.value, p.sigma, p.unit);
+  }
+  if (!fit.unidentifiable.empty()) {
+    fmt::print("\nnot determined by this run (held at zero):\n");
+    for (const auto& u : fit.unidentifiable) fmt::print("  {:<26} {}\n", u.name, u.reason);
+  }
+  fmt::print("\nfit quality: chi2/dof {:.3g} ({:.1f} over {} degrees of freedom)\n", fit.chi2_dof,
+             fit.chi2, fit.dof);
+  const bool gyro = fit.rows != solver::SensorRows::kAccel;
+  const bool accel = fit.rows != solver::SensorRows::kGyro;
+  if (gyro) {
+    fmt::print("  gyro  step residual rms {:.3g} deg/s   noise floor {:.3g} {:.3g} {:.3g} deg/s\n",
+               fit.residual_rms_gyro_dps, fit.noise_floor[0], fit.noise_floor[1],
+               fit.noise_floor[2]);
+  }
+  if (accel) {
+    fmt::print("  accel step residual rms {:.3g} m/s^2  noise floor {:.3g} {:.3g} {:.3g} m/s^2\n",
+               fit.residual_rms_accel_mps2, fit.noise_floor[3], fit.noise_floor[4],
+               fit.noise_floor[5]);
+  }
+  fmt::print("  noise floor from {} {}\n", fit.floor.steps_used,
+             fit.floor.from_static_steps ? "static steps" : "steps (the run has no static step)");
+  if (fit.chi2_dof > 2.0) {
+    fmt::print("  the residuals are {:.1f} times the noise: the model misses an effect "
+               "(try `calstand diagnose`)\n",
+               std::sqrt(fit.chi2_dof));
+  } else {
+    fmt::print("  the residuals are at the noise floor\n");
+  }
+}
+
+std::string catalogue_help() {
+  std::string text = "Error terms (error-model.md):\n";
+  for (const auto& t : core::error_term_catalogue()) {
+    text += fmt::format("  {:<22} [{}] {}\n", std::string(t.name) + (t.polynomial_order ? "[:N]" : ""),
+                        t.unit, t.effect);
+  }
+  return text;
+}
+
+}  // namespace calstand::cli
