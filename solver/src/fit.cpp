@@ -44,6 +44,20 @@ void temperature_rules(const Model& model, std::size_t plateaus, std::vector<boo
   }
 }
 
+/// A magnitude no real sensor's parameter reaches, per contract unit: a parameter whose sigma
+/// exceeds it is barely excited by the run (fitted to noise), though not collinear with others.
+double implausible_sigma(const std::string& unit) {
+  static const std::vector<std::pair<std::string, double>> kBounds{
+      {"deg/s", 1.0},          {"ppm", 1e4},          {"rad", 0.05},
+      {"ppm/(deg/s)", 100.0},  {"(deg/s)/g", 0.1},    {"deg/s/degC^k", 0.1},
+      {"ppm/degC", 1e3},       {"m/s^2", 1.0},        {"ug/g^2", 1e4},
+      {"m/s^2/degC^k", 0.1},   {"m", 1.0}};
+  for (const auto& [u, bound] : kBounds) {
+    if (u == unit) return bound;
+  }
+  return std::numeric_limits<double>::infinity();  // custom terms: the user's scale
+}
+
 }  // namespace
 
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) {
@@ -143,30 +157,57 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     accepted.push_back(col);
   }
 
-  const auto k = static_cast<Eigen::Index>(accepted.size());
-  if (rows <= k) {
-    throw core::InputError("fit", fmt::format("{} determinable parameters need more than {} "
-                                              "step-mean rows to judge the fit: the run has too "
-                                              "few steps for this model",
-                                              k, rows));
-  }
-  Eigen::MatrixXd Ak(rows, k);
-  Eigen::VectorXd scale(k);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    scale[j] = A.col(accepted[static_cast<std::size_t>(j)]).norm();
-    Ak.col(j) = A.col(accepted[static_cast<std::size_t>(j)]) / scale[j];
-  }
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(k);
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(k, k);
-  if (k > 0) {
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Ak);
-    const Eigen::MatrixXd R = qr.matrixQR().topLeftCorner(k, k).triangularView<Eigen::Upper>();
-    theta = qr.solve(y);
-    const Eigen::MatrixXd Rinv =
-        R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
-    cov = Rinv * Rinv.transpose();
-    theta = theta.cwiseQuotient(scale);
-    cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
+  // Solve; drop parameters the run barely excites (sigma beyond any real sensor's value) and
+  // solve again, until every remaining one is determined.
+  Eigen::Index k = 0;
+  Eigen::MatrixXd Ak;
+  Eigen::VectorXd scale, theta;
+  Eigen::MatrixXd cov;
+  for (;;) {
+    k = static_cast<Eigen::Index>(accepted.size());
+    if (rows <= k) {
+      throw core::InputError("fit", fmt::format("{} determinable parameters need more than {} "
+                                                "step-mean rows to judge the fit: the run has "
+                                                "too few steps for this model",
+                                                k, rows));
+    }
+    Ak.resize(rows, k);
+    scale.resize(k);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      scale[j] = A.col(accepted[static_cast<std::size_t>(j)]).norm();
+      Ak.col(j) = A.col(accepted[static_cast<std::size_t>(j)]) / scale[j];
+    }
+    theta = Eigen::VectorXd::Zero(k);
+    cov = Eigen::MatrixXd::Zero(k, k);
+    if (k > 0) {
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Ak);
+      const Eigen::MatrixXd R = qr.matrixQR().topLeftCorner(k, k).triangularView<Eigen::Upper>();
+      theta = qr.solve(y);
+      const Eigen::MatrixXd Rinv =
+          R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(k, k));
+      cov = Rinv * Rinv.transpose();
+      theta = theta.cwiseQuotient(scale);
+      cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
+    }
+    std::vector<Eigen::Index> kept;
+    for (Eigen::Index j = 0; j < k; ++j) {
+      const auto p = static_cast<std::size_t>(accepted[static_cast<std::size_t>(j)]);
+      const ParameterInfo& info = model.parameters()[p];
+      const double sigma = std::sqrt(cov(j, j));
+      const double bound = implausible_sigma(info.unit);
+      if (sigma > bound) {
+        fit.unidentifiable.push_back(
+            {info.name,
+             fmt::format("the run barely excites it: its sigma would be {:.2g} {} (beyond the "
+                         "{:g} {} of any real sensor)",
+                         sigma, info.unit, bound, info.unit),
+             {}});
+      } else {
+        kept.push_back(accepted[static_cast<std::size_t>(j)]);
+      }
+    }
+    if (kept.size() == accepted.size()) break;
+    accepted = std::move(kept);
   }
   const Eigen::VectorXd wres = y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
                                           : Eigen::VectorXd::Zero(rows));
