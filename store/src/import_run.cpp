@@ -8,7 +8,7 @@
 
 #include "import_format.hpp"
 #include "sql_util.hpp"
-#include "step_stats.hpp"
+#include "step_writer.hpp"
 #include "store/hash.hpp"
 #include "store/import_export.hpp"
 #include "store/sample_codec.hpp"
@@ -89,127 +89,45 @@ core::ImuSample to_sample(const ImportRow& r, std::uint32_t sequence) {
   return s;
 }
 
-/// Prepared inserts of one import transaction.
-class ImportWriter {
- public:
-  explicit ImportWriter(SQLite::Database& db)
-      : db_(db),
-        step_(db, "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
-                  "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, "
-                  "'capture', ?, ?, ?, 'completed', 1, 1, ?, ?)"),
-        chunk_(db, "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
-                   "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
-                   "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
-        table_(db, "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
-                   "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)") {}
+/// Writes the run row of an import.
+std::int64_t insert_import_run(SQLite::Database& db, const detail::ImportMeta& meta,
+                               const std::filesystem::path& dir, double first_s, double last_s) {
+  SQLite::Statement st(db,
+                       "INSERT INTO runs (procedure_name, procedure_text, procedure_sha256, "
+                       "parameters, station_snapshot, status, created_utc, started_clock_s, "
+                       "ended_clock_s) VALUES (?, ?, ?, ?, ?, 'imported', ?, ?, ?)");
+  st.bind(1, std::string(detail::kImportFormat));
+  st.bind(2, meta.text);
+  st.bind(3, sha256_hex(meta.text));
+  st.bind(4, nlohmann::json{{"source", std::filesystem::absolute(dir).string()}}.dump());
+  st.bind(5, meta.doc.dump());
+  st.bind(6, utc_now_iso8601());
+  st.bind(7, first_s);
+  st.bind(8, last_s);
+  st.exec();
+  return db.getLastInsertRowid();
+}
 
-  std::int64_t run(const detail::ImportMeta& meta, const std::filesystem::path& dir,
-                   double first_s, double last_s) {
-    SQLite::Statement st(db_,
-                         "INSERT INTO runs (procedure_name, procedure_text, procedure_sha256, "
-                         "parameters, station_snapshot, status, created_utc, started_clock_s, "
-                         "ended_clock_s) VALUES (?, ?, ?, ?, ?, 'imported', ?, ?, ?)");
-    st.bind(1, std::string(detail::kImportFormat));
-    st.bind(2, meta.text);
-    st.bind(3, sha256_hex(meta.text));
-    st.bind(4, nlohmann::json{{"source", std::filesystem::absolute(dir).string()}}.dump());
-    st.bind(5, meta.doc.dump());
-    st.bind(6, utc_now_iso8601());
-    st.bind(7, first_s);
-    st.bind(8, last_s);
-    st.exec();
-    return db_.getLastInsertRowid();
+void write_import_step(detail::StepWriter& writer, std::int64_t run, std::size_t index,
+                       const StepRows& s, const std::string& file) {
+  detail::StepRow row;
+  row.index = index;
+  row.label = fmt::format("step {}", s.value);
+  row.commanded = commanded_state(s);
+  row.origin = fmt::format("{}:{}", file, s.rows.front()->line);
+  row.first_s = s.rows.front()->t_s;
+  row.last_s = row.first_s;
+  std::vector<core::ImuSample> samples;
+  std::vector<TableSample> table;
+  std::uint32_t sequence = 0;
+  for (const auto* r : s.rows) {
+    row.first_s = std::min(row.first_s, r->t_s);
+    row.last_s = std::max(row.last_s, r->t_s);
+    samples.push_back(to_sample(*r, sequence++));
+    table.push_back({r->outer_deg, r->inner_deg, r->outer_rate_dps, r->inner_rate_dps});
   }
-
-  void step(std::int64_t run, std::size_t index, const StepRows& s, const std::string& file) {
-    double first = s.rows.front()->t_s;
-    double last = first;
-    for (const auto* r : s.rows) {
-      first = std::min(first, r->t_s);
-      last = std::max(last, r->t_s);
-    }
-    step_.reset();
-    step_.bind(1, run);
-    step_.bind(2, static_cast<std::int64_t>(index));
-    step_.bind(3, fmt::format("step {}", s.value));
-    step_.bind(4, commanded_state(s).dump());
-    step_.bind(5, fmt::format("{}:{}", file, s.rows.front()->line));
-    step_.bind(6, first);
-    step_.bind(7, last);
-    step_.exec();
-    const std::int64_t step_id = db_.getLastInsertRowid();
-
-    ChunkEncoder enc(SampleEncoding::kExact);
-    StepStats stats;
-    std::uint32_t sequence = 0;
-    for (const auto* r : s.rows) {
-      const core::ImuSample sample = to_sample(*r, sequence++);
-      if (!enc.fits(sample)) {
-        insert_chunk(run, step_id, enc);
-        enc.clear();
-      }
-      enc.append(sample);
-      stats.add(sample);
-      table_.reset();
-      table_.bind(1, run);
-      table_.bind(2, step_id);
-      table_.bind(3, r->t_s);
-      table_.bind(4, r->outer_deg);
-      table_.bind(5, r->inner_deg);
-      table_.bind(6, r->outer_rate_dps);
-      table_.bind(7, r->inner_rate_dps);
-      table_.exec();
-    }
-    insert_chunk(run, step_id, enc);
-    insert_means(run, step_id, stats);
-  }
-
- private:
-  void insert_chunk(std::int64_t run, std::int64_t step_id, const ChunkEncoder& enc) {
-    chunk_.reset();
-    chunk_.bind(1, run);
-    chunk_.bind(2, step_id);
-    chunk_.bind(3, std::string(kImportDevice));
-    chunk_.bind(4, enc.first_receive_time_s());
-    chunk_.bind(5, enc.last_receive_time_s());
-    chunk_.bind(6, static_cast<std::int64_t>(enc.count()));
-    chunk_.bind(7, static_cast<int>(enc.encoding()));
-    const auto blob = enc.bytes();
-    chunk_.bindNoCopy(8, blob.data(), static_cast<int>(blob.size()));
-    chunk_.exec();
-  }
-
-  void insert_means(std::int64_t run, std::int64_t step_id, const StepStats& s) {
-    SQLite::Statement st(
-        db_,
-        "INSERT INTO step_means (run_id, step_id, attempt, device, count, first_receive_time_s, "
-        "last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, ay_mps2, az_mps2, temperature_c, "
-        "std_gx_dps, std_gy_dps, std_gz_dps, std_ax_mps2, std_ay_mps2, std_az_mps2, "
-        "std_temperature_c) VALUES (?, ?, 1, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-        "?)");
-    st.bind(1, run);
-    st.bind(2, step_id);
-    st.bind(3, std::string(kImportDevice));
-    st.bind(4, static_cast<std::int64_t>(s.count()));
-    st.bind(5, s.first_time_s());
-    st.bind(6, s.last_time_s());
-    for (int c = 0; c < StepStats::kChannels; ++c) {
-      st.bind(7 + c, s.mean(c));
-      const double sd = s.stddev(c);
-      if (std::isfinite(sd)) {
-        st.bind(14 + c, sd);
-      } else {
-        st.bind(14 + c);
-      }
-    }
-    st.exec();
-  }
-
-  SQLite::Database& db_;
-  SQLite::Statement step_;
-  SQLite::Statement chunk_;
-  SQLite::Statement table_;
-};
+  writer.write(run, row, kImportDevice, samples, table);
+}
 
 }  // namespace
 
@@ -227,11 +145,11 @@ ImportResult import_run(Database& db, const std::filesystem::path& dir) {
 
   return detail::guarded("import " + dir.string(), [&] {
     SQLite::Transaction tx(db.sql(), SQLite::TransactionBehavior::IMMEDIATE);
-    ImportWriter writer(db.sql());
+    detail::StepWriter writer(db.sql());
     ImportResult result;
-    result.run = writer.run(meta, dir, first, last);
+    result.run = insert_import_run(db.sql(), meta, dir, first, last);
     const std::string csv = (dir / "samples.csv").string();
-    for (std::size_t i = 0; i < steps.size(); ++i) writer.step(result.run, i, steps[i], csv);
+    for (std::size_t i = 0; i < steps.size(); ++i) write_import_step(writer, result.run, i, steps[i], csv);
     tx.commit();
     result.steps = steps.size();
     result.samples = rows.size();
