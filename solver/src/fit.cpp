@@ -116,6 +116,12 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     const auto col = static_cast<Eigen::Index>(p);
     const std::string& name = model.parameters()[p].name;
     if (excluded[p]) continue;
+    const core::TermSensor sensor = model.parameters()[p].sensor;
+    if ((options.rows == SensorRows::kGyro && sensor == core::TermSensor::kAccel) ||
+        (options.rows == SensorRows::kAccel && sensor == core::TermSensor::kGyro)) {
+      fit.unidentifiable.push_back({name, "its sensor's rows are not part of this fit", {}});
+      continue;
+    }
     const double norm = A.col(col).norm();
     if (!(norm > 0.0)) {
       fit.unidentifiable.push_back(

@@ -1,0 +1,33 @@
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "store/database.hpp"
+
+namespace calstand::store {
+
+/// A row of table calibrations.
+struct CalibrationRow {
+  std::int64_t id = 0;
+  std::int64_t run = 0;
+  std::string imu;
+  std::string model;
+  nlohmann::json record;
+  std::string created_utc;
+};
+
+/// Stores a calibration record (schemas/calibration.schema.json) of `imu` fitted on `run`;
+/// returns its id. Throws core::InputError for an unknown run, StoreError on SQL failure.
+std::int64_t insert_calibration(Database& db, std::int64_t run, const std::string& imu,
+                                const std::string& model, const nlohmann::json& record);
+
+/// The calibration `id`; throws core::InputError when there is none.
+CalibrationRow load_calibration(Database& db, std::int64_t id);
+
+/// The calibrations fitted on `run`, oldest first.
+std::vector<CalibrationRow> calibrations_of_run(Database& db, std::int64_t run);
+
+}  // namespace calstand::store

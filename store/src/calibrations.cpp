@@ -1,0 +1,62 @@
+#include "store/calibrations.hpp"
+
+#include <SQLiteCpp/Statement.h>
+
+#include "core/error.hpp"
+#include "sql_util.hpp"
+#include "store/run_store.hpp"
+#include "store/stamp.hpp"
+
+namespace calstand::store {
+namespace {
+
+CalibrationRow row_of(SQLite::Statement& q) {
+  return {q.getColumn(0).getInt64(), q.getColumn(1).getInt64(), q.getColumn(2).getString(),
+          q.getColumn(3).getString(), nlohmann::json::parse(q.getColumn(4).getString()),
+          q.getColumn(5).getString()};
+}
+
+constexpr const char* kSelect =
+    "SELECT id, run_id, imu, model, record, created_utc FROM calibrations ";
+
+}  // namespace
+
+std::int64_t insert_calibration(Database& db, std::int64_t run, const std::string& imu,
+                                const std::string& model, const nlohmann::json& record) {
+  RunStore(db).load_steps(run);  // InputError for an unknown run
+  return detail::guarded("insert calibration", [&] {
+    SQLite::Statement st(db.sql(),
+                         "INSERT INTO calibrations (run_id, imu, model, record, created_utc) "
+                         "VALUES (?, ?, ?, ?, ?)");
+    st.bind(1, run);
+    st.bind(2, imu);
+    st.bind(3, model);
+    st.bind(4, record.dump());
+    st.bind(5, utc_now_iso8601());
+    st.exec();
+    return db.sql().getLastInsertRowid();
+  });
+}
+
+CalibrationRow load_calibration(Database& db, std::int64_t id) {
+  auto row = detail::guarded("read calibration", [&]() -> std::optional<CalibrationRow> {
+    SQLite::Statement q(db.sql(), std::string(kSelect) + "WHERE id = ?");
+    q.bind(1, id);
+    if (!q.executeStep()) return std::nullopt;
+    return row_of(q);
+  });
+  if (!row) throw core::InputError("calibration " + std::to_string(id), "no such calibration");
+  return *row;
+}
+
+std::vector<CalibrationRow> calibrations_of_run(Database& db, std::int64_t run) {
+  return detail::guarded("read calibrations", [&] {
+    SQLite::Statement q(db.sql(), std::string(kSelect) + "WHERE run_id = ? ORDER BY id");
+    q.bind(1, run);
+    std::vector<CalibrationRow> out;
+    while (q.executeStep()) out.push_back(row_of(q));
+    return out;
+  });
+}
+
+}  // namespace calstand::store
