@@ -195,11 +195,18 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       theta = theta.cwiseQuotient(scale);
       cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
     }
+    // The sigmas as they will be reported (inflated by a poor fit) decide what is determined.
+    const double chi2_now =
+        (y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale))) : Eigen::VectorXd::Zero(rows)))
+            .squaredNorm();
+    const double inflation = options.inflate_sigma_by_chi2
+                                 ? std::max(1.0, chi2_now / static_cast<double>(rows - k))
+                                 : 1.0;
     std::vector<Eigen::Index> kept;
     for (Eigen::Index j = 0; j < k; ++j) {
       const auto p = static_cast<std::size_t>(accepted[static_cast<std::size_t>(j)]);
       const ParameterInfo& info = model.parameters()[p];
-      const double sigma = std::sqrt(cov(j, j));
+      const double sigma = std::sqrt(cov(j, j) * inflation);
       const double bound = implausible_sigma(info.unit);
       if (sigma > bound) {
         fit.unidentifiable.push_back(

@@ -45,8 +45,7 @@ double wrap180(double deg) {
 }
 
 // Table state at `t_s` from time-ordered telemetry of one step: linear between neighbours
-// (angles along the shorter arc, which holds while an axis turns less than 180 degrees between
-// rows: 1800 deg/s at the engine's 10 Hz); outside the rows' span the nearest row, its angles
+// (the turn between rows resolved with the recorded rates); outside the rows' span the nearest row, its angles
 // advanced at its rates (a rate step's angles keep turning; a position step's rates are zero).
 TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
   const auto after = std::lower_bound(rows.begin(), rows.end(), t_s,
@@ -63,8 +62,15 @@ TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
   const TableSample& b = after->state;
   const double span = after->time_s - std::prev(after)->time_s;
   const double f = span > 0.0 ? (t_s - std::prev(after)->time_s) / span : 0.0;
-  return {wrap180(a.outer_deg + f * wrap180(b.outer_deg - a.outer_deg)),
-          wrap180(a.inner_deg + f * wrap180(b.inner_deg - a.inner_deg)),
+  // The turn between the rows: what the mean rate predicts, corrected by the wrapped difference
+  // of the encoder readings. A fast axis turns several revolutions between rows; the rates
+  // resolve how many.
+  const auto turn = [span](double from_deg, double to_deg, double rate_a, double rate_b) {
+    const double predicted = 0.5 * (rate_a + rate_b) * span;
+    return predicted + wrap180(to_deg - from_deg - predicted);
+  };
+  return {wrap180(a.outer_deg + f * turn(a.outer_deg, b.outer_deg, a.outer_rate_dps, b.outer_rate_dps)),
+          wrap180(a.inner_deg + f * turn(a.inner_deg, b.inner_deg, a.inner_rate_dps, b.inner_rate_dps)),
           a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps),
           a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps)};
 }

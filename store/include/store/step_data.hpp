@@ -29,7 +29,8 @@ struct StepData {
 /// Every completed step of `run` with samples of `device`, by step index. The table state per
 /// sample is the stored one when the step holds one table row per sample (imported runs), else
 /// interpolated in the table telemetry recorded while the step ran, at the sample's receive
-/// time (linear, angles along the shorter arc; before the first and after the last row, that
+/// time (linear, the turn between rows resolved with the recorded rates; before the first and
+/// after the last row, that
 /// row advanced at its rates), else the step's commanded state. Throws core::InputError for an unknown
 /// run, StoreError when reading fails.
 std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device);
