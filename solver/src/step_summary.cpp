@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/error.hpp"
 #include "store/run_store.hpp"
@@ -100,6 +102,34 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       s.mean_variance = avar / static_cast<double>(blocks);
     }
     out.push_back(std::move(s));
+  }
+  return out;
+}
+
+std::vector<StepSummary> select_parameters(const std::vector<StepSummary>& steps,
+                                           const Model& superset, const Model& subset) {
+  if (superset.earth_rate() != subset.earth_rate()) {
+    throw std::invalid_argument("select_parameters: the models disagree on earth_rate");
+  }
+  std::vector<Eigen::Index> columns;
+  for (const auto& p : subset.parameters()) {
+    const auto& all = superset.parameters();
+    const auto it = std::find_if(all.begin(), all.end(),
+                                 [&](const ParameterInfo& q) { return q.name == p.name; });
+    if (it == all.end()) {
+      throw std::invalid_argument("select_parameters: " + p.name + " is not in the superset");
+    }
+    columns.push_back(it - all.begin());
+  }
+  std::vector<StepSummary> out;
+  out.reserve(steps.size());
+  for (const StepSummary& s : steps) {
+    StepSummary t = s;
+    t.regressors.resize(kChannels, static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t j = 0; j < columns.size(); ++j) {
+      t.regressors.col(static_cast<Eigen::Index>(j)) = s.regressors.col(columns[j]);
+    }
+    out.push_back(std::move(t));
   }
   return out;
 }

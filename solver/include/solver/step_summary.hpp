@@ -48,6 +48,13 @@ struct StepSummary {
 /// Summaries of every step of `data` for `model`, in step order.
 std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model);
 
+/// The summaries of `subset` taken from summaries built for `superset` (regressor columns picked
+/// by parameter name), so that many models can be fitted from one pass over the samples.
+/// Throws std::invalid_argument when a parameter of `subset` is not in `superset` or the two
+/// disagree on earth_rate (which changes the reference).
+std::vector<StepSummary> select_parameters(const std::vector<StepSummary>& steps,
+                                           const Model& superset, const Model& subset);
+
 /// The measured noise floor: per channel, the white-equivalent variance of one sample such
 /// that the step mean of n samples has variance density / n, pooled from the static steps
 /// (all steps when the run has none).
