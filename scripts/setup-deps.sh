@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
   libmuparser-dev libfftw3-dev libboost-math-dev
+  gnuplot-nox chromium
 )
 
 missing=()

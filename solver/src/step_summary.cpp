@@ -74,7 +74,11 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
         s.regressors += g;
       }
       const auto values = signal_values(sig);
-      for (std::size_t k = 0; k < kSignalCount; ++k) s.signals[k] += values[k];
+      for (std::size_t k = 0; k < kSignalCount; ++k) {
+        s.signals[k] += values[k];
+        s.signals_sq[k] += values[k] * values[k];
+        s.signals_abs[k] += std::abs(values[k]);
+      }
       if (blocks > 0) {
         const auto b = std::min<std::size_t>(i * static_cast<std::size_t>(blocks) / n,
                                              static_cast<std::size_t>(blocks - 1));
@@ -86,7 +90,11 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     s.measured *= inv_n;
     s.reference *= inv_n;
     s.regressors *= inv_n;
-    for (double& v : s.signals) v *= inv_n;
+    for (std::size_t k = 0; k < kSignalCount; ++k) {
+      s.signals[k] *= inv_n;
+      s.signals_sq[k] *= inv_n;
+      s.signals_abs[k] *= inv_n;
+    }
     s.is_static = max_rate < kStaticRateDps;
     if (blocks > 1) {
       // Allan variance of the block means (half the mean squared difference of neighbours)

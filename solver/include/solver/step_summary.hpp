@@ -41,7 +41,9 @@ struct StepSummary {
   /// Allan variance over the number of blocks, robust to a linear drift); NaN when the step is
   /// too short to tell.
   Vector6d mean_variance = Vector6d::Constant(std::numeric_limits<double>::quiet_NaN());
-  std::array<double, kSignalCount> signals{};  ///< mean of each signal (signal_names())
+  std::array<double, kSignalCount> signals{};      ///< mean of each signal (signal_names())
+  std::array<double, kSignalCount> signals_sq{};   ///< mean of each signal squared
+  std::array<double, kSignalCount> signals_abs{};  ///< mean of each signal's absolute value
   bool is_static = false;                      ///< the table was at rest
 };
 
