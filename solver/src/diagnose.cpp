@@ -1,0 +1,239 @@
+#include "solver/diagnose.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <cmath>
+#include <map>
+
+#include <fmt/ranges.h>
+
+#include "core/error.hpp"
+
+namespace calstand::solver {
+namespace {
+
+constexpr std::size_t kSignalsReported = 20;
+
+struct CandidateModel {
+  std::string term;
+  const core::ErrorTermInfo* info = nullptr;
+  Model model;
+};
+
+/// Each catalogue term the model lacks, and the next order of its temperature polynomials.
+std::vector<CandidateModel> candidate_models(const Model& model) {
+  std::vector<CandidateModel> out;
+  for (const auto& info : core::error_term_catalogue()) {
+    const ModelTerm* present = model.find(info.name);
+    if (present && !info.polynomial_order) continue;
+    const int order = present ? present->order + 1 : 1;
+    Model m = model.with_term(info, order);
+    out.push_back({m.terms()[present ? static_cast<std::size_t>(present - model.terms().data())
+                                     : m.terms().size() - 1]
+                       .name,
+                   &info, std::move(m)});
+  }
+  return out;
+}
+
+double squared_z(const FitResult& fit, const StepResidual& s) {
+  const Vector6d z = s.z();
+  double sum = 0.0;
+  for (int c : fit_channels(fit.rows)) sum += z[c] * z[c];
+  return sum;
+}
+
+/// "the steps at T 70 degC, +z up" for the groups whose chi-square the candidate lowers most.
+std::string what_it_fixes(const FitResult& before, const FitResult& after,
+                          const std::vector<StepSummary>& steps) {
+  const auto g_before = group_quality(before, steps);
+  const auto g_after = group_quality(after, steps);
+  std::map<std::string, double> after_chi2;
+  for (const auto& g : g_after) after_chi2[g.group] = g.chi2_dof;
+  std::vector<std::pair<double, std::string>> gains;
+  for (const auto& g : g_before) {
+    const double gain = (g.chi2_dof - after_chi2[g.group]) * static_cast<double>(g.steps.size());
+    if (gain > 0.0) gains.emplace_back(gain, g.group);
+  }
+  std::sort(gains.begin(), gains.end(), std::greater<>());
+  // Steps it fixes: those whose squared z-score falls the most.
+  std::vector<std::pair<double, std::string>> step_gains;
+  for (std::size_t k = 0; k < before.steps.size() && k < after.steps.size(); ++k) {
+    step_gains.emplace_back(squared_z(before, before.steps[k]) - squared_z(after, after.steps[k]),
+                            before.steps[k].label.empty() ? fmt::format("step {}", before.steps[k].index)
+                                                          : before.steps[k].label);
+  }
+  std::sort(step_gains.begin(), step_gains.end(), std::greater<>());
+  std::vector<std::string> words;
+  for (std::size_t i = 0; i < gains.size() && i < 2; ++i) words.push_back(gains[i].second);
+  std::vector<std::string> named;
+  for (std::size_t i = 0; i < step_gains.size() && i < 3 && step_gains[i].first > 0.0; ++i) {
+    named.push_back(step_gains[i].second);
+  }
+  if (words.empty() && named.empty()) return "it fixes no step noticeably";
+  return fmt::format("fixes most where {}{}", fmt::join(words, " and "),
+                     named.empty() ? "" : fmt::format(" (e.g. {})", fmt::join(named, ", ")));
+}
+
+double pearson(const std::vector<double>& a, const std::vector<double>& b) {
+  const double n = static_cast<double>(a.size());
+  double ma = 0.0, mb = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ma += a[i];
+    mb += b[i];
+  }
+  ma /= n;
+  mb /= n;
+  double sab = 0.0, saa = 0.0, sbb = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  // A signal constant over the run (to rounding) correlates with nothing.
+  if (saa <= 1e-20 * (ma * ma + 1.0) * n || sbb <= 0.0) return 0.0;
+  return sab / std::sqrt(saa * sbb);
+}
+
+std::vector<SignalCorrelation> correlate_signals(const FitResult& fit,
+                                                 const std::vector<StepSummary>& steps) {
+  std::vector<SignalCorrelation> out;
+  for (int c : fit_channels(fit.rows)) {
+    std::vector<double> z;
+    for (const auto& s : fit.steps) z.push_back(s.z()[c]);
+    for (std::size_t k = 0; k < kSignalCount; ++k) {
+      const std::string name(signal_names()[k]);
+      const std::pair<std::string, std::array<double, kSignalCount> StepSummary::*> forms[] = {
+          {name, &StepSummary::signals},
+          {name + "^2", &StepSummary::signals_sq},
+          {"abs(" + name + ")", &StepSummary::signals_abs}};
+      for (const auto& [label, member] : forms) {
+        std::vector<double> x;
+        for (const auto& s : steps) x.push_back((s.*member)[k]);
+        const double r = pearson(x, z);
+        if (r != 0.0) out.push_back({label, std::string(channel_name(c)), r});
+      }
+    }
+  }
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::abs(a.correlation) > std::abs(b.correlation);
+  });
+  if (out.size() > kSignalsReported) out.resize(kSignalsReported);
+  return out;
+}
+
+}  // namespace
+
+Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options) {
+  std::vector<CandidateModel> candidates = candidate_models(model);
+  // One pass over the samples for the model and every candidate that keeps its reference; the
+  // Earth rate changes the reference, so that candidate gets its own pass.
+  Model superset = model;
+  for (const auto& c : candidates) {
+    if (c.info->name == "earth_rate") continue;
+    const ModelTerm* t = c.model.find(c.info->name);
+    superset = superset.with_term(*c.info, t ? t->order : 1);
+  }
+  const std::vector<StepSummary> all = summarize_steps(data, superset);
+  const NoiseFloor floor = measure_noise_floor(all);
+  const std::vector<StepSummary> steps = select_parameters(all, superset, model);
+
+  Diagnosis d;
+  d.fit = fit_model(steps, model, floor, options);
+  d.groups = group_quality(d.fit, steps);
+  d.signals = correlate_signals(d.fit, steps);
+  const double n_rows = static_cast<double>(d.fit.dof + static_cast<int>(d.fit.parameters.size()));
+  for (const auto& c : candidates) {
+    const std::vector<StepSummary> cs = c.info->name == "earth_rate"
+                                            ? summarize_steps(data, c.model)
+                                            : select_parameters(all, superset, c.model);
+    FitResult after;
+    try {
+      after = fit_model(cs, c.model, floor, options);
+    } catch (const core::InputError&) {
+      d.untestable.push_back(c.term);  // more parameters than the run has rows
+      continue;
+    }
+    const int added = static_cast<int>(after.parameters.size()) - static_cast<int>(d.fit.parameters.size());
+    if (added <= 0 && c.info->name != "earth_rate") {
+      d.untestable.push_back(c.term);
+      continue;
+    }
+    Candidate k;
+    k.term = c.term;
+    k.added_parameters = added;
+    k.chi2_dof_after = after.chi2_dof;
+    k.delta_bic = after.chi2 - d.fit.chi2 + static_cast<double>(added) * std::log(n_rows);
+    if (added > 0 && after.dof > 0 && after.chi2 > 0.0) {
+      const double F = ((d.fit.chi2 - after.chi2) / added) / (after.chi2 / after.dof);
+      const boost::math::fisher_f_distribution<double> dist(added, after.dof);
+      k.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
+    }
+    k.explanation = fmt::format("{}: {}", c.info->effect, what_it_fixes(d.fit, after, steps));
+    d.candidates.push_back(std::move(k));
+  }
+  std::stable_sort(d.candidates.begin(), d.candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.delta_bic < b.delta_bic; });
+
+  const bool model_fits = d.fit.chi2_dof <= kExplainedChi2Dof;
+  const bool best_fits = !d.candidates.empty() && d.candidates.front().chi2_dof_after <= kExplainedChi2Dof;
+  d.explained = model_fits || best_fits;
+  if (model_fits) {
+    d.advice = fmt::format("the model fits to the noise floor (chi2/dof {:.2f}); nothing is missing",
+                           d.fit.chi2_dof);
+  } else if (best_fits) {
+    d.advice = fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}", d.candidates.front().term,
+                           d.fit.chi2_dof, d.candidates.front().chi2_dof_after);
+  } else {
+    std::string follows;
+    for (std::size_t i = 0; i < d.signals.size() && i < 3; ++i) {
+      follows += fmt::format("{}{} ({}, r = {:.2f})", i ? ", " : "", d.signals[i].signal,
+                             d.signals[i].channel, d.signals[i].correlation);
+    }
+    const std::string best = d.candidates.empty()
+                                 ? std::string("no candidate could be tested")
+                                 : fmt::format("even the best candidate, {}, leaves chi2/dof {:.2f}",
+                                               d.candidates.front().term,
+                                               d.candidates.front().chi2_dof_after);
+    d.advice = fmt::format("no catalogue term explains the residual: {}. The residual follows {}.",
+                           best, follows.empty() ? "no signal" : follows);
+    if (!d.signals.empty()) {
+      const auto& top = d.signals.front();
+      const char* sensor = top.channel[0] == 'g' ? "gyro" : "accel";
+      d.advice += fmt::format(" Try a custom term built on it, e.g. --custom k1={}:{}", sensor, top.signal);
+    }
+  }
+  return d;
+}
+
+nlohmann::json diagnosis_to_json(const Diagnosis& d) {
+  nlohmann::json j;
+  j["model"] = d.fit.terms;
+  j["chi2_dof"] = d.fit.chi2_dof;
+  j["residual_rms"] = {{"gyro", d.fit.residual_rms_gyro_dps}, {"accel", d.fit.residual_rms_accel_mps2}};
+  j["candidates"] = nlohmann::json::array();
+  for (const auto& c : d.candidates) {
+    j["candidates"].push_back({{"term", c.term},
+                               {"delta_bic", c.delta_bic},
+                               {"p_value", c.p_value},
+                               {"chi2_dof_after", c.chi2_dof_after},
+                               {"added_parameters", c.added_parameters},
+                               {"explanation", c.explanation}});
+  }
+  j["untestable"] = d.untestable;
+  j["signals"] = nlohmann::json::array();
+  for (const auto& s : d.signals) {
+    j["signals"].push_back({{"signal", s.signal}, {"channel", s.channel}, {"correlation", s.correlation}});
+  }
+  j["explained"] = d.explained;
+  j["advice"] = d.advice;
+  nlohmann::json groups = nlohmann::json::object();
+  add_groups_json(groups, d.groups, worst_steps(d.fit));
+  j["groups"] = groups["groups"];
+  j["worst_steps"] = groups["worst_steps"];
+  return j;
+}
+
+}  // namespace calstand::solver
