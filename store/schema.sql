@@ -196,3 +196,22 @@ SELECT r.id, r.procedure_name, r.status,
        (SELECT COUNT(*) FROM steps s WHERE s.run_id = r.id) AS steps_total,
        r.started_utc, r.ended_utc, r.exit_reason
 FROM runs r;
+
+-- migration 2: fit history
+-- Every fit of a run (calstand fit, diagnose, calibrate): the model and how well it fitted, so
+-- that `calstand history` shows the error falling as effects are added.
+CREATE TABLE fits (
+  id               INTEGER PRIMARY KEY,
+  run_id           INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  device           TEXT NOT NULL,
+  command          TEXT NOT NULL,
+  model            TEXT NOT NULL,
+  custom_terms     TEXT NOT NULL CHECK (json_valid(custom_terms)),
+  sensors          TEXT NOT NULL,
+  parameters       INTEGER NOT NULL,
+  chi2_dof         REAL,
+  rms_gyro_dps     REAL,
+  rms_accel_mps2   REAL,
+  created_utc      TEXT NOT NULL
+);
+CREATE INDEX fits_by_run ON fits (run_id, id);

@@ -1,7 +1,400 @@
+// `calstand allan` (a deviation curve of one channel, from a run or a CSV file) and
+// `calstand noise` (the fitted noise terms of a run's static step, all six channels, in
+// datasheet units, optionally as a Kalibr imu.yaml).
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
+
 #include "commands.hpp"
+#include "core/error.hpp"
+#include "solver/allan.hpp"
+#include "solver/kalibr.hpp"
+#include "solver/noise_fit.hpp"
+#include "solver/run_noise.hpp"
+#include "store/database.hpp"
+#include "store/sample_reader.hpp"
 
 namespace calstand::cli {
+namespace {
 
-void register_allan(CLI::App& app) { (void)app; }
+using Json = nlohmann::ordered_json;
+
+// Options arrive as text and are converted here, so that every bad value is an InputError
+// naming the option (exit code 2), like the other commands' input.
+struct AllanArgs {
+  std::string db, run, step, channel, device, csv, column, rate;
+  std::string taus = "octave";
+  std::string kind = "adev";
+  std::string confidence = "0.683";
+  bool json = false;
+};
+
+struct NoiseArgs {
+  std::string db, run, step, device, kalibr;
+  std::string taus = "dense";
+  std::string rostopic = "/imu0";
+  bool json = false;
+};
+
+std::int64_t parse_int(const std::string& text, const char* option, std::int64_t min) {
+  std::int64_t v = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size() || v < min) {
+    throw core::InputError(option, fmt::format("expected an integer >= {}, got '{}'", min, text));
+  }
+  return v;
+}
+
+double parse_double(const std::string& text, const char* option) {
+  double v = 0.0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(v)) {
+    throw core::InputError(option, fmt::format("expected a finite number, got '{}'", text));
+  }
+  return v;
+}
+
+std::optional<std::size_t> parse_step(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  return static_cast<std::size_t>(parse_int(text, "--step", 0));
+}
+
+// Column `column` of a CSV file with a header line; empty lines are skipped.
+std::vector<double> read_csv_column(const std::string& path, const std::string& column) {
+  std::ifstream in(path);
+  if (!in) throw core::InputError(path, "cannot open the CSV file");
+  const auto split = [](const std::string& line) {
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    std::string f;
+    while (std::getline(ss, f, ',')) {
+      const auto a = f.find_first_not_of(" \t\r\"");
+      const auto b = f.find_last_not_of(" \t\r\"");
+      fields.push_back(a == std::string::npos ? "" : f.substr(a, b - a + 1));
+    }
+    return fields;
+  };
+  std::string line;
+  if (!std::getline(in, line)) throw core::InputError(path, "the CSV file is empty");
+  const std::vector<std::string> header = split(line);
+  std::size_t index = header.size();
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == column) index = i;
+  }
+  if (index == header.size()) {
+    throw core::InputError(path, fmt::format("no column '{}' in the header ({})", column, line));
+  }
+  std::vector<double> values;
+  for (std::size_t number = 2; std::getline(in, line); ++number) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::vector<std::string> fields = split(line);
+    const std::string where = fmt::format("{} line {}", path, number);
+    if (index >= fields.size()) throw core::InputError(where, "too few fields");
+    values.push_back(parse_double(fields[index], where.c_str()));
+  }
+  return values;
+}
+
+Json term_json(const solver::NoiseTerm& t, const std::string& unit) {
+  return {{"value", t.value}, {"sigma", t.sigma}, {"resolved", t.resolved}, {"unit", unit}};
+}
+
+// The fitted terms in the data's unit u (what the fit works in).
+Json terms_json(const solver::NoiseTerms& t, const std::string& u) {
+  Json j;
+  j["quantization"] = term_json(t.quantization, u + "*s");
+  j["random_walk"] = term_json(t.random_walk, u + "/sqrt(Hz)");
+  j["bias_instability"] = term_json(t.bias_instability, u);
+  j["rate_random_walk"] = term_json(t.rate_random_walk, u + "/sqrt(s)");
+  j["rate_ramp"] = term_json(t.rate_ramp, u + "/s");
+  j["min_deviation"] = t.min_deviation;
+  j["min_tau_s"] = t.min_tau_s;
+  j["bias_instability_from_min"] = t.bias_instability_from_min;
+  j["chi2_dof"] = t.chi2_dof;
+  j["unit"] = u;
+  return j;
+}
+
+Json figures_json(const std::vector<solver::DatasheetFigure>& figures) {
+  Json a = Json::array();
+  for (const auto& f : figures) {
+    a.push_back({{"name", f.name},
+                 {"label", f.label},
+                 {"value", f.value},
+                 {"sigma", std::isfinite(f.sigma) ? Json(f.sigma) : Json()},
+                 {"unit", f.unit},
+                 {"resolved", f.resolved}});
+  }
+  return a;
+}
+
+std::string term_line(const char* label, const solver::NoiseTerm& t, const std::string& unit) {
+  if (!t.resolved) return fmt::format("  {:<26} not resolved\n", label);
+  return fmt::format("  {:<26} {:.4g} +- {:.2g} {}\n", label, t.value, t.sigma, unit);
+}
+
+void run_allan(const AllanArgs& a) {
+  solver::AllanOptions options;
+  options.kind = solver::parse_allan_kind(a.kind);
+  options.taus = solver::TauSet::parse(a.taus);
+  options.confidence = parse_double(a.confidence, "--confidence");
+  options.validate();
+
+  std::vector<double> data;
+  double rate_hz = 0.0;
+  std::string unit = "unit";
+  std::string source;
+  std::optional<solver::ImuChannel> channel;
+  if (!a.csv.empty()) {
+    if (!a.db.empty() || !a.run.empty()) {
+      throw core::InputError("--csv", "give either --csv or --db/--run, not both");
+    }
+    if (a.column.empty() || a.rate.empty()) {
+      throw core::InputError("--csv", "needs --column NAME and --rate HZ");
+    }
+    rate_hz = parse_double(a.rate, "--rate");
+    if (rate_hz <= 0.0) throw core::InputError("--rate", fmt::format("must be positive, got {}", rate_hz));
+    data = read_csv_column(a.csv, a.column);
+    source = fmt::format("{} column {}", a.csv, a.column);
+  } else {
+    if (a.db.empty() || a.run.empty() || a.channel.empty()) {
+      throw core::InputError("allan", "give --db FILE --run ID --channel gx|gy|gz|ax|ay|az "
+                                      "(and --step N), or --csv FILE --column NAME --rate HZ");
+    }
+    channel = solver::parse_channel(a.channel);
+    const std::int64_t run = parse_int(a.run, "--run", 1);
+    store::Database db(a.db);
+    const std::size_t step = solver::choose_noise_step(db, run, parse_step(a.step));
+    std::string device = a.device;
+    if (device.empty()) {
+      const auto devices = store::sample_devices(db, run);
+      if (devices.empty()) throw core::InputError("--run", fmt::format("run {} holds no samples", run));
+      device = devices.front();
+    }
+    const auto samples = store::read_samples(db, run, step, device);
+    if (samples.empty()) {
+      throw core::InputError("--step", fmt::format("step {} of run {} holds no samples of '{}'",
+                                                   step, run, device));
+    }
+    rate_hz = solver::sample_rate_of(samples);
+    data = solver::channel_series(samples, *channel);
+    unit = std::string(solver::channel_unit(*channel));
+    source = fmt::format("run {} step {} {} {}", run, step, device, a.channel);
+  }
+  const solver::AllanResult r = solver::allan(data, rate_hz, options);
+  std::optional<solver::NoiseTerms> terms;
+  if (options.kind == solver::AllanKind::kAllan) {
+    // As `calstand noise`: an IMU's anti-aliasing filter shapes the first samples of tau.
+    solver::NoiseFitOptions fit;
+    if (channel) fit.min_tau_s = solver::RunNoiseOptions{}.min_tau_samples / rate_hz;
+    try {
+      terms = solver::fit_noise_terms(r, fit);
+    } catch (const core::InputError&) {
+      // Too few averaging times for a fit: the curve alone is still the answer.
+    }
+  }
+  const std::string key(solver::to_string(options.kind));
+  if (a.json) {
+    Json out;
+    out["source"] = source;
+    out["kind"] = key;
+    out["unit"] = unit;
+    out["sample_rate_hz"] = rate_hz;
+    out["samples"] = r.samples;
+    out["confidence"] = r.confidence;
+    Json tau = Json::array(), dev = Json::array(), lo = Json::array(), hi = Json::array(),
+         edf = Json::array(), alpha = Json::array();
+    for (const auto& p : r.points) {
+      tau.push_back(p.tau_s);
+      dev.push_back(p.deviation);
+      lo.push_back(p.lo);
+      hi.push_back(p.hi);
+      edf.push_back(p.edf);
+      alpha.push_back(p.alpha);
+    }
+    out["tau"] = tau;
+    out[key] = dev;
+    out[key + "_lo"] = lo;
+    out[key + "_hi"] = hi;
+    out["edf"] = edf;
+    out["alpha"] = alpha;
+    if (terms) {
+      Json noise = terms_json(*terms, unit);
+      if (channel) noise["datasheet"] = figures_json(solver::datasheet_figures(*terms, solver::is_gyro(*channel)));
+      out["noise"] = noise;
+    } else {
+      out["noise"] = nullptr;
+    }
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals [{}]\n", key,
+                           source, r.samples, rate_hz, 100.0 * r.confidence, unit);
+  std::cout << fmt::format("{:>12} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", key, "lo",
+                           "hi", "edf", "alpha");
+  for (const auto& p : r.points) {
+    std::cout << fmt::format("{:>12.6g} {:>13.6e} {:>13.6e} {:>13.6e} {:>10.4g} {:>6}\n", p.tau_s,
+                             p.deviation, p.lo, p.hi, p.edf, p.alpha);
+  }
+  if (terms) {
+    const auto& t = *terms;
+    std::cout << fmt::format("\nnoise terms (Allan variance fit, chi2/dof {:.3g}; unit u = {})\n",
+                             t.chi2_dof, unit);
+    std::cout << term_line("quantization Q", t.quantization, "u*s");
+    std::cout << term_line("random walk N", t.random_walk, "u/sqrt(Hz)");
+    std::cout << term_line("bias instability B (fit)", t.bias_instability, "u");
+    std::cout << term_line("rate random walk K", t.rate_random_walk, "u/sqrt(s)");
+    std::cout << term_line("rate ramp R", t.rate_ramp, "u/s");
+    std::cout << fmt::format("  {:<26} {:.4g} u at tau {:.4g} s (B = minimum / 0.664 = {:.4g} u)\n",
+                             "Allan minimum", t.min_deviation, t.min_tau_s,
+                             t.bias_instability_from_min);
+  }
+}
+
+void print_noise_table(const solver::RunNoise& r, bool gyro) {
+  std::vector<const solver::ChannelNoise*> chans;
+  for (const auto& c : r.channels) {
+    if (solver::is_gyro(c.channel) == gyro) chans.push_back(&c);
+  }
+  if (chans.empty()) return;
+  std::cout << fmt::format("\n{:<40} {:<14}", gyro ? "gyro" : "accelerometer", "unit");
+  for (const auto* c : chans) std::cout << fmt::format(" {:>22}", solver::to_string(c->channel));
+  std::cout << "\n";
+  for (std::size_t i = 0; i < chans.front()->figures.size(); ++i) {
+    const auto& f0 = chans.front()->figures[i];
+    std::cout << fmt::format("{:<40} {:<14}", f0.label, f0.unit);
+    for (const auto* c : chans) {
+      const auto& f = c->figures[i];
+      std::string cell = !f.resolved            ? "-"
+                         : std::isfinite(f.sigma) ? fmt::format("{:.4g} +- {:.2g}", f.value, f.sigma)
+                                                  : fmt::format("{:.4g}", f.value);
+      std::cout << fmt::format(" {:>22}", cell);
+    }
+    std::cout << "\n";
+  }
+}
+
+void run_noise(const NoiseArgs& a) {
+  if (a.db.empty() || a.run.empty()) throw core::InputError("noise", "needs --db FILE --run ID");
+  solver::RunNoiseOptions options;
+  options.device = a.device;
+  options.step = parse_step(a.step);
+  options.allan.taus = solver::TauSet::parse(a.taus);
+  const std::int64_t run = parse_int(a.run, "--run", 1);
+  store::Database db(a.db);
+  const solver::RunNoise r = solver::analyse_run_noise(db, run, options);
+
+  if (!a.kalibr.empty()) {
+    std::vector<std::string> unresolved;
+    const std::string yaml =
+        solver::kalibr_yaml(solver::kalibr_from_run_noise(r, a.rostopic, &unresolved));
+    std::ofstream out(a.kalibr);
+    if (!out || !(out << yaml) || !out.flush()) {
+      throw std::runtime_error(fmt::format("{}: cannot write the Kalibr file", a.kalibr));
+    }
+    for (const auto& field : unresolved) {
+      std::cerr << fmt::format(
+          "calstand: warning: {}: not resolved on every axis (record longer); the file has the "
+          "largest resolved axis or 0\n",
+          field);
+    }
+  }
+  if (a.json) {
+    Json out;
+    out["run"] = r.run;
+    out["device"] = r.device;
+    out["step"] = r.step;
+    out["step_label"] = r.step_label;
+    out["samples"] = r.samples;
+    out["sample_rate_hz"] = r.sample_rate_hz;
+    out["duration_s"] = r.duration_s;
+    out["gaps"] = r.gaps;
+    Json chans = Json::array();
+    for (const auto& c : r.channels) {
+      const std::string unit(solver::channel_unit(c.channel));
+      chans.push_back({{"channel", std::string(solver::to_string(c.channel))},
+                       {"unit", unit},
+                       {"figures", figures_json(c.figures)},
+                       {"terms", terms_json(c.terms, unit)}});
+    }
+    out["channels"] = chans;
+    if (!a.kalibr.empty()) out["kalibr"] = a.kalibr;
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << fmt::format(
+      "noise of run {} step {} ({}), {}: {} samples at {:.6g} Hz over {:.1f} s{}\n", r.run, r.step,
+      r.step_label, r.device, r.samples, r.sample_rate_hz, r.duration_s,
+      r.gaps ? fmt::format(", {} gaps in the device clock", r.gaps) : "");
+  std::cout << "IEEE Std 952 terms fitted to the Allan variance (+- one sigma); '-': not resolved "
+               "by the record.\nBias instability: the Allan minimum is what datasheets quote; "
+               "B = minimum / 0.664 is the IEEE coefficient.\n";
+  print_noise_table(r, true);
+  print_noise_table(r, false);
+  if (!a.kalibr.empty()) std::cout << fmt::format("\nKalibr imu.yaml written to {}\n", a.kalibr);
+}
+
+}  // namespace
+
+void register_allan(CLI::App& app) {
+  auto a = std::make_shared<AllanArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "allan",
+      "Allan (or modified Allan, Hadamard) deviation of one channel with confidence intervals, "
+      "and the noise terms fitted to it");
+  cmd->add_option("--db", a->db, "SQLite database file")->type_name("FILE");
+  cmd->add_option("--run", a->run, "run id")->type_name("ID");
+  cmd->add_option("--step", a->step, "step index (default: the longest static capture)")
+      ->type_name("N");
+  cmd->add_option("--channel", a->channel, "gx gy gz [deg/s] or ax ay az [m/s^2]")
+      ->type_name("NAME");
+  cmd->add_option("--device", a->device, "IMU name (default: the first with samples)")
+      ->type_name("NAME");
+  cmd->add_option("--csv", a->csv, "CSV file with a header line, instead of --db")
+      ->type_name("FILE");
+  cmd->add_option("--column", a->column, "CSV column")->type_name("NAME");
+  cmd->add_option("--rate", a->rate, "CSV sample rate [Hz]")->type_name("HZ");
+  cmd->add_option("--taus", a->taus, "octave, decade, dense or a list of seconds (1,10,100)")
+      ->capture_default_str();
+  cmd->add_option("--kind", a->kind,
+                  "adev (overlapping), mdev, ohdev (overlapping Hadamard) or hdev (Hadamard)")
+      ->capture_default_str();
+  cmd->add_option("--confidence", a->confidence, "two-sided probability of the intervals")
+      ->capture_default_str();
+  cmd->add_flag("--json", a->json, "print the result as JSON");
+  cmd->callback([a] { run_allan(*a); });
+
+  auto n = std::make_shared<NoiseArgs>();
+  CLI::App* noise = app.add_subcommand(
+      "noise",
+      "Noise terms of a run's static step for all six channels, in datasheet units (ARW "
+      "deg/sqrt(h), bias instability deg/h and ug, RRW deg/h/sqrt(h), VRW m/s/sqrt(h))");
+  noise->add_option("--db", n->db, "SQLite database file")->type_name("FILE");
+  noise->add_option("--run", n->run, "run id")->type_name("ID");
+  noise->add_option("--device", n->device, "IMU name (default: the first with samples)")
+      ->type_name("NAME");
+  noise->add_option("--step", n->step, "step index (default: the longest static capture)")
+      ->type_name("N");
+  noise->add_option("--taus", n->taus, "averaging times of the fit: octave, decade, dense or a list")
+      ->capture_default_str();
+  noise->add_option("--kalibr", n->kalibr, "also write the figures as a Kalibr imu.yaml")
+      ->type_name("FILE");
+  noise->add_option("--rostopic", n->rostopic, "rostopic of the Kalibr file")
+      ->capture_default_str();
+  noise->add_flag("--json", n->json, "print the result as JSON");
+  noise->callback([n] { run_noise(*n); });
+}
 
 }  // namespace calstand::cli

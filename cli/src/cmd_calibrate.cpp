@@ -45,6 +45,7 @@ void run_calibrate(const CalibrateOptions& opt) {
   const auto steps = solver::summarize_steps(data, model);
   const solver::FitResult fit =
       solver::fit_model(steps, model, solver::measure_noise_floor(steps));
+  record_history(db, opt.run, data.setup.device, "calibrate", model, fit, "both");
   const nlohmann::json record = solver::make_calibration_record(data.setup, model, fit, steps);
   // Check our own output against the published schema before anything is stored.
   core::validate_or_throw(core::schema("calibration.schema.json"), record, "calibration record");

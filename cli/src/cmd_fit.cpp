@@ -34,13 +34,19 @@ void run_fit(const FitCommandOptions& opt) {
   fit_options.rows = parse_sensor_rows(opt.sensor);
   const solver::FitResult fit =
       solver::fit_model(steps, model, solver::measure_noise_floor(steps), fit_options);
+  record_history(db, opt.run, data.setup.device, "fit", model, fit, opt.sensor);
+  const auto groups = solver::group_quality(fit, steps);
+  const auto worst = solver::worst_steps(fit);
   if (opt.as_json) {
-    fmt::print("{}\n", solver::fit_to_json(fit).dump(2));
+    nlohmann::json j = solver::fit_to_json(fit);
+    solver::add_groups_json(j, groups, worst);
+    fmt::print("{}\n", j.dump(2));
     return;
   }
   fmt::print("run {} ({}), device {}, {} steps\n", opt.run, data.setup.procedure_name,
              data.setup.device, steps.size());
   print_fit(fit);
+  print_groups(groups, worst);
 }
 
 }  // namespace

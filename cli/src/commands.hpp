@@ -10,10 +10,12 @@ namespace calstand::cli {
 void register_allan(CLI::App& app);      // allan and noise
 void register_calibrate(CLI::App& app);  // calibrate and apply
 void register_demo(CLI::App& app);
+void register_diagnose(CLI::App& app);  // diagnose and history
 void register_fit(CLI::App& app);
 void register_import_export(CLI::App& app);  // import and export
 void register_noise_study(CLI::App& app);
 void register_plan(CLI::App& app);
+void register_report(CLI::App& app);
 void register_run(CLI::App& app);
 void register_runs(CLI::App& app);  // runs and show
 void register_station(CLI::App& app);

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/error_terms.hpp"
+#include "store/fit_history.hpp"
 
 namespace calstand::cli {
 
@@ -47,6 +48,41 @@ void print_fit(const solver::FitResult& fit) {
   } else {
     fmt::print("  the residuals are at the noise floor\n");
   }
+}
+
+void print_groups(const std::vector<solver::GroupQuality>& groups,
+                  const std::vector<solver::WorstStep>& worst, std::size_t max_groups) {
+  if (groups.empty()) return;
+  fmt::print("\nwhere the model fails (step groups, worst first):\n");
+  fmt::print("  {:<40} {:>10} {:>6}\n", "group", "chi2/dof", "steps");
+  for (std::size_t i = 0; i < groups.size() && i < max_groups; ++i) {
+    fmt::print("  {:<40} {:>10.3g} {:>6}\n", groups[i].group, groups[i].chi2_dof,
+               groups[i].steps.size());
+  }
+  if (!worst.empty()) {
+    fmt::print("worst steps:");
+    for (std::size_t i = 0; i < worst.size() && i < 5; ++i) {
+      fmt::print(" step {} {} z={:+.1f}{}", worst[i].step, worst[i].channel, worst[i].z,
+                 i + 1 < std::min<std::size_t>(worst.size(), 5) ? ";" : "\n");
+    }
+  }
+}
+
+void record_history(store::Database& db, std::int64_t run, const std::string& device,
+                    const std::string& command, const solver::Model& model,
+                    const solver::FitResult& fit, const std::string& sensors) {
+  store::FitRecord r;
+  r.run = run;
+  r.device = device;
+  r.command = command;
+  r.model = fit.model;
+  for (const auto& c : model.customs()) r.custom_terms.push_back(c.text());
+  r.sensors = sensors;
+  r.parameters = static_cast<int>(fit.parameters.size());
+  r.chi2_dof = fit.chi2_dof;
+  if (fit.rows != solver::SensorRows::kAccel) r.rms_gyro_dps = fit.residual_rms_gyro_dps;
+  if (fit.rows != solver::SensorRows::kGyro) r.rms_accel_mps2 = fit.residual_rms_accel_mps2;
+  store::record_fit(db, r);
 }
 
 std::string catalogue_help() {

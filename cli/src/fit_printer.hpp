@@ -4,6 +4,8 @@
 #include <string>
 
 #include "solver/fit.hpp"
+#include "solver/groups.hpp"
+#include "store/database.hpp"
 
 namespace calstand::cli {
 
@@ -17,6 +19,15 @@ solver::SensorRows parse_sensor_rows(const std::string& sensor);
 /// The parameter table (value, sigma, unit), the parameters the run cannot determine, and the
 /// fit quality against the noise floor.
 void print_fit(const solver::FitResult& fit);
+
+/// The groups of steps where the fit fails, worst first, and the worst single residuals.
+void print_groups(const std::vector<solver::GroupQuality>& groups,
+                  const std::vector<solver::WorstStep>& worst, std::size_t max_groups = 8);
+
+/// Appends the fit to the run's history (calstand history).
+void record_history(store::Database& db, std::int64_t run, const std::string& device,
+                    const std::string& command, const solver::Model& model,
+                    const solver::FitResult& fit, const std::string& sensors);
 
 /// The catalogue of terms for --help.
 std::string catalogue_help();

@@ -13,10 +13,12 @@ int main(int argc, char** argv) {
   calstand::cli::register_allan(app);
   calstand::cli::register_calibrate(app);
   calstand::cli::register_demo(app);
+  calstand::cli::register_diagnose(app);
   calstand::cli::register_fit(app);
   calstand::cli::register_import_export(app);
   calstand::cli::register_noise_study(app);
   calstand::cli::register_plan(app);
+  calstand::cli::register_report(app);
   calstand::cli::register_run(app);
   calstand::cli::register_runs(app);
   calstand::cli::register_station(app);

@@ -23,9 +23,13 @@ struct CandidateModel {
 };
 
 /// Each catalogue term the model lacks, and the next order of its temperature polynomials.
-std::vector<CandidateModel> candidate_models(const Model& model) {
+std::vector<CandidateModel> candidate_models(const Model& model, SensorRows rows) {
   std::vector<CandidateModel> out;
   for (const auto& info : core::error_term_catalogue()) {
+    // Terms of a sensor whose rows are not fitted, and the Earth rate without gyro rows, cannot
+    // change the fit.
+    if (rows == SensorRows::kAccel && (info.sensor == core::TermSensor::kGyro || info.name == "earth_rate")) continue;
+    if (rows == SensorRows::kGyro && info.sensor == core::TermSensor::kAccel) continue;
     const ModelTerm* present = model.find(info.name);
     if (present && !info.polynomial_order) continue;
     const int order = present ? present->order + 1 : 1;
@@ -127,7 +131,7 @@ std::vector<SignalCorrelation> correlate_signals(const FitResult& fit,
 }  // namespace
 
 Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options) {
-  std::vector<CandidateModel> candidates = candidate_models(model);
+  std::vector<CandidateModel> candidates = candidate_models(model, options.rows);
   // One pass over the samples for the model and every candidate that keeps its reference; the
   // Earth rate changes the reference, so that candidate gets its own pass.
   Model superset = model;

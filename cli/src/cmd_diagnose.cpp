@@ -1,0 +1,138 @@
+// `calstand diagnose` (which effect is the model missing?) and `calstand history` (how the fit
+// of a run improved as effects were added).
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "fit_printer.hpp"
+#include "open_database.hpp"
+#include "solver/diagnose.hpp"
+#include "store/fit_history.hpp"
+
+namespace calstand::cli {
+namespace {
+
+struct DiagnoseOptions {
+  std::string db;
+  std::int64_t run = 0;
+  std::string model = kDefaultModel;
+  std::vector<std::string> customs;
+  std::string device;
+  std::string sensor = "both";
+  bool as_json = false;
+};
+
+void run_diagnose(const DiagnoseOptions& opt) {
+  const solver::Model model = solver::Model::parse(opt.model, opt.customs);
+  store::Database db = open_existing_database(opt.db);
+  const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
+  solver::FitOptions options;
+  options.rows = parse_sensor_rows(opt.sensor);
+  const solver::Diagnosis d = solver::diagnose(data, model, options);
+  record_history(db, opt.run, data.setup.device, "diagnose", model, d.fit, opt.sensor);
+  if (opt.as_json) {
+    fmt::print("{}\n", solver::diagnosis_to_json(d).dump(2));
+    return;
+  }
+  fmt::print("run {} ({}), device {}: model {}\n", opt.run, data.setup.procedure_name,
+             data.setup.device, d.fit.model);
+  fmt::print("chi2/dof {:.3g}; step residual rms gyro {:.3g} deg/s, accel {:.3g} m/s^2\n",
+             d.fit.chi2_dof, d.fit.residual_rms_gyro_dps, d.fit.residual_rms_accel_mps2);
+  print_groups(d.groups, solver::worst_steps(d.fit), 5);
+  fmt::print("\ncandidates (each added in turn, best first):\n");
+  fmt::print("  {:<24} {:>11} {:>9} {:>14}  {}\n", "term", "delta BIC", "p", "chi2/dof after",
+             "what it is");
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    const auto& c = d.candidates[i];
+    fmt::print("  {:<24} {:>11.1f} {:>9.2g} {:>14.3g}  {}\n", c.term, c.delta_bic, c.p_value,
+               c.chi2_dof_after, c.explanation);
+  }
+  if (!d.untestable.empty()) {
+    fmt::print("  not testable on this run: {}\n", fmt::join(d.untestable, ", "));
+  }
+  fmt::print("\nresiduals follow (strongest first):\n");
+  for (std::size_t i = 0; i < d.signals.size() && i < 8; ++i) {
+    fmt::print("  {:<24} {:<3} r = {:+.2f}\n", d.signals[i].signal, d.signals[i].channel,
+               d.signals[i].correlation);
+  }
+  fmt::print("\n{}: {}\n", d.explained ? "explained" : "NOT explained", d.advice);
+}
+
+struct HistoryOptions {
+  std::string db;
+  std::int64_t run = 0;
+  bool as_json = false;
+};
+
+std::string optional_text(const std::optional<double>& v, const char* format) {
+  return v ? fmt::format(fmt::runtime(format), *v) : std::string("-");
+}
+
+void run_history(const HistoryOptions& opt) {
+  store::Database db = open_existing_database(opt.db);
+  const auto fits = store::fit_history(db, opt.run);
+  if (opt.as_json) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& f : fits) {
+      out.push_back({{"id", f.id},
+                     {"command", f.command},
+                     {"model", f.model},
+                     {"custom_terms", f.custom_terms},
+                     {"sensors", f.sensors},
+                     {"parameters", f.parameters},
+                     {"chi2_dof", f.chi2_dof ? nlohmann::json(*f.chi2_dof) : nlohmann::json()},
+                     {"rms_gyro_dps", f.rms_gyro_dps ? nlohmann::json(*f.rms_gyro_dps) : nlohmann::json()},
+                     {"rms_accel_mps2", f.rms_accel_mps2 ? nlohmann::json(*f.rms_accel_mps2) : nlohmann::json()},
+                     {"time", f.created_utc}});
+    }
+    fmt::print("{}\n", out.dump(2));
+    return;
+  }
+  if (fits.empty()) {
+    fmt::print("run {} has no fits yet: try calstand fit --db {} --run {}\n", opt.run, opt.db, opt.run);
+    return;
+  }
+  fmt::print("{:>4}  {:<24} {:<9} {:>6} {:>10} {:>14} {:>14}  {}\n", "fit", "time", "command",
+             "params", "chi2/dof", "gyro [deg/s]", "accel [m/s^2]", "model");
+  for (const auto& f : fits) {
+    std::string model = f.model;
+    for (const auto& c : f.custom_terms) model += " (" + c + ")";
+    fmt::print("{:>4}  {:<24} {:<9} {:>6} {:>10} {:>14} {:>14}  {}\n", f.id, f.created_utc,
+               f.command, f.parameters, optional_text(f.chi2_dof, "{:.3g}"),
+               optional_text(f.rms_gyro_dps, "{:.3g}"), optional_text(f.rms_accel_mps2, "{:.3g}"),
+               model);
+  }
+}
+
+}  // namespace
+
+void register_diagnose(CLI::App& app) {
+  auto opt = std::make_shared<DiagnoseOptions>();
+  auto* cmd = app.add_subcommand(
+      "diagnose", "Find the effect a model misses: candidate terms ranked, residual signals");
+  cmd->add_option("--db", opt->db, "Database file")->required();
+  cmd->add_option("--run", opt->run, "Run id")->required();
+  cmd->add_option("--model", opt->model, "Comma-separated error terms")->capture_default_str();
+  cmd->add_option("--custom", opt->customs, "A custom term NAME=SENSOR:EXPR, repeatable");
+  cmd->add_option("--device", opt->device, "IMU (default: the run's only IMU)");
+  cmd->add_option("--sensor", opt->sensor, "Rows to fit: both, gyro or accel")
+      ->check(CLI::IsMember({"both", "gyro", "accel"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", opt->as_json, "Print the diagnosis as JSON");
+  cmd->footer(catalogue_help());
+  cmd->callback([opt] { run_diagnose(*opt); });
+
+  auto hopt = std::make_shared<HistoryOptions>();
+  auto* history = app.add_subcommand("history", "Every fit of a run: how the error fell");
+  history->add_option("--db", hopt->db, "Database file")->required();
+  history->add_option("--run", hopt->run, "Run id")->required();
+  history->add_flag("--json", hopt->as_json, "Print the history as JSON");
+  history->callback([hopt] { run_history(*hopt); });
+}
+
+}  // namespace calstand::cli
