@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "../tests/unit/solver/sim_run.hpp"
+#include "solver/diagnose.hpp"
 #include "solver/fit.hpp"
 
 namespace {
@@ -62,5 +63,22 @@ void BM_FitAndThirteenCandidates(benchmark::State& state) {
   state.counters["candidates"] = static_cast<double>(candidates.size());
 }
 BENCHMARK(BM_FitAndThirteenCandidates)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// The whole `calstand diagnose` computation on the same campaign (issue 5 target: under 0.5 s):
+// the base fit, every candidate term, groups and signal correlations.
+void BM_Diagnose(benchmark::State& state) {
+  const solver::RunData& data = campaign_100k();
+  const solver::Model base = solver::Model::parse(kBase);
+  for (auto _ : state) {
+    const solver::Diagnosis d = solver::diagnose(data, base);
+    benchmark::DoNotOptimize(d.candidates.size());
+  }
+  state.counters["samples"] = static_cast<double>(sample_count(data));
+}
+BENCHMARK(BM_Diagnose)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -15,6 +15,9 @@ namespace calstand::solver {
 namespace {
 
 constexpr std::size_t kSignalsReported = 20;
+// A candidate that removes more than this share of the chi2/dof excess over 1 is a real effect
+// even when others remain.
+constexpr double kDominantShareOfExcess = 0.5;
 
 struct CandidateModel {
   std::string term;
@@ -183,13 +186,24 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
 
   const bool model_fits = d.fit.chi2_dof <= kExplainedChi2Dof;
   const bool best_fits = !d.candidates.empty() && d.candidates.front().chi2_dof_after <= kExplainedChi2Dof;
-  d.explained = model_fits || best_fits;
+  // Several effects missing at once: the best candidate removes most of the excess over the
+  // noise but not all. It explains what it removes; the user adds it and diagnoses again.
+  const bool best_dominates =
+      !d.candidates.empty() && d.candidates.front().p_value < 1e-6 &&
+      (d.fit.chi2_dof - d.candidates.front().chi2_dof_after) >
+          kDominantShareOfExcess * (d.fit.chi2_dof - 1.0);
+  d.explained = model_fits || best_fits || best_dominates;
   if (model_fits) {
     d.advice = fmt::format("the model fits to the noise floor (chi2/dof {:.2f}); nothing is missing",
                            d.fit.chi2_dof);
   } else if (best_fits) {
     d.advice = fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}", d.candidates.front().term,
                            d.fit.chi2_dof, d.candidates.front().chi2_dof_after);
+  } else if (best_dominates) {
+    d.advice = fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}; more than one effect is "
+                           "missing, so diagnose again with it in the model",
+                           d.candidates.front().term, d.fit.chi2_dof,
+                           d.candidates.front().chi2_dof_after);
   } else {
     std::string follows;
     for (std::size_t i = 0; i < d.signals.size() && i < 3; ++i) {
