@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
 # The main job on the embedded simulator, from a bare machine: installs the dependencies,
-# builds, and runs `calstand demo` (extra arguments go to the demo, e.g. --json, --seed 7).
+# builds, runs `calstand demo` (what the simulated IMU measures; extra arguments go to it, e.g.
+# --seed 7), then the demo campaign (scripts/demo-campaign.sh): a thermal calibration ending in
+# a fit, a diagnosis loop, a calibration record and an HTML report in ./demo-out.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/build.sh"
-exec "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" demo "$@"
+"${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" demo "$@"
+echo
+exec bash "$root/scripts/demo-campaign.sh"

@@ -25,6 +25,7 @@ struct DiagnoseOptions {
   std::string device;
   std::string sensor = "both";
   bool as_json = false;
+  bool suggest = false;
 };
 
 void run_diagnose(const DiagnoseOptions& opt) {
@@ -34,9 +35,13 @@ void run_diagnose(const DiagnoseOptions& opt) {
   solver::FitOptions options;
   options.rows = parse_sensor_rows(opt.sensor);
   const solver::Diagnosis d = solver::diagnose(data, model, options);
-  record_history(db, opt.run, data.setup.device, "diagnose", model, d.fit, opt.sensor);
+  if (!opt.suggest) record_history(db, opt.run, data.setup.device, "diagnose", model, d.fit, opt.sensor);
   if (opt.as_json) {
     fmt::print("{}\n", solver::diagnosis_to_json(d).dump(2));
+    return;
+  }
+  if (opt.suggest) {
+    if (!d.recommended.empty()) fmt::print("{}\n", d.recommended);
     return;
   }
   fmt::print("run {} ({}), device {}: model {}\n", opt.run, data.setup.procedure_name,
@@ -124,6 +129,9 @@ void register_diagnose(CLI::App& app) {
       ->check(CLI::IsMember({"both", "gyro", "accel"}))
       ->capture_default_str();
   cmd->add_flag("--json", opt->as_json, "Print the diagnosis as JSON");
+  cmd->add_flag("--suggest", opt->suggest,
+                "Print only the term to add (nothing when the model fits or no term explains "
+                "the residual): for scripts");
   cmd->footer(catalogue_help());
   cmd->callback([opt] { run_diagnose(*opt); });
 

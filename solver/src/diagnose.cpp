@@ -18,6 +18,8 @@ constexpr std::size_t kSignalsReported = 20;
 // A candidate that removes more than this share of the chi2/dof excess over 1 is a real effect
 // even when others remain.
 constexpr double kDominantShareOfExcess = 0.5;
+// "Very strong" evidence on the Kass-Raftery scale of BIC differences.
+constexpr double kStrongDeltaBic = -10.0;
 
 struct CandidateModel {
   std::string term;
@@ -193,7 +195,19 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       (d.fit.chi2_dof - d.candidates.front().chi2_dof_after) >
           kDominantShareOfExcess * (d.fit.chi2_dof - 1.0);
   d.explained = model_fits || best_fits || best_dominates;
-  if (model_fits) {
+  // Strong evidence (BIC lower by more than 10, F-test p under 1e-6) recommends a term even when
+  // the model is already near the floor: with hundreds of rows, chi2/dof 1.2 is still a signal.
+  const bool strong = !d.candidates.empty() && d.candidates.front().delta_bic < kStrongDeltaBic &&
+                      d.candidates.front().p_value < 1e-6;
+  if (strong && (!model_fits || d.candidates.front().chi2_dof_after < d.fit.chi2_dof)) {
+    d.recommended = d.candidates.front().term;
+  }
+  if (model_fits && strong) {
+    d.advice = fmt::format("the model is near the noise floor (chi2/dof {:.2f}), but adding {} is "
+                           "strongly supported (BIC {:+.0f}, chi2/dof to {:.2f})",
+                           d.fit.chi2_dof, d.candidates.front().term, d.candidates.front().delta_bic,
+                           d.candidates.front().chi2_dof_after);
+  } else if (model_fits) {
     d.advice = fmt::format("the model fits to the noise floor (chi2/dof {:.2f}); nothing is missing",
                            d.fit.chi2_dof);
   } else if (best_fits) {
@@ -247,6 +261,7 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
   }
   j["explained"] = d.explained;
   j["advice"] = d.advice;
+  j["recommended"] = d.recommended;
   nlohmann::json groups = nlohmann::json::object();
   add_groups_json(groups, d.groups, worst_steps(d.fit));
   j["groups"] = groups["groups"];

@@ -34,6 +34,9 @@ struct Diagnosis {
   std::vector<SignalCorrelation> signals;  ///< strongest first
   bool explained = false;  ///< the model, or the model with the best candidate, fits the noise
   std::string advice;      ///< one paragraph for the user
+  /// The term to add: the best candidate when the model is above the noise floor and that
+  /// candidate explains (all or most of) the excess; empty otherwise.
+  std::string recommended;
 };
 
 /// A fit with chi2/dof at or below this is at the noise floor (the residuals are explained).
