@@ -1,7 +1,64 @@
+// `calstand report`: one self-contained HTML page of a run's fit: how the error fell over the
+// fits of the run, where the model fails, what the residual follows, the parameters, the
+// candidate terms and, for a static run, the Allan deviation with its fitted noise lines.
+#include <fmt/format.h>
+
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "commands.hpp"
+#include "core/error.hpp"
+#include "fit_printer.hpp"
+#include "gnuplot_svg.hpp"
+#include "open_database.hpp"
+#include "report_data.hpp"
+#include "report_html.hpp"
 
 namespace calstand::cli {
+namespace {
 
-void register_report(CLI::App& app) { (void)app; }
+struct ReportOptions {
+  ReportRequest request;
+  std::string out;
+};
+
+void run_report(const ReportOptions& opt) {
+  find_gnuplot();  // before the work: a missing plotter is the first thing to say
+  store::Database db = open_existing_database(opt.request.db);
+  const ReportData data = gather_report(db, opt.request);
+  const std::string page = render_report_html(data);
+  std::ofstream out(opt.out, std::ios::binary);
+  if (!out || !(out << page) || !out.flush()) {
+    throw core::InputError("--out " + opt.out, "cannot write the report");
+  }
+  fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}; {} kB\n",
+             opt.out, data.request.run, data.procedure, data.diagnosis.fit.model,
+             data.diagnosis.fit.chi2_dof, data.history.size(),
+             data.noise ? ", Allan deviation of the static step" : "", (page.size() + 512) / 1024);
+}
+
+}  // namespace
+
+void register_report(CLI::App& app) {
+  auto opt = std::make_shared<ReportOptions>();
+  opt->request.model = kDefaultModel;
+  auto* cmd = app.add_subcommand(
+      "report", "One self-contained HTML page of a run's fit: history, residuals, signals, "
+                "parameters, candidates, Allan deviation (plots by gnuplot)");
+  cmd->add_option("--db", opt->request.db, "Database file")->required();
+  cmd->add_option("--run", opt->request.run, "Run id")->required();
+  cmd->add_option("--model", opt->request.model, "Comma-separated error terms")
+      ->capture_default_str();
+  cmd->add_option("--custom", opt->request.customs, "A custom term NAME=SENSOR:EXPR, repeatable");
+  cmd->add_option("--device", opt->request.device, "IMU (default: the run's only IMU)");
+  cmd->add_option("--sensor", opt->request.sensor, "Rows to fit: both, gyro or accel")
+      ->check(CLI::IsMember({"both", "gyro", "accel"}))
+      ->capture_default_str();
+  cmd->add_option("--out", opt->out, "The HTML file to write")->required();
+  cmd->footer(catalogue_help());
+  cmd->callback([opt] { run_report(*opt); });
+}
 
 }  // namespace calstand::cli

@@ -1,0 +1,191 @@
+#include "report_html.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "report_plots.hpp"
+#include "report_tables.hpp"
+
+namespace calstand::cli {
+namespace {
+
+constexpr const char* kStyle = R"(
+:root { --ink: #1d2733; --dim: #6b7785; --line: #dde3ea; --good: #1e7b34; --warn: #a86400;
+        --bad: #b3261e; --accent: #1f77b4; }
+* { box-sizing: border-box; }
+body { margin: 0; background: #f3f5f8; color: var(--ink);
+       font: 15px/1.45 "Helvetica Neue", Helvetica, Arial, sans-serif; }
+main { max-width: 1120px; margin: 0 auto; padding: 24px 20px 48px; }
+header { background: #1d2733; color: #fff; padding: 22px 28px; border-radius: 10px; }
+header h1 { margin: 0 0 6px; font-size: 24px; font-weight: 600; }
+header p { margin: 4px 0; color: #c9d3de; }
+header code { color: #fff; }
+.badge { display: inline-block; padding: 2px 10px; border-radius: 12px; font-weight: 600;
+         font-size: 13px; margin-left: 8px; }
+.badge.good { background: #d8f0dc; color: var(--good); }
+.badge.bad { background: #fbe0dd; color: var(--bad); }
+section { background: #fff; border: 1px solid var(--line); border-radius: 10px;
+          padding: 18px 24px 22px; margin-top: 20px; }
+section h2 { margin: 0 0 4px; font-size: 19px; }
+section h3 { margin: 18px 0 6px; font-size: 15px; }
+p.lead { margin: 0 0 12px; color: var(--dim); }
+svg { display: block; width: 100%; height: auto; margin: 8px 0 12px; }
+.grid { display: grid; grid-template-columns: repeat(auto-fit, minmax(320px, 1fr)); gap: 14px; }
+table { border-collapse: collapse; width: 100%; margin: 8px 0; font-size: 13.5px; }
+th, td { text-align: left; padding: 5px 9px; border-bottom: 1px solid var(--line);
+         vertical-align: top; }
+th { background: #f0f3f7; font-weight: 600; }
+tbody tr:nth-child(even) { background: #fafbfc; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.good { color: var(--good); font-weight: 600; }
+td.warn { color: var(--warn); font-weight: 600; }
+td.bad { color: var(--bad); font-weight: 600; }
+td.model { font-family: monospace; font-size: 12px; word-break: break-all; }
+.dim { color: var(--dim); }
+.advice { border-left: 4px solid var(--accent); background: #eef5fb; padding: 10px 14px;
+          margin: 10px 0; }
+.advice.good { border-color: var(--good); background: #eef8f0; }
+.advice.bad { border-color: var(--bad); background: #fdf0ee; }
+footer { color: var(--dim); font-size: 12px; margin-top: 18px; text-align: center; }
+)";
+
+// The strongest signals, at most `count`, one per base signal and channel (r with x, x^2 and
+// abs(x) of one signal tell the same story).
+std::vector<solver::SignalCorrelation> top_signals(const ReportData& r, std::size_t count) {
+  std::vector<solver::SignalCorrelation> out;
+  std::vector<std::string> seen;
+  for (const auto& s : r.diagnosis.signals) {
+    std::string base = s.signal;
+    if (base.starts_with("abs(")) base = base.substr(4, base.size() - 5);
+    if (base.ends_with("^2")) base.resize(base.size() - 2);
+    const std::string key = base + "/" + s.channel;
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) continue;
+    if (!signal_series(r.steps, s.signal)) continue;
+    seen.push_back(key);
+    out.push_back(s);
+    if (out.size() == count) break;
+  }
+  return out;
+}
+
+std::string header(const ReportData& r) {
+  const solver::FitResult& fit = r.diagnosis.fit;
+  const bool floor = fit.chi2_dof <= solver::kExplainedChi2Dof;
+  std::string customs;
+  for (const auto& c : r.request.customs) customs += " --custom " + c;
+  return fmt::format(
+      "<header><h1>Run {} &middot; {} &middot; {}</h1>\n"
+      "<p>Model <code>{}</code>{}</p>\n"
+      "<p>chi2/dof {:.3g} over {} steps<span class=\"badge {}\">{}</span></p>\n"
+      "<p>{} fits in the history &middot; database {}</p></header>\n",
+      r.request.run, html_escape(r.procedure), html_escape(r.device), html_escape(fit.model),
+      customs.empty() ? "" : " with <code>" + html_escape(customs) + "</code>", fit.chi2_dof,
+      fit.steps.size(), floor ? "good" : "bad",
+      floor ? "at the noise floor" : fmt::format("{:.1f} &times; the noise", std::sqrt(fit.chi2_dof)),
+      r.history.size(), html_escape(r.request.db));
+}
+
+std::string history_section(const ReportData& r) {
+  return "<section id=\"history\"><h2>How the error fell</h2>\n"
+         "<p class=\"lead\">chi2/dof of every fit of this run, oldest first, each labelled by the "
+         "terms it added; at 1 the model explains the measurements down to their noise.</p>\n" +
+         history_plot(r) + history_table(r) + "</section>\n";
+}
+
+std::string residual_section(const ReportData& r) {
+  return fmt::format(
+             "<section id=\"residuals\"><h2>Where the model fails</h2>\n"
+             "<p class=\"lead\">Step-mean residual of each channel over its noise (z-score), "
+             "step by step, coloured by <b>{}</b>. Within the dotted lines (|z| &lt; 2) the "
+             "model fits.</p>\n",
+             html_escape(r.grouping.kind)) +
+         residual_plot(r) + groups_table(r) + "</section>\n";
+}
+
+std::string signals_section(const ReportData& r) {
+  std::string out =
+      "<section id=\"signals\"><h2>What the residual follows</h2>\n"
+      "<p class=\"lead\">The residual of a channel against the signals it correlates with most "
+      "(step means; colours as above, dashed: least-squares line). A clear trend names the "
+      "missing effect.</p>\n<div class=\"grid\">\n";
+  int rank = 0;
+  for (const auto& s : top_signals(r, 3)) out += "<div>" + signal_plot(r, s, ++rank) + "</div>\n";
+  return out + "</div>\n" + signals_table(r) + "</section>\n";
+}
+
+std::string parameters_section(const ReportData& r) {
+  return "<section id=\"parameters\"><h2>Parameters and fit quality</h2>\n" + quality_table(r) +
+         "<h3>Fitted parameters</h3>\n" + parameter_tables(r) + "</section>\n";
+}
+
+std::string candidates_section(const ReportData& r) {
+  const auto& d = r.diagnosis;
+  std::string out = fmt::format(
+      "<section id=\"candidates\"><h2>Which effect is missing</h2>\n"
+      "<div class=\"advice {}\"><b>{}</b> {}</div>\n",
+      d.explained ? "good" : "bad", d.explained ? "Explained." : "Not explained.",
+      html_escape(d.advice));
+  if (!d.candidates.empty()) {
+    out += "<p class=\"lead\">Each catalogue term the model lacks, added in turn and refitted, "
+           "best change in BIC first.</p>\n" +
+           candidate_plot(r);
+  }
+  return out + candidates_table(r) + "</section>\n";
+}
+
+std::string allan_section(const ReportData& r) {
+  if (!r.noise) {
+    return "<section id=\"allan\" class=\"absent\"><h2>Noise</h2>\n<p class=\"dim\">" +
+           html_escape(r.noise_note) + ".</p></section>\n";
+  }
+  return fmt::format(
+             "<section id=\"allan\"><h2>Noise: Allan deviation</h2>\n"
+             "<p class=\"lead\">Overlapping Allan deviation of the longest static step ({} "
+             "samples{}) with its confidence intervals, the fitted IEEE Std 952 model (solid) "
+             "and its terms (dashed).</p>\n",
+             r.noise->samples,
+             r.noise->gaps ? fmt::format(", {} gaps in the device clock", r.noise->gaps) : "") +
+         allan_plot(r, true) + allan_plot(r, false) +
+         "<h3>Noise figures (datasheet units, &plusmn; one sigma; - not resolved)</h3>\n" +
+         noise_figures_table(r) + "</section>\n";
+}
+
+}  // namespace
+
+std::string html_escape(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string render_report_html(const ReportData& r) {
+  std::string page = fmt::format(
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<title>calstand report: run {} ({})</title>\n<style>{}</style>\n</head>\n<body>\n<main>\n",
+      r.request.run, html_escape(r.procedure), kStyle);
+  page += header(r);
+  page += history_section(r);
+  page += residual_section(r);
+  page += signals_section(r);
+  page += parameters_section(r);
+  page += candidates_section(r);
+  page += allan_section(r);
+  page += fmt::format("<footer>calstand report &middot; run {} &middot; {}</footer>\n",
+                      r.request.run,
+                      r.history.empty() ? std::string() : html_escape(r.history.back().created_utc));
+  return page + "</main>\n</body>\n</html>\n";
+}
+
+}  // namespace calstand::cli

@@ -1,0 +1,166 @@
+// `calstand allan` and `calstand noise` as a user runs them: a short static-allan run on the
+// simulated station, the curve and noise figures against the simulated IMU's truth, a CSV
+// source, the Kalibr file and bad input (exit code 2).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_runner.hpp"
+
+namespace {
+
+using calstand::testing::read_text;
+using calstand::testing::Result;
+using calstand::testing::run;
+
+// One 20-minute static-allan run shared by the tests (a fraction of a second of simulation).
+class NoiseCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = ::testing::TempDir() + "noise_cli";
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    db_ = dir_ + "/allan.db";
+    const Result r = run("run static-allan --quiet --db " + db_ +
+                         " --set duration_s=1200 --set soak_s=1 --set warmup_s=1");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  }
+  static std::string dir_, db_;
+};
+std::string NoiseCli::dir_, NoiseCli::db_;
+
+TEST_F(NoiseCli, AllanJsonFollowsTheWhiteNoiseOfTheSimulatedImu) {
+  const Result truth_run = run("station --json");
+  ASSERT_EQ(truth_run.exit_code, 0) << truth_run.out;
+  const auto noise = nlohmann::json::parse(truth_run.out)["derived"]["imus"][0]["truth"]["noise"];
+  const double arw_dps_per_sqrt_hz = noise["gyro"]["arw_deg_per_sqrt_h"].get<double>() / 60.0;
+
+  const Result r = run("allan --db " + db_ + " --run 1 --channel gx --taus decade --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["tau"].size(), j["adev"].size());
+  ASSERT_EQ(j["tau"].size(), j["adev_lo"].size());
+  ASSERT_EQ(j["tau"].size(), j["adev_hi"].size());
+  ASSERT_GE(j["tau"].size(), 5u);  // 1/400 s .. 250 s at 400 Hz
+  for (std::size_t i = 0; i < j["tau"].size(); ++i) {
+    EXPECT_LE(j["adev_lo"][i].get<double>(), j["adev"][i].get<double>());
+    EXPECT_GE(j["adev_hi"][i].get<double>(), j["adev"][i].get<double>());
+  }
+  // At 0.25 s the gyro curve is its angle random walk, N / sqrt(tau), within a few per cent.
+  const double tau = j["tau"][2].get<double>();
+  EXPECT_NEAR(tau, 0.25, 1e-6);  // the rate is measured from the device clock
+  const double white = arw_dps_per_sqrt_hz / std::sqrt(tau);
+  EXPECT_NEAR(j["adev"][2].get<double>(), white, 0.05 * white);
+  // The fitted random walk is the truth's ARW.
+  const auto& n = j["noise"]["random_walk"];
+  EXPECT_TRUE(n["resolved"].get<bool>());
+  EXPECT_NEAR(n["value"].get<double>(), arw_dps_per_sqrt_hz, 0.03 * arw_dps_per_sqrt_hz);
+  EXPECT_EQ(j["noise"]["unit"], "deg/s");
+
+  // The modified deviation under --kind names its arrays after itself.
+  const Result m = run("allan --db " + db_ + " --run 1 --channel gx --kind mdev --json");
+  ASSERT_EQ(m.exit_code, 0) << m.out;
+  const auto mj = nlohmann::json::parse(m.out);
+  EXPECT_TRUE(mj.contains("mdev") && mj.contains("mdev_lo") && mj.contains("mdev_hi"));
+  EXPECT_TRUE(mj["noise"].is_null());
+}
+
+TEST_F(NoiseCli, NoiseGivesDatasheetFiguresAndAKalibrFile) {
+  const Result truth_run = run("station --json");
+  const auto noise = nlohmann::json::parse(truth_run.out)["derived"]["imus"][0]["truth"]["noise"];
+  const std::string yaml = dir_ + "/imu.yaml";
+  const Result r = run("noise --db " + db_ + " --run 1 --json --kalibr " + yaml,
+                       dir_ + "/noise.err");
+  ASSERT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "/noise.err");
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["step"], 3);  // the capture step of static-allan
+  EXPECT_NEAR(j["sample_rate_hz"].get<double>(), 400.0, 0.01);
+  ASSERT_EQ(j["channels"].size(), 6u);
+  const auto figure = [&](std::size_t channel, const std::string& name) {
+    for (const auto& f : j["channels"][channel]["figures"]) {
+      if (f["name"] == name) return f;
+    }
+    ADD_FAILURE() << "no figure " << name;
+    return nlohmann::json();
+  };
+  for (std::size_t c = 0; c < 3; ++c) {
+    const auto arw = figure(c, "angle_random_walk");
+    EXPECT_EQ(arw["unit"], "deg/sqrt(h)");
+    const double truth = noise["gyro"]["arw_deg_per_sqrt_h"].get<double>();
+    EXPECT_NEAR(arw["value"].get<double>(), truth, 0.03 * truth) << "channel " << c;
+    EXPECT_EQ(figure(c, "bias_instability_min")["unit"], "deg/h");
+  }
+  for (std::size_t c = 3; c < 6; ++c) {
+    const auto vrw = figure(c, "velocity_random_walk");
+    EXPECT_EQ(vrw["unit"], "m/s/sqrt(h)");
+    const double truth = noise["accel"]["vrw_mps_per_sqrt_h"].get<double>();
+    EXPECT_NEAR(vrw["value"].get<double>(), truth, 0.05 * truth) << "channel " << c;
+    EXPECT_EQ(figure(c, "bias_instability_min")["unit"], "ug");
+  }
+  const std::string text = read_text(yaml);
+  EXPECT_NE(text.find("gyroscope_noise_density:"), std::string::npos) << text;
+  EXPECT_NE(text.find("accelerometer_random_walk:"), std::string::npos) << text;
+  EXPECT_NE(text.find("update_rate: 400"), std::string::npos) << text;
+
+  const Result human = run("noise --db " + db_ + " --run 1");
+  ASSERT_EQ(human.exit_code, 0) << human.out;
+  EXPECT_NE(human.out.find("angle random walk N"), std::string::npos) << human.out;
+  EXPECT_NE(human.out.find("deg/sqrt(h)"), std::string::npos);
+}
+
+TEST_F(NoiseCli, CsvSource) {
+  // White noise of known sigma from a fixed LCG: ADEV at m samples is sigma / sqrt(m).
+  const std::string csv = dir_ + "/data.csv";
+  {
+    std::ofstream f(csv);
+    f << "t,rate\n";
+    std::uint64_t s = 12345;
+    for (int i = 0; i < 20000; ++i) {
+      // Sum of 12 uniforms minus 6: unit variance, near normal.
+      double v = -6.0;
+      for (int k = 0; k < 12; ++k) {
+        s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+        v += static_cast<double>(s >> 11U) * 0x1.0p-53;
+      }
+      f << i * 0.01 << "," << v << "\n";
+    }
+  }
+  const Result r = run("allan --csv " + csv + " --column rate --rate 100 --taus 0.01,0.1,1 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["adev"].size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double want = 1.0 / std::sqrt(j["tau"][i].get<double>() * 100.0);
+    EXPECT_NEAR(j["adev"][i].get<double>(), want, 0.1 * want);
+  }
+  const Result table = run("allan --csv " + csv + " --column rate --rate 100");
+  ASSERT_EQ(table.exit_code, 0) << table.out;
+  EXPECT_NE(table.out.find("tau [s]"), std::string::npos) << table.out;
+}
+
+TEST_F(NoiseCli, BadInputExitsWithTwo) {
+  const auto expect_input_error = [](const std::string& args, const std::string& needle) {
+    const Result r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(needle), std::string::npos) << args << "\n" << r.out;
+  };
+  expect_input_error("allan --db " + db_ + " --run 1 --channel gq", "gq");
+  expect_input_error("allan --db " + db_ + " --run 1 --channel gx --taus 1,-2", "-2");
+  expect_input_error("allan --db " + db_ + " --run 1 --channel gx --taus 100000", "100000");
+  expect_input_error("allan --db " + db_ + " --run 1 --channel gx --kind xdev", "xdev");
+  expect_input_error("allan --db " + db_ + " --run 99 --channel gx", "99");
+  expect_input_error("allan --db " + db_ + " --run 1 --step 1 --channel gx", "no samples");
+  expect_input_error("allan --csv " + dir_ + "/data.csv --column nope --rate 100", "nope");
+  expect_input_error("allan --csv " + dir_ + "/data.csv --column rate --rate 0", "--rate");
+  expect_input_error("allan --csv " + dir_ + "/missing.csv --column rate --rate 10", "missing");
+  expect_input_error("allan --run 1", "--db");
+  expect_input_error("noise --db " + db_ + " --run 1 --step x", "--step");
+  expect_input_error("noise --db " + db_ + " --run 1 --device imu9", "imu9");
+}
+
+}  // namespace
