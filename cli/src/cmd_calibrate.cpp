@@ -2,6 +2,7 @@
 // (correct a run's raw samples with a record, as a new run).
 #include <fmt/format.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -14,6 +15,7 @@
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/calibration_record.hpp"
+#include "solver/run_noise.hpp"
 #include "store/calibrations.hpp"
 #include "store/derived_run.hpp"
 #include "store/run_store.hpp"
@@ -38,6 +40,37 @@ void write_text(const std::string& path, const std::string& text) {
   if (!f) throw std::runtime_error(path + ": cannot write the file");
 }
 
+// Noise figures are worth a record only from a static step long enough for the Allan curve to
+// reach the bias instability region [s].
+constexpr double kMinNoiseStepS = 100.0;
+
+/// The run's noise figures in datasheet units from its longest static capture, or null when the
+/// run has none long enough.
+nlohmann::json noise_figures(store::Database& db, std::int64_t run, const std::string& device) {
+  solver::RunNoiseOptions options;
+  options.device = device;
+  solver::RunNoise noise;
+  try {
+    noise = solver::analyse_run_noise(db, run, options);
+  } catch (const core::InputError&) {
+    return nullptr;  // no static capture
+  }
+  if (noise.duration_s < kMinNoiseStepS) return nullptr;
+  nlohmann::json j = {{"step", noise.step}, {"duration_s", noise.duration_s}, {"channels", nlohmann::json::object()}};
+  for (const auto& c : noise.channels) {
+    nlohmann::json figures = nlohmann::json::array();
+    for (const auto& f : c.figures) {
+      figures.push_back({{"name", f.name},
+                         {"value", f.value},
+                         {"sigma", std::isfinite(f.sigma) ? nlohmann::json(f.sigma) : nlohmann::json()},
+                         {"unit", f.unit},
+                         {"resolved", f.resolved}});
+    }
+    j["channels"][std::string(solver::to_string(c.channel))] = figures;
+  }
+  return j;
+}
+
 void run_calibrate(const CalibrateOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
@@ -46,7 +79,8 @@ void run_calibrate(const CalibrateOptions& opt) {
   const solver::FitResult fit =
       solver::fit_model(steps, model, solver::measure_noise_floor(steps));
   record_history(db, opt.run, data.setup.device, "calibrate", model, fit, "both");
-  const nlohmann::json record = solver::make_calibration_record(data.setup, model, fit, steps);
+  const nlohmann::json record = solver::make_calibration_record(
+      data.setup, model, fit, steps, noise_figures(db, opt.run, data.setup.device));
   // Check our own output against the published schema before anything is stored.
   core::validate_or_throw(core::schema("calibration.schema.json"), record, "calibration record");
   const std::string out =
