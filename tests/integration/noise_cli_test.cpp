@@ -2,6 +2,7 @@
 // simulated station, the curve and noise figures against the simulated IMU's truth, a CSV
 // source, the Kalibr file and bad input (exit code 2).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -22,7 +23,8 @@ using calstand::testing::run;
 class NoiseCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = ::testing::TempDir() + "noise_cli";
+    // One folder per process: ctest runs each test of the suite in its own process, in parallel.
+    dir_ = ::testing::TempDir() + "noise_cli-" + std::to_string(::getpid());
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
     db_ = dir_ + "/allan.db";
@@ -30,6 +32,7 @@ class NoiseCli : public ::testing::Test {
                          " --set duration_s=1200 --set soak_s=1 --set warmup_s=1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
   }
+  static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
   static std::string dir_, db_;
 };
 std::string NoiseCli::dir_, NoiseCli::db_;
@@ -155,8 +158,15 @@ TEST_F(NoiseCli, BadInputExitsWithTwo) {
   expect_input_error("allan --db " + db_ + " --run 1 --channel gx --kind xdev", "xdev");
   expect_input_error("allan --db " + db_ + " --run 99 --channel gx", "99");
   expect_input_error("allan --db " + db_ + " --run 1 --step 1 --channel gx", "no samples");
-  expect_input_error("allan --csv " + dir_ + "/data.csv --column nope --rate 100", "nope");
-  expect_input_error("allan --csv " + dir_ + "/data.csv --column rate --rate 0", "--rate");
+  // Its own CSV: each test may run in its own process (ctest), so none relies on another's files.
+  const std::string csv = dir_ + "/bad_input.csv";
+  {
+    std::ofstream f(csv);
+    f << "t,rate\n";
+    for (int i = 0; i < 100; ++i) f << i * 0.01 << "," << (i % 7) * 0.1 << "\n";
+  }
+  expect_input_error("allan --csv " + csv + " --column nope --rate 100", "nope");
+  expect_input_error("allan --csv " + csv + " --column rate --rate 0", "--rate");
   expect_input_error("allan --csv " + dir_ + "/missing.csv --column rate --rate 10", "missing");
   expect_input_error("allan --run 1", "--db");
   expect_input_error("noise --db " + db_ + " --run 1 --step x", "--step");
