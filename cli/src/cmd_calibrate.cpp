@@ -23,12 +23,7 @@
 namespace calstand::cli {
 namespace {
 
-struct CalibrateOptions {
-  std::string db;
-  std::int64_t run = 0;
-  std::string model = kDefaultModel;
-  std::vector<std::string> customs;
-  std::string device;
+struct CalibrateOptions : RunModelOptions {
   std::string out;
   bool as_json = false;
 };
@@ -144,14 +139,9 @@ void register_calibrate(CLI::App& app) {
   auto opt = std::make_shared<CalibrateOptions>();
   auto* cmd = app.add_subcommand(
       "calibrate", "Fit a run, store the calibration record in the database and write its JSON");
-  cmd->add_option("--db", opt->db, "Database file")->required();
-  cmd->add_option("--run", opt->run, "Run id")->required();
-  cmd->add_option("--model", opt->model, "Comma-separated error terms")->capture_default_str();
-  cmd->add_option("--custom", opt->customs, "A custom term NAME=SENSOR:EXPR, repeatable");
-  cmd->add_option("--device", opt->device, "IMU (default: the run's only IMU)");
+  add_run_model_options(cmd, *opt, false);
   cmd->add_option("--out", opt->out, "Record file (default calibration-run<ID>-<device>.json)");
   cmd->add_flag("--json", opt->as_json, "Print the record id, file and record as JSON");
-  cmd->footer(catalogue_help());
   cmd->callback([opt] { run_calibrate(*opt); });
 
   auto aopt = std::make_shared<ApplyOptions>();

@@ -17,13 +17,7 @@
 namespace calstand::cli {
 namespace {
 
-struct DiagnoseOptions {
-  std::string db;
-  std::int64_t run = 0;
-  std::string model = kDefaultModel;
-  std::vector<std::string> customs;
-  std::string device;
-  std::string sensor = "both";
+struct DiagnoseOptions : RunModelOptions {
   bool as_json = false;
   bool suggest = false;
 };
@@ -120,19 +114,11 @@ void register_diagnose(CLI::App& app) {
   auto opt = std::make_shared<DiagnoseOptions>();
   auto* cmd = app.add_subcommand(
       "diagnose", "Find the effect a model misses: candidate terms ranked, residual signals");
-  cmd->add_option("--db", opt->db, "Database file")->required();
-  cmd->add_option("--run", opt->run, "Run id")->required();
-  cmd->add_option("--model", opt->model, "Comma-separated error terms")->capture_default_str();
-  cmd->add_option("--custom", opt->customs, "A custom term NAME=SENSOR:EXPR, repeatable");
-  cmd->add_option("--device", opt->device, "IMU (default: the run's only IMU)");
-  cmd->add_option("--sensor", opt->sensor, "Rows to fit: both, gyro or accel")
-      ->check(CLI::IsMember({"both", "gyro", "accel"}))
-      ->capture_default_str();
+  add_run_model_options(cmd, *opt);
   cmd->add_flag("--json", opt->as_json, "Print the diagnosis as JSON");
   cmd->add_flag("--suggest", opt->suggest,
                 "Print only the term to add (nothing when the model fits or no term explains "
                 "the residual): for scripts");
-  cmd->footer(catalogue_help());
   cmd->callback([opt] { run_diagnose(*opt); });
 
   auto hopt = std::make_shared<HistoryOptions>();

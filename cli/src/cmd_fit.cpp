@@ -15,13 +15,7 @@
 namespace calstand::cli {
 namespace {
 
-struct FitCommandOptions {
-  std::string db;
-  std::int64_t run = 0;
-  std::string model = kDefaultModel;
-  std::vector<std::string> customs;
-  std::string device;
-  std::string sensor = "both";
+struct FitCommandOptions : RunModelOptions {
   bool as_json = false;
 };
 
@@ -55,20 +49,8 @@ void register_fit(CLI::App& app) {
   auto opt = std::make_shared<FitCommandOptions>();
   auto* cmd = app.add_subcommand(
       "fit", "Fit an error model to a run by weighted least squares on step means");
-  cmd->add_option("--db", opt->db, "Database file")->required();
-  cmd->add_option("--run", opt->run, "Run id")->required();
-  cmd->add_option("--model", opt->model,
-                  "Comma-separated terms of error-model.md (gyro_temp_bias:2 for order 2)")
-      ->capture_default_str();
-  cmd->add_option("--custom", opt->customs,
-                  "A custom term NAME=SENSOR:EXPR (muParser; signals as in error-model.md), "
-                  "repeatable");
-  cmd->add_option("--device", opt->device, "IMU (default: the run's only IMU)");
-  cmd->add_option("--sensor", opt->sensor, "Rows to fit: both, gyro or accel")
-      ->check(CLI::IsMember({"both", "gyro", "accel"}))
-      ->capture_default_str();
+  add_run_model_options(cmd, *opt);
   cmd->add_flag("--json", opt->as_json, "Print the fit as JSON");
-  cmd->footer(catalogue_help());
   cmd->callback([opt] { run_fit(*opt); });
 }
 

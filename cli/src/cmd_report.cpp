@@ -45,8 +45,9 @@ void register_report(CLI::App& app) {
   auto opt = std::make_shared<ReportOptions>();
   opt->request.model = kDefaultModel;
   auto* cmd = app.add_subcommand(
-      "report", "One self-contained HTML page of a run's fit: history, residuals, signals, "
-                "parameters, candidates, Allan deviation (plots by gnuplot)");
+      "report",
+      "One self-contained HTML page of a run's fit: history, residuals, signals, "
+      "parameters, candidates, Allan deviation (plots by gnuplot)");
   cmd->add_option("--db", opt->request.db, "Database file")->required();
   cmd->add_option("--run", opt->request.run, "Run id")->required();
   cmd->add_option("--model", opt->request.model, "Comma-separated error terms")

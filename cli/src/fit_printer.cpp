@@ -15,6 +15,24 @@ solver::SensorRows parse_sensor_rows(const std::string& sensor) {
   throw core::InputError("--sensor", "must be both, gyro or accel");
 }
 
+void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor) {
+  cmd->add_option("--db", opt.db, "Database file")->required();
+  cmd->add_option("--run", opt.run, "Run id")->required();
+  cmd->add_option("--model", opt.model,
+                  "Comma-separated terms of error-model.md (gyro_temp_bias:2 for order 2)")
+      ->capture_default_str();
+  cmd->add_option("--custom", opt.customs,
+                  "A custom term NAME=SENSOR:EXPR (muParser; signals as in error-model.md), "
+                  "repeatable");
+  cmd->add_option("--device", opt.device, "IMU (default: the run's only IMU)");
+  if (with_sensor) {
+    cmd->add_option("--sensor", opt.sensor, "Rows to fit: both, gyro or accel")
+        ->check(CLI::IsMember({"both", "gyro", "accel"}))
+        ->capture_default_str();
+  }
+  cmd->footer(catalogue_help());
+}
+
 void print_fit(const solver::FitResult& fit) {
   fmt::print("model: {}\n\n", fit.model);
   fmt::print("{:<28} {:>15} {:>12}  {}\n", "parameter", "value", "sigma", "unit");

@@ -1,7 +1,10 @@
 #pragma once
 // Human output shared by `fit`, `calibrate` and `diagnose`.
 
+#include <CLI/CLI.hpp>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "solver/fit.hpp"
 #include "solver/groups.hpp"
@@ -15,6 +18,20 @@ inline constexpr const char* kDefaultModel =
     "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 
 solver::SensorRows parse_sensor_rows(const std::string& sensor);
+
+/// What every command that fits a model to a run takes.
+struct RunModelOptions {
+  std::string db;
+  std::int64_t run = 0;
+  std::string model = kDefaultModel;
+  std::vector<std::string> customs;
+  std::string device;
+  std::string sensor = "both";
+};
+
+/// Adds --db, --run, --model, --custom, --device and (when `with_sensor`) --sensor to `cmd`,
+/// with the catalogue of terms as its help footer.
+void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor = true);
 
 /// The parameter table (value, sigma, unit), the parameters the run cannot determine, and the
 /// fit quality against the noise floor.

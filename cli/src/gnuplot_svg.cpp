@@ -22,7 +22,8 @@ namespace {
 class TempDir {
  public:
   TempDir() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "calstand-plot-XXXXXX").string();
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "calstand-plot-XXXXXX").string();
     if (::mkdtemp(pattern.data()) == nullptr) {
       throw std::runtime_error("cannot create a temporary directory for gnuplot in " +
                                std::filesystem::temp_directory_path().string());
@@ -56,10 +57,17 @@ std::string escape_xml(std::string_view text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -93,8 +101,9 @@ std::string find_gnuplot() {
     const std::filesystem::path candidate = std::filesystem::path(dir) / "gnuplot";
     if (::access(candidate.c_str(), X_OK) == 0) return candidate.string();
   }
-  throw core::InputError("gnuplot", "not found on PATH; the report draws its plots with gnuplot "
-                                    "(Debian: apt-get install gnuplot-nox)");
+  throw core::InputError("gnuplot",
+                         "not found on PATH; the report draws its plots with gnuplot "
+                         "(Debian: apt-get install gnuplot-nox)");
 }
 
 std::string gnuplot_svg(const std::string& script, const std::string& id_prefix,
@@ -118,9 +127,9 @@ std::string gnuplot_svg(const std::string& script, const std::string& id_prefix,
   while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
   if (status != 0) {
     const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    throw core::InputError(
-        "gnuplot", fmt::format("{} failed (exit {}) drawing '{}'{}", gnuplot, code, title,
-                               err.empty() ? std::string() : ": " + err.substr(0, 600)));
+    throw core::InputError("gnuplot",
+                           fmt::format("{} failed (exit {}) drawing '{}'{}", gnuplot, code, title,
+                                       err.empty() ? std::string() : ": " + err.substr(0, 600)));
   }
   return inline_svg(read_file(svg_file), id_prefix, title);
 }

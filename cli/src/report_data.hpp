@@ -26,9 +26,9 @@ struct ReportRequest {
 
 /// One condition kind of the steps, used to colour them in the plots.
 struct StepGrouping {
-  std::string kind;                   ///< "plateau", "orientation", ...
-  std::vector<std::string> of_step;   ///< the value of each step (by position in the fit)
-  std::vector<std::string> values;    ///< distinct values, in order of first appearance
+  std::string kind;                  ///< "plateau", "orientation", ...
+  std::vector<std::string> of_step;  ///< the value of each step (by position in the fit)
+  std::vector<std::string> values;   ///< distinct values, in order of first appearance
   /// Position of `of_step[i]` in `values`.
   std::size_t value_index(std::size_t step) const;
 };
@@ -40,14 +40,14 @@ struct ReportData {
   ReportRequest request;
   std::string procedure;
   std::string device;
-  std::vector<store::FitRecord> history;     ///< oldest first, this report's fit last
-  std::vector<std::string> history_labels;   ///< per fit: the model, or the terms it added
+  std::vector<store::FitRecord> history;    ///< oldest first, this report's fit last
+  std::vector<std::string> history_labels;  ///< per fit: the model, or the terms it added
   solver::Diagnosis diagnosis;
-  std::vector<solver::StepSummary> steps;    ///< summaries of the diagnosed model, in fit order
+  std::vector<solver::StepSummary> steps;  ///< summaries of the diagnosed model, in fit order
   StepGrouping grouping;
-  double longest_static_s = 0.0;             ///< longest static step [s]
-  std::optional<solver::RunNoise> noise;     ///< Allan curves and noise fit, static runs only
-  std::string noise_note;                    ///< why there is no Allan section, or ""
+  double longest_static_s = 0.0;          ///< longest static step [s]
+  std::optional<solver::RunNoise> noise;  ///< Allan curves and noise fit, static runs only
+  std::string noise_note;                 ///< why there is no Allan section, or ""
 };
 
 /// Fits and diagnoses the model, records the fit in the run's history (command "report"),

@@ -83,7 +83,8 @@ std::string header(const ReportData& r) {
       r.request.run, html_escape(r.procedure), html_escape(r.device), html_escape(fit.model),
       customs.empty() ? "" : " with <code>" + html_escape(customs) + "</code>", fit.chi2_dof,
       fit.steps.size(), floor ? "good" : "bad",
-      floor ? "at the noise floor" : fmt::format("{:.1f} &times; the noise", std::sqrt(fit.chi2_dof)),
+      floor ? "at the noise floor"
+            : fmt::format("{:.1f} &times; the noise", std::sqrt(fit.chi2_dof)),
       r.history.size(), html_escape(r.request.db));
 }
 
@@ -128,9 +129,10 @@ std::string candidates_section(const ReportData& r) {
       d.explained ? "good" : "bad", d.explained ? "Explained." : "Not explained.",
       html_escape(d.advice));
   if (!d.candidates.empty()) {
-    out += "<p class=\"lead\">Each catalogue term the model lacks, added in turn and refitted, "
-           "best change in BIC first.</p>\n" +
-           candidate_plot(r);
+    out +=
+        "<p class=\"lead\">Each catalogue term the model lacks, added in turn and refitted, "
+        "best change in BIC first.</p>\n" +
+        candidate_plot(r);
   }
   return out + candidates_table(r) + "</section>\n";
 }
@@ -149,7 +151,7 @@ std::string allan_section(const ReportData& r) {
              r.noise->gaps ? fmt::format(", {} gaps in the device clock", r.noise->gaps) : "") +
          allan_plot(r, true) + allan_plot(r, false) +
          "<h3>Noise figures (datasheet units, &plusmn; one sigma; - not resolved)</h3>\n" +
-         noise_figures_table(r) + "</section>\n";
+         noise_figures_table(r, true) + noise_figures_table(r, false) + "</section>\n";
 }
 
 }  // namespace
@@ -159,11 +161,20 @@ std::string html_escape(std::string_view text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -182,9 +193,9 @@ std::string render_report_html(const ReportData& r) {
   page += parameters_section(r);
   page += candidates_section(r);
   page += allan_section(r);
-  page += fmt::format("<footer>calstand report &middot; run {} &middot; {}</footer>\n",
-                      r.request.run,
-                      r.history.empty() ? std::string() : html_escape(r.history.back().created_utc));
+  page +=
+      fmt::format("<footer>calstand report &middot; run {} &middot; {}</footer>\n", r.request.run,
+                  r.history.empty() ? std::string() : html_escape(r.history.back().created_utc));
   return page + "</main>\n</body>\n</html>\n";
 }
 

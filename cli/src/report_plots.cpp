@@ -55,7 +55,8 @@ std::string history_plot(const ReportData& r) {
     rows.push_back(fmt::format("{} {} {}", i + 1, gp_number(chi2), data_text(r.history_labels[i])));
   }
   std::string s = terminal(1000, 420) + data_block("h", rows);
-  s += fmt::format("set logscale y\nset xrange [0.5:{}]\n", static_cast<double>(r.history.size()) + 0.5);
+  s += fmt::format("set logscale y\nset xrange [0.5:{}]\n",
+                   static_cast<double>(r.history.size()) + 0.5);
   s += "set ylabel 'chi2 / dof'\nset xtics rotate by 20 right font ',11'\nset bmargin 7\n";
   s += "set offsets 0, 0, graph 0.12, graph 0.05\nset key top right\n";
   s += hline(1.0, "#2ca02c", 2);
@@ -90,8 +91,9 @@ std::string residual_plot(const ReportData& r) {
         for (int axis = 0; axis < 3; ++axis) {
           const double v = z[sensor * 3 + axis];
           if (!std::isfinite(v)) continue;
-          rows.push_back(fmt::format("{} {} {}", static_cast<double>(fit.steps[i].index) + kOffset[axis], gp_number(v),
-                                     kShape[axis]));
+          rows.push_back(fmt::format("{} {} {}",
+                                     static_cast<double>(fit.steps[i].index) + kOffset[axis],
+                                     gp_number(v), kShape[axis]));
         }
       }
       if (rows.empty()) rows.push_back("NaN NaN 7");  // keeps the legend entry
@@ -100,19 +102,27 @@ std::string residual_plot(const ReportData& r) {
   }
   s += fmt::format("set multiplot layout {},1\n", panels);
   s += fmt::format("set xrange [-0.5:{}]\nset xlabel 'step'\n", max_index + 0.5);
+  s += "set yrange [*<-2.5:2.5<*]\n";  // the |z| = 2 lines always inside
   s += fmt::format("set key outside right top title {} box lc rgb '#cccccc'\n",
                    gnuplot_quote(r.grouping.kind));
   s += hline(0.0, "#555555", 1) + hline(2.0, "#999999", 3) + hline(-2.0, "#999999", 3);
   for (int sensor = 0; sensor < 2; ++sensor) {
     if ((sensor == 0 && !gyro) || (sensor == 1 && !accel)) continue;
     s += fmt::format("set ylabel '{} residual z'\n", sensor == 0 ? "gyro" : "accel");
-    s += fmt::format("set title '{}: step-mean residual / step noise (x circle, y triangle, z "
-                     "square)'\n",
-                     sensor == 0 ? "gyro" : "accelerometer");
+    s += fmt::format(
+        "set title '{}: step-mean residual / step noise (x circle, y triangle, z "
+        "square)'\n",
+        sensor == 0 ? "gyro" : "accelerometer");
     std::string plot = "plot ";
     for (std::size_t g = 0; g < r.grouping.values.size(); ++g) {
-      plot += fmt::format("{}$s{}g{} using 1:2:3 with points pt variable ps 0.9 lc rgb '{}' title {}",
-                          g ? ", " : "", sensor, g, colour(g), gnuplot_quote(r.grouping.values[g]));
+      plot +=
+          fmt::format("{}$s{}g{} using 1:2:3 with points pt variable ps 0.9 lc rgb '{}' notitle",
+                      g ? ", " : "", sensor, g, colour(g));
+    }
+    // Legend entries of their own: a point-type-variable sample is drawn as a dot.
+    for (std::size_t g = 0; g < r.grouping.values.size(); ++g) {
+      plot += fmt::format(", keyentry with points pt 7 ps 1.2 lc rgb '{}' title {}", colour(g),
+                          gnuplot_quote(r.grouping.values[g]));
     }
     s += plot + "\n";
   }
@@ -125,7 +135,9 @@ std::string signal_plot(const ReportData& r, const solver::SignalCorrelation& si
   const int c = channel_index(signal.channel);
   const auto& fit_steps = r.diagnosis.fit.steps;
   if (!x || c < 0 || x->size() != fit_steps.size()) return "";
-  std::string s = terminal(470, 380);
+  std::string s = terminal(420, 360);
+  s += "set xtics font ',10'\nset ytics font ',10'\nset format x '%.3g'\nset xtics rotate by 30 "
+       "right\n";
   // Least-squares line of z on the signal, over the finite points.
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (std::size_t g = 0; g < r.grouping.values.size(); ++g) {
@@ -147,9 +159,9 @@ std::string signal_plot(const ReportData& r, const solver::SignalCorrelation& si
   const double det = n * sxx - sx * sx;
   const double slope = det > 0 ? (n * sxy - sx * sy) / det : 0.0;
   const double intercept = n > 0 ? (sy - slope * sx) / n : 0.0;
-  s += fmt::format("set title {}\n", gnuplot_quote(fmt::format(
-                                         "{} vs {}: r = {:+.2f}", signal.channel, signal.signal,
-                                         signal.correlation)));
+  s += fmt::format("set title {} font ',13'\n",
+                   gnuplot_quote(fmt::format("{} vs {}: r = {:+.2f}", signal.channel, signal.signal,
+                                             signal.correlation)));
   s += fmt::format("set xlabel {}\nset ylabel {}\nset key off\n",
                    gnuplot_quote("step mean of " + signal.signal),
                    gnuplot_quote(signal.channel + " residual z"));
@@ -182,10 +194,11 @@ std::string candidate_plot(const ReportData& r) {
   s += "set offsets 0, 0, graph 0.1, 0\n";
   s += hline(std::max(d.fit.chi2_dof, 1e-6), "#d62728", 2);
   s += hline(1.0, "#2ca02c", 3);
-  s += fmt::format("set label {} at graph 0.99, first {} right offset 0,0.7 textcolor rgb "
-                   "'#d62728'\n",
-                   gnuplot_quote(fmt::format("model as given: {:.3g}", d.fit.chi2_dof)),
-                   gp_number(std::max(d.fit.chi2_dof, 1e-6)));
+  s += fmt::format(
+      "set label {} at graph 0.99, first {} right offset 0,0.7 textcolor rgb "
+      "'#d62728'\n",
+      gnuplot_quote(fmt::format("model as given: {:.3g}", d.fit.chi2_dof)),
+      gp_number(std::max(d.fit.chi2_dof, 1e-6)));
   s += "plot $c using 1:2:4:xtic(3) with boxes lc rgb variable "
        "title 'green: BIC improves, grey: not worth its parameters'\n";
   return gnuplot_svg(s, "candidates", "chi2/dof after adding each candidate term");
@@ -234,27 +247,28 @@ std::string allan_plot(const ReportData& r, bool gyro) {
     std::vector<std::string> rows;
     for (int i = 0; i <= 80; ++i) {
       const double tau = tmin * std::pow(tmax / tmin, i / 80.0);
-      rows.push_back(fmt::format(
-          "{} {} {} {} {} {} {}", gp_number(tau),
-          gp_number(std::sqrt(solver::noise_model_allan_variance(t, tau))),
-          term(t.quantization, std::sqrt(3.0) * t.quantization.value / tau),
-          term(t.random_walk, t.random_walk.value / std::sqrt(tau)),
-          term(t.bias_instability, floor * t.bias_instability.value),
-          term(t.rate_random_walk, t.rate_random_walk.value * std::sqrt(tau / 3.0)),
-          term(t.rate_ramp, t.rate_ramp.value * tau / std::sqrt(2.0))));
+      rows.push_back(
+          fmt::format("{} {} {} {} {} {} {}", gp_number(tau),
+                      gp_number(std::sqrt(solver::noise_model_allan_variance(t, tau))),
+                      term(t.quantization, std::sqrt(3.0) * t.quantization.value / tau),
+                      term(t.random_walk, t.random_walk.value / std::sqrt(tau)),
+                      term(t.bias_instability, floor * t.bias_instability.value),
+                      term(t.rate_random_walk, t.rate_random_walk.value * std::sqrt(tau / 3.0)),
+                      term(t.rate_ramp, t.rate_ramp.value * tau / std::sqrt(2.0))));
     }
     s += data_block(fmt::format("f{}", k), rows);
   }
   const std::string unit(gyro ? "deg/s" : "m/s^2");
-  s += "set logscale xy\nset format y '%.0e'\nset key outside right top\n";
+  s += "set logscale xy\nset format y '%.0e'\nset key bottom left box lc rgb '#cccccc' "
+       "opaque font ',11'\n";
   s += fmt::format("set xrange [{}:{}]\nset yrange [{}:{}]\n", gp_number(tmin / 1.3),
                    gp_number(tmax * 1.3), gp_number(ymin / 2.0), gp_number(ymax * 2.0));
-  s += fmt::format("set xlabel 'averaging time tau [s]'\nset ylabel 'Allan deviation [{}]'\n", unit);
+  s +=
+      fmt::format("set xlabel 'averaging time tau [s]'\nset ylabel 'Allan deviation [{}]'\n", unit);
   s += fmt::format("set title {}\n",
-                   gnuplot_quote(fmt::format("{}: step {} ({}), {:.0f} s at {:.4g} Hz",
-                                             gyro ? "gyro" : "accelerometer", noise.step,
-                                             noise.step_label, noise.duration_s,
-                                             noise.sample_rate_hz)));
+                   gnuplot_quote(fmt::format(
+                       "{}: step {} ({}), {:.0f} s at {:.4g} Hz", gyro ? "gyro" : "accelerometer",
+                       noise.step, noise.step_label, noise.duration_s, noise.sample_rate_hz)));
   constexpr std::array<const char*, 5> kTermNames = {"Q quantization", "N random walk",
                                                      "B bias instability (0.664 B)",
                                                      "K rate random walk", "R rate ramp"};
@@ -268,14 +282,13 @@ std::string allan_plot(const ReportData& r, bool gyro) {
         k ? ", " : "", k, colour(k), name, k, colour(k), name);
     const solver::NoiseTerms& t = chans[k]->terms;
     const std::array<bool, 5> resolved = {t.quantization.resolved, t.random_walk.resolved,
-                                          t.bias_instability.resolved,
-                                          t.rate_random_walk.resolved, t.rate_ramp.resolved};
+                                          t.bias_instability.resolved, t.rate_random_walk.resolved,
+                                          t.rate_ramp.resolved};
     for (std::size_t j = 0; j < 5; ++j) {
       if (!resolved[j]) continue;
-      plot += fmt::format(", $f{} using 1:{} with lines lw 1 dt {} lc rgb '{}' {}", k, j + 3,
-                          j + 2, colour(k),
-                          titled[j] ? std::string("notitle")
-                                    : "title " + gnuplot_quote(kTermNames[j]));
+      plot += fmt::format(
+          ", $f{} using 1:{} with lines lw 1 dt {} lc rgb '{}' {}", k, j + 3, j + 2, colour(k),
+          titled[j] ? std::string("notitle") : "title " + gnuplot_quote(kTermNames[j]));
       titled[j] = true;
     }
   }

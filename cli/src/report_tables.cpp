@@ -19,8 +19,8 @@ std::string optional_number(const std::optional<double>& v) {
 // A chi2/dof cell coloured by how far it is from the noise floor.
 std::string chi2_cell(double chi2_dof) {
   const char* cls = chi2_dof <= solver::kExplainedChi2Dof ? "good"
-                    : chi2_dof <= 5.0                      ? "warn"
-                                                           : "bad";
+                    : chi2_dof <= 5.0                     ? "warn"
+                                                          : "bad";
   return fmt::format("<td class=\"num {}\">{:.3g}</td>", cls, chi2_dof);
 }
 
@@ -31,7 +31,9 @@ std::string row(std::initializer_list<std::string> cells) {
 }
 
 std::string td(std::string_view text) { return "<td>" + html_escape(text) + "</td>"; }
-std::string num(std::string_view text) { return "<td class=\"num\">" + html_escape(text) + "</td>"; }
+std::string num(std::string_view text) {
+  return "<td class=\"num\">" + html_escape(text) + "</td>";
+}
 
 }  // namespace
 
@@ -58,8 +60,9 @@ std::string groups_table(const ReportData& r) {
   const auto& groups = r.diagnosis.groups;
   std::string out;
   if (!groups.empty()) {
-    out += "<table><thead><tr><th>group of steps</th><th>chi2/dof</th><th>steps</th></tr>"
-           "</thead><tbody>\n";
+    out +=
+        "<table><thead><tr><th>group of steps</th><th>chi2/dof</th><th>steps</th></tr>"
+        "</thead><tbody>\n";
     for (std::size_t i = 0; i < groups.size() && i < 8; ++i) {
       out += row({td(groups[i].group), chi2_cell(groups[i].chi2_dof),
                   num(std::to_string(groups[i].steps.size()))});
@@ -81,8 +84,9 @@ std::string groups_table(const ReportData& r) {
 std::string signals_table(const ReportData& r) {
   const auto& signals = r.diagnosis.signals;
   if (signals.empty()) return "<p>No signal varies over the steps of this run.</p>\n";
-  std::string out = "<table><thead><tr><th>signal</th><th>channel</th><th>correlation r</th>"
-                    "</tr></thead><tbody>\n";
+  std::string out =
+      "<table><thead><tr><th>signal</th><th>channel</th><th>correlation r</th>"
+      "</tr></thead><tbody>\n";
   for (std::size_t i = 0; i < signals.size() && i < 8; ++i) {
     out += row({td(signals[i].signal), td(signals[i].channel),
                 num(fmt::format("{:+.2f}", signals[i].correlation))});
@@ -95,11 +99,11 @@ std::string quality_table(const ReportData& r) {
   std::string out = fmt::format(
       "<p class=\"quality\">chi2/dof <b>{:.3g}</b> ({:.1f} over {} degrees of freedom): the "
       "step-mean residuals are <b>{:.2g}</b> times the noise. Noise floor from {} {}.</p>\n",
-      fit.chi2_dof, fit.chi2, fit.dof, std::sqrt(std::max(fit.chi2_dof, 0.0)),
-      fit.floor.steps_used,
+      fit.chi2_dof, fit.chi2, fit.dof, std::sqrt(std::max(fit.chi2_dof, 0.0)), fit.floor.steps_used,
       fit.floor.from_static_steps ? "static steps" : "steps (the run has no static step)");
-  out += "<table><thead><tr><th>sensor</th><th>step residual rms</th><th>noise floor x</th>"
-         "<th>noise floor y</th><th>noise floor z</th><th>unit</th></tr></thead><tbody>\n";
+  out +=
+      "<table><thead><tr><th>sensor</th><th>step residual rms</th><th>noise floor x</th>"
+      "<th>noise floor y</th><th>noise floor z</th><th>unit</th></tr></thead><tbody>\n";
   const auto used = solver::fit_channels(fit.rows);
   for (int sensor = 0; sensor < 2; ++sensor) {
     if (std::find(used.begin(), used.end(), sensor * 3) == used.end()) continue;
@@ -115,8 +119,9 @@ std::string quality_table(const ReportData& r) {
 
 std::string parameter_tables(const ReportData& r) {
   const solver::FitResult& fit = r.diagnosis.fit;
-  std::string out = "<table><thead><tr><th>parameter</th><th>value</th><th>&plusmn; sigma</th>"
-                    "<th>unit</th><th>|value| / sigma</th></tr></thead><tbody>\n";
+  std::string out =
+      "<table><thead><tr><th>parameter</th><th>value</th><th>&plusmn; sigma</th>"
+      "<th>unit</th><th>|value| / sigma</th></tr></thead><tbody>\n";
   for (const auto& p : fit.parameters) {
     const double significance = p.sigma > 0 ? std::abs(p.value) / p.sigma : 0.0;
     out += row({td(p.name), num(fmt::format("{:.6g}", p.value)),
@@ -126,8 +131,9 @@ std::string parameter_tables(const ReportData& r) {
   }
   out += "</tbody></table>\n";
   if (fit.unidentifiable.empty()) return out;
-  out += "<h3>Not determined by this run (held at zero)</h3>\n<table><thead><tr><th>parameter</th>"
-         "<th>why</th><th>collinear with</th></tr></thead><tbody>\n";
+  out +=
+      "<h3>Not determined by this run (held at zero)</h3>\n<table><thead><tr><th>parameter</th>"
+      "<th>why</th><th>collinear with</th></tr></thead><tbody>\n";
   for (const auto& u : fit.unidentifiable) {
     std::string related;
     for (const auto& name : u.related) related += (related.empty() ? "" : ", ") + name;
@@ -140,8 +146,9 @@ std::string candidates_table(const ReportData& r) {
   const auto& d = r.diagnosis;
   std::string out;
   if (!d.candidates.empty()) {
-    out += "<table><thead><tr><th>term</th><th>&Delta; BIC</th><th>p</th>"
-           "<th>chi2/dof after</th><th>what it is</th></tr></thead><tbody>\n";
+    out +=
+        "<table><thead><tr><th>term</th><th>&Delta; BIC</th><th>p</th>"
+        "<th>chi2/dof after</th><th>what it is</th></tr></thead><tbody>\n";
     for (std::size_t i = 0; i < d.candidates.size() && i < 15; ++i) {
       const auto& c = d.candidates[i];
       out += row({td(c.term), num(fmt::format("{:.1f}", c.delta_bic)),
@@ -158,32 +165,30 @@ std::string candidates_table(const ReportData& r) {
   return out;
 }
 
-std::string noise_figures_table(const ReportData& r) {
-  if (!r.noise || r.noise->channels.empty()) return "";
-  const auto& chans = r.noise->channels;
-  std::string out = "<table><thead><tr><th>figure</th><th>unit</th>";
-  for (const auto& c : chans) out += "<th>" + html_escape(solver::to_string(c.channel)) + "</th>";
+std::string noise_figures_table(const ReportData& r, bool gyro) {
+  if (!r.noise) return "";
+  std::vector<const solver::ChannelNoise*> chans;
+  for (const auto& c : r.noise->channels) {
+    if (solver::is_gyro(c.channel) == gyro) chans.push_back(&c);
+  }
+  if (chans.empty()) return "";
+  std::string out =
+      fmt::format("<table><thead><tr><th>{}</th><th>unit</th>", gyro ? "gyro" : "accelerometer");
+  for (const auto* c : chans) out += "<th>" + html_escape(solver::to_string(c->channel)) + "</th>";
   out += "</tr></thead><tbody>\n";
-  for (int sensor = 0; sensor < 2; ++sensor) {
-    const solver::ChannelNoise* first = nullptr;
-    for (const auto& c : chans) {
-      if (solver::is_gyro(c.channel) == (sensor == 0) && !first) first = &c;
-    }
-    if (!first) continue;
-    for (std::size_t i = 0; i < first->figures.size(); ++i) {
-      out += "<tr>" + td(first->figures[i].label) + td(first->figures[i].unit);
-      for (const auto& c : chans) {
-        if (solver::is_gyro(c.channel) != (sensor == 0) || i >= c.figures.size()) {
-          out += "<td></td>";
-          continue;
-        }
-        const auto& f = c.figures[i];
-        out += num(!f.resolved              ? std::string("-")
-                   : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
-                                            : fmt::format("{:.3g}", f.value));
+  for (std::size_t i = 0; i < chans.front()->figures.size(); ++i) {
+    out += "<tr>" + td(chans.front()->figures[i].label) + td(chans.front()->figures[i].unit);
+    for (const auto* c : chans) {
+      if (i >= c->figures.size()) {
+        out += "<td></td>";
+        continue;
       }
-      out += "</tr>\n";
+      const auto& f = c->figures[i];
+      out += num(!f.resolved              ? std::string("-")
+                 : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
+                                          : fmt::format("{:.3g}", f.value));
     }
+    out += "</tr>\n";
   }
   return out + "</tbody></table>\n";
 }

@@ -25,7 +25,8 @@ std::string parameter_tables(const ReportData& r);
 /// The candidate terms, best first, with what each is.
 std::string candidates_table(const ReportData& r);
 
-/// The noise figures of the static step in datasheet units, per channel.
-std::string noise_figures_table(const ReportData& r);
+/// The noise figures of the static step's gyros (or accelerometers) in datasheet units, per
+/// channel.
+std::string noise_figures_table(const ReportData& r, bool gyro);
 
 }  // namespace calstand::cli

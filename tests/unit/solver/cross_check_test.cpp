@@ -42,17 +42,7 @@ constexpr double kSampleRateHz = 100.0;  // white_noise_truth()'s output rate
 sim::ImuTruth random_unit(std::uint64_t seed, double gyro_noise_dps_rthz = 2e-3) {
   sim::NormalSource n(seed * 7919 + 3);
   sim::ImuTruth t = white_noise_truth(gyro_noise_dps_rthz);
-  for (int i = 0; i < 3; ++i) {
-    t.gyro_bias[i] = 3e-3 * n.next();
-    t.gyro_scale[i] = 300.0 * n.next();
-    t.accel_bias[i] = 5e-3 * n.next();
-    t.accel_scale[i] = 300.0 * n.next();
-    for (int j = 0; j < 3; ++j) {
-      if (i == j) continue;
-      t.gyro_misalignment(i, j) = 1e-3 * n.next();
-      t.accel_misalignment(i, j) = 1e-3 * n.next();
-    }
-  }
+  testing::draw_classical_errors(t, n);
   return t;
 }
 

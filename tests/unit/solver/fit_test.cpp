@@ -24,17 +24,7 @@ const char* kBaseModel =
 sim::ImuTruth random_unit(std::uint64_t seed) {
   sim::NormalSource n(seed * 7919 + 1);
   sim::ImuTruth t = white_noise_truth();
-  for (int i = 0; i < 3; ++i) {
-    t.gyro_bias[i] = 3e-3 * n.next();
-    t.gyro_scale[i] = 300.0 * n.next();
-    t.accel_bias[i] = 5e-3 * n.next();
-    t.accel_scale[i] = 300.0 * n.next();
-    for (int j = 0; j < 3; ++j) {
-      if (i == j) continue;
-      t.gyro_misalignment(i, j) = 1e-3 * n.next();
-      t.accel_misalignment(i, j) = 1e-3 * n.next();
-    }
-  }
+  testing::draw_classical_errors(t, n);
   return t;
 }
 

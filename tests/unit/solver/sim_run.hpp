@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sim/imu_sim.hpp"
+#include "sim/noise.hpp"
 #include "solver/step_summary.hpp"
 
 namespace calstand::solver::testing {
@@ -37,6 +38,22 @@ inline sim::ImuTruth white_noise_truth(double gyro_dps_rthz = 2e-3, double accel
   t.accel_noise.white = Eigen::Vector3d::Constant(accel_rthz);
   t.latency_s = 0.0;
   return t;
+}
+
+/// Draws bias, scale factor and misalignment of both triads from `normal` (LN200-class sizes:
+/// 3e-3 deg/s, 5e-3 m/s^2, 300 ppm, 1 mrad) into `t`.
+inline void draw_classical_errors(sim::ImuTruth& t, sim::NormalSource& normal) {
+  for (int i = 0; i < 3; ++i) {
+    t.gyro_bias[i] = 3e-3 * normal.next();
+    t.gyro_scale[i] = 300.0 * normal.next();
+    t.accel_bias[i] = 5e-3 * normal.next();
+    t.accel_scale[i] = 300.0 * normal.next();
+    for (int j = 0; j < 3; ++j) {
+      if (i == j) continue;
+      t.gyro_misalignment(i, j) = 1e-3 * normal.next();
+      t.accel_misalignment(i, j) = 1e-3 * normal.next();
+    }
+  }
 }
 
 inline RunData simulate_run(const sim::ImuTruth& truth, const std::vector<SimStep>& steps,

@@ -30,17 +30,7 @@ const std::vector<double> kPlateausC = {-20.0, 5.0, 30.0, 60.0};
 sim::ImuTruth thermal_unit(std::uint64_t seed) {
   sim::NormalSource n(seed * 104729 + 5);
   sim::ImuTruth t = white_noise_truth();
-  for (int i = 0; i < 3; ++i) {
-    t.gyro_bias[i] = 3e-3 * n.next();
-    t.gyro_scale[i] = 300.0 * n.next();
-    t.accel_bias[i] = 5e-3 * n.next();
-    t.accel_scale[i] = 300.0 * n.next();
-    for (int j = 0; j < 3; ++j) {
-      if (i == j) continue;
-      t.gyro_misalignment(i, j) = 1e-3 * n.next();
-      t.accel_misalignment(i, j) = 1e-3 * n.next();
-    }
-  }
+  testing::draw_classical_errors(t, n);
   t.gyro_temp_bias = {Eigen::Vector3d(4e-5, -3e-5, 2e-5),      // deg/s/degC
                       Eigen::Vector3d(8e-7, -5e-7, 6e-7)};     // deg/s/degC^2
   t.gyro_temp_scale = Eigen::Vector3d(3.0, -2.0, 1.5);         // ppm/degC
