@@ -66,6 +66,19 @@ TEST(DiagnoseCli, TheLoopFindsTheDemoImusEffectsOnImportedData) {
     previous = chi2;
   }
   EXPECT_GT(history.front()["chi2_dof"].get<double>(), 5.0);
+
+  // The classical thermal calibration (per-plateau fits, then a line in temperature) finds the
+  // demo IMU's accelerometer temperature drift (sim/stations/demo.json: x1 = 3e-5 m/s^2/degC).
+  const auto thermal = nlohmann::json::parse(
+      run("fit --db " + db + " --run 1 --per-plateau 1 --json").out);
+  bool found = false;
+  for (const auto& c : thermal["coefficients"]) {
+    if (c["name"] == "accel_temp_bias.x1") {
+      found = true;
+      EXPECT_NEAR(c["value"].get<double>(), 3e-5, 4.0 * c["sigma"].get<double>());
+    }
+  }
+  EXPECT_TRUE(found) << thermal.dump(2);
   std::filesystem::remove_all(dir);
 }
 
