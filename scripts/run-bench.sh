@@ -3,5 +3,7 @@
 # e.g. --benchmark_filter=World.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bash "$root/scripts/build.sh"
+# Explicit: the test command configures the same build folder without benchmarks.
+bash "$root/scripts/build.sh" -DCALSTAND_BUILD_BENCHMARKS=ON \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g -DNDEBUG"
 exec "${CALSTAND_BUILD_DIR:-$root/build}/bench/calstand_bench" "$@"
