@@ -21,7 +21,7 @@ main { max-width: 1120px; margin: 0 auto; padding: 24px 20px 48px; }
 header { background: #1d2733; color: #fff; padding: 22px 28px; border-radius: 10px; }
 header h1 { margin: 0 0 6px; font-size: 24px; font-weight: 600; }
 header p { margin: 4px 0; color: #c9d3de; }
-header code { color: #fff; }
+header code { color: #fff; overflow-wrap: anywhere; }
 .badge { display: inline-block; padding: 2px 10px; border-radius: 12px; font-weight: 600;
          font-size: 13px; margin-left: 8px; }
 .badge.good { background: #d8f0dc; color: var(--good); }
