@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "markup_escape.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -53,26 +54,6 @@ std::string read_file(const std::filesystem::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-std::string escape_xml(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 // gnuplot's SVG as an inline element of an HTML page (see gnuplot_svg()).
 std::string inline_svg(std::string svg, const std::string& prefix, const std::string& title) {
   const auto start = svg.find("<svg");
@@ -86,7 +67,7 @@ std::string inline_svg(std::string svg, const std::string& prefix, const std::st
   svg = std::regex_replace(svg, std::regex(R"(href=(['"])#)"), "href=$1#" + prefix + "-");
   svg = std::regex_replace(svg, std::regex(R"(url\(#)"), "url(#" + prefix + "-");
   svg = std::regex_replace(svg, std::regex(R"(<title>Gnuplot</title>)"),
-                           "<title>" + escape_xml(title) + "</title>");
+                           "<title>" + html_escape(title) + "</title>");
   svg = std::regex_replace(svg, std::regex(R"(<desc>[^<]*</desc>\s*)"), "");
   return svg;
 }

@@ -5,6 +5,7 @@
 #include <string>
 #include <string_view>
 
+#include "markup_escape.hpp"
 #include "report_data.hpp"
 
 namespace calstand::cli {
@@ -13,7 +14,5 @@ namespace calstand::cli {
 /// is missing or fails.
 std::string render_report_html(const ReportData& r);
 
-/// `text` with &, <, >, " escaped for HTML text and attribute values.
-std::string html_escape(std::string_view text);
 
 }  // namespace calstand::cli

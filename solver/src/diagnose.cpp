@@ -55,9 +55,8 @@ double squared_z(const FitResult& fit, const StepResidual& s) {
 }
 
 /// "the steps at T 70 degC, +z up" for the groups whose chi-square the candidate lowers most.
-std::string what_it_fixes(const FitResult& before, const FitResult& after,
-                          const std::vector<StepSummary>& steps) {
-  const auto g_before = group_quality(before, steps);
+std::string what_it_fixes(const FitResult& before, const std::vector<GroupQuality>& g_before,
+                          const FitResult& after, const std::vector<StepSummary>& steps) {
   const auto g_after = group_quality(after, steps);
   std::map<std::string, double> after_chi2;
   for (const auto& g : g_after) after_chi2[g.group] = g.chi2_dof;
@@ -180,7 +179,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       const boost::math::fisher_f_distribution<double> dist(added, after.dof);
       k.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
     }
-    k.explanation = fmt::format("{}: {}", c.info->effect, what_it_fixes(d.fit, after, steps));
+    k.explanation = fmt::format("{}: {}", c.info->effect, what_it_fixes(d.fit, d.groups, after, steps));
     d.candidates.push_back(std::move(k));
   }
   std::stable_sort(d.candidates.begin(), d.candidates.end(),

@@ -169,6 +169,7 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   Eigen::MatrixXd Ak;
   Eigen::VectorXd scale, theta;
   Eigen::MatrixXd cov;
+  double chi2 = 0.0;  // of the last solve
   for (;;) {
     k = static_cast<Eigen::Index>(accepted.size());
     if (rows <= k) {
@@ -196,11 +197,11 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
     }
     // The sigmas as they will be reported (inflated by a poor fit) decide what is determined.
-    const double chi2_now =
-        (y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale))) : Eigen::VectorXd::Zero(rows)))
-            .squaredNorm();
+    chi2 = (y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
+                       : Eigen::VectorXd::Zero(rows)))
+               .squaredNorm();
     const double inflation = options.inflate_sigma_by_chi2
-                                 ? std::max(1.0, chi2_now / static_cast<double>(rows - k))
+                                 ? std::max(1.0, chi2 / static_cast<double>(rows - k))
                                  : 1.0;
     std::vector<Eigen::Index> kept;
     for (Eigen::Index j = 0; j < k; ++j) {
@@ -222,9 +223,7 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     if (kept.size() == accepted.size()) break;
     accepted = std::move(kept);
   }
-  const Eigen::VectorXd wres = y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
-                                          : Eigen::VectorXd::Zero(rows));
-  fit.chi2 = wres.squaredNorm();
+  fit.chi2 = chi2;
   fit.dof = static_cast<int>(rows - k);
   fit.chi2_dof = fit.dof > 0 ? fit.chi2 / fit.dof : std::numeric_limits<double>::quiet_NaN();
   if (options.inflate_sigma_by_chi2 && fit.dof > 0 && fit.chi2_dof > 1.0) cov *= fit.chi2_dof;
