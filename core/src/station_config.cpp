@@ -75,6 +75,21 @@ void check_semantics(const StationConfig& c, const std::string& file) {
                      fmt::format("{} is outside the chamber range [{}, {}]", c.chamber.ambient_c,
                                  c.chamber.min_c, c.chamber.max_c));
   }
+  // A simulated IMU needs the simulated table it sits on (one world), and a real table carries
+  // real IMUs: the station is simulated or real as a whole.
+  const bool simulated = c.table.backend == "sim";
+  auto same_world = [&](const std::string& backend, const std::string& field) {
+    if ((backend == "sim") != simulated) {
+      throw InputError(fmt::format("{}: {}", file, field),
+                       fmt::format("is \"{}\" but table.backend is \"{}\": a station is simulated "
+                                   "(every backend \"sim\") or real (none), not a mix",
+                                   backend, c.table.backend));
+    }
+  };
+  same_world(c.chamber.backend, "chamber.backend");
+  for (std::size_t i = 0; i < c.imus.size(); ++i) {
+    same_world(c.imus[i].backend, fmt::format("imus[{}].backend", i));
+  }
   std::set<std::string> names;
   for (std::size_t i = 0; i < c.imus.size(); ++i) {
     if (!names.insert(c.imus[i].name).second) {
@@ -161,6 +176,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.sim_max_step_s = doc.at("sim").value("max_step_s", c.sim_max_step_s);
     c.sim_thermal_step_s = doc.at("sim").value("thermal_step_s", c.sim_thermal_step_s);
   }
+  c.time_scale = doc.value("time_scale", c.time_scale);
   check_semantics(c, file_name);
   c.table.outer_axis.normalize();
   c.table.inner_axis.normalize();
@@ -224,6 +240,7 @@ json StationConfig::to_json() const {
                 {"max_capture_attempts", policy.max_capture_attempts}}},
               {"sim", {{"max_step_s", sim_max_step_s}, {"thermal_step_s", sim_thermal_step_s}}}};
   if (!description.empty()) doc["description"] = description;
+  if (time_scale != 1.0) doc["time_scale"] = time_scale;
   return doc;
 }
 

@@ -5,16 +5,6 @@
 
 namespace calstand::drivers {
 
-std::string_view to_string(DeviceState state) {
-  switch (state) {
-    case DeviceState::kUnconfigured: return "unconfigured";
-    case DeviceState::kInactive: return "inactive";
-    case DeviceState::kActive: return "active";
-    case DeviceState::kError: return "error";
-  }
-  return "unknown";
-}
-
 Result Station::bring_up() {
   std::vector<Device*> devices{&table(), &chamber()};
   for (std::size_t i = 0; i < imu_count(); ++i) devices.push_back(&imu(i));

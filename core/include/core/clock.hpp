@@ -19,16 +19,19 @@ class Clock {
   virtual bool is_virtual() const = 0;
 };
 
-/// std::chrono::steady_clock, epoch at construction. Thread safe.
+/// std::chrono::steady_clock, epoch at construction. Thread safe. `time_scale` station seconds
+/// pass per real second: 1 in a lab; more when rehearsing against an accelerated simulator
+/// (`calstand sim-station --time-scale K`).
 class SteadyClock final : public Clock {
  public:
-  SteadyClock();
+  explicit SteadyClock(double time_scale = 1.0);
   double now_s() const override;
   void sleep_until(double t_s) override;
   bool is_virtual() const override { return false; }
 
  private:
   std::chrono::steady_clock::time_point epoch_;
+  double time_scale_;
 };
 
 /// Time advanced explicitly by the simulator. Thread safe.

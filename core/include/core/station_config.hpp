@@ -81,8 +81,16 @@ struct StationConfig {
   ChamberConfig chamber;
   std::vector<ImuConfig> imus;
   FaultPolicy policy;
+  /// Station seconds per wall-clock second of a real station's clock (1 in a lab). Only for
+  /// rehearsing against an accelerated `calstand sim-station`, whose world runs this much
+  /// faster than the wall clock.
+  double time_scale = 1.0;
   double sim_max_step_s = 0.01;
   double sim_thermal_step_s = 0.1;
+
+  /// True when every device is simulated in process ("sim"); false when none is. A station is
+  /// one or the other: from_json() refuses a mix (a simulated IMU cannot sit on a real table).
+  bool is_simulated() const { return table.backend == "sim"; }
 
   /// The table geometry with the mount of IMU `imu_index`.
   TableGeometry geometry(std::size_t imu_index) const;

@@ -4,6 +4,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace calstand::drivers {
 
@@ -25,6 +26,15 @@ enum class DeviceState { kUnconfigured, kInactive, kActive, kError };
 
 std::string_view to_string(DeviceState state);
 
+/// Something a device saw that belongs in the run's event log: a fault (CRC errors, a lost
+/// link, an out-of-range reading) or information (link back). Drivers queue them; the engine
+/// records them with the device's name.
+struct DeviceEvent {
+  double time_s = 0.0;  ///< station clock when it was seen [s]
+  bool fault = true;    ///< fault (true) or information (false)
+  std::string message;
+};
+
 /// What every device has: a name, a lifecycle and named fault counters for `status`.
 class Device {
  public:
@@ -36,6 +46,8 @@ class Device {
   virtual DeviceState state() const = 0;
   /// Named counters of faults seen since construction (e.g. "sequence_gaps", "timeouts").
   virtual std::map<std::string, std::uint64_t> fault_counters() const = 0;
+  /// Events seen since the last call, oldest first (never blocks). Simulated devices have none.
+  virtual std::vector<DeviceEvent> take_events() { return {}; }
 };
 
 }  // namespace calstand::drivers

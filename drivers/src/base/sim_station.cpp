@@ -2,33 +2,22 @@
 
 #include <fmt/format.h>
 
+#include "drivers/device_support.hpp"
+
 namespace calstand::drivers {
 namespace {
 
-// Lifecycle bookkeeping shared by the simulated devices (they have no link to open).
-class SimLifecycle {
+// The simulated devices have no link to open: configure() only moves the lifecycle.
+class SimLifecycle : public Lifecycle {
  public:
   Result configure() {
-    state_ = DeviceState::kInactive;
-    return Result::success();
-  }
-  Result activate() {
-    if (state_ == DeviceState::kUnconfigured) return Result::failure("not configured");
-    state_ = DeviceState::kActive;
+    set(DeviceState::kInactive);
     return Result::success();
   }
   Result deactivate() {
-    if (state_ == DeviceState::kActive) state_ = DeviceState::kInactive;
+    Lifecycle::deactivate();
     return Result::success();
   }
-  DeviceState state() const { return state_; }
-  Result require_active(const std::string& name) const {
-    if (state_ == DeviceState::kActive) return Result::success();
-    return Result::failure(fmt::format("{} is {}, not active", name, to_string(state_)));
-  }
-
- private:
-  DeviceState state_ = DeviceState::kUnconfigured;
 };
 
 Result from_sim(const sim::Status& s) { return s.ok ? Result::success() : Result::failure(s.message); }

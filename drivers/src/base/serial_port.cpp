@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "drivers/fd_io.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -36,14 +37,6 @@ std::optional<speed_t> baud_code(int rate_bps) {
   return std::nullopt;
 }
 
-/// Milliseconds left until `deadline`, clamped to [0, INT_MAX] for poll().
-int remaining_ms(std::chrono::steady_clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-      deadline - std::chrono::steady_clock::now());
-  if (left.count() <= 0) return 0;
-  return left.count() > 0x7FFFFFFF ? 0x7FFFFFFF : static_cast<int>(left.count());
-}
-
 }  // namespace
 
 void SerialOptions::validate() const {
@@ -64,7 +57,7 @@ SerialPort::SerialPort(SerialOptions options) : options_(std::move(options)) {}
 SerialPort::~SerialPort() { close(); }
 
 std::string SerialPort::os_error(const char* what, int err) const {
-  return options_.path + ": " + what + ": " + std::strerror(err);
+  return os_error_text(options_.path, what, err);
 }
 
 void SerialPort::open() {
@@ -113,42 +106,12 @@ void SerialPort::close() noexcept {
 
 IoResult SerialPort::read(std::span<std::uint8_t> buffer, std::chrono::milliseconds timeout) {
   if (fd_ < 0) return {0, options_.path + ": serial port is not open"};
-  if (buffer.empty()) return {};
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (;;) {
-    pollfd pfd{fd_, POLLIN, 0};
-    const int ready = ::poll(&pfd, 1, remaining_ms(deadline));
-    if (ready < 0) {
-      if (errno == EINTR) continue;  // a signal is not a timeout: wait out the rest
-      return {0, os_error("poll", errno)};
-    }
-    if (ready == 0) return {};  // timeout, no data
-    const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
-    if (n > 0) return {static_cast<std::size_t>(n), {}};
-    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
-    if (n < 0) return {0, os_error("read", errno)};
-    // poll said readable but there is nothing: the other end hung up.
-    return {0, options_.path + ": read: end of stream (device gone)"};
-  }
+  return read_fd(fd_, buffer, timeout, options_.path);
 }
 
 IoResult SerialPort::write(std::span<const std::uint8_t> bytes, std::chrono::milliseconds timeout) {
   if (fd_ < 0) return {0, options_.path + ": serial port is not open"};
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  std::size_t sent = 0;
-  while (sent < bytes.size()) {
-    const ssize_t n = ::write(fd_, bytes.data() + sent, bytes.size() - sent);
-    if (n > 0) {
-      sent += static_cast<std::size_t>(n);
-      continue;
-    }
-    if (n < 0 && errno != EAGAIN && errno != EINTR) return {sent, os_error("write", errno)};
-    pollfd pfd{fd_, POLLOUT, 0};
-    const int ready = ::poll(&pfd, 1, remaining_ms(deadline));
-    if (ready < 0 && errno != EINTR) return {sent, os_error("poll", errno)};
-    if (ready == 0) return {sent, options_.path + ": write timed out"};
-  }
-  return {sent, {}};
+  return write_fd(fd_, bytes, timeout, options_.path);
 }
 
 }  // namespace calstand::drivers

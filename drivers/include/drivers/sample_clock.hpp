@@ -1,0 +1,43 @@
+#pragma once
+
+#include <deque>
+
+namespace calstand::drivers {
+
+/// Puts an IMU's samples on the station clock. A real link delivers samples in bursts (UART
+/// FIFOs, USB frames, scheduling, an accelerated simulator), so the arrival time says little
+/// about when a sample was taken; the device's own clock says it well but has another epoch.
+/// The station time of a sample is its device time plus an offset: the smallest
+/// (arrival - device time) seen over the last `window_s` of device time, i.e. the sample that
+/// waited least in buffers. The window lets the offset follow the slow drift between the two
+/// clocks. A device clock that jumps (restart, wrap, time set) restarts the estimate.
+/// Not thread safe: one per stream, used from the stream's reader.
+class SampleClock {
+ public:
+  /// Arrivals must be given in the order they happened.
+  explicit SampleClock(double window_s = 10.0, double jump_s = 5.0)
+      : window_s_(window_s), jump_s_(jump_s) {}
+
+  /// Station time [s] of the sample taken at `device_time_s` and received at `arrival_s`
+  /// (station clock). Never later than `arrival_s`; never earlier than the previous result.
+  double stamp(double device_time_s, double arrival_s);
+  /// Forgets the estimate (the next sample starts a new one).
+  void reset();
+  /// Restarts counted since construction (device clock jumps).
+  unsigned long restarts() const { return restarts_; }
+
+ private:
+  struct Point {
+    double device_s;
+    double delay_s;  // arrival - device time
+  };
+  double window_s_;
+  double jump_s_;
+  std::deque<Point> minima_;  // increasing delay_s; front is the window's minimum
+  double last_device_s_ = 0.0;
+  double last_stamp_s_ = -1e300;
+  bool started_ = false;
+  unsigned long restarts_ = 0;
+};
+
+}  // namespace calstand::drivers
