@@ -10,6 +10,7 @@ namespace calstand::cli {
 void register_allan(CLI::App& app);      // allan and noise
 void register_calibrate(CLI::App& app);  // calibrate and apply
 void register_demo(CLI::App& app);
+void register_device(CLI::App& app);
 void register_diagnose(CLI::App& app);  // diagnose and history
 void register_fit(CLI::App& app);
 void register_import_export(CLI::App& app);  // import and export
@@ -18,6 +19,7 @@ void register_plan(CLI::App& app);
 void register_report(CLI::App& app);
 void register_run(CLI::App& app);
 void register_runs(CLI::App& app);  // runs and show
+void register_sim_station(CLI::App& app);
 void register_station(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_allan(app);
   calstand::cli::register_calibrate(app);
   calstand::cli::register_demo(app);
+  calstand::cli::register_device(app);
   calstand::cli::register_diagnose(app);
   calstand::cli::register_fit(app);
   calstand::cli::register_import_export(app);
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_report(app);
   calstand::cli::register_run(app);
   calstand::cli::register_runs(app);
+  calstand::cli::register_sim_station(app);
   calstand::cli::register_station(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);

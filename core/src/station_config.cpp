@@ -49,6 +49,18 @@ std::string resolve(const std::string& base_dir, const std::string& path) {
   return (std::filesystem::path(base_dir) / p).lexically_normal().string();
 }
 
+/// A device's connection with every string field named "*_file" (e.g. a CAN signal map's
+/// "map_file") resolved against the station file's folder, as spec and truth files are.
+json resolve_connection_files(json connection, const std::string& base_dir) {
+  if (!connection.is_object()) return connection;
+  for (auto& [key, value] : connection.items()) {
+    if (value.is_string() && key.size() > 5 && key.ends_with("_file")) {
+      value = resolve(base_dir, value.get<std::string>());
+    }
+  }
+  return connection;
+}
+
 // Rules the schema cannot state: checked after it, each naming its field.
 void check_semantics(const StationConfig& c, const std::string& file) {
   // Axes are usually typed with a few decimals ([0.7071, 0, 0.7071]); 1e-3 accepts those and
@@ -130,7 +142,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
   c.table.inner_axis = vec3(table.at("inner_axis"));
   c.table.outer = axis_from_json(table.at("outer"));
   c.table.inner = axis_from_json(table.at("inner"));
-  c.table.connection = table.value("connection", json::object());
+  c.table.connection = resolve_connection_files(table.value("connection", json::object()), base_dir);
   if (table.contains("tilt_rad")) {
     c.table.tilt_rad = {table.at("tilt_rad").value("east", 0.0),
                         table.at("tilt_rad").value("north", 0.0)};
@@ -150,7 +162,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.chamber.imu_time_constant_s = s.value("imu_time_constant_s", c.chamber.imu_time_constant_s);
     c.chamber.imu_self_heating_c = s.value("imu_self_heating_c", c.chamber.imu_self_heating_c);
   }
-  c.chamber.connection = ch.value("connection", json::object());
+  c.chamber.connection = resolve_connection_files(ch.value("connection", json::object()), base_dir);
 
   for (const json& j : doc.at("imus")) {
     ImuConfig imu;
@@ -161,7 +173,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     if (j.contains("truth_file")) imu.truth_file = resolve(base_dir, j.at("truth_file"));
     if (j.contains("truth")) imu.truth = j.at("truth");
     if (j.contains("mount_rpy_deg")) imu.mount_rpy_deg = vec3(j.at("mount_rpy_deg"));
-    imu.connection = j.value("connection", json::object());
+    imu.connection = resolve_connection_files(j.value("connection", json::object()), base_dir);
     c.imus.push_back(std::move(imu));
   }
   if (doc.contains("policy")) {

@@ -128,6 +128,7 @@ void RunEngine::finish(RunState final_state, const std::string& reason) {
   }
   const auto safe = station_.make_safe();
   if (!safe) record_event(EventKind::kFault, "engine", "making the station safe: " + safe.message);
+  record_device_events();
   {
     std::lock_guard lock(mutex_);
     exit_reason_ = reason;
@@ -274,6 +275,7 @@ void RunEngine::rate(const Step& step, std::size_t index) {
 
 int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) {
   int attempt = first_attempt;
+  std::string last_invalid_reason;
   for (int tries = 0; tries < options_.max_capture_attempts; ++tries, ++attempt) {
     if (tries > 0) journal_.step_started(index, attempt, station_.clock().now_s());
     poll_imus();  // samples from before the capture belong to no step
@@ -295,8 +297,12 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
       return attempt;
     }
     journal_.discard_attempt(index, attempt, *invalid);
+    last_invalid_reason = *invalid;
     record_event(EventKind::kInterlock, "engine",
                  fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
+    // A repeat while an IMU is still silent would be invalid at once: give the streams time
+    // to come back first.
+    wait_for_streams();
     // Before repeating, command the setpoint again (the controller may have been upset) and
     // let the chamber come back into its band (re-soak).
     if (setpoint_c_) {
@@ -312,8 +318,21 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
     }
   }
   journal_.step_failed(index, attempt - 1, station_.clock().now_s(), "capture invalidated too often");
-  throw StepFailed{fmt::format("step {}: capture invalidated {} times", index,
-                               options_.max_capture_attempts)};
+  throw StepFailed{fmt::format("step {}: capture invalidated {} times (last: {})", index,
+                               options_.max_capture_attempts, last_invalid_reason)};
+}
+
+void RunEngine::wait_for_streams() {
+  auto any_stale = [&] {
+    for (const auto& h : imu_health_) {
+      if (h.stale) return true;
+    }
+    return false;
+  };
+  if (!any_stale()) return;
+  set_phase("waiting for IMU streams");
+  const double end = station_.clock().now_s() + options_.stream_recovery_timeout_s;
+  while (any_stale() && station_.clock().now_s() < end) tick();
 }
 
 void RunEngine::wait_for(double duration_s, const char* phase) {
@@ -346,6 +365,7 @@ void RunEngine::tick() {
   const double now = station_.clock().now_s();
   station_.wait_until(now + options_.tick_s);
   poll_imus();
+  record_device_events();
   check_interlocks();
   const double t = station_.clock().now_s();
   if (t - last_telemetry_s_ >= options_.telemetry_period_s) {
@@ -375,11 +395,17 @@ void RunEngine::poll_imus() {
     ImuHealth& health = imu_health_[i];
     const auto samples = imu.poll();
     if (samples.empty()) {
-      if (!health.stale && now - health.last_sample_s > options_.imu_stale_s) {
-        health.stale = true;
-        record_event(EventKind::kFault, imu.name(),
-                     fmt::format("stream stale: no sample for {:.1f} s", now - health.last_sample_s));
-        if (capturing_ && options_.stale_policy == GapPolicy::kRepeatCapture) {
+      if (now - health.last_sample_s > options_.imu_stale_s) {
+        if (!health.stale) {
+          health.stale = true;
+          record_event(EventKind::kFault, imu.name(),
+                       fmt::format("stream stale: no sample for {:.1f} s",
+                                   now - health.last_sample_s));
+        }
+        // Every capture that sees the stream silent is affected, not only the one during which
+        // it fell silent: a repeated capture of a still-silent IMU must not pass as valid.
+        if (capturing_ && !capturing_->invalid_reason &&
+            options_.stale_policy == GapPolicy::kRepeatCapture) {
           capturing_->invalid_reason = imu.name() + " stream stale";
         } else if (capturing_ && options_.stale_policy == GapPolicy::kAbort) {
           throw Aborted{imu.name() + ": stream stale"};
@@ -392,13 +418,14 @@ void RunEngine::poll_imus() {
       record_event(EventKind::kInfo, imu.name(), "stream back");
     }
     health.last_sample_s = now;
-    const std::uint32_t modulus = imu.sequence_modulus();
+    // 64-bit arithmetic: a 32-bit counter wraps at 2^32, which a uint32_t cannot hold.
+    const std::uint64_t modulus = imu.sequence_modulus();
     std::uint64_t missing = 0;
     for (const auto& s : samples) {
       if (health.last_sequence) {
-        const std::uint32_t expected = (*health.last_sequence + 1) % modulus;
+        const std::uint64_t expected = (std::uint64_t{*health.last_sequence} + 1) % modulus;
         if (s.sequence != expected) {
-          missing += (s.sequence + modulus - expected) % modulus;
+          missing += (std::uint64_t{s.sequence} + modulus - expected) % modulus;
         }
       }
       health.last_sequence = s.sequence;
@@ -427,6 +454,20 @@ void RunEngine::poll_imus() {
       }
     }
   }
+}
+
+void RunEngine::record_device_events() {
+  // What the drivers saw on their links (frame errors, lost and restored links, refused
+  // writes) goes into the run's log under the device's name, at the time it was seen.
+  auto drain = [&](drivers::Device& device) {
+    for (const auto& e : device.take_events()) {
+      journal_.event(e.time_s, e.fault ? EventKind::kFault : EventKind::kInfo, device.name(),
+                     e.message);
+    }
+  };
+  drain(station_.table());
+  drain(station_.chamber());
+  for (std::size_t i = 0; i < station_.imu_count(); ++i) drain(station_.imu(i));
 }
 
 void RunEngine::check_interlocks() {

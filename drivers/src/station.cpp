@@ -1,6 +1,7 @@
 #include "drivers/station.hpp"
 
 #include "core/error.hpp"
+#include "drivers/real_station.hpp"
 #include "drivers/sim_station.hpp"
 
 namespace calstand::drivers {
@@ -26,9 +27,9 @@ Result Station::make_safe() {
 }
 
 std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s) {
-  // The station schema admits only simulated devices until the real drivers land; the world
-  // refuses anything else with an error naming the device.
-  return std::make_unique<SimStation>(config, start_time_s);
+  // The station file is simulated or real as a whole (StationConfig::from_json checks it).
+  if (config.is_simulated()) return std::make_unique<SimStation>(config, start_time_s);
+  return std::make_unique<RealStation>(config, start_time_s);
 }
 
 }  // namespace calstand::drivers

@@ -21,10 +21,11 @@ class Clock {
 
 /// std::chrono::steady_clock, epoch at construction. Thread safe. `time_scale` station seconds
 /// pass per real second: 1 in a lab; more when rehearsing against an accelerated simulator
-/// (`calstand sim-station --time-scale K`).
+/// (`calstand sim-station --time-scale K`). Reads `start_s` at construction (a run resumed
+/// after a restart continues its station time).
 class SteadyClock final : public Clock {
  public:
-  explicit SteadyClock(double time_scale = 1.0);
+  explicit SteadyClock(double time_scale = 1.0, double start_s = 0.0);
   double now_s() const override;
   void sleep_until(double t_s) override;
   bool is_virtual() const override { return false; }
@@ -32,6 +33,7 @@ class SteadyClock final : public Clock {
  private:
   std::chrono::steady_clock::time_point epoch_;
   double time_scale_;
+  double start_s_;
 };
 
 /// Time advanced explicitly by the simulator. Thread safe.

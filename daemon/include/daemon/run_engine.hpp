@@ -51,6 +51,9 @@ struct EngineOptions {
   GapPolicy gap_policy = GapPolicy::kRecord;
   GapPolicy stale_policy = GapPolicy::kRepeatCapture;
   int max_capture_attempts = 3;         ///< repeats of an invalidated capture before failing
+  /// Before repeating a capture invalidated by a stale stream, wait up to this long for the
+  /// stream to come back [s].
+  double stream_recovery_timeout_s = 30.0;
   /// Called from the engine's thread at most once per tick.
   std::function<void(const Progress&)> on_progress;
   /// The options a station's fault policy (station file `policy`) sets; the rest default.
@@ -107,10 +110,12 @@ class RunEngine {
   /// Records the IMUs for `duration_s`; repeats invalidated attempts; returns the good attempt.
   int capture(std::size_t index, double duration_s, int first_attempt);
   void wait_for(double duration_s, const char* phase);
+  void wait_for_streams();
   void reestablish(std::size_t first_step);
   void tick();
   void poll_imus();
   void check_interlocks();
+  void record_device_events();
   void handle_pause_at_boundary();
   void finish(RunState final_state, const std::string& reason);
   void set_phase(const char* phase);

@@ -15,8 +15,8 @@ class Imu : public Device {
   virtual std::vector<core::ImuSample> poll() = 0;
   /// The device's nominal output rate [Hz].
   virtual double sample_rate_hz() const = 0;
-  /// The sequence counter wraps to 0 at this value (gap detection needs it).
-  virtual std::uint32_t sequence_modulus() const = 0;
+  /// The sequence counter wraps to 0 at this value (gap detection needs it); up to 2^32.
+  virtual std::uint64_t sequence_modulus() const = 0;
 };
 
 }  // namespace calstand::drivers

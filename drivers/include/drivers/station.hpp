@@ -31,9 +31,9 @@ class Station {
   Result make_safe();
 };
 
-/// The station of `config`. Every backend must be "sim" for now (the real drivers arrive with
-/// their own issue); throws core::InputError naming the device otherwise. A simulated station's
-/// clock starts at `start_time_s` (a real station's clock is the steady clock).
+/// The station of `config`: a SimStation when its devices are simulated (its virtual clock
+/// starting at `start_time_s`), a RealStation of drivers otherwise (on the steady clock, which
+/// reads `start_time_s` now). Throws core::InputError naming the device on a bad connection.
 std::unique_ptr<Station> make_station(const core::StationConfig& config,
                                       double start_time_s = 0.0);
 

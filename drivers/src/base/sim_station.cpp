@@ -123,7 +123,7 @@ class SimStation::SimImu final : public Imu {
     return samples;
   }
   double sample_rate_hz() const override { return world_.imu(index_).truth().sample_rate_hz; }
-  std::uint32_t sequence_modulus() const override {
+  std::uint64_t sequence_modulus() const override {
     return world_.imu(index_).truth().sequence_modulus;
   }
 

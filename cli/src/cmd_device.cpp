@@ -1,0 +1,313 @@
+// `calstand device`: manual control of a real station's devices through the same drivers the
+// engine uses, for setting up and debugging a station by hand:
+//   calstand device --station lab.json status
+//   calstand device --station lab.json chamber get|set TEMP [--ramp R] [--wait]|standby
+//   calstand device --station lab.json table get|move --outer D --inner D|rate --axis A --dps R|stop
+//   calstand device --station lab.json imu stream --count N [--imu NAME]
+// Output is JSON (one object, or JSON lines for `imu stream`), so scripts can read it.
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "drivers/station.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::cli {
+namespace {
+
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+struct DeviceOptions {
+  std::string station_file;
+  // chamber
+  double temperature_c = 0.0;
+  std::optional<double> ramp_c_per_min;
+  bool wait = false;
+  double tolerance_c = 0.5;
+  // table
+  double outer_deg = 0.0;
+  double inner_deg = 0.0;
+  std::string axis;
+  double rate_dps = 0.0;
+  double timeout_s = 600.0;
+  // imu
+  std::size_t count = 10;
+  std::string imu_name;
+};
+
+std::unique_ptr<drivers::Station> open_station(const DeviceOptions& opt) {
+  const auto config = sim::load_station_or_default(opt.station_file);
+  if (config.is_simulated()) {
+    throw core::InputError(opt.station_file.empty() ? "--station" : opt.station_file,
+                           "the station is simulated in process, so there is no device to talk "
+                           "to; start `calstand sim-station --station-out lab.json` and use "
+                           "that file");
+  }
+  return drivers::make_station(config);
+}
+
+/// configure() and activate() one device; a failure ends the command (exit 1).
+void bring_up(drivers::Device& device) {
+  if (auto r = device.configure(); !r) throw std::runtime_error(device.name() + ": " + r.message);
+  if (auto r = device.activate(); !r) throw std::runtime_error(device.name() + ": " + r.message);
+}
+
+/// configure() only: reading needs the link, not activation (which would, e.g., try to close
+/// an open interlock).
+void configure(drivers::Device& device) {
+  if (auto r = device.configure(); !r) throw std::runtime_error(device.name() + ": " + r.message);
+}
+
+void check(const drivers::Result& r, const std::string& what) {
+  if (r) return;
+  // Drivers usually name themselves already ("chamber: ramp ..."); do not say it twice.
+  const bool named = r.message.rfind(what + ":", 0) == 0;
+  throw std::runtime_error(named ? r.message : what + ": " + r.message);
+}
+
+json axis_json(const core::AxisState& a) {
+  json j = {{"angle_deg", a.angle_deg}, {"rate_dps", a.rate_dps},
+            {"mode", std::string(core::to_string(a.mode))}, {"in_position", a.in_position},
+            {"fault", a.fault}};
+  if (a.fault) j["fault_text"] = a.fault_text;
+  return j;
+}
+
+json table_json(const core::TableState& s) {
+  return {{"time_s", s.time_s}, {"outer", axis_json(s.outer)}, {"inner", axis_json(s.inner)}};
+}
+
+json chamber_json(const core::ChamberState& s) {
+  json j = {{"time_s", s.time_s}, {"air_c", s.air_temperature_c}, {"setpoint_c", s.setpoint_c},
+            {"mode", std::string(core::to_string(s.mode))}, {"fault", s.fault}};
+  if (s.fault) j["fault_text"] = s.fault_text;
+  return j;
+}
+
+json device_json(drivers::Device& d) {
+  json events = json::array();
+  for (const auto& e : d.take_events()) {
+    events.push_back({{"time_s", e.time_s}, {"fault", e.fault}, {"message", e.message}});
+  }
+  return {{"name", d.name()}, {"state", std::string(drivers::to_string(d.state()))},
+          {"fault_counters", d.fault_counters()}, {"events", events}};
+}
+
+void print(const json& j) { fmt::print("{}\n", j.dump()); }
+
+/// A driver that polls in the background needs a moment for its first reading.
+void settle_first_reading() { std::this_thread::sleep_for(300ms); }
+
+void status(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  json devices = json::array();
+  std::vector<drivers::Device*> all{&station->table(), &station->chamber()};
+  for (std::size_t i = 0; i < station->imu_count(); ++i) all.push_back(&station->imu(i));
+  for (auto* d : all) {
+    const auto r = d->configure();
+    json entry = device_json(*d);
+    entry["configure"] = r ? "ok" : r.message;
+    devices.push_back(std::move(entry));
+  }
+  print({{"station", station->config().name}, {"devices", devices}});
+}
+
+void chamber_get(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  configure(station->chamber());
+  settle_first_reading();
+  json out = chamber_json(station->chamber().read_state());
+  out["device"] = device_json(station->chamber());
+  print(out);
+}
+
+void chamber_set(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  auto& chamber = station->chamber();
+  bring_up(chamber);
+  check(chamber.set_temperature(opt.temperature_c, opt.ramp_c_per_min), "chamber");
+  // The driver steps the setpoint itself when the controller cannot ramp: stay until the
+  // setpoint has reached the target (and, with --wait, the air has too).
+  auto& clock = station->clock();
+  const double start = clock.now_s();
+  for (;;) {
+    std::this_thread::sleep_for(250ms);
+    const auto s = chamber.read_state();
+    if (s.fault) throw std::runtime_error("chamber fault: " + s.fault_text);
+    const bool setpoint_there = std::abs(s.setpoint_c - opt.temperature_c) < 0.05;
+    const bool air_there = std::abs(s.air_temperature_c - opt.temperature_c) <= opt.tolerance_c;
+    if (setpoint_there && (!opt.wait || air_there)) break;
+    if (clock.now_s() - start > opt.timeout_s) {
+      throw std::runtime_error(fmt::format("chamber did not reach {} degC within {:.0f} s "
+                                           "(air {:.2f}, setpoint {:.2f})",
+                                           opt.temperature_c, opt.timeout_s,
+                                           s.air_temperature_c, s.setpoint_c));
+    }
+  }
+  print(chamber_json(chamber.read_state()));
+}
+
+void chamber_standby(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  bring_up(station->chamber());
+  check(station->chamber().standby(), "chamber");
+  settle_first_reading();
+  print(chamber_json(station->chamber().read_state()));
+}
+
+void table_get(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  configure(station->table());
+  json out = table_json(station->table().read_state());
+  out["device"] = device_json(station->table());
+  print(out);
+}
+
+/// Waits until `done(state)` or the timeout; a table fault ends the command.
+template <typename Done>
+void wait_table(drivers::Station& station, double timeout_s, Done done, const char* what) {
+  const double start = station.clock().now_s();
+  for (;;) {
+    const auto s = station.table().read_state();
+    if (s.outer.fault || s.inner.fault) {
+      throw std::runtime_error("table fault: " +
+                               (s.outer.fault ? s.outer.fault_text : s.inner.fault_text));
+    }
+    if (done(s)) return;
+    if (station.clock().now_s() - start > timeout_s) {
+      throw std::runtime_error(fmt::format("table: {} not done within {:.0f} s", what, timeout_s));
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+}
+
+void table_move(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  bring_up(station->table());
+  check(station->table().move_to(opt.outer_deg, opt.inner_deg), "table");
+  std::this_thread::sleep_for(50ms);  // let the controller take the move before polling
+  wait_table(*station, opt.timeout_s,
+             [](const core::TableState& s) { return s.outer.in_position && s.inner.in_position; },
+             "move");
+  print(table_json(station->table().read_state()));
+}
+
+void table_rate(const DeviceOptions& opt) {
+  const auto axis = opt.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
+  auto station = open_station(opt);
+  bring_up(station->table());
+  check(station->table().set_rate(axis, opt.rate_dps), "table");
+  std::this_thread::sleep_for(50ms);
+  wait_table(*station, opt.timeout_s,
+             [&](const core::TableState& s) {
+               return (axis == drivers::TableAxis::kOuter ? s.outer : s.inner).in_position;
+             },
+             "rate");
+  // The axis keeps turning after the command returns: that is what was asked for.
+  print(table_json(station->table().read_state()));
+}
+
+void table_stop(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  auto& table = station->table();
+  table.configure();  // stop is allowed in every state; try even if the link is troubled
+  check(table.stop(), "table");
+  print(table_json(table.read_state()));
+}
+
+void imu_stream(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  std::size_t index = 0;
+  if (!opt.imu_name.empty()) {
+    bool found = false;
+    for (std::size_t i = 0; i < station->imu_count(); ++i) {
+      if (station->imu(i).name() == opt.imu_name) {
+        index = i;
+        found = true;
+      }
+    }
+    if (!found) throw core::InputError("--imu", fmt::format("no IMU \"{}\" in the station", opt.imu_name));
+  }
+  auto& imu = station->imu(index);
+  bring_up(imu);
+  const double period_s = 1.0 / imu.sample_rate_hz();
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration<double>(10.0 + 2.0 * static_cast<double>(opt.count) * period_s);
+  std::size_t printed = 0;
+  while (printed < opt.count) {
+    for (const auto& s : imu.poll()) {
+      if (printed == opt.count) break;
+      print({{"imu", imu.name()}, {"sequence", s.sequence}, {"device_time_s", s.device_time_s},
+             {"receive_time_s", s.receive_time_s},
+             {"gyro_dps", {s.gyro_dps.x(), s.gyro_dps.y(), s.gyro_dps.z()}},
+             {"accel_mps2", {s.accel_mps2.x(), s.accel_mps2.y(), s.accel_mps2.z()}},
+             {"temperature_c", s.temperature_c}});
+      ++printed;
+    }
+    if (std::chrono::steady_clock::now() > deadline) {
+      throw std::runtime_error(fmt::format("{}: {} of {} samples within the time allowed; "
+                                           "counters {}",
+                                           imu.name(), printed, opt.count,
+                                           json(imu.fault_counters()).dump()));
+    }
+    std::this_thread::sleep_for(5ms);
+  }
+  imu.deactivate();
+}
+
+}  // namespace
+
+void register_device(CLI::App& app) {
+  auto opt = std::make_shared<DeviceOptions>();
+  auto* cmd = app.add_subcommand("device", "Talk to a real station's devices by hand (JSON out)");
+  cmd->add_option("--station", opt->station_file, "station file with real backends")->required();
+  cmd->require_subcommand(1);
+
+  cmd->add_subcommand("status", "configure every device; state, fault counters and events")
+      ->callback([opt] { status(*opt); });
+
+  auto* chamber = cmd->add_subcommand("chamber", "temperature chamber");
+  chamber->require_subcommand(1);
+  chamber->add_subcommand("get", "air temperature, setpoint, mode")->callback([opt] { chamber_get(*opt); });
+  auto* set = chamber->add_subcommand("set", "control the air to TEMP degC");
+  set->add_option("temperature", opt->temperature_c, "target [degC]")->required();
+  set->add_option("--ramp", opt->ramp_c_per_min, "ramp [degC/min] (default: the chamber's)");
+  set->add_flag("--wait", opt->wait, "wait until the air is within --tolerance of TEMP");
+  set->add_option("--tolerance", opt->tolerance_c, "with --wait [degC]")->capture_default_str();
+  set->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  set->callback([opt] { chamber_set(*opt); });
+  chamber->add_subcommand("standby", "stop controlling (safe state)")->callback([opt] { chamber_standby(*opt); });
+
+  auto* table = cmd->add_subcommand("table", "rate table");
+  table->require_subcommand(1);
+  table->add_subcommand("get", "angles, rates, modes, faults")->callback([opt] { table_get(*opt); });
+  auto* move = table->add_subcommand("move", "both axes to angles, wait until in position");
+  move->add_option("--outer", opt->outer_deg, "outer axis angle [deg]")->required();
+  move->add_option("--inner", opt->inner_deg, "inner axis angle [deg]")->required();
+  move->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  move->callback([opt] { table_move(*opt); });
+  auto* rate = table->add_subcommand("rate", "turn one axis at a rate (it keeps turning)");
+  rate->add_option("--axis", opt->axis, "outer or inner")->required()->check(CLI::IsMember({"outer", "inner"}));
+  rate->add_option("--dps", opt->rate_dps, "rate [deg/s], signed")->required();
+  rate->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  rate->callback([opt] { table_rate(*opt); });
+  table->add_subcommand("stop", "both axes to rest (safe state)")->callback([opt] { table_stop(*opt); });
+
+  auto* imu = cmd->add_subcommand("imu", "IMU streams");
+  imu->require_subcommand(1);
+  auto* stream = imu->add_subcommand("stream", "print samples as JSON lines");
+  stream->add_option("--count", opt->count, "samples to print")->capture_default_str();
+  stream->add_option("--imu", opt->imu_name, "IMU name (default: the first)");
+  stream->callback([opt] { imu_stream(*opt); });
+}
+
+}  // namespace calstand::cli

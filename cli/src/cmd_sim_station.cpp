@@ -1,0 +1,182 @@
+// `calstand sim-station`: one simulated world behind the real protocols (table command server,
+// chamber over Modbus TCP and RTU, IMU frames on pseudo-terminals), so that the real drivers and
+// the engine can be rehearsed end to end on this machine. Prints the endpoints as one line of
+// JSON on start; `--station-out` writes the station file that points the real drivers at them.
+//
+// While it runs, lines on stdin rehearse faults (one JSON line answers each):
+//   interlock open outer|inner [WHY...]   interlock clear outer|inner
+//   modbus stop | modbus start            imu silent NAME | imu talk NAME
+//   imu garbage NAME N                    status | quit
+#include <fmt/format.h>
+#include <poll.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "commands.hpp"
+#include "core/error.hpp"
+#include "drivers/protocol_simulator.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::cli {
+namespace {
+
+using nlohmann::json;
+
+struct SimStationOptions {
+  std::string station_file;
+  std::string station_out;
+  drivers::ProtocolSimOptions serve;
+  bool no_rtu = false;
+  double duration_s = 0.0;  // 0: until a signal or `quit`
+};
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop = true; }
+
+drivers::TableAxis parse_axis(const std::string& word) {
+  if (word == "outer") return drivers::TableAxis::kOuter;
+  if (word == "inner") return drivers::TableAxis::kInner;
+  throw core::InputError("axis", fmt::format("\"{}\" is not outer or inner", word));
+}
+
+/// Executes one stdin command; returns the answer line. "quit" sets `quit`.
+json execute(drivers::ProtocolSimulator& sim, const std::string& line, bool& quit) {
+  std::istringstream in(line);
+  std::string verb, what, arg;
+  in >> verb >> what >> arg;
+  std::string rest;
+  std::getline(in, rest);
+  if (!rest.empty() && rest.front() == ' ') rest.erase(0, 1);
+  if (verb == "quit") {
+    quit = true;
+    return {{"ok", true}};
+  }
+  if (verb == "status") return {{"ok", true}, {"statistics", sim.statistics()}};
+  if (verb == "interlock" && what == "open") {
+    std::string why = rest.empty() ? "interlock open (door)" : rest;
+    sim.open_interlock(parse_axis(arg), why);
+    return {{"ok", true}};
+  }
+  if (verb == "interlock" && what == "clear") {
+    sim.clear_interlock_cause(parse_axis(arg));
+    return {{"ok", true}};
+  }
+  if (verb == "modbus" && (what == "stop" || what == "start")) {
+    sim.set_modbus_running(what == "start");
+    return {{"ok", true}};
+  }
+  if (verb == "imu" && (what == "silent" || what == "talk")) {
+    sim.set_imu_silent(sim.imu_index(arg), what == "silent");
+    return {{"ok", true}};
+  }
+  if (verb == "imu" && what == "garbage") {
+    const auto index = sim.imu_index(arg);
+    const long count = std::strtol(rest.c_str(), nullptr, 10);
+    if (count <= 0 || count > 1'000'000) throw core::InputError("count", "must be 1..1000000");
+    std::mt19937 rng(static_cast<unsigned>(count));
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(count));
+    for (auto& b : bytes) b = static_cast<std::uint8_t>(rng());
+    sim.inject_imu_bytes(index, std::move(bytes));
+    return {{"ok", true}};
+  }
+  throw core::InputError("command", fmt::format("\"{}\" is not understood (interlock open|clear "
+                                                "AXIS, modbus stop|start, imu silent|talk|garbage "
+                                                "NAME, status, quit)", line));
+}
+
+void run(SimStationOptions opt) {
+  const auto config = sim::load_station_or_default(opt.station_file);
+  if (!config.is_simulated()) {
+    throw core::InputError(opt.station_file, "sim-station serves a simulated station; every "
+                                             "backend must be \"sim\"");
+  }
+  opt.serve.f4_rtu = !opt.no_rtu;
+  drivers::ProtocolSimulator sim(config, opt.serve);
+  sim.start();
+  if (!opt.station_out.empty()) {
+    std::ofstream out(opt.station_out);
+    out << sim.client_station().to_json().dump(2) << "\n";
+    if (!out) throw std::runtime_error(opt.station_out + ": cannot write the station file");
+  }
+  json hello = sim.endpoints();
+  if (!opt.station_out.empty()) hello["station_file"] = opt.station_out;
+  std::cout << hello.dump() << std::endl;
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const auto start = std::chrono::steady_clock::now();
+  bool stdin_open = true;
+  bool quit = false;
+  std::string pending;
+  while (!g_stop && !quit) {
+    if (opt.duration_s > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+            opt.duration_s) {
+      break;
+    }
+    if (!stdin_open) {
+      ::usleep(100'000);
+      continue;
+    }
+    pollfd pfd{STDIN_FILENO, POLLIN, 0};
+    if (::poll(&pfd, 1, 100) <= 0) continue;
+    char buf[4096];
+    const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+    if (n <= 0) {
+      stdin_open = false;  // serve on without commands (e.g. started with </dev/null)
+      continue;
+    }
+    pending.append(buf, static_cast<std::size_t>(n));
+    for (auto eol = pending.find('\n'); eol != std::string::npos; eol = pending.find('\n')) {
+      const std::string line = pending.substr(0, eol);
+      pending.erase(0, eol + 1);
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      json answer;
+      try {
+        answer = execute(sim, line, quit);
+      } catch (const std::exception& e) {
+        answer = {{"ok", false}, {"error", e.what()}};
+      }
+      std::cout << answer.dump() << std::endl;
+    }
+  }
+  sim.stop();
+}
+
+}  // namespace
+
+void register_sim_station(CLI::App& app) {
+  auto opt = std::make_shared<SimStationOptions>();
+  auto* cmd = app.add_subcommand(
+      "sim-station", "Serve a simulated station behind the real protocols (Modbus, table "
+                     "commands, IMU frames) for rehearsing the real drivers");
+  cmd->add_option("--station", opt->station_file, "station file (default: the built-in station)");
+  cmd->add_option("--time-scale", opt->serve.time_scale, "world seconds per wall second")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 1000.0));
+  cmd->add_option("--host", opt->serve.host, "listening address")->capture_default_str();
+  cmd->add_option("--table-port", opt->serve.table_port, "table command port (0: any free)")
+      ->capture_default_str();
+  cmd->add_option("--modbus-port", opt->serve.modbus_port, "Modbus TCP port (0: any free)")
+      ->capture_default_str();
+  cmd->add_flag("--no-rtu", opt->no_rtu, "do not serve the chamber as an F4 over RTU");
+  cmd->add_option("--can", opt->serve.can_interface,
+                  "also send the first IMU's samples on this CAN interface (e.g. vcan0)");
+  cmd->add_option("--can-map", opt->serve.can_map_file, "CAN signal map for --can");
+  cmd->add_option("--station-out", opt->station_out,
+                  "write the station file for the real drivers here");
+  cmd->add_option("--duration", opt->duration_s, "stop after this many wall seconds (0: never)");
+  cmd->callback([opt] { run(*opt); });
+}
+
+}  // namespace calstand::cli

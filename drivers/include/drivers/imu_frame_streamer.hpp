@@ -1,0 +1,54 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/imu_sample.hpp"
+#include "drivers/pseudo_terminal.hpp"
+
+namespace calstand::drivers {
+
+/// The serial end of a simulated IMU: calstand frames (docs/protocols.md) written on a
+/// pseudo-terminal whose slave path a SerialImu opens. push() is called by the world as samples
+/// are produced and never blocks; a writer thread sends them. As on a real line, what nobody
+/// reads is lost: beyond `max_queued_frames` the oldest frames are dropped (counted), and the
+/// receiver sees a sequence gap.
+class ImuFrameStreamer {
+ public:
+  explicit ImuFrameStreamer(std::size_t max_queued_frames = 100000);
+  ~ImuFrameStreamer();
+  ImuFrameStreamer(const ImuFrameStreamer&) = delete;
+  ImuFrameStreamer& operator=(const ImuFrameStreamer&) = delete;
+
+  const std::string& path() const { return pty_.slave_path(); }
+  void push(const core::ImuSample& sample);
+  /// Stops sending (frames pushed meanwhile are dropped, as from an IMU that stopped talking)
+  /// or resumes.
+  void set_silent(bool silent) { silent_ = silent; }
+  /// Writes `bytes` on the line as they are (fault rehearsal: garbage, corrupted frames).
+  void inject(std::vector<std::uint8_t> bytes);
+  std::uint64_t frames_sent() const { return sent_.load(); }
+  std::uint64_t frames_dropped() const { return dropped_.load(); }
+
+ private:
+  void loop();
+
+  PseudoTerminal pty_;
+  std::size_t max_queued_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::vector<std::uint8_t>> queue_;
+  std::atomic<bool> silent_{false};
+  std::atomic<bool> running_{true};
+  std::atomic<std::uint64_t> sent_{0};
+  std::atomic<std::uint64_t> dropped_{0};
+  std::thread thread_;
+};
+
+}  // namespace calstand::drivers

@@ -1,0 +1,177 @@
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "drivers/acutrol_server.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::drivers {
+
+using acutrol::ErrorCode;
+using acutrol::WireMode;
+
+namespace {
+
+acutrol::ErrorReply refuse(ErrorCode code, std::string text) {
+  return {static_cast<int>(code), std::move(text)};
+}
+
+sim::TableAxisSim& sim_axis(sim::SimWorld& world, int axis) {
+  return axis == acutrol::kInnerAxis ? world.table().inner() : world.table().outer();
+}
+
+WireMode to_wire_mode(core::AxisMode mode) {
+  switch (mode) {
+    case core::AxisMode::kRest:
+      return WireMode::kRest;
+    case core::AxisMode::kPosition:
+      return WireMode::kPosition;
+    case core::AxisMode::kRate:
+      return WireMode::kRate;
+    case core::AxisMode::kFault:
+      return WireMode::kFault;
+  }
+  return WireMode::kFault;
+}
+
+}  // namespace
+
+SimTableBackend::SimTableBackend(sim::SimWorld& world, std::mutex& world_mutex)
+    : world_(world), mutex_(world_mutex) {
+  std::lock_guard lock(mutex_);
+  for (const int axis : {acutrol::kOuterAxis, acutrol::kInnerAxis}) {
+    const auto& limits = sim_axis(world_, axis).limits();
+    control(axis).max_rate_dps = limits.max_rate_dps;
+    control(axis).max_accel_dps2 = limits.max_accel_dps2;
+  }
+}
+
+std::string SimTableBackend::identity() { return "CALSTAND,ACUTROL-SIM,0,1.0"; }
+
+TableServerBackend::AxisReport SimTableBackend::report(int axis) {
+  std::lock_guard lock(mutex_);
+  const core::AxisState s = sim_axis(world_, axis).state();
+  const auto& c = control(axis);
+  AxisReport r;
+  r.angle_deg = s.angle_deg;
+  r.rate_dps = s.rate_dps;
+  r.status.mode = to_wire_mode(s.mode);
+  r.status.settled = s.in_position;
+  r.status.interlock_open = c.interlock_open;
+  r.status.fault_text = s.fault ? s.fault_text : std::string();
+  return r;
+}
+
+acutrol::InterlockReply SimTableBackend::interlock(int axis) {
+  std::lock_guard lock(mutex_);
+  const auto& c = control(axis);
+  return {c.interlock_open, c.interlock_why};
+}
+
+Refusal SimTableBackend::motion_refusal(int axis) {
+  const auto& c = control(axis);
+  if (c.interlock_open) {
+    return refuse(ErrorCode::kInterlockOpen,
+                  fmt::format("axis {} interlock open: {}", axis, c.interlock_why));
+  }
+  const auto s = sim_axis(world_, axis).state();
+  if (s.fault)
+    return refuse(ErrorCode::kAxisFault, fmt::format("axis {} fault: {}", axis, s.fault_text));
+  return std::nullopt;
+}
+
+Refusal SimTableBackend::select_mode(int axis, WireMode mode) {
+  std::lock_guard lock(mutex_);
+  if (auto r = motion_refusal(axis)) return r;
+  control(axis).selected = mode;
+  return std::nullopt;
+}
+
+Refusal SimTableBackend::demand_position(int axis, double angle_deg) {
+  std::lock_guard lock(mutex_);
+  if (auto r = motion_refusal(axis)) return r;
+  if (control(axis).selected != WireMode::kPosition) {
+    return refuse(
+        ErrorCode::kWrongMode,
+        fmt::format("axis {} is not in position mode: send :mode:position {} first", axis, axis));
+  }
+  const auto st = sim_axis(world_, axis).command_position(angle_deg);
+  if (!st) return refuse(ErrorCode::kAxisFault, fmt::format("axis {}: {}", axis, st.message));
+  return std::nullopt;
+}
+
+Refusal SimTableBackend::demand_rate(int axis, double rate_dps) {
+  std::lock_guard lock(mutex_);
+  if (auto r = motion_refusal(axis)) return r;
+  auto& c = control(axis);
+  if (c.selected != WireMode::kRate) {
+    return refuse(ErrorCode::kWrongMode,
+                  fmt::format("axis {} is not in rate mode: send :mode:rate {} first", axis, axis));
+  }
+  if (std::abs(rate_dps) > c.max_rate_dps) {
+    return refuse(ErrorCode::kLimitExceeded,
+                  fmt::format("axis {} rate {:.6f} deg/s exceeds the limit {:.6f} deg/s", axis,
+                              rate_dps, c.max_rate_dps));
+  }
+  const auto st = sim_axis(world_, axis).command_rate(rate_dps);
+  if (!st) return refuse(ErrorCode::kLimitExceeded, fmt::format("axis {}: {}", axis, st.message));
+  return std::nullopt;
+}
+
+Refusal SimTableBackend::set_limits(int axis, double max_rate_dps, double max_accel_dps2) {
+  std::lock_guard lock(mutex_);
+  const auto& own = sim_axis(world_, axis).limits();
+  if (max_rate_dps > own.max_rate_dps || max_accel_dps2 > own.max_accel_dps2) {
+    return refuse(
+        ErrorCode::kLimitExceeded,
+        fmt::format("axis {} limits {:.6f} deg/s, {:.6f} deg/s^2 exceed the axis's own "
+                    "{:.6f} deg/s, {:.6f} deg/s^2",
+                    axis, max_rate_dps, max_accel_dps2, own.max_rate_dps, own.max_accel_dps2));
+  }
+  control(axis).max_rate_dps = max_rate_dps;
+  control(axis).max_accel_dps2 = max_accel_dps2;
+  return std::nullopt;
+}
+
+void SimTableBackend::stop(int axis) {
+  std::lock_guard lock(mutex_);
+  sim_axis(world_, axis).stop();
+  control(axis).selected = WireMode::kRest;
+}
+
+Refusal SimTableBackend::close_interlock(int axis) {
+  std::lock_guard lock(mutex_);
+  auto& c = control(axis);
+  if (!c.interlock_open) return std::nullopt;
+  if (c.cause_present) {
+    return refuse(ErrorCode::kInterlockCause,
+                  fmt::format("axis {} interlock cannot close: {}", axis, c.interlock_why));
+  }
+  c.interlock_open = false;
+  c.interlock_why.clear();
+  c.selected = WireMode::kRest;
+  sim_axis(world_, axis).clear_fault();
+  return std::nullopt;
+}
+
+void SimTableBackend::open_interlock(int axis, const std::string& why) {
+  std::lock_guard lock(mutex_);
+  auto& c = control(axis);
+  c.interlock_open = true;
+  c.cause_present = true;
+  c.interlock_why = why.empty() ? std::string("unspecified cause") : why;
+  c.selected = WireMode::kRest;
+  sim_axis(world_, axis).inject_fault("interlock open: " + c.interlock_why);
+}
+
+void SimTableBackend::clear_interlock_cause(int axis) {
+  std::lock_guard lock(mutex_);
+  control(axis).cause_present = false;
+}
+
+std::pair<double, double> SimTableBackend::limits(int axis) {
+  std::lock_guard lock(mutex_);
+  return {control(axis).max_rate_dps, control(axis).max_accel_dps2};
+}
+
+}  // namespace calstand::drivers

@@ -1,0 +1,202 @@
+#include "drivers/can_sample_assembler.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+namespace calstand::drivers {
+
+CanSampleAssembler::CanSampleAssembler(CanSignalMap map, std::uint64_t sequence_modulus,
+                                       double sample_rate_hz)
+    : map_(std::move(map)),
+      modulus_(std::clamp<std::uint64_t>(sequence_modulus, 2, map_.sequence_wrap())),
+      sample_rate_hz_(sample_rate_hz > 0.0 ? sample_rate_hz : 1.0),
+      complete_mask_(static_cast<std::uint32_t>((std::uint64_t{1} << map_.frames.size()) - 1)) {}
+
+std::uint64_t CanSampleAssembler::ahead(std::uint32_t from, std::uint32_t to) const {
+  return (std::uint64_t{to} + modulus_ - from) % modulus_;
+}
+
+std::size_t CanSampleAssembler::pending_frames() const {
+  std::size_t n = 0;
+  for (const auto& p : partials_) n += static_cast<std::size_t>(std::popcount(p.received));
+  return n;
+}
+
+void CanSampleAssembler::drop_partial(std::size_t index) {
+  ++stats_.incomplete_samples;
+  stats_.frames_discarded += static_cast<std::uint64_t>(std::popcount(partials_[index].received));
+  partials_.erase(partials_.begin() + static_cast<std::ptrdiff_t>(index));
+}
+
+void CanSampleAssembler::reset() {
+  while (!partials_.empty()) drop_partial(0);
+  have_newest_ = false;
+  have_delivered_ = false;
+  unwrapped_sequence_ = 0;
+  have_time_raw_ = false;
+  time_wraps_ = 0;
+}
+
+void CanSampleAssembler::deliver(std::size_t index, std::vector<core::ImuSample>& out) {
+  // Older partial samples can no longer complete in order: drop them first.
+  while (index > 0) {
+    drop_partial(0);
+    --index;
+  }
+  const Partial p = partials_.front();
+  partials_.erase(partials_.begin());
+
+  core::ImuSample s;
+  s.sequence = p.sequence;
+  bool valid = true;
+  std::optional<std::uint64_t> time_raw;
+  for (std::size_t f = 0; f < map_.frames.size(); ++f) {
+    const std::span<const std::uint8_t, 8> payload(p.payloads[f]);
+    for (const auto& [which, field] : map_.frames[f].signals) {
+      const double v = field.decode(payload);
+      valid = valid && std::isfinite(v);
+      switch (which) {
+        case ImuSignal::kGyroX:
+          s.gyro_dps.x() = v;
+          break;
+        case ImuSignal::kGyroY:
+          s.gyro_dps.y() = v;
+          break;
+        case ImuSignal::kGyroZ:
+          s.gyro_dps.z() = v;
+          break;
+        case ImuSignal::kAccelX:
+          s.accel_mps2.x() = v;
+          break;
+        case ImuSignal::kAccelY:
+          s.accel_mps2.y() = v;
+          break;
+        case ImuSignal::kAccelZ:
+          s.accel_mps2.z() = v;
+          break;
+        case ImuSignal::kTemperature:
+          s.temperature_c = v;
+          break;
+        case ImuSignal::kDeviceTime:
+          s.device_time_s = v;
+          if (field.type == FieldType::kUnsigned && field.length_bits < 64) {
+            // Unwrap the counter: a step back by more than half its range is a wrap.
+            const std::uint64_t raw = field.extract_raw(payload);
+            const std::uint64_t half = std::uint64_t{1} << (field.length_bits - 1);
+            if (have_time_raw_ && raw < last_time_raw_ && last_time_raw_ - raw > half)
+              ++time_wraps_;
+            time_raw = raw;
+            const double wrap = std::ldexp(1.0, static_cast<int>(field.length_bits));
+            s.device_time_s =
+                (static_cast<double>(raw) + static_cast<double>(time_wraps_) * wrap) * field.scale +
+                field.offset;
+          }
+          break;
+      }
+    }
+  }
+  const std::uint64_t frames_in_sample = map_.frames.size();
+  if (!valid) {
+    // A NaN or infinity would poison a calibration fit; dropping the sample is what a gap is.
+    ++stats_.invalid_samples;
+    stats_.frames_discarded += frames_in_sample;
+    return;
+  }
+  if (time_raw) {
+    have_time_raw_ = true;
+    last_time_raw_ = *time_raw;
+  }
+  if (have_delivered_) {
+    const std::uint64_t step = ahead(last_delivered_, s.sequence);
+    if (step != 1) ++stats_.sequence_gaps;
+    unwrapped_sequence_ += step;
+  }
+  have_delivered_ = true;
+  last_delivered_ = s.sequence;
+  if (!map_.has_device_time)
+    s.device_time_s = static_cast<double>(unwrapped_sequence_) / sample_rate_hz_;
+  ++stats_.samples;
+  stats_.frames_used += frames_in_sample;
+  out.push_back(s);
+}
+
+std::size_t CanSampleAssembler::feed(const can_frame& frame, std::vector<core::ImuSample>& out) {
+  ++stats_.frames;
+  const bool extended = (frame.can_id & CAN_EFF_FLAG) != 0;
+  const canid_t id_bits = frame.can_id & CAN_EFF_MASK;
+  if ((frame.can_id & (CAN_RTR_FLAG | CAN_ERR_FLAG)) != 0 || frame.len > CAN_MAX_DLEN ||
+      (!extended && id_bits > CAN_SFF_MASK)) {
+    ++stats_.bad_frames;
+    return 0;
+  }
+  const auto index = map_.frame_index(id_bits | (extended ? CAN_EFF_FLAG : 0u));
+  if (!index) {
+    ++stats_.unknown_ids;
+    return 0;
+  }
+  if (frame.len < map_.frames[*index].min_length) {
+    ++stats_.bad_dlc;
+    return 0;
+  }
+  std::array<std::uint8_t, 8> payload{};  // bytes beyond len read as 0
+  std::copy_n(frame.data, frame.len, payload.begin());
+  const std::uint64_t raw_sequence =
+      map_.sequence.extract_raw(std::span<const std::uint8_t, 8>(payload));
+  if (raw_sequence >= modulus_) {
+    ++stats_.bad_frames;  // the device says its counter never gets here
+    return 0;
+  }
+  const auto sequence = static_cast<std::uint32_t>(raw_sequence);
+  const std::uint32_t bit = std::uint32_t{1} << *index;
+
+  auto slot = std::find_if(partials_.begin(), partials_.end(),
+                           [&](const Partial& p) { return p.sequence == sequence; });
+  if (slot == partials_.end()) {
+    // Newer than anything seen, or far enough behind to be a restarted counter: a new sample.
+    // Otherwise it belongs to a sample already delivered or dropped.
+    const std::uint64_t late_window = map_.reassembly_depth + 2;
+    const std::uint64_t back = have_newest_ ? ahead(sequence, newest_) : 0;
+    const bool behind = have_newest_ && back <= late_window && back < (modulus_ + 1) / 2;
+    if (behind) {
+      ++stats_.late_frames;
+      return 0;
+    }
+    if (have_newest_ && back != 0 && back < (modulus_ + 1) / 2) {
+      // A restart: older partial samples belong to the previous run.
+      while (!partials_.empty()) drop_partial(0);
+    }
+    have_newest_ = true;
+    newest_ = sequence;
+    partials_.push_back({sequence, 0, {}});
+    while (partials_.size() > map_.reassembly_depth) drop_partial(0);
+    slot = partials_.end() - 1;
+  }
+  if (slot->received & bit) {
+    ++stats_.duplicate_frames;  // the first copy stands
+    return 0;
+  }
+  slot->received |= bit;
+  slot->payloads[*index] = payload;
+  if (slot->received != complete_mask_) return 0;
+  const std::size_t before = out.size();
+  deliver(static_cast<std::size_t>(slot - partials_.begin()), out);
+  return out.size() - before;
+}
+
+std::map<std::string, std::uint64_t> CanSampleAssembler::counters() const {
+  return {{"frames", stats_.frames},
+          {"unknown_ids", stats_.unknown_ids},
+          {"bad_frames", stats_.bad_frames},
+          {"bad_dlc", stats_.bad_dlc},
+          {"duplicate_frames", stats_.duplicate_frames},
+          {"late_frames", stats_.late_frames},
+          {"frames_used", stats_.frames_used},
+          {"frames_discarded", stats_.frames_discarded},
+          {"samples", stats_.samples},
+          {"incomplete_samples", stats_.incomplete_samples},
+          {"invalid_samples", stats_.invalid_samples},
+          {"sequence_gaps", stats_.sequence_gaps}};
+}
+
+}  // namespace calstand::drivers

@@ -1,0 +1,294 @@
+#include "drivers/chamber_register_map.hpp"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace calstand::drivers {
+namespace {
+
+using nlohmann::json;
+
+std::string join(const std::string& where, std::string_view field) {
+  return where.empty() ? std::string(field) : where + "." + std::string(field);
+}
+
+// Every object in a map is checked for unknown keys: a misspelt "adress" must not silently
+// leave the default address in place on a live chamber.
+void reject_unknown_keys(const json& j, const std::string& where,
+                         std::initializer_list<std::string_view> known) {
+  for (const auto& [key, value] : j.items()) {
+    bool found = false;
+    for (auto k : known) found = found || key == k;
+    if (!found) {
+      std::string list;
+      for (auto k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+      throw core::InputError(join(where, key), "unknown field (expected one of " + list + ")");
+    }
+  }
+}
+
+std::uint16_t register_value(const json& j, const std::string& where) {
+  if (!j.is_number_integer() || j.get<std::int64_t>() < 0 || j.get<std::int64_t>() > 65535) {
+    throw core::InputError(where, "must be an integer in [0, 65535], got " + j.dump());
+  }
+  return static_cast<std::uint16_t>(j.get<std::int64_t>());
+}
+
+RegisterKind kind_from_json(const json& j, const std::string& where) {
+  if (j == "holding") return RegisterKind::kHolding;
+  if (j == "input") return RegisterKind::kInput;
+  throw core::InputError(where, "must be \"holding\" or \"input\", got " + j.dump());
+}
+
+RegisterEncoding encoding_from_json(const json& j, const std::string& where) {
+  if (j == "int16") return RegisterEncoding::kInt16;
+  if (j == "uint16") return RegisterEncoding::kUint16;
+  if (j == "float32") return RegisterEncoding::kFloat32;
+  throw core::InputError(where, "must be \"int16\", \"uint16\" or \"float32\", got " + j.dump());
+}
+
+RegisterField field_from_json(const json& j, const std::string& where) {
+  if (!j.is_object()) throw core::InputError(where, "must be an object");
+  reject_unknown_keys(j, where, {"address", "kind", "encoding", "scale"});
+  if (!j.contains("address")) throw core::InputError(join(where, "address"), "is required");
+  RegisterField f;
+  f.address = register_value(j.at("address"), join(where, "address"));
+  if (j.contains("kind")) f.kind = kind_from_json(j.at("kind"), join(where, "kind"));
+  if (!j.contains("encoding")) throw core::InputError(join(where, "encoding"), "is required");
+  f.encoding = encoding_from_json(j.at("encoding"), join(where, "encoding"));
+  if (j.contains("scale")) {
+    const auto& s = j.at("scale");
+    if (!s.is_number()) throw core::InputError(join(where, "scale"), "must be a number");
+    if (f.encoding == RegisterEncoding::kFloat32) {
+      throw core::InputError(join(where, "scale"),
+                             "applies to int16/uint16 only (float32 is in "
+                             "engineering units)");
+    }
+    f.scale = s.get<double>();
+  }
+  return f;
+}
+
+ModeField mode_from_json(const json& j, const std::string& where) {
+  if (!j.is_object()) throw core::InputError(where, "must be an object");
+  reject_unknown_keys(j, where, {"address", "control", "standby"});
+  for (auto key : {"address", "control", "standby"}) {
+    if (!j.contains(key)) throw core::InputError(join(where, key), "is required");
+  }
+  ModeField m;
+  m.address = register_value(j.at("address"), join(where, "address"));
+  m.control = register_value(j.at("control"), join(where, "control"));
+  m.standby = register_value(j.at("standby"), join(where, "standby"));
+  if (m.control == m.standby) {
+    throw core::InputError(join(where, "standby"), "must differ from control");
+  }
+  return m;
+}
+
+void check_field(const RegisterField& f, const std::string& where, bool written) {
+  if (written && f.kind != RegisterKind::kHolding) {
+    throw core::InputError(join(where, "kind"), "must be \"holding\": the driver writes it");
+  }
+  if (f.encoding != RegisterEncoding::kFloat32 && !(std::isfinite(f.scale) && f.scale > 0.0)) {
+    throw core::InputError(join(where, "scale"),
+                           fmt::format("must be positive and finite, got {}", f.scale));
+  }
+  if (f.encoding == RegisterEncoding::kFloat32 && f.address == 65535) {
+    throw core::InputError(join(where, "address"), "float32 needs two registers: 65534 at most");
+  }
+}
+
+struct Span {
+  std::string name;
+  RegisterKind kind;
+  int first;
+  int last;
+};
+
+}  // namespace
+
+std::string_view to_string(RegisterEncoding encoding) {
+  switch (encoding) {
+    case RegisterEncoding::kInt16:
+      return "int16";
+    case RegisterEncoding::kUint16:
+      return "uint16";
+    case RegisterEncoding::kFloat32:
+      return "float32";
+  }
+  return "?";
+}
+
+std::string_view to_string(WordOrder order) {
+  return order == WordOrder::kHighFirst ? "high_first" : "low_first";
+}
+
+std::optional<RegisterWords> encode_value(const RegisterField& field, double value) {
+  if (!std::isfinite(value)) return std::nullopt;
+  RegisterWords out;
+  out.count = field.register_count();
+  switch (field.encoding) {
+    case RegisterEncoding::kInt16: {
+      const double counts = std::round(value / field.scale);
+      if (counts < -32768.0 || counts > 32767.0) return std::nullopt;
+      out.words[0] = static_cast<std::uint16_t>(static_cast<std::int16_t>(counts));
+      return out;
+    }
+    case RegisterEncoding::kUint16: {
+      const double counts = std::round(value / field.scale);
+      if (counts < 0.0 || counts > 65535.0) return std::nullopt;
+      out.words[0] = static_cast<std::uint16_t>(counts);
+      return out;
+    }
+    case RegisterEncoding::kFloat32: {
+      if (std::abs(value) > double(std::numeric_limits<float>::max())) return std::nullopt;
+      const auto bits = std::bit_cast<std::uint32_t>(static_cast<float>(value));
+      const auto high = static_cast<std::uint16_t>(bits >> 16);
+      const auto low = static_cast<std::uint16_t>(bits & 0xFFFFu);
+      const bool high_first = field.word_order == WordOrder::kHighFirst;
+      out.words[0] = high_first ? high : low;
+      out.words[1] = high_first ? low : high;
+      return out;
+    }
+  }
+  return std::nullopt;
+}
+
+double decode_value(const RegisterField& field, std::span<const std::uint16_t> words) {
+  if (words.size() < std::size_t(field.register_count())) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  switch (field.encoding) {
+    case RegisterEncoding::kInt16:
+      return static_cast<std::int16_t>(words[0]) * field.scale;
+    case RegisterEncoding::kUint16:
+      return words[0] * field.scale;
+    case RegisterEncoding::kFloat32: {
+      const bool high_first = field.word_order == WordOrder::kHighFirst;
+      const std::uint32_t high = high_first ? words[0] : words[1];
+      const std::uint32_t low = high_first ? words[1] : words[0];
+      return double(std::bit_cast<float>((high << 16) | low));
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+void ChamberRegisterMap::set_word_order(WordOrder order) {
+  process_value.word_order = order;
+  setpoint.word_order = order;
+  if (ramp_rate) ramp_rate->word_order = order;
+}
+
+void ChamberRegisterMap::validate(const std::string& where) const {
+  check_field(process_value, join(where, "process_value"), false);
+  check_field(setpoint, join(where, "setpoint"), true);
+  if (ramp_rate) check_field(*ramp_rate, join(where, "ramp_rate"), true);
+  // Overlapping fields would make a setpoint write clobber the mode (or read back as the PV).
+  std::vector<Span> spans;
+  auto add = [&](std::string field_name, const RegisterField& f) {
+    spans.push_back({std::move(field_name), f.kind, f.address, f.address + f.register_count() - 1});
+  };
+  add("process_value", process_value);
+  add("setpoint", setpoint);
+  if (ramp_rate) add("ramp_rate", *ramp_rate);
+  if (mode) spans.push_back({"mode", RegisterKind::kHolding, mode->address, mode->address});
+  for (std::size_t i = 0; i < spans.size(); ++i) {
+    for (std::size_t k = 0; k < i; ++k) {
+      const auto& a = spans[i];
+      const auto& b = spans[k];
+      if (a.kind == b.kind && a.first <= b.last && b.first <= a.last) {
+        throw core::InputError(join(join(where, a.name), "address"),
+                               fmt::format("registers {}..{} overlap {} ({}..{})", a.first, a.last,
+                                           b.name, b.first, b.last));
+      }
+    }
+  }
+  if (!sensor_fault_raw.empty() && process_value.encoding == RegisterEncoding::kFloat32) {
+    throw core::InputError(join(where, "sensor_fault_raw"),
+                           "applies to int16/uint16 process values only (a float32 fault is "
+                           "NaN or infinity)");
+  }
+}
+
+ChamberRegisterMap watlow_f4_map() {
+  ChamberRegisterMap m;
+  m.name = "watlow-f4";
+  m.process_value = {100, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
+  m.setpoint = {300, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
+  // Full-scale words are what an int16 controller can say when it has no valid reading; a
+  // chamber never sits at +-3276.7 degC, so treating them as a fault costs nothing.
+  m.sensor_fault_raw = {0x7FFF, 0x8000};
+  return m;
+}
+
+ChamberRegisterMap watlow_f4t_map(WordOrder order) {
+  ChamberRegisterMap m;
+  m.name = "watlow-f4t";
+  m.process_value = {2820, RegisterKind::kHolding, RegisterEncoding::kFloat32, 1.0, order};
+  m.setpoint = {2782, RegisterKind::kHolding, RegisterEncoding::kFloat32, 1.0, order};
+  m.mode = ModeField{2730, 10, 62};
+  return m;
+}
+
+WordOrder word_order_from_json(const json& j, const std::string& where) {
+  if (j == "high_first") return WordOrder::kHighFirst;
+  if (j == "low_first") return WordOrder::kLowFirst;
+  throw core::InputError(where, "must be \"high_first\" or \"low_first\", got " + j.dump());
+}
+
+ChamberRegisterMap register_map_from_json(const json& j, const std::string& where,
+                                          WordOrder word_order) {
+  if (j.is_string()) {
+    const auto name = j.get<std::string>();
+    if (name == "watlow-f4") return watlow_f4_map();
+    if (name == "watlow-f4t") return watlow_f4t_map(word_order);
+    throw core::InputError(where,
+                           "unknown built-in map \"" + name +
+                               "\" (built-ins: watlow-f4, watlow-f4t; or give a map object)");
+  }
+  if (!j.is_object()) {
+    throw core::InputError(where, "must be a built-in map name or a map object, got " + j.dump());
+  }
+  reject_unknown_keys(
+      j, where, {"name", "process_value", "setpoint", "mode", "ramp_rate", "sensor_fault_raw"});
+  ChamberRegisterMap m;
+  m.name = "generic";
+  if (j.contains("name")) {
+    if (!j.at("name").is_string()) throw core::InputError(join(where, "name"), "must be a string");
+    m.name = j.at("name").get<std::string>();
+  }
+  for (auto key : {"process_value", "setpoint"}) {
+    if (!j.contains(key)) throw core::InputError(join(where, key), "is required");
+  }
+  m.process_value = field_from_json(j.at("process_value"), join(where, "process_value"));
+  m.setpoint = field_from_json(j.at("setpoint"), join(where, "setpoint"));
+  if (j.contains("mode")) m.mode = mode_from_json(j.at("mode"), join(where, "mode"));
+  if (j.contains("ramp_rate")) {
+    m.ramp_rate = field_from_json(j.at("ramp_rate"), join(where, "ramp_rate"));
+  }
+  if (j.contains("sensor_fault_raw")) {
+    const auto& list = j.at("sensor_fault_raw");
+    const auto list_where = join(where, "sensor_fault_raw");
+    if (!list.is_array()) throw core::InputError(list_where, "must be an array of register values");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      // Signed controllers document their sentinels as negative numbers (-32768): accept both.
+      const auto& v = list[i];
+      if (!v.is_number_integer() || v.get<std::int64_t>() < -32768 ||
+          v.get<std::int64_t>() > 65535) {
+        throw core::InputError(fmt::format("{}[{}]", list_where, i),
+                               "must be an integer in [-32768, 65535], got " + v.dump());
+      }
+      m.sensor_fault_raw.push_back(static_cast<std::uint16_t>(v.get<std::int64_t>() & 0xFFFF));
+    }
+  }
+  m.set_word_order(word_order);
+  m.validate(where);
+  return m;
+}
+
+}  // namespace calstand::drivers

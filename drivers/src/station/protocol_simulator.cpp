@@ -1,0 +1,234 @@
+#include "drivers/protocol_simulator.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/error.hpp"
+#include "drivers/acutrol_protocol.hpp"
+#include "drivers/acutrol_server.hpp"
+#if CALSTAND_WITH_SOCKETCAN
+#include "drivers/can_sample_streamer.hpp"
+#include "drivers/can_signal_map.hpp"
+#include "drivers/socketcan_port.hpp"
+#endif
+#include "drivers/chamber_register_map.hpp"
+#include "drivers/imu_frame_streamer.hpp"
+#include "drivers/modbus_chamber_server.hpp"
+#include "drivers/sim_world_runner.hpp"
+
+namespace calstand::drivers {
+
+using nlohmann::json;
+
+struct ProtocolSimulator::Impl {
+  Impl(const core::StationConfig& config, ProtocolSimOptions o)
+      : options(std::move(o)),
+        sim_config(config),
+        runner(config, options.time_scale),
+        table_backend(runner.world(), runner.mutex()),
+        chamber_backend(runner.world(), runner.mutex()) {}
+
+  ProtocolSimOptions options;
+  core::StationConfig sim_config;
+  SimWorldRunner runner;
+  SimTableBackend table_backend;
+  SimChamberBackend chamber_backend;
+  std::unique_ptr<AcutrolServer> table_server;
+  std::unique_ptr<ModbusChamberServer> f4t_server;
+  std::unique_ptr<ModbusChamberServer> f4_server;
+  std::vector<std::unique_ptr<ImuFrameStreamer>> imu_lines;
+#if CALSTAND_WITH_SOCKETCAN
+  std::unique_ptr<CanSampleStreamer> can;  // the first IMU on CAN, when asked
+#else
+  struct NoCan {
+    void push(const core::ImuSample&) {}
+    void set_silent(bool) {}
+    std::uint64_t frames_sent() const { return 0; }
+    std::uint64_t frames_dropped() const { return 0; }
+  };
+  std::unique_ptr<NoCan> can;
+#endif
+  bool started = false;
+};
+
+ProtocolSimulator::ProtocolSimulator(const core::StationConfig& sim_config,
+                                     ProtocolSimOptions options)
+    : impl_(std::make_unique<Impl>(sim_config, std::move(options))) {}
+
+ProtocolSimulator::~ProtocolSimulator() { stop(); }
+
+SimWorldRunner& ProtocolSimulator::runner() { return impl_->runner; }
+
+void ProtocolSimulator::start() {
+  auto& m = *impl_;
+  if (m.started) return;
+  AcutrolServerOptions table_options;
+  table_options.bind_host = m.options.host;
+  table_options.port = static_cast<std::uint16_t>(m.options.table_port);
+  m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
+  m.table_server->start();
+  m.f4t_server = ModbusChamberServer::tcp(watlow_f4t_map(), m.chamber_backend,
+                                          m.options.modbus_port);
+  m.f4t_server->start();
+  if (m.options.f4_rtu) {
+    m.f4_server = ModbusChamberServer::rtu(watlow_f4_map(), m.chamber_backend);
+    m.f4_server->start();
+  }
+  for (std::size_t i = 0; i < m.runner.world().imu_count(); ++i) {
+    m.imu_lines.push_back(std::make_unique<ImuFrameStreamer>());
+  }
+  if (!m.options.can_interface.empty()) {
+    if (m.options.can_map_file.empty()) {
+      throw core::InputError("--can-map", "a CAN signal map is needed to send IMU frames on CAN");
+    }
+#if CALSTAND_WITH_SOCKETCAN
+    auto port = std::make_unique<SocketCanPort>(m.options.can_interface);
+    port->open();
+    m.can = std::make_unique<CanSampleStreamer>(
+        std::move(port), CanSignalMap::load(m.options.can_map_file, "--can-map"));
+#else
+    throw core::InputError("--can", "this calstand was built without SocketCAN");
+#endif
+  }
+  {
+    // Every sample the world produces goes out on the lines, from the world's thread.
+    std::lock_guard lock(m.runner.mutex());
+    m.runner.world().set_sample_sink([this](std::size_t i, const core::ImuSample& s) {
+      impl_->imu_lines[i]->push(s);
+      if (impl_->can && i == 0) impl_->can->push(s);
+    });
+  }
+  m.runner.start();
+  m.started = true;
+}
+
+void ProtocolSimulator::stop() {
+  auto& m = *impl_;
+  if (!m.started) return;
+  m.runner.stop();
+  if (m.table_server) m.table_server->stop();
+  if (m.f4t_server) m.f4t_server->stop();
+  if (m.f4_server) m.f4_server->stop();
+  m.imu_lines.clear();
+  m.can.reset();
+  m.started = false;
+}
+
+json ProtocolSimulator::endpoints() const {
+  auto& m = *impl_;  // the world's names and truths never change: no lock needed
+  json imus = json::array();
+  for (std::size_t i = 0; i < m.imu_lines.size(); ++i) {
+    json entry = {{"name", m.runner.world().imu_name(i)},
+                  {"serial", m.imu_lines[i]->path()},
+                  {"format", "calstand"}};
+    if (m.can && i == 0) entry["can"] = m.options.can_interface;
+    imus.push_back(std::move(entry));
+  }
+  json chamber = {{"modbus_tcp", fmt::format("{}:{}", m.options.host, m.f4t_server->port())},
+                  {"map", "watlow-f4t"}};
+  if (m.f4_server) chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
+  return {{"sim_station", m.sim_config.name},
+          {"time_scale", m.options.time_scale},
+          {"table", {{"tcp", fmt::format("{}:{}", m.options.host, m.table_server->port())},
+                     {"protocol", "acutrol"}}},
+          {"chamber", chamber},
+          {"imus", imus}};
+}
+
+core::StationConfig ProtocolSimulator::client_station() const {
+  auto& m = *impl_;  // the world's names and truths never change: no lock needed
+  core::StationConfig c = m.sim_config;
+  c.name = m.sim_config.name + " (via sim-station)";
+  c.time_scale = m.options.time_scale;
+  // Link-health thresholds guard against operating-system and link delays, which do not speed
+  // up with the world: scaled by K they keep their wall-clock meaning (a 1 s stale-stream rule
+  // at K = 20 would otherwise fire on a 50 ms scheduling hiccup).
+  c.policy.stale_after_s = m.sim_config.policy.stale_after_s * m.options.time_scale;
+  c.table.backend = "acutrol";
+  c.table.connection = {{"transport", "tcp"}, {"host", m.options.host},
+                        {"port", m.table_server->port()}};
+  c.chamber.backend = "modbus";
+  c.chamber.connection = {{"transport", "tcp"}, {"host", m.options.host},
+                          {"port", m.f4t_server->port()}, {"unit_id", 1}, {"map", "watlow-f4t"},
+                          // Poll as often in world time as a lab station does (4 Hz); the
+                          // staleness rule (5 s in a lab) scaled as the policy above.
+                          {"poll_period_ms", std::max(10, static_cast<int>(std::lround(
+                                                              250.0 / m.options.time_scale)))},
+                          {"stale_after_s", 5.0 * m.options.time_scale}};
+  for (std::size_t i = 0; i < c.imus.size(); ++i) {
+    auto& imu = c.imus[i];
+    const auto& truth = m.runner.world().imu(i).truth();
+    imu.backend = "serial";
+    imu.model.clear();
+    imu.spec_file.clear();
+    imu.truth_file.clear();
+    imu.truth = nullptr;
+    imu.connection = {{"path", m.imu_lines.at(i)->path()},
+                      {"baud", 921600},
+                      {"format", "calstand"},
+                      {"sample_rate_hz", truth.sample_rate_hz},
+                      {"sequence_modulus", truth.sequence_modulus}};
+  }
+  return c;
+}
+
+void ProtocolSimulator::open_interlock(TableAxis axis, const std::string& why) {
+  impl_->table_backend.open_interlock(axis == TableAxis::kOuter ? acutrol::kOuterAxis
+                                                                : acutrol::kInnerAxis,
+                                      why);
+}
+
+void ProtocolSimulator::clear_interlock_cause(TableAxis axis) {
+  impl_->table_backend.clear_interlock_cause(axis == TableAxis::kOuter ? acutrol::kOuterAxis
+                                                                       : acutrol::kInnerAxis);
+}
+
+void ProtocolSimulator::set_modbus_running(bool running) {
+  for (auto* server : {impl_->f4t_server.get(), impl_->f4_server.get()}) {
+    if (!server) continue;
+    if (running) {
+      server->start();
+    } else {
+      server->stop();
+    }
+  }
+}
+
+void ProtocolSimulator::set_imu_silent(std::size_t index, bool silent) {
+  impl_->imu_lines.at(index)->set_silent(silent);
+  if (impl_->can && index == 0) impl_->can->set_silent(silent);
+}
+
+void ProtocolSimulator::inject_imu_bytes(std::size_t index, std::vector<std::uint8_t> bytes) {
+  impl_->imu_lines.at(index)->inject(std::move(bytes));
+}
+
+std::size_t ProtocolSimulator::imu_index(const std::string& name) const {
+  auto& world = impl_->runner.world();
+  for (std::size_t i = 0; i < world.imu_count(); ++i) {
+    if (world.imu_name(i) == name) return i;
+  }
+  throw core::InputError("imu", fmt::format("no IMU \"{}\" in the simulated station", name));
+}
+
+json ProtocolSimulator::statistics() const {
+  auto& m = *impl_;  // the world's names and truths never change: no lock needed
+  json imus = json::array();
+  for (std::size_t i = 0; i < m.imu_lines.size(); ++i) {
+    imus.push_back({{"name", m.runner.world().imu_name(i)},
+                    {"frames_sent", m.imu_lines[i]->frames_sent()},
+                    {"frames_dropped", m.imu_lines[i]->frames_dropped()}});
+  }
+  return {{"world_lag_s", m.runner.lag_s()},
+          {"table_commands", m.table_server ? m.table_server->commands_served() : 0},
+          {"modbus_requests", m.f4t_server ? m.f4t_server->requests() : 0},
+          {"can_frames_sent", m.can ? m.can->frames_sent() : 0},
+          {"can_frames_dropped", m.can ? m.can->frames_dropped() : 0},
+          {"imus", imus}};
+}
+
+}  // namespace calstand::drivers

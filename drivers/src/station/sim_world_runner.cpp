@@ -1,0 +1,50 @@
+#include "drivers/sim_world_runner.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+namespace calstand::drivers {
+namespace {
+// Wall time between world advances [ms]: short enough that protocol replies see fresh state.
+constexpr auto kSlice = std::chrono::milliseconds(1);
+// At most this much world time per advance [s], so the mutex is never held for long even when
+// the world has fallen behind.
+constexpr double kMaxAdvanceS = 0.25;
+}  // namespace
+
+SimWorldRunner::SimWorldRunner(const core::StationConfig& config, double time_scale)
+    : world_(config), time_scale_(time_scale > 0.0 ? time_scale : 1.0) {}
+
+SimWorldRunner::~SimWorldRunner() { stop(); }
+
+void SimWorldRunner::start() {
+  if (running_.exchange(true)) return;
+  thread_ = std::thread([this] { loop(); });
+}
+
+void SimWorldRunner::stop() {
+  running_ = false;
+  if (thread_.joinable()) thread_.join();
+}
+
+void SimWorldRunner::loop() {
+  const auto wall0 = std::chrono::steady_clock::now();
+  double world0;
+  {
+    std::lock_guard lock(mutex_);
+    world0 = world_.now_s();
+  }
+  while (running_) {
+    const double wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    const double target = world0 + time_scale_ * wall_s;
+    {
+      std::lock_guard lock(mutex_);
+      world_.advance_to(std::min(target, world_.now_s() + kMaxAdvanceS));
+      lag_s_ = target - world_.now_s();
+    }
+    std::this_thread::sleep_for(kSlice);
+  }
+}
+
+}  // namespace calstand::drivers

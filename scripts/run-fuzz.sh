@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (tests/fuzz) with clang and runs each for SECONDS (default 60)
+# on a corpus kept in build-fuzz/corpus/<target>. Needs clang and libclang-rt (Debian clang,
+# libclang-rt-14-dev). Exits non-zero when a target crashes; the crashing input is kept in
+# build-fuzz/ (crash-*).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${1:-60}"
+if ! command -v clang++ >/dev/null; then
+  echo "run-fuzz: clang++ is not installed (apt install clang libclang-rt-14-dev)" >&2
+  exit 2
+fi
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCALSTAND_FUZZ=ON -DCALSTAND_BUILD_TESTS=OFF -DCALSTAND_BUILD_BENCHMARKS=OFF >/dev/null
+targets=$(cd tests/fuzz && ls *_fuzz.cpp | sed 's/\.cpp$//')
+# shellcheck disable=SC2086
+cmake --build build-fuzz --target $targets
+status=0
+for t in $targets; do
+  mkdir -p "build-fuzz/corpus/$t"
+  echo "run-fuzz: $t for ${seconds} s"
+  if ! (cd build-fuzz && "./tests/fuzz/$t" -max_total_time="$seconds" -print_final_stats=1 \
+          "corpus/$t" >"$t.log" 2>&1); then
+    status=1
+    echo "run-fuzz: $t FAILED (log: build-fuzz/$t.log)"
+  fi
+  grep -E 'stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY' "build-fuzz/$t.log" || true
+done
+exit $status
