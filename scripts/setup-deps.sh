@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
   libmuparser-dev libfftw3-dev libboost-math-dev
-  libmodbus-dev python3-pymodbus python3-serial
+  libmodbus-dev python3-pymodbus python3-serial libcpp-httplib-dev
   gnuplot-nox chromium
 )
 

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cli_runner.hpp"
+#include "known_imu_station.hpp"
 
 namespace {
 
@@ -18,32 +19,13 @@ using calstand::testing::read_text;
 using calstand::testing::run;
 using calstand::testing::write_text;
 
-// A station whose IMU has known errors and white noise only (no turn-on bias, no correlated
-// noise), so a calibration from one run holds exactly for the next.
-constexpr const char* kTruthParameters = R"({
-  "gyro_bias.x": 0.002, "gyro_bias.y": -0.001, "gyro_bias.z": 0.003,
-  "gyro_scale.x": 300, "gyro_scale.y": -200, "gyro_scale.z": 150,
-  "gyro_misalignment.xy": 0.0005, "gyro_misalignment.zx": -0.0003,
-  "accel_bias.x": 0.01, "accel_bias.y": -0.02, "accel_bias.z": 0.005,
-  "accel_scale.x": -400, "accel_scale.y": 250, "accel_scale.z": 100,
-  "accel_misalignment.yx": 0.0004, "accel_misalignment.xz": -0.0002})";
-
 class FitCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = ::testing::TempDir() + "calstand-fit-cli-" + std::to_string(::getpid()) + "/";
     std::filesystem::create_directories(dir_);
     station_ = dir_ + "station.json";
-    write_text(station_, std::string(R"({"format": "calstand-station/1", "name": "fit-test", "seed": 3,
-      "site": {"latitude_deg": 30.5, "height_m": 25},
-      "table": {"backend": "sim", "outer_axis": [0, 1, 0], "inner_axis": [0, 0, 1],
-                "outer": {"max_rate_dps": 400, "max_accel_dps2": 300},
-                "inner": {"max_rate_dps": 1000, "max_accel_dps2": 500}},
-      "chamber": {"backend": "sim", "min_c": -55, "max_c": 125, "max_ramp_c_per_min": 5},
-      "imus": [{"name": "imu0", "backend": "sim", "truth": {"format": "calstand-truth/1",
-        "parameters": )") + kTruthParameters + R"(,
-        "noise": {"gyro": {"arw_deg_per_sqrt_h": 0.1}, "accel": {"vrw_mps_per_sqrt_h": 0.03}},
-        "output": {"sample_rate_hz": 200}}}]})");
+    write_text(station_, calstand::testing::known_imu_station("fit-test", 3));
     db_ = dir_ + "fit.db";
     // Run 1: six positions; run 2: rates about both table axes; run 3: six positions again.
     for (const std::string args :
@@ -64,9 +46,7 @@ class FitCli : public ::testing::Test {
   static inline std::string dir_, station_, db_;
 };
 
-double truth(const std::string& name) {
-  return nlohmann::json::parse(kTruthParameters).value(name, 0.0);
-}
+double truth(const std::string& name) { return calstand::testing::known_imu_truth(name); }
 
 TEST_F(FitCli, SixPositionRecoversTheAccelerometerWithinThreeSigma) {
   const auto j = fit_json("--run 1 --sensor accel --model accel_bias,accel_scale,accel_misalignment");

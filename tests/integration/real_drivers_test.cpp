@@ -12,10 +12,13 @@
 #include <filesystem>
 #include <future>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "cli_runner.hpp"
+#include "known_imu_station.hpp"
 #include "sim_station_process.hpp"
 
 namespace {
@@ -30,17 +33,7 @@ using nlohmann::json;
 // enough that the engine's 0.1 s ticks (5 ms of wall time) keep up on a busy 2-core machine.
 constexpr const char* kTimeScale = "20";
 
-constexpr const char* kTruthParameters = R"({
-  "gyro_bias.x": 0.002, "gyro_bias.y": -0.001, "gyro_bias.z": 0.003,
-  "gyro_scale.x": 300, "gyro_scale.y": -200, "gyro_scale.z": 150,
-  "gyro_misalignment.xy": 0.0005, "gyro_misalignment.zx": -0.0003,
-  "accel_bias.x": 0.01, "accel_bias.y": -0.02, "accel_bias.z": 0.005,
-  "accel_scale.x": -400, "accel_scale.y": 250, "accel_scale.z": 100,
-  "accel_misalignment.yx": 0.0004, "accel_misalignment.xz": -0.0002})";
-
-double truth(const std::string& name) {
-  return json::parse(kTruthParameters).value(name, 0.0);
-}
+double truth(const std::string& name) { return calstand::testing::known_imu_truth(name); }
 
 class RealDrivers : public ::testing::Test {
  protected:
@@ -48,16 +41,7 @@ class RealDrivers : public ::testing::Test {
     dir_ = ::testing::TempDir() + "calstand-real-drivers-" + std::to_string(::getpid()) + "/";
     std::filesystem::create_directories(dir_);
     sim_station_ = dir_ + "sim.json";
-    write_text(sim_station_, std::string(R"({"format": "calstand-station/1", "name": "drivers-test", "seed": 5,
-      "site": {"latitude_deg": 30.5, "height_m": 25},
-      "table": {"backend": "sim", "outer_axis": [0, 1, 0], "inner_axis": [0, 0, 1],
-                "outer": {"max_rate_dps": 400, "max_accel_dps2": 300},
-                "inner": {"max_rate_dps": 1000, "max_accel_dps2": 500}},
-      "chamber": {"backend": "sim", "min_c": -55, "max_c": 125, "max_ramp_c_per_min": 5},
-      "imus": [{"name": "imu0", "backend": "sim", "truth": {"format": "calstand-truth/1",
-        "parameters": )") + kTruthParameters + R"(,
-        "noise": {"gyro": {"arw_deg_per_sqrt_h": 0.1}, "accel": {"vrw_mps_per_sqrt_h": 0.03}},
-        "output": {"sample_rate_hz": 200}}}]})");
+    write_text(sim_station_, calstand::testing::known_imu_station("drivers-test", 5));
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
 
@@ -216,6 +200,62 @@ TEST_F(RealDrivers, ImuStreamStoppingFailsTheCaptureAndRecordsWhy) {
   EXPECT_NE(events_text(f.shown).find("stream stale"), std::string::npos) << events_text(f.shown);
   const auto t = table_state(f.lab);
   EXPECT_EQ(t["outer"]["mode"], "rest") << t.dump();
+}
+
+TEST_F(RealDrivers, DeviceCommandsDriveTheStationByHand) {
+  const std::string lab = dir_ + "device-lab.json";
+  auto station = serve(lab);
+  const std::string device = "device --station " + lab + " ";
+  auto json_of = [&](const std::string& args) {
+    const auto r = run(device + args, dir_ + "stderr.txt");
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << read_text(dir_ + "stderr.txt");
+    return json::parse(r.out);
+  };
+
+  const auto status = json_of("status");
+  ASSERT_EQ(status["devices"].size(), 3u) << status.dump(2);
+  for (const auto& d : status["devices"]) EXPECT_EQ(d["configure"], "ok") << d.dump();
+
+  const auto moved = json_of("table move --outer 90 --inner -45");
+  EXPECT_NEAR(moved["outer"]["angle_deg"].get<double>(), 90.0, 1e-3) << moved.dump();
+  EXPECT_NEAR(moved["inner"]["angle_deg"].get<double>(), -45.0, 1e-3) << moved.dump();
+  EXPECT_TRUE(moved["outer"]["in_position"].get<bool>());
+
+  const auto turning = json_of("table rate --axis inner --dps 20");
+  EXPECT_NEAR(turning["inner"]["rate_dps"].get<double>(), 20.0, 0.01) << turning.dump();
+  json_of("table stop");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // 6 s of world time to brake
+  const auto stopped = json_of("table get");
+  EXPECT_NEAR(stopped["inner"]["rate_dps"].get<double>(), 0.0, 1e-3) << stopped.dump();
+
+  const auto set = json_of("chamber set 30 --ramp 5");  // stays while the driver steps
+  EXPECT_NEAR(set["setpoint_c"].get<double>(), 30.0, 0.05) << set.dump();
+  EXPECT_EQ(set["mode"], "active") << set.dump();
+  const auto standby = json_of("chamber standby");
+  EXPECT_EQ(standby["mode"], "standby") << standby.dump();
+
+  const auto r = run(device + "imu stream --count 50", dir_ + "stderr.txt");
+  ASSERT_EQ(r.exit_code, 0) << read_text(dir_ + "stderr.txt");
+  std::istringstream lines(r.out);
+  std::string line;
+  std::vector<json> samples;
+  while (std::getline(lines, line)) samples.push_back(json::parse(line));
+  ASSERT_EQ(samples.size(), 50u);
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    EXPECT_EQ(samples[i]["sequence"].get<int>(), (samples[i - 1]["sequence"].get<int>() + 1) % 65536);
+    EXPECT_NEAR(samples[i]["accel_mps2"][2].get<double>(), samples[0]["accel_mps2"][2].get<double>(), 0.5);
+  }
+
+  // Mistakes are refused with where and why.
+  const auto unknown = run(device + "imu stream --imu nope --count 1");
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.out;
+  EXPECT_NE(unknown.out.find("no IMU \"nope\""), std::string::npos) << unknown.out;
+  const auto simulated = run("device --station " + sim_station_ + " table get");
+  EXPECT_EQ(simulated.exit_code, 2) << simulated.out;
+  EXPECT_NE(simulated.out.find("simulated in process"), std::string::npos) << simulated.out;
+  const auto bad = station->command("levitate table");
+  EXPECT_FALSE(bad.value("ok", true));
+  EXPECT_NE(bad.value("error", "").find("not understood"), std::string::npos) << bad.dump();
 }
 
 }  // namespace
