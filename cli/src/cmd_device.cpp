@@ -179,12 +179,15 @@ void wait_table(drivers::Station& station, double timeout_s, Done done, const ch
   for (;;) {
     const auto s = station.table().read_state();
     if (s.outer.fault || s.inner.fault) {
+      station.table().stop();  // never leave an axis moving when the command gives up
       throw std::runtime_error("table fault: " +
                                (s.outer.fault ? s.outer.fault_text : s.inner.fault_text));
     }
     if (done(s)) return;
     if (station.clock().now_s() - start > timeout_s) {
-      throw std::runtime_error(fmt::format("table: {} not done within {:.0f} s", what, timeout_s));
+      station.table().stop();
+      throw std::runtime_error(fmt::format("table: {} not done within {:.0f} s (stopped)", what,
+                                           timeout_s));
     }
     std::this_thread::sleep_for(20ms);
   }
@@ -283,7 +286,7 @@ void register_device(CLI::App& app) {
   set->add_option("--ramp", opt->ramp_c_per_min, "ramp [degC/min] (default: the chamber's)");
   set->add_flag("--wait", opt->wait, "wait until the air is within --tolerance of TEMP");
   set->add_option("--tolerance", opt->tolerance_c, "with --wait [degC]")->capture_default_str();
-  set->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  set->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
   set->callback([opt] { chamber_set(*opt); });
   chamber->add_subcommand("standby", "stop controlling (safe state)")->callback([opt] { chamber_standby(*opt); });
 
@@ -293,12 +296,12 @@ void register_device(CLI::App& app) {
   auto* move = table->add_subcommand("move", "both axes to angles, wait until in position");
   move->add_option("--outer", opt->outer_deg, "outer axis angle [deg]")->required();
   move->add_option("--inner", opt->inner_deg, "inner axis angle [deg]")->required();
-  move->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  move->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
   move->callback([opt] { table_move(*opt); });
   auto* rate = table->add_subcommand("rate", "turn one axis at a rate (it keeps turning)");
   rate->add_option("--axis", opt->axis, "outer or inner")->required()->check(CLI::IsMember({"outer", "inner"}));
   rate->add_option("--dps", opt->rate_dps, "rate [deg/s], signed")->required();
-  rate->add_option("--timeout", opt->timeout_s, "give up after [s]")->capture_default_str();
+  rate->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
   rate->callback([opt] { table_rate(*opt); });
   table->add_subcommand("stop", "both axes to rest (safe state)")->callback([opt] { table_stop(*opt); });
 

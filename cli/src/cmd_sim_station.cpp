@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "drivers/protocol_simulator.hpp"
+#include "drivers/sim_world_runner.hpp"
 #include "sim/sim_world.hpp"
 
 namespace calstand::cli {
@@ -118,7 +119,16 @@ void run(SimStationOptions opt) {
   bool stdin_open = true;
   bool quit = false;
   std::string pending;
+  auto last_lag_warning = std::chrono::steady_clock::now() - std::chrono::hours(1);
   while (!g_stop && !quit) {
+    // The world falling behind the clock the clients run on (time scale too high for this
+    // machine) would make every timing of the rehearsal wrong: say so, at most every 10 s.
+    if (const double lag = sim.runner().lag_s(); lag > 1.0 * opt.serve.time_scale &&
+        std::chrono::steady_clock::now() - last_lag_warning > std::chrono::seconds(10)) {
+      std::cerr << fmt::format("sim-station: warning: the world is {:.1f} s behind the wall "
+                               "clock x {}; lower --time-scale\n", lag, opt.serve.time_scale);
+      last_lag_warning = std::chrono::steady_clock::now();
+    }
     if (opt.duration_s > 0.0 &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
             opt.duration_s) {

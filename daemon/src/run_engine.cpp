@@ -92,6 +92,8 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt) {
   journal_.run_state(RunState::kRunning, station_.clock().now_s(), "");
   try {
     if (auto r = station_.bring_up(); !r) throw StepFailed{"station bring-up: " + r.message};
+    // Stream health counts from now: a resumed run's clock does not start at 0.
+    for (auto& h : imu_health_) h.last_sample_s = station_.clock().now_s();
     if (first_step > 0) reestablish(first_step);
     std::size_t i = first_step;
     while (i < plan_.steps.size()) {
@@ -126,15 +128,30 @@ void RunEngine::finish(RunState final_state, const std::string& reason) {
     state_ = RunState::kAborting;
     set_phase("making safe");
   }
-  const auto safe = station_.make_safe();
-  if (!safe) record_event(EventKind::kFault, "engine", "making the station safe: " + safe.message);
+  auto safe = station_.make_safe();
+  if (!safe) {
+    record_event(EventKind::kFault, "engine", "making the station safe: " + safe.message);
+    // A device whose link is down (a Modbus gateway rebooting) cannot take its safe command
+    // now; leaving would leave it as it was (a chamber still at +85 degC). Keep trying while
+    // the drivers reconnect, then say plainly if it did not work.
+    const auto give_up = std::chrono::steady_clock::now() +
+                         std::chrono::duration<double>(options_.safe_state_retry_s);
+    while (!safe && !station_.clock().is_virtual() && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      safe = station_.make_safe();
+    }
+    record_event(safe ? EventKind::kInfo : EventKind::kFault, "engine",
+                 safe ? std::string("station safe") : "station NOT safe: " + safe.message);
+  }
   record_device_events();
+  std::string final_reason = reason;
+  if (!safe) final_reason += (final_reason.empty() ? "" : "; ") + ("station NOT safe: " + safe.message);
   {
     std::lock_guard lock(mutex_);
-    exit_reason_ = reason;
+    exit_reason_ = final_reason;
   }
   state_ = final_state;
-  journal_.run_state(final_state, station_.clock().now_s(), reason);
+  journal_.run_state(final_state, station_.clock().now_s(), final_reason);
   set_phase(to_string(final_state).data());
 }
 
@@ -279,7 +296,7 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
   for (int tries = 0; tries < options_.max_capture_attempts; ++tries, ++attempt) {
     if (tries > 0) journal_.step_started(index, attempt, station_.clock().now_s());
     poll_imus();  // samples from before the capture belong to no step
-    capturing_ = Capturing{index, attempt, std::nullopt};
+    capturing_ = Capturing{index, attempt, std::nullopt, station_.clock().now_s()};
     set_phase("capturing");
     const double end = station_.clock().now_s() + duration_s;
     try {
@@ -300,6 +317,7 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
     last_invalid_reason = *invalid;
     record_event(EventKind::kInterlock, "engine",
                  fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
+    if (tries + 1 == options_.max_capture_attempts) break;  // no attempt left to prepare for
     // A repeat while an IMU is still silent would be invalid at once: give the streams time
     // to come back first.
     wait_for_streams();
@@ -442,11 +460,22 @@ void RunEngine::poll_imus() {
       }
     }
     if (capturing_ && !capturing_->invalid_reason) {
-      bool queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples);
+      // A real link delivers late: samples taken before the capture began (stamped so by the
+      // driver) can arrive in its first poll. They belong to no step.
+      std::vector<core::ImuSample> late_trimmed;
+      const std::vector<core::ImuSample>* in_capture = &samples;
+      if (samples.front().receive_time_s < capturing_->start_s) {
+        for (const auto& s : samples) {
+          if (s.receive_time_s >= capturing_->start_s) late_trimmed.push_back(s);
+        }
+        in_capture = &late_trimmed;
+      }
+      if (in_capture->empty()) continue;
+      bool queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
       if (!queued && station_.clock().is_virtual()) {
         // Simulated time waits for the disk: back-pressure, not loss.
         journal_.wait_for_writer();
-        queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), samples);
+        queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
       }
       if (!queued) {
         record_event(EventKind::kFault, "writer", "capture queue overflow: samples not stored");

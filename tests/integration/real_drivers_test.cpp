@@ -141,20 +141,44 @@ struct FaultedRun {
   json shown;
 };
 
+/// Waits (up to 60 s) until the run in `db` is in its first capture or rate step.
+void wait_until_capturing(const std::string& db) {
+  for (int i = 0; i < 600; ++i) {
+    const auto r = run("show --db " + db + " --run 1 --json");
+    if (r.exit_code == 0) {
+      const auto shown = json::parse(r.out, nullptr, false);
+      if (!shown.is_discarded()) {
+        for (const auto& step : shown["steps"]) {
+          const bool records = step["kind"] == "capture" || step["kind"] == "rate";
+          if (records && step["status"] == "running") return;
+        }
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ADD_FAILURE() << "the run never started capturing";
+}
+
 FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
                           const std::string& fault, double after_wall_s,
                           const std::function<std::unique_ptr<SimStationProcess>(const std::string&)>& serve,
-                          const std::string& dir) {
+                          const std::string& dir,
+                          const std::function<void(FaultedRun&)>& before = {},
+                          const std::function<void(FaultedRun&)>& after_fault = {}) {
   FaultedRun out;
   out.lab = dir + name + "-lab.json";
   out.station = serve(out.lab);
+  if (before) before(out);
   const std::string db = dir + name + ".db";
   auto running = std::async(std::launch::async, [&] {
     return run("run " + procedure + " --station " + out.lab + " --db " + db + " --quiet");
   });
+  // The fault strikes during the first capture, whatever the machine's load.
+  wait_until_capturing(db);
   std::this_thread::sleep_for(std::chrono::duration<double>(after_wall_s));
   const auto answer = out.station->command(fault);
   EXPECT_TRUE(answer.value("ok", false)) << answer.dump();
+  if (after_fault) after_fault(out);
   out.result = running.get();
   const auto shown = run("show --db " + db + " --run 1 --json");
   out.shown = json::parse(shown.out);
@@ -162,21 +186,36 @@ FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
 }
 
 TEST_F(RealDrivers, ModbusControllerGoneMidRunAbortsToSafeStateWithTheReason) {
-  auto f = run_with_fault("modbus-gone", "six-position --set capture_s=60", "modbus stop", 2.0,
-                          &RealDrivers::serve, dir_);
+  // The chamber is controlling at 30 degC when its controller vanishes mid-capture; it comes
+  // back while the engine is still trying to put it in standby, which must then succeed.
+  auto set_chamber = [&](FaultedRun& f) {
+    const auto r = run("device --station " + f.lab + " chamber set 30 --ramp 5");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+  };
+  auto controller_back = [](FaultedRun& f) {
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    EXPECT_TRUE(f.station->command("modbus start").value("ok", false));
+  };
+  auto f = run_with_fault("modbus-gone", "six-position --set capture_s=60", "modbus stop", 0.5,
+                          &RealDrivers::serve, dir_, set_chamber, controller_back);
   EXPECT_NE(f.result.exit_code, 0) << f.result.out;
   EXPECT_EQ(f.shown["status"], "aborted") << f.shown.dump(2);
   const std::string reason = f.shown.value("exit_reason", "");
   EXPECT_NE(reason.find("chamber"), std::string::npos) << reason;
-  EXPECT_NE(events_text(f.shown).find("chamber"), std::string::npos) << events_text(f.shown);
+  EXPECT_EQ(reason.find("NOT safe"), std::string::npos) << reason;
+  const std::string events = events_text(f.shown);
+  EXPECT_NE(events.find("station safe"), std::string::npos) << events;
   const auto t = table_state(f.lab);
   EXPECT_NEAR(t["outer"]["rate_dps"].get<double>(), 0.0, 1e-3);
   EXPECT_NEAR(t["inner"]["rate_dps"].get<double>(), 0.0, 1e-3);
+  const auto c = run("device --station " + f.lab + " chamber get", dir_ + "stderr.txt");
+  ASSERT_EQ(c.exit_code, 0) << read_text(dir_ + "stderr.txt");
+  EXPECT_EQ(json::parse(c.out)["mode"], "standby") << c.out;
 }
 
 TEST_F(RealDrivers, InterlockOpeningMidRunStopsTheTableAndSaysWhy) {
   auto f = run_with_fault("interlock", "rate-ladder --set rates=[30,90] --set revolutions=4",
-                          "interlock open outer door opened", 2.0, &RealDrivers::serve, dir_);
+                          "interlock open outer door opened", 0.5, &RealDrivers::serve, dir_);
   EXPECT_NE(f.result.exit_code, 0) << f.result.out;
   EXPECT_EQ(f.shown["status"], "aborted") << f.shown.dump(2);
   const std::string reason = f.shown.value("exit_reason", "");
@@ -191,7 +230,7 @@ TEST_F(RealDrivers, InterlockOpeningMidRunStopsTheTableAndSaysWhy) {
 }
 
 TEST_F(RealDrivers, ImuStreamStoppingFailsTheCaptureAndRecordsWhy) {
-  auto f = run_with_fault("imu-silent", "six-position --set capture_s=60", "imu silent imu0", 2.0,
+  auto f = run_with_fault("imu-silent", "six-position --set capture_s=60", "imu silent imu0", 0.5,
                           &RealDrivers::serve, dir_);
   EXPECT_NE(f.result.exit_code, 0) << f.result.out;
   EXPECT_EQ(f.shown["status"], "failed") << f.shown.dump(2);

@@ -2,6 +2,7 @@
 // `calstand sim-station` as a child process for the integration tests: started with pipes on
 // stdin (fault commands) and stdout (the endpoints line, then one answer per command).
 
+#include <poll.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,6 +19,8 @@ class SimStationProcess {
  public:
   /// Starts `calstand sim-station` with `args`; waits for and parses its endpoints line.
   explicit SimStationProcess(const std::vector<std::string>& args) {
+    // A child that died must fail the test that talks to it, not kill the test binary.
+    ::signal(SIGPIPE, SIG_IGN);
     int to_child[2], from_child[2];
     if (::pipe(to_child) != 0 || ::pipe(from_child) != 0) throw std::runtime_error("pipe");
     pid_ = ::fork();
@@ -37,6 +40,7 @@ class SimStationProcess {
     ::close(from_child[1]);
     in_ = ::fdopen(to_child[1], "w");
     out_ = ::fdopen(from_child[0], "r");
+    std::setvbuf(out_, nullptr, _IONBF, 0);  // unbuffered: poll() then sees every byte waiting
     endpoints_ = nlohmann::json::parse(line());
   }
   ~SimStationProcess() {
@@ -71,9 +75,17 @@ class SimStationProcess {
   }
 
  private:
+  /// One line of the child's output, waiting at most 20 s for it (a hung sim-station fails the
+  /// test instead of hanging it).
   std::string line() {
     std::string s;
-    for (int c = std::fgetc(out_); c != EOF && c != '\n'; c = std::fgetc(out_)) {
+    for (;;) {
+      pollfd pfd{::fileno(out_), POLLIN, 0};
+      if (::poll(&pfd, 1, 20'000) <= 0) {
+        throw std::runtime_error("sim-station gave no answer within 20 s");
+      }
+      const int c = std::fgetc(out_);
+      if (c == EOF || c == '\n') break;
       s.push_back(static_cast<char>(c));
     }
     if (s.empty()) throw std::runtime_error("sim-station said nothing (did it start?)");

@@ -54,6 +54,9 @@ struct EngineOptions {
   /// Before repeating a capture invalidated by a stale stream, wait up to this long for the
   /// stream to come back [s].
   double stream_recovery_timeout_s = 30.0;
+  /// When the station cannot be made safe at the end of a run (a device's link is down), the
+  /// engine keeps trying for this long in real seconds before giving up and saying so.
+  double safe_state_retry_s = 30.0;
   /// Called from the engine's thread at most once per tick.
   std::function<void(const Progress&)> on_progress;
   /// The options a station's fault policy (station file `policy`) sets; the rest default.
@@ -141,6 +144,7 @@ class RunEngine {
     std::size_t step;
     int attempt;
     std::optional<std::string> invalid_reason;
+    double start_s = 0.0;  // samples taken before this (station time) belong to no step
   };
   std::optional<Capturing> capturing_;
   int attempt_ = 1;  // attempt number of the current step

@@ -14,11 +14,13 @@ void SampleClock::reset() {
 double SampleClock::stamp(double device_time_s, double arrival_s) {
   const double delay = arrival_s - device_time_s;
   if (started_) {
-    // A device clock going back, or leaping ahead, or a delay far from the estimate: the
-    // device restarted or its time was set. The old offset means nothing now.
+    // A device clock going back or leaping ahead, or samples suddenly arriving much *earlier*
+    // than the device clock allows: the device restarted or its time was set, and the old
+    // offset means nothing now. A sample arriving much *later* than usual is not a jump: the
+    // link stalled (a busy machine, a USB hiccup), and it keeps the estimate.
     const bool clock_jump = device_time_s < last_device_s_ ||
                             device_time_s - last_device_s_ > jump_s_ ||
-                            std::abs(delay - minima_.front().delay_s) > jump_s_;
+                            delay < minima_.front().delay_s - jump_s_;
     if (clock_jump) {
       reset();
       ++restarts_;

@@ -1,6 +1,7 @@
 #include "drivers/serial_port.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <poll.h>
 #include <termios.h>
 #include <unistd.h>
@@ -67,6 +68,15 @@ void SerialPort::open() {
   // us). O_NONBLOCK: open must not wait for carrier detect; reads wait in poll() instead.
   const int fd = ::open(options_.path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw std::runtime_error(os_error("cannot open serial port", errno));
+  // One reader per line: two processes reading one IMU would split its bytes between them
+  // (a run and `calstand device imu stream` at once). An advisory lock, held while open.
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd);
+    throw std::runtime_error(err == EWOULDBLOCK
+                                 ? options_.path + ": in use by another process (locked)"
+                                 : os_error("cannot lock serial port", err));
+  }
 
   termios tio{};
   if (::tcgetattr(fd, &tio) != 0) {

@@ -24,6 +24,13 @@ namespace calstand::drivers {
 
 using nlohmann::json;
 
+namespace {
+/// The address clients connect to: the listening one, or loopback when it listens on all.
+std::string connect_host(const std::string& listen_host) {
+  return listen_host == "0.0.0.0" ? "127.0.0.1" : listen_host;
+}
+}  // namespace
+
 struct ProtocolSimulator::Impl {
   Impl(const core::StationConfig& config, ProtocolSimOptions o)
       : options(std::move(o)),
@@ -72,7 +79,7 @@ void ProtocolSimulator::start() {
   m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
   m.table_server->start();
   m.f4t_server = ModbusChamberServer::tcp(watlow_f4t_map(), m.chamber_backend,
-                                          m.options.modbus_port);
+                                          m.options.modbus_port, 1, m.options.host);
   m.f4t_server->start();
   if (m.options.f4_rtu) {
     m.f4_server = ModbusChamberServer::rtu(watlow_f4_map(), m.chamber_backend);
@@ -128,12 +135,12 @@ json ProtocolSimulator::endpoints() const {
     if (m.can && i == 0) entry["can"] = m.options.can_interface;
     imus.push_back(std::move(entry));
   }
-  json chamber = {{"modbus_tcp", fmt::format("{}:{}", m.options.host, m.f4t_server->port())},
+  json chamber = {{"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host), m.f4t_server->port())},
                   {"map", "watlow-f4t"}};
   if (m.f4_server) chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
   return {{"sim_station", m.sim_config.name},
           {"time_scale", m.options.time_scale},
-          {"table", {{"tcp", fmt::format("{}:{}", m.options.host, m.table_server->port())},
+          {"table", {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
                      {"protocol", "acutrol"}}},
           {"chamber", chamber},
           {"imus", imus}};
@@ -149,10 +156,10 @@ core::StationConfig ProtocolSimulator::client_station() const {
   // at K = 20 would otherwise fire on a 50 ms scheduling hiccup).
   c.policy.stale_after_s = m.sim_config.policy.stale_after_s * m.options.time_scale;
   c.table.backend = "acutrol";
-  c.table.connection = {{"transport", "tcp"}, {"host", m.options.host},
+  c.table.connection = {{"transport", "tcp"}, {"host", connect_host(m.options.host)},
                         {"port", m.table_server->port()}};
   c.chamber.backend = "modbus";
-  c.chamber.connection = {{"transport", "tcp"}, {"host", m.options.host},
+  c.chamber.connection = {{"transport", "tcp"}, {"host", connect_host(m.options.host)},
                           {"port", m.f4t_server->port()}, {"unit_id", 1}, {"map", "watlow-f4t"},
                           // Poll as often in world time as a lab station does (4 Hz); the
                           // staleness rule (5 s in a lab) scaled as the policy above.

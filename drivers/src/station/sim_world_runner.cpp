@@ -7,9 +7,10 @@ namespace calstand::drivers {
 namespace {
 // Wall time between world advances [ms]: short enough that protocol replies see fresh state.
 constexpr auto kSlice = std::chrono::milliseconds(1);
-// At most this much world time per advance [s], so the mutex is never held for long even when
-// the world has fallen behind.
-constexpr double kMaxAdvanceS = 0.25;
+// At most this much wall-clock-equivalent world time per advance [s] (times the time scale),
+// so the mutex is never held for long even when the world has fallen behind, yet the world
+// catches up after a stall whatever the scale.
+constexpr double kMaxAdvanceWallS = 0.05;
 }  // namespace
 
 SimWorldRunner::SimWorldRunner(const core::StationConfig& config, double time_scale)
@@ -40,7 +41,7 @@ void SimWorldRunner::loop() {
     const double target = world0 + time_scale_ * wall_s;
     {
       std::lock_guard lock(mutex_);
-      world_.advance_to(std::min(target, world_.now_s() + kMaxAdvanceS));
+      world_.advance_to(std::min(target, world_.now_s() + kMaxAdvanceWallS * time_scale_));
       lag_s_ = target - world_.now_s();
     }
     std::this_thread::sleep_for(kSlice);

@@ -66,5 +66,17 @@ TEST(SampleClock, TracksSlowDriftBetweenClocks) {
   EXPECT_LT(worst, 0.0015);  // 1 ms fixed delay + at most 5 s x 100 ppm lag
 }
 
+TEST(SampleClock, ALongDeliveryStallKeepsTheSampleInstants) {
+  // 100 Hz, 20 ms link delay; then the link stalls for 6 s and delivers the backlog at once.
+  SampleClock clock;
+  for (int i = 0; i < 1000; ++i) clock.stamp(0.01 * i, 0.01 * i + 0.02);
+  const double stall_end = 0.01 * 1600 + 0.02;
+  for (int i = 1000; i < 1600; ++i) {
+    const double t = clock.stamp(0.01 * i, stall_end);
+    EXPECT_NEAR(t, 0.01 * i + 0.02, 1e-9) << i;  // not squashed onto the arrival time
+  }
+  EXPECT_EQ(clock.restarts(), 0u);
+}
+
 }  // namespace
 }  // namespace calstand::drivers

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 #include <cmath>
 
 #include "drivers/modbus_chamber.hpp"
@@ -27,6 +29,10 @@ std::optional<json> last_write_to(const std::vector<json>& writes, int address) 
 #define SKIP_WITHOUT_PYMODBUS()                            \
   do {                                                     \
     static const std::string missing = pymodbus_missing(); \
+    if (!missing.empty() && std::getenv("CALSTAND_REQUIRE_PYMODBUS")) {                \
+      FAIL() << missing << " (CALSTAND_REQUIRE_PYMODBUS is set: the test command "     \
+                           "installs python3-pymodbus, so its absence is an error)";  \
+    }                                                      \
     if (!missing.empty()) GTEST_SKIP() << missing;         \
   } while (false)
 
