@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (tests/fuzz) with clang and runs each for SECONDS (default 60)
-# on a corpus kept in build-fuzz/corpus/<target>. Needs clang and libclang-rt (Debian clang,
-# libclang-rt-14-dev). Exits non-zero when a target crashes; the crashing input is kept in
-# build-fuzz/ (crash-*).
+# on a corpus kept in build-fuzz/corpus/<target>, started from the seeds in
+# tests/fuzz/seeds/<target>/ and with the dictionary tests/fuzz/<target>.dict when they exist.
+# One target at a time (the fuzzers are single-process). Needs clang and libclang-rt (Debian
+# clang, libclang-rt-14-dev). Exits non-zero when a target crashes; the crashing input is kept
+# in build-fuzz/ (crash-*), and the log in build-fuzz/<target>.log.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-60}"
@@ -15,12 +17,19 @@ CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWit
 targets=$(cd tests/fuzz && ls *_fuzz.cpp | sed 's/\.cpp$//')
 # shellcheck disable=SC2086
 cmake --build build-fuzz --target $targets
+# The library is built with recoverable UBSan (top CMakeLists.txt): make undefined behaviour
+# stop the fuzzer like a crash instead of a line in the log.
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
 status=0
 for t in $targets; do
   mkdir -p "build-fuzz/corpus/$t"
+  extra=()
+  [[ -f "tests/fuzz/$t.dict" ]] && extra+=("-dict=../tests/fuzz/$t.dict")
+  dirs=("corpus/$t")
+  [[ -d "tests/fuzz/seeds/$t" ]] && dirs+=("../tests/fuzz/seeds/$t")
   echo "run-fuzz: $t for ${seconds} s"
   if ! (cd build-fuzz && "./tests/fuzz/$t" -max_total_time="$seconds" -print_final_stats=1 \
-          "corpus/$t" >"$t.log" 2>&1); then
+          "${extra[@]}" "${dirs[@]}" >"$t.log" 2>&1); then
     status=1
     echo "run-fuzz: $t FAILED (log: build-fuzz/$t.log)"
   fi

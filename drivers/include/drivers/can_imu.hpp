@@ -1,13 +1,10 @@
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "core/clock.hpp"
@@ -15,9 +12,7 @@
 #include "drivers/can_sample_assembler.hpp"
 #include "drivers/can_signal_map.hpp"
 #include "drivers/can_transport.hpp"
-#include "drivers/device_support.hpp"
-#include "drivers/imu.hpp"
-#include "drivers/sample_clock.hpp"
+#include "drivers/streaming_imu.hpp"
 
 namespace calstand::drivers {
 
@@ -44,14 +39,17 @@ struct CanImuConnection {
                                     const std::string& base_dir = {});
 };
 
-/// An IMU sending its samples as CAN frames described by a signal map. A reader thread,
-/// running while the device is active, reads frames, reassembles samples (CanSampleAssembler),
-/// stamps each on the station clock (SampleClock, from the kernel's receive time when there is
-/// one) and buffers it for poll(). Faults are counted and summarised in at most one event per
-/// second of station time; a lost link is an event and the error state, and the transport is
-/// reopened with backoff while active (a socket pair cannot be, and stays in error).
+/// An IMU sending its samples as CAN frames described by a signal map. The reader
+/// (StreamingImu) reads frames, reassembles samples (CanSampleAssembler), stamps each on the
+/// station clock (SampleClock, from the kernel's receive time when there is one) and buffers
+/// it for poll(). Faults are counted and summarised in at most one event per second of station
+/// time; a lost link is an event and the error state, and the transport is reopened with
+/// backoff while active (a socket pair cannot be, and stays in error).
 /// No sample is ever invented: missing frames mean a missing sample and a sequence gap.
-class CanImu final : public Imu {
+/// configure() opens the transport and sets its filters (from kError: closes and reopens it
+/// first). fault_counters() adds malformed_messages, clock_restarts and the assembler's
+/// counters (CanAssemblyCounters).
+class CanImu final : public StreamingImu {
  public:
   /// As the station file describes it (no I/O until configure()).
   CanImu(const core::ImuConfig& config, core::Clock& clock, const std::string& where,
@@ -60,54 +58,29 @@ class CanImu final : public Imu {
   CanImu(std::string name, CanImuConnection connection, std::unique_ptr<CanTransport> transport,
          core::Clock& clock);
   ~CanImu() override;
-  CanImu(const CanImu&) = delete;
-  CanImu& operator=(const CanImu&) = delete;
 
-  const std::string& name() const override { return name_; }
-  /// Opens the transport and sets its filters (from kError: closes and reopens it first);
-  /// kError with the transport's reason otherwise.
-  Result configure() override;
   /// Starts the reader. Refused when unconfigured or in kError (configure() again first).
   Result activate() override;
-  Result deactivate() override;
-  DeviceState state() const override { return life_.state(); }
-  /// read_errors, reopens, buffer_overflows, malformed_messages, clock_restarts and the
-  /// assembler's counters (CanAssemblyCounters).
-  std::map<std::string, std::uint64_t> fault_counters() const override;
-  std::vector<DeviceEvent> take_events() override { return events_.take(); }
 
-  std::vector<core::ImuSample> poll() override;
   double sample_rate_hz() const override { return connection_.sample_rate_hz; }
   std::uint64_t sequence_modulus() const override { return connection_.sequence_modulus; }
 
  private:
-  void read_loop();
+  void open_link(bool after_error) override;
+  bool reopen_link() override;
+  Result read_step() override;
+  void summarise_faults(double now_s, double period_s) override;
+  void on_reader_start() override { last_arrival_s_ = -1e300; }
   double arrival_time_s(const ReceivedCanFrame& frame) const;
-  void report_faults(double now_s, bool force);
-  bool reopen();
   void open_transport();
-  void stop_reader();
 
-  std::string name_;
-  core::Clock& clock_;
   CanImuConnection connection_;
   std::unique_ptr<CanTransport> transport_;
-  Lifecycle life_;
-  FaultCounters faults_{"read_errors", "reopens", "buffer_overflows", "malformed_messages",
-                        "clock_restarts"};
-  EventQueue events_;
-
-  std::thread reader_;
-  std::atomic<bool> running_{false};
-  mutable std::mutex mutex_;  // guards buffer_ and assembler_counters_
-  std::vector<core::ImuSample> buffer_;
-  std::map<std::string, std::uint64_t> assembler_counters_;
   // Reader thread only (or while it is stopped).
   CanSampleAssembler assembler_;
-  SampleClock sample_clock_;
+  std::vector<core::ImuSample> decoded_;
   std::map<std::string, std::uint64_t> reported_;
   double last_arrival_s_ = -1e300;  // station clock [s]
-  double last_report_s_ = 0.0;
 };
 
 /// The CAN IMU of `config` (backend "socketcan"); `where` names its config ("imus[0].connection").

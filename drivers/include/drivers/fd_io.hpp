@@ -20,6 +20,9 @@ IoResult read_fd(int fd, std::span<std::uint8_t> buffer, std::chrono::millisecon
 /// Writes all of `bytes` within `timeout` in total; a partial write is an error.
 IoResult write_fd(int fd, std::span<const std::uint8_t> bytes, std::chrono::milliseconds timeout,
                   const std::string& who);
+/// Milliseconds left until `deadline` on the steady clock, clamped to [0, INT_MAX]: a timeout
+/// for poll() that is never negative (which would wait forever) and never overflows.
+int remaining_ms(std::chrono::steady_clock::time_point deadline);
 /// "who: what: strerror(err)".
 std::string os_error_text(const std::string& who, const char* what, int err);
 

@@ -1,21 +1,18 @@
 #pragma once
 
-#include <atomic>
+#include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "core/clock.hpp"
 #include "core/station_config.hpp"
-#include "drivers/device_support.hpp"
-#include "drivers/imu.hpp"
 #include "drivers/imu_frame.hpp"
-#include "drivers/sample_clock.hpp"
 #include "drivers/serial_port.hpp"
+#include "drivers/streaming_imu.hpp"
 
 namespace calstand::drivers {
 
@@ -38,11 +35,11 @@ std::unique_ptr<FrameDecoder> make_frame_decoder(const std::string& format,
                                                  const std::string& where);
 
 /// An IMU streaming frames over a byte link (a serial line in the lab; a pseudo-terminal from
-/// `calstand sim-station`). A reader thread, running while the device is active, decodes
-/// frames, stamps each sample on the station clock (SampleClock) and buffers it for poll().
-/// Decoder faults (CRC and length errors, garbage) become events, summarised at most once per
-/// second; a lost link is an event and an error state, and the port is reopened with backoff.
-class SerialImu final : public Imu {
+/// `calstand sim-station`). The reader (StreamingImu) decodes frames, stamps each sample on the
+/// station clock and buffers it for poll(). Decoder faults (CRC and length errors, garbage)
+/// become events, summarised at most once per second; a lost link is an event and an error
+/// state, and the port is reopened with backoff.
+class SerialImu final : public StreamingImu {
  public:
   /// A serial IMU as the station file describes it (no I/O until configure()).
   SerialImu(const core::ImuConfig& config, core::Clock& clock, const std::string& where);
@@ -52,44 +49,24 @@ class SerialImu final : public Imu {
             std::uint64_t sequence_modulus, core::Clock& clock);
   ~SerialImu() override;
 
-  const std::string& name() const override { return name_; }
-  Result configure() override;
-  Result activate() override;
-  Result deactivate() override;
-  DeviceState state() const override { return life_.state(); }
-  std::map<std::string, std::uint64_t> fault_counters() const override;
-  std::vector<DeviceEvent> take_events() override { return events_.take(); }
-
-  std::vector<core::ImuSample> poll() override;
   double sample_rate_hz() const override { return sample_rate_hz_; }
   std::uint64_t sequence_modulus() const override { return sequence_modulus_; }
 
  private:
-  void read_loop();
-  void report_decoder_faults(double now_s, bool force);
-  bool reopen();
-  void stop_reader();
+  void open_link(bool after_error) override;
+  bool reopen_link() override;
+  Result read_step() override;
+  void summarise_faults(double now_s, double period_s) override;
 
-  std::string name_;
-  core::Clock& clock_;
   std::unique_ptr<ByteTransport> transport_;
   SerialPort* port_ = nullptr;  // transport_ when it is a serial port we may reopen
   std::unique_ptr<FrameDecoder> decoder_;
-  double sample_rate_hz_;
-  std::uint64_t sequence_modulus_;
-  Lifecycle life_;
-  FaultCounters faults_{"read_errors", "reopens", "buffer_overflows"};
-  EventQueue events_;
-
-  std::thread reader_;
-  std::atomic<bool> running_{false};
-  mutable std::mutex mutex_;  // guards buffer_ and decoder_counters_
-  std::vector<core::ImuSample> buffer_;
-  std::map<std::string, std::uint64_t> decoder_counters_;
+  double sample_rate_hz_ = 0.0;
+  std::uint64_t sequence_modulus_ = 0;
   // Reader thread only.
-  SampleClock sample_clock_;
+  std::array<std::uint8_t, 4096> chunk_{};
+  std::vector<core::ImuSample> decoded_;
   std::map<std::string, std::uint64_t> reported_counters_;
-  double last_report_s_ = 0.0;
 };
 
 std::unique_ptr<Imu> make_serial_imu(const core::ImuConfig& config, core::Clock& clock,

@@ -9,16 +9,12 @@
 #include <cstring>
 
 namespace calstand::drivers {
-namespace {
 
-/// Milliseconds left until `deadline`, clamped to [0, INT_MAX] for poll().
 int remaining_ms(std::chrono::steady_clock::time_point deadline) {
   const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
       deadline - std::chrono::steady_clock::now());
   return static_cast<int>(std::clamp<long long>(left.count(), 0, INT_MAX));
 }
-
-}  // namespace
 
 std::string os_error_text(const std::string& who, const char* what, int err) {
   return who + ": " + what + ": " + std::strerror(err);

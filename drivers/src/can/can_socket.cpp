@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <climits>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -15,15 +14,6 @@
 #include "drivers/fd_io.hpp"
 
 namespace calstand::drivers {
-namespace {
-
-int remaining_ms(std::chrono::steady_clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-      deadline - std::chrono::steady_clock::now());
-  return static_cast<int>(std::clamp<long long>(left.count(), 0, INT_MAX));
-}
-
-}  // namespace
 
 CanSocket::CanSocket(int fd, std::string who) : fd_(fd), who_(std::move(who)) {
   if (fd_ < 0) return;

@@ -277,9 +277,14 @@ ChamberRegisterMap register_map_from_json(const json& j, const std::string& wher
     if (!list.is_array()) throw core::InputError(list_where, "must be an array of register values");
     for (std::size_t i = 0; i < list.size(); ++i) {
       // Signed controllers document their sentinels as negative numbers (-32768): accept both.
+      // An unsigned number is compared as one: beyond INT64_MAX, get<int64_t>() would wrap it
+      // to a negative that passes the range check (2^64 - 1 read as -1, i.e. 0xFFFF).
       const auto& v = list[i];
-      if (!v.is_number_integer() || v.get<std::int64_t>() < -32768 ||
-          v.get<std::int64_t>() > 65535) {
+      const bool in_range = v.is_number_unsigned()
+                                ? v.get<std::uint64_t>() <= 65535
+                                : v.is_number_integer() && v.get<std::int64_t>() >= -32768 &&
+                                      v.get<std::int64_t>() <= 65535;
+      if (!in_range) {
         throw core::InputError(fmt::format("{}[{}]", list_where, i),
                                "must be an integer in [-32768, 65535], got " + v.dump());
       }

@@ -162,6 +162,16 @@ TEST(ChamberRegisterMap, GenericMapErrorsNameTheField) {
   doc = generic_map();
   doc["sensor_fault_raw"][1] = 70000;
   EXPECT_EQ(error_where(doc), at + ".sensor_fault_raw[1]");
+  // Beyond INT64_MAX: once read as a wrapped negative (2^64 - 1 taken for -1, i.e. 0xFFFF).
+  doc = generic_map();
+  doc["sensor_fault_raw"][1] = json::parse("18446744073709551615");
+  EXPECT_EQ(error_where(doc), at + ".sensor_fault_raw[1]");
+  doc = generic_map();
+  doc["sensor_fault_raw"][0] = json::parse("18446744073709518848");  // 2^64 - 32768
+  EXPECT_EQ(error_where(doc), at + ".sensor_fault_raw[0]");
+  doc = generic_map();
+  doc["sensor_fault_raw"][0] = json::parse("65535");
+  EXPECT_EQ(error_where(doc), "");
   doc = generic_map();
   doc["ramp_rate"]["address"] = 2;  // inside the setpoint's two registers
   EXPECT_EQ(error_where(doc), at + ".ramp_rate.address");
