@@ -53,6 +53,7 @@ class SerialImu final : public StreamingImu {
   std::uint64_t sequence_modulus() const override { return sequence_modulus_; }
 
  private:
+  void on_reader_start() override;
   void open_link(bool after_error) override;
   bool reopen_link() override;
   Result read_step() override;

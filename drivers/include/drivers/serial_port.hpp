@@ -57,6 +57,8 @@ class SerialPort final : public ByteTransport {
   /// (errno text) when the device cannot be opened or configured. Reopens if already open.
   void open();
   void close() noexcept;
+  /// Drops what the line received and nobody has read yet (tcflush).
+  void discard_input() noexcept;
   bool is_open() const { return fd_ >= 0; }
   const SerialOptions& options() const { return options_; }
 

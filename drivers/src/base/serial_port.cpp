@@ -114,6 +114,10 @@ void SerialPort::close() noexcept {
   fd_ = -1;
 }
 
+void SerialPort::discard_input() noexcept {
+  if (fd_ >= 0) ::tcflush(fd_, TCIFLUSH);
+}
+
 IoResult SerialPort::read(std::span<std::uint8_t> buffer, std::chrono::milliseconds timeout) {
   if (fd_ < 0) return {0, options_.path + ": serial port is not open"};
   return read_fd(fd_, buffer, timeout, options_.path);

@@ -90,6 +90,11 @@ SerialImu::SerialImu(std::string name, std::unique_ptr<ByteTransport> transport,
 
 SerialImu::~SerialImu() { stop_reader(); }
 
+void SerialImu::on_reader_start() {
+  // Bytes the line received while the device was inactive belong to nobody, like the buffer.
+  if (port_) port_->discard_input();
+}
+
 void SerialImu::open_link(bool /*after_error*/) {
   // SerialPort::open() reopens an open port, so a dead one needs no closing first.
   if (port_) port_->open();
