@@ -89,6 +89,8 @@ class ModbusChamber final : public Chamber {
   /// Writes what the command needs now (mode, the next setpoint step, standby). Needs
   /// link_mutex_. Returns the first failed write, if any.
   LinkStatus drive_command();
+  /// drive_command() now, for set_temperature() and standby(); `what` names it in errors.
+  Result write_command_now(const char* what);
   LinkStatus write_standby();
   /// Counts the failure; drops the link (kError, event) on a lost connection or after
   /// kMaxConsecutiveFailures timeouts/garbage in a row. Needs link_mutex_.

@@ -172,16 +172,7 @@ Result ModbusChamber::set_temperature(double target_c, std::optional<double> ram
     written_setpoint_c_.reset();
     refusal_reported_ = false;
   }
-  const auto s = drive_command();
-  if (!s.ok()) {
-    if (s.kind == LinkStatus::Kind::kException) {
-      note_refused_write(s);
-    } else {
-      handle_failure(s);
-    }
-    return Result::failure(fmt::format("{}: setpoint not written: {}", name_, s.message));
-  }
-  return Result::success();
+  return write_command_now("setpoint");
 }
 
 Result ModbusChamber::standby() {
@@ -199,16 +190,20 @@ Result ModbusChamber::standby() {
           "{}: link down ({}): standby will be written when the link is back", name_, link_error_));
     }
   }
+  return write_command_now("standby");
+}
+
+Result ModbusChamber::write_command_now(const char* what) {
+  // Caller holds link_mutex_. A refusal is the controller's answer (counted, reported once);
+  // anything else is a link problem the poll thread recovers from.
   const auto s = drive_command();
-  if (!s.ok()) {
-    if (s.kind == LinkStatus::Kind::kException) {
-      note_refused_write(s);
-    } else {
-      handle_failure(s);
-    }
-    return Result::failure(fmt::format("{}: standby not written: {}", name_, s.message));
+  if (s.ok()) return Result::success();
+  if (s.kind == LinkStatus::Kind::kException) {
+    note_refused_write(s);
+  } else {
+    handle_failure(s);
   }
-  return Result::success();
+  return Result::failure(fmt::format("{}: {} not written: {}", name_, what, s.message));
 }
 
 core::ChamberState ModbusChamber::read_state() {
