@@ -215,3 +215,13 @@ CREATE TABLE fits (
   created_utc      TEXT NOT NULL
 );
 CREATE INDEX fits_by_run ON fits (run_id, id);
+
+-- migration 3: run queue of the station daemon
+-- Runs submitted to calstandd wait here (runs.status = 'queued') until the station is free;
+-- the daemon takes them oldest first, so a queue survives a restart. `submitted_by` is who
+-- asked (the API's operator name and address).
+CREATE TABLE run_queue (
+  run_id        INTEGER PRIMARY KEY REFERENCES runs(id) ON DELETE CASCADE,
+  submitted_utc TEXT NOT NULL,
+  submitted_by  TEXT NOT NULL
+);

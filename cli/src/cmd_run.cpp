@@ -16,6 +16,7 @@
 #include "core/station_config.hpp"
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
+#include "daemon/stored_run.hpp"
 #include "procedures/plan.hpp"
 #include "procedures/procedure.hpp"
 #include "progress_bar.hpp"
@@ -103,54 +104,19 @@ int run_new(const RunOptions& opt) {
 int run_resume(const RunOptions& opt) {
   store::Database db(opt.db);
   store::RunStore run_store(db);
-  const store::RunRecord record = run_store.load_run(opt.resume_run);
-  const auto& status = record.summary.status;
-  if (status == "completed" || status == "aborted" || status == "failed") {
-    throw core::InputError(fmt::format("--resume {}", opt.resume_run),
-                           fmt::format("the run is {}; only an interrupted run can resume", status));
-  }
-  const auto first = run_store.first_unfinished_step(opt.resume_run);
-  if (!first) throw core::InputError("--resume", "every step of the run is already done");
-
-  // The run's own procedure text, parameters and station, exactly as they were at its start.
-  const core::StationConfig station =
-      core::StationConfig::from_json(record.station_snapshot, fmt::format("run {} station", opt.resume_run));
-  const procedures::Procedure procedure =
-      procedures::parse_procedure(record.procedure_text, record.summary.procedure_name);
-  procedures::Overrides overrides;
-  for (const auto& [k, v] : record.parameters.items()) overrides[k] = v;
-  const procedures::Plan plan = procedures::make_plan(procedure, station, overrides);
-  procedures::require_valid(plan);
-  if (plan.steps.size() != record.steps.size()) {
-    throw core::InputError(fmt::format("run {}", opt.resume_run),
-                           "the stored procedure no longer expands to the stored steps");
-  }
-
-  // Whatever the cut-off attempts of unfinished steps left behind is discarded; the station
-  // clock continues from the last recorded time.
-  int next_attempt = 1;
-  double last_time_s = 0.0;
-  for (const auto& s : record.steps) {
-    if (s.ended_clock_s) last_time_s = std::max(last_time_s, *s.ended_clock_s);
-    if (s.started_clock_s) last_time_s = std::max(last_time_s, *s.started_clock_s);
-    if (s.index < *first) continue;
-    if (s.status == store::StepStatus::kCompleted || s.status == store::StepStatus::kSkipped) continue;
-    for (int a = 1; a <= s.attempts; ++a) run_store.discard_attempt(opt.resume_run, s.index, a);
-    if (s.index == *first) next_attempt = s.attempts + 1;
-  }
-  for (const auto& e : record.events) last_time_s = std::max(last_time_s, e.time_s);
+  // The run's own procedure, parameters and station; cut-off attempts discarded.
+  const daemon::StoredRun stored = daemon::prepare_stored_run(run_store, opt.resume_run);
   store::EventRecord e;
   e.run_id = opt.resume_run;
-  e.time_s = last_time_s;
+  e.time_s = stored.start.start_time_s;
   e.kind = store::EventKind::kOperator;
   e.source = "operator";
-  e.message = fmt::format("resume requested at step {}", *first);
+  e.message = fmt::format("resume requested at step {}", stored.start.first_step);
   run_store.add_event(e);
-  fmt::print("run {}: resuming {} at step {}/{}\n", opt.resume_run, procedure.name, *first + 1,
-             plan.steps.size());
+  fmt::print("run {}: resuming {} at step {}/{}\n", opt.resume_run, stored.procedure_name,
+             stored.start.first_step + 1, stored.plan.steps.size());
   std::fflush(stdout);
-  return execute(station, plan, opt.db, opt.resume_run, {*first, next_attempt, last_time_s},
-                 opt.quiet);
+  return execute(stored.station, stored.plan, opt.db, opt.resume_run, stored.start, opt.quiet);
 }
 
 }  // namespace

@@ -12,6 +12,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "calstand 0.1.0");
   calstand::cli::register_allan(app);
   calstand::cli::register_calibrate(app);
+  calstand::cli::register_client(app);
+  calstand::cli::register_client_watch(app);
   calstand::cli::register_demo(app);
   calstand::cli::register_device(app);
   calstand::cli::register_diagnose(app);

@@ -1,0 +1,98 @@
+// `calstand watch RUN`: follows a run on calstandd live (the daemon's server-sent events) with
+// the progress bar of `calstand run`, printing step ends, faults and operator actions; exits
+// when the run ends (0 when completed, 1 otherwise).
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "daemon/run_state.hpp"
+#include "daemon_client.hpp"
+#include "progress_bar.hpp"
+
+namespace calstand::cli {
+namespace {
+
+struct WatchOptions {
+  DaemonAddress address;
+  std::int64_t run = 0;
+};
+
+bool is_end_state(const std::string& state) {
+  return state == "completed" || state == "aborted" || state == "failed" || state == "interrupted";
+}
+
+daemon::RunState state_named(const std::string& name) {
+  for (auto s : {daemon::RunState::kIdle, daemon::RunState::kRunning, daemon::RunState::kPaused,
+                 daemon::RunState::kAborting, daemon::RunState::kCompleted, daemon::RunState::kAborted,
+                 daemon::RunState::kFailed}) {
+    if (to_string(s) == name) return s;
+  }
+  return daemon::RunState::kIdle;
+}
+
+// The bar's progress from GET /runs/RUN.
+daemon::Progress progress_of(const nlohmann::json& r) {
+  daemon::Progress p;
+  p.steps = r["steps_total"].get<std::size_t>();
+  if (r["current_step"].is_object()) {
+    p.step = r["current_step"]["index"].get<std::size_t>();
+    p.label = r["current_step"]["label"].get<std::string>();
+  }
+  if (r.contains("live")) {
+    p.state = state_named(r["live"]["state"].get<std::string>());
+    p.phase = r["live"]["phase"].get<std::string>();
+    p.eta_s = r["live"]["eta_s"].get<double>();
+    p.station_time_s = r["live"]["station_time_s"].get<double>();
+  } else {
+    p.phase = r["status"].get<std::string>();
+  }
+  return p;
+}
+
+int watch(const WatchOptions& opt) {
+  const DaemonClient client(opt.address);
+  const std::string path = fmt::format("/runs/{}", opt.run);
+  auto status = client.get(path);
+  ProgressBar bar;
+  std::string final_state = status["status"];
+  if (!is_end_state(final_state)) {
+    bar.update(progress_of(status));
+    client.stream_events([&](const std::string& type, const nlohmann::json& data) {
+      if (!data.is_object() || data.value("run", std::int64_t{0}) != opt.run) return true;
+      if (type == "fault" || (type == "event" && data.value("kind", "") == "operator")) {
+        bar.finish();
+        fmt::print("{}: {}: {}\n", type, data.value("source", ""), data.value("message", ""));
+      }
+      if (type == "run" && is_end_state(data.value("state", ""))) {
+        final_state = data["state"];
+        return false;
+      }
+      // Step changes and telemetry (about 2 Hz) pace the redraws.
+      bar.update(progress_of(client.get(path)));
+      return true;
+    });
+  }
+  bar.finish();
+  status = client.get(path);
+  fmt::print("run {} {}: {}/{} steps{}\n", opt.run, status["status"].get<std::string>(),
+             status["steps_done"].get<int>(), status["steps_total"].get<int>(),
+             status["exit_reason"].get<std::string>().empty()
+                 ? ""
+                 : " (" + status["exit_reason"].get<std::string>() + ")");
+  return status["status"] == "completed" ? 0 : 1;
+}
+
+}  // namespace
+
+void register_client_watch(CLI::App& app) {
+  auto opt = std::make_shared<WatchOptions>();
+  CLI::App* cmd = app.add_subcommand("watch", "Follow a run on calstandd live, with a progress bar");
+  add_daemon_options(*cmd, opt->address);
+  cmd->add_option("run", opt->run, "Run id")->required();
+  cmd->callback([opt] {
+    if (const int code = watch(*opt); code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace calstand::cli

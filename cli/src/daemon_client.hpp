@@ -1,0 +1,42 @@
+#pragma once
+
+// The `calstand` side of calstandd's control API (schemas/api.md): where the daemon is, the
+// token, and JSON requests that turn refusals into errors naming the request.
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace calstand::cli {
+
+/// Options every client command takes.
+struct DaemonAddress {
+  std::string daemon = "127.0.0.1:8765";  ///< HOST:PORT of calstandd
+  std::string token_file;                 ///< else env CALSTAND_TOKEN
+  std::string operator_name;              ///< recorded with operator actions; default $USER
+};
+
+/// Adds --daemon, --token-file and --operator to `cmd`.
+void add_daemon_options(CLI::App& cmd, DaemonAddress& address);
+
+/// A JSON client of one daemon.
+class DaemonClient {
+ public:
+  explicit DaemonClient(const DaemonAddress& address);
+
+  /// GET `path`; the answer's JSON. Throws core::InputError for 4xx answers (their error,
+  /// where, and every violation) and std::runtime_error when the daemon cannot be reached.
+  nlohmann::json get(const std::string& path) const;
+  /// POST `path` with `body` (and the bearer token); as get().
+  nlohmann::json post(const std::string& path, const nlohmann::json& body) const;
+  /// Reads GET /events until `on_message(type, data)` returns false or the stream ends.
+  void stream_events(const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const;
+
+ private:
+  std::string host_;
+  int port_ = 0;
+  std::string token_;
+  std::string operator_;
+};
+
+}  // namespace calstand::cli

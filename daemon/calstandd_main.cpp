@@ -1,0 +1,141 @@
+// calstandd: the station daemon. Owns the station, runs the queue of runs in its database one
+// at a time, serves the control API (schemas/api.md), and after a crash resumes or holds the
+// interrupted run (--recovery). SIGTERM/SIGINT: the run in progress is checkpointed (the
+// station made safe, the run set back to 'interrupted'), then the daemon exits 0.
+#include <fmt/format.h>
+#include <pthread.h>
+#include <spdlog/sinks/rotating_file_sink.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <sys/stat.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "core/error.hpp"
+#include "daemon/api/api_server.hpp"
+#include "daemon/service/event_hub.hpp"
+#include "daemon/service/run_service.hpp"
+#include "sim/sim_world.hpp"
+#include "store/database.hpp"
+
+namespace {
+
+using calstand::core::InputError;
+
+struct Options {
+  std::string station_file;
+  std::string db;
+  std::string listen = "127.0.0.1:8765";
+  std::string token_file;
+  std::string log_dir;
+  std::string recovery = "auto";
+  std::string log_level = "info";
+};
+
+std::string read_token(const Options& opt) {
+  if (opt.token_file.empty()) {
+    const char* env = std::getenv("CALSTAND_TOKEN");
+    return env ? env : "";
+  }
+  std::ifstream in(opt.token_file);
+  if (!in) throw InputError(opt.token_file, "cannot read the token file");
+  std::string token;
+  std::getline(in, token);
+  while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
+  if (token.size() < 16) throw InputError(opt.token_file, "the token must have at least 16 characters");
+  struct stat st{};
+  if (::stat(opt.token_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0) {
+    spdlog::warn("{}: readable by others than its owner (chmod 600)", opt.token_file);
+  }
+  return token;
+}
+
+void set_up_logging(const Options& opt) {
+  std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_color_sink_mt>()};
+  if (!opt.log_dir.empty()) {
+    std::filesystem::create_directories(opt.log_dir);
+    // 10 MB per file, 5 files: weeks of a busy station's log.
+    sinks.push_back(std::make_shared<spdlog::sinks::rotating_file_sink_mt>(
+        (std::filesystem::path(opt.log_dir) / "calstandd.log").string(), 10 * 1024 * 1024, 5));
+  }
+  auto logger = std::make_shared<spdlog::logger>("calstandd", sinks.begin(), sinks.end());
+  logger->set_level(spdlog::level::from_str(opt.log_level));
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+}
+
+int run_daemon(const Options& opt, const sigset_t& stop_signals) {
+  set_up_logging(opt);
+  namespace svc = calstand::daemon::service;
+  namespace api = calstand::daemon::api;
+  svc::ServiceOptions service_options;
+  service_options.station = calstand::sim::load_station_or_default(opt.station_file);
+  service_options.db_path = opt.db;
+  service_options.recovery = svc::parse_recovery_policy(opt.recovery, "--recovery");
+  api::ApiOptions api_options;
+  std::tie(api_options.host, api_options.port) = api::parse_listen_address(opt.listen);
+  api_options.token = read_token(opt);
+  api_options.validate();  // before anything is opened: refuses an open port without a token
+  { calstand::store::Database migrate(opt.db); }  // opens (and migrates) once, or fails here
+
+  svc::EventHub hub;
+  svc::RunService service(service_options, hub);
+  api::ApiServer server(service, hub, api_options);
+  const int port = server.start();
+  // One line on stdout that scripts and tests read (the port when --listen asked for 0).
+  fmt::print("calstandd: listening on http://{}:{}\n", api_options.host, port);
+  std::fflush(stdout);
+  spdlog::info("station {} ({} IMUs), database {}, recovery {}", service_options.station.name,
+               service_options.station.imus.size(), opt.db, opt.recovery);
+  service.start();
+
+  int sig = 0;
+  sigwait(&stop_signals, &sig);
+  const std::string why = sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "SIGHUP";
+  spdlog::info("{} received: checkpointing the run in progress and stopping", why);
+  service.stop(why);
+  server.stop();
+  spdlog::info("stopped cleanly");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // The stop signals are taken by sigwait() in main: blocked before any thread starts, so
+  // every thread inherits the mask and none is interrupted by them.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&stop_signals, s);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);  // a client that goes away must not kill the daemon
+
+  CLI::App app{"calstandd: the calstand station daemon (queue, control API, crash recovery)"};
+  Options opt;
+  app.add_option("--station", opt.station_file, "Station file (default: built-in simulator)");
+  app.add_option("--db", opt.db, "SQLite database (runs, queue, samples)")->required();
+  app.add_option("--listen", opt.listen, "Address and port of the control API")->capture_default_str();
+  app.add_option("--token-file", opt.token_file, "File holding the bearer token (else env CALSTAND_TOKEN)");
+  app.add_option("--log-dir", opt.log_dir, "Directory of the rotating log file calstandd.log");
+  app.add_option("--recovery", opt.recovery, "Interrupted run on start: auto (resume) or hold")
+      ->capture_default_str();
+  app.add_option("--log-level", opt.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.set_version_flag("--version", "calstandd 0.1.0");
+  try {
+    app.parse(argc, argv);
+    return run_daemon(opt, stop_signals);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const InputError& e) {
+    std::cerr << "calstandd: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "calstandd: error: " << e.what() << "\n";
+    return 1;
+  }
+}

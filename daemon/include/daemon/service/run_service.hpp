@@ -1,0 +1,119 @@
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/station_config.hpp"
+#include "daemon/service/event_hub.hpp"
+#include "daemon/service/live_status.hpp"
+#include "procedures/procedure.hpp"
+
+namespace calstand::daemon::service {
+
+/// What the daemon does on start with a run that was cut off (status running, paused, held or
+/// interrupted in the database): resume it at once, or hold it with the station safe until an
+/// operator resumes or aborts it.
+enum class RecoveryPolicy { kAuto, kHold };
+
+/// "auto" or "hold"; throws core::InputError naming `where` otherwise.
+RecoveryPolicy parse_recovery_policy(const std::string& name, const std::string& where);
+
+struct ServiceOptions {
+  core::StationConfig station;  ///< the station this daemon owns
+  std::string db_path;          ///< its SQLite database (the queue lives there)
+  RecoveryPolicy recovery = RecoveryPolicy::kAuto;
+};
+
+/// An operator request that does not apply to the run as it is (e.g. pause a queued run,
+/// resume a run that is not paused). what() says why.
+class ActionRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The daemon's run queue and run thread: one run at a time on the station, queued runs
+/// oldest first, operator actions recorded as events with who asked.
+///
+/// Thread safety: every public method may be called from any thread (API handlers); runs
+/// execute on the service's own thread, and operator actions reach the engine through that
+/// thread (the engine's journal is not shared between threads).
+class RunService {
+ public:
+  RunService(ServiceOptions options, EventHub& hub);
+  /// Calls stop("service destroyed") when still running.
+  ~RunService();
+  RunService(const RunService&) = delete;
+  RunService& operator=(const RunService&) = delete;
+
+  /// Starts the run thread: it first deals with an interrupted run per the recovery policy,
+  /// then takes queued runs.
+  void start();
+
+  /// Stops the run thread: a run in progress is aborted to the station's safe state and set
+  /// back to 'interrupted' (it resumes at its first unfinished step on the next start), with
+  /// `why` recorded. Blocks until the station is safe. Idempotent.
+  void stop(const std::string& why);
+
+  /// Plans `procedure` with `overrides` on the station and queues it as a new run; returns the
+  /// run id. Throws procedures::ProcedureError listing every violation when the plan breaks a
+  /// rule (nothing is written then).
+  std::int64_t submit(const procedures::Procedure& procedure,
+                      const procedures::Overrides& overrides, const std::string& who);
+
+  /// Operator actions on run `run`. Throw core::InputError when there is no such run,
+  /// ActionRefused when the action does not apply to its state.
+  /// pause: the running run, at the next step boundary or at once (`immediate`).
+  void pause(std::int64_t run, bool immediate, const std::string& who);
+  /// resume: the paused run, or the held one (an interrupted run waiting for an operator).
+  void resume(std::int64_t run, const std::string& who);
+  /// abort: the running or paused run (to the safe state), a held run, or a queued one.
+  void abort(std::int64_t run, const std::string& why, const std::string& who);
+
+  LiveSnapshot snapshot() const { return live_.snapshot(); }
+  const ServiceOptions& options() const { return options_; }
+
+ private:
+  struct Command {
+    enum class Kind { kPause, kResume, kAbort } kind;
+    bool immediate = false;
+    std::string why;
+    std::string who;
+    bool checkpoint = false;  ///< an abort for a daemon stop: the run is set back to interrupted
+  };
+
+  void run_thread();
+  /// The next run to execute and whether it resumes an interrupted one; none when there is
+  /// nothing to do now (or a run is held).
+  std::optional<std::pair<std::int64_t, bool>> next_run();
+  void hold(std::int64_t run);
+  void execute(std::int64_t run, bool resuming);
+  void fail_before_start(std::int64_t run, const std::string& why);
+  void record_event(std::int64_t run, const std::string& who, const std::string& message,
+                    bool operator_action = true);
+  /// Queues `command` for the run on the station; refuses unless `run` is that run.
+  void command_current(std::int64_t run, Command command);
+  std::string status_of(std::int64_t run);
+
+  ServiceOptions options_;
+  EventHub& hub_;
+  LiveStatus live_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stopping_ = false;
+  std::string stop_reason_;
+  std::uint64_t generation_ = 0;         // bumped on every change the run thread waits for
+  std::optional<std::int64_t> current_;  // the run on the station
+  std::optional<std::int64_t> held_;     // the interrupted run waiting for an operator
+  bool resume_held_ = false;
+  std::vector<Command> commands_;        // for the current run, applied on the engine thread
+  std::thread thread_;
+};
+
+}  // namespace calstand::daemon::service

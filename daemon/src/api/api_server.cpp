@@ -1,0 +1,133 @@
+#include "daemon/api/api_server.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <charconv>
+#include <thread>
+
+#include "core/error.hpp"
+#include "daemon/api/access.hpp"
+#include "http_util.hpp"
+#include "routes.hpp"
+
+namespace calstand::daemon::api {
+
+void ApiOptions::validate() const {
+  if (!is_loopback_address(host) && token.empty()) {
+    throw core::InputError("--listen", fmt::format("{} is beyond loopback: a token is required "
+                                                   "(--token-file or CALSTAND_TOKEN)", host));
+  }
+  if (port < 0 || port > 65535) throw core::InputError("--listen", fmt::format("port {} is not 0..65535", port));
+  if (threads < 1) throw core::InputError("threads", "at least one connection thread is needed");
+  if (max_body_bytes == 0) throw core::InputError("max_body_bytes", "must be > 0");
+}
+
+struct ApiServer::Impl {
+  Impl(service::RunService& service, service::EventHub& hub, ApiOptions opts)
+      : options(std::move(opts)), ctx{service, hub, service.options().db_path} {}
+
+  ApiOptions options;
+  RouteContext ctx;
+  httplib::Server server;
+  std::thread listener;
+};
+
+ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOptions options) {
+  options.validate();
+  impl_ = std::make_unique<Impl>(service, hub, std::move(options));
+  auto& server = impl_->server;
+  const int threads = impl_->options.threads;
+  server.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+  server.set_payload_max_length(impl_->options.max_body_bytes);
+
+  // Every mutating request carries the token when one is configured; reads stay open so a
+  // status display needs no secret (they reveal no more than the lab's station screen).
+  server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    if (req.method == "GET" || req.method == "HEAD") return httplib::Server::HandlerResponse::Unhandled;
+    if (bearer_token_accepted(req.get_header_value("Authorization"), impl_->options.token)) {
+      return httplib::Server::HandlerResponse::Unhandled;
+    }
+    res.set_header("WWW-Authenticate", "Bearer");
+    send_error(res, 401, "Authorization", "a valid bearer token is required for this request");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  // Answers httplib produced without a body (unknown route, body too large, ...) get a JSON
+  // body saying why; answers of the handlers keep theirs.
+  server.set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request& req,
+                                                                   httplib::Response& res) {
+    if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    std::string why = "request refused";
+    if (res.status == 400) why = "malformed request";
+    if (res.status == 404) why = "no such resource";
+    if (res.status == 405) why = "method not allowed";
+    if (res.status == 413) why = "request body too large";
+    if (res.status == 414) why = "request URI too long";
+    send_error(res, res.status, req.method + " " + req.path, why);
+    return httplib::Server::HandlerResponse::Handled;
+  }));
+  server.set_exception_handler([](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+    std::string why = "unknown error";
+    try {
+      if (ep) std::rethrow_exception(ep);
+    } catch (const std::exception& e) {
+      why = e.what();
+    } catch (...) {
+    }
+    spdlog::error("{} {}: {}", req.method, req.path, why);
+    send_error(res, 500, req.path, "internal error: " + why);
+  });
+  server.set_logger([](const httplib::Request& req, const httplib::Response& res) {
+    spdlog::debug("{} {} {} -> {}", req.remote_addr, req.method, req.path, res.status);
+  });
+  register_run_routes(server, impl_->ctx);
+  register_station_routes(server, impl_->ctx);
+}
+
+ApiServer::~ApiServer() { stop(); }
+
+int ApiServer::start() {
+  auto& server = impl_->server;
+  const auto& o = impl_->options;
+  int port = o.port;
+  if (port == 0) {
+    port = server.bind_to_any_port(o.host);
+    if (port < 0) throw std::runtime_error(fmt::format("cannot listen on {}: no free port", o.host));
+  } else if (!server.bind_to_port(o.host, port)) {
+    throw std::runtime_error(fmt::format("cannot listen on {}:{} (in use, or not an address of this machine)",
+                                         o.host, port));
+  }
+  impl_->listener = std::thread([&server] { server.listen_after_bind(); });
+  spdlog::info("control API on http://{}:{} ({})", o.host, port,
+               o.token.empty() ? "no token: loopback only" : "bearer token required for changes");
+  return port;
+}
+
+void ApiServer::stop() {
+  if (!impl_) return;
+  impl_->ctx.hub.close();  // ends live streams, whose threads the server joins
+  impl_->server.stop();
+  if (impl_->listener.joinable()) impl_->listener.join();
+}
+
+}  // namespace calstand::daemon::api
+
+namespace calstand::daemon::api {
+
+std::pair<std::string, int> parse_listen_address(const std::string& text) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {
+    throw core::InputError("--listen", fmt::format("'{}' is not HOST:PORT", text));
+  }
+  std::string host = text.substr(0, colon);
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  const std::string port_text = text.substr(colon + 1);
+  int port = 0;
+  const auto [ptr, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), port);
+  if (ec != std::errc() || ptr != port_text.data() + port_text.size() || port < 0 || port > 65535) {
+    throw core::InputError("--listen", fmt::format("'{}' is not a port (0..65535)", port_text));
+  }
+  return {host, port};
+}
+
+}  // namespace calstand::daemon::api

@@ -1,0 +1,188 @@
+// /runs: submit, list, one run's status, steps, events and export; operator actions.
+#include <fmt/format.h>
+
+#include "core/error.hpp"
+#include "daemon/api/access.hpp"
+#include "daemon/api/export_archive.hpp"
+#include "daemon/api/run_request.hpp"
+#include "http_util.hpp"
+#include "routes.hpp"
+#include "store/database.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::daemon::api {
+namespace {
+
+std::string who_of(const httplib::Request& req) {
+  return operator_name(req.get_header_value("X-Calstand-Operator"), req.remote_addr);
+}
+
+store::RunRecord load_run_or_404(store::RunStore& runs, std::int64_t id) {
+  try {
+    return runs.load_run(id);
+  } catch (const core::InputError&) {
+    throw BadRequest(404, fmt::format("/runs/{}", id), fmt::format("no run {}", id));
+  }
+}
+
+// Operator actions on an unknown run answer 404 (the service's own check would say 400).
+void require_run(const RouteContext& ctx, std::int64_t id) {
+  store::Database db(ctx.db_path);
+  store::RunStore runs(db);
+  load_run_or_404(runs, id);
+}
+
+nlohmann::json summary_json(const store::RunSummary& s) {
+  return {{"id", s.id},
+          {"procedure", s.procedure_name},
+          {"status", s.status},
+          {"steps_done", s.steps_done},
+          {"steps_total", s.steps_total},
+          {"created_utc", s.created_utc},
+          {"started_utc", s.started_utc},
+          {"ended_utc", s.ended_utc},
+          {"exit_reason", s.exit_reason}};
+}
+
+nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); }
+
+nlohmann::json step_json(const store::StepRecord& s) {
+  return {{"index", s.index},
+          {"kind", s.kind},
+          {"label", s.label},
+          {"status", std::string(to_string(s.status))},
+          {"reason", s.reason},
+          {"attempts", s.attempts},
+          {"good_attempt", s.good_attempt ? nlohmann::json(*s.good_attempt) : nlohmann::json()},
+          {"started_clock_s", optional_json(s.started_clock_s)},
+          {"ended_clock_s", optional_json(s.ended_clock_s)},
+          {"origin", s.origin},
+          {"commanded", s.commanded}};
+}
+
+nlohmann::json event_json(const store::EventRecord& e) {
+  return {{"id", e.id},
+          {"time_s", e.time_s},
+          {"wall_utc", e.wall_utc},
+          {"kind", std::string(to_string(e.kind))},
+          {"source", e.source},
+          {"message", e.message},
+          {"detail", e.detail}};
+}
+
+// GET /runs/{id}: the stored summary, with the live position while the run is on the station.
+nlohmann::json run_status_json(const store::RunRecord& record, const service::LiveSnapshot& live) {
+  nlohmann::json j = summary_json(record.summary);
+  j["parameters"] = record.parameters;
+  const auto total = record.summary.steps_total;
+  j["progress"] = total == 0 ? 0.0 : static_cast<double>(record.summary.steps_done) / static_cast<double>(total);
+  j["held"] = live.held == record.summary.id;
+  if (live.run == record.summary.id) {
+    const Progress& p = live.progress;
+    j["live"] = {{"state", std::string(to_string(p.state))},
+                 {"phase", p.phase},
+                 {"station_time_s", p.station_time_s},
+                 {"eta_s", p.eta_s}};
+    j["current_step"] = {{"index", p.step}, {"label", p.label}};
+    j["eta_s"] = p.eta_s;
+  } else {
+    j["eta_s"] = nullptr;
+    for (const auto& s : record.steps) {
+      if (s.status != store::StepStatus::kCompleted && s.status != store::StepStatus::kSkipped) {
+        j["current_step"] = {{"index", s.index}, {"label", s.label}};
+        break;
+      }
+    }
+    if (!j.contains("current_step")) j["current_step"] = nullptr;
+  }
+  return j;
+}
+
+}  // namespace
+
+void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
+  server.Post("/runs", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const RunRequest request = parse_run_request(parse_json_body(req));
+    const std::int64_t id = ctx.service.submit(request.procedure, request.overrides, who_of(req));
+    res.set_header("Location", fmt::format("/runs/{}", id));
+    send_json(res, 201, {{"id", id}});
+  }));
+
+  server.Get("/runs", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
+    store::Database db(ctx.db_path);
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& s : store::RunStore(db).list_runs()) out.push_back(summary_json(s));
+    send_json(res, 200, out);
+  }));
+
+  server.Get(R"(/runs/(\d+))", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    store::Database db(ctx.db_path);
+    store::RunStore runs(db);
+    const auto record = load_run_or_404(runs, id_from_path(req));
+    send_json(res, 200, run_status_json(record, ctx.service.snapshot()));
+  }));
+
+  server.Get(R"(/runs/(\d+)/steps)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    store::Database db(ctx.db_path);
+    store::RunStore runs(db);
+    const auto record = load_run_or_404(runs, id_from_path(req));
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& s : record.steps) out.push_back(step_json(s));
+    send_json(res, 200, out);
+  }));
+
+  server.Get(R"(/runs/(\d+)/events)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    store::Database db(ctx.db_path);
+    store::RunStore runs(db);
+    const auto record = load_run_or_404(runs, id_from_path(req));
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& e : record.events) out.push_back(event_json(e));
+    send_json(res, 200, out);
+  }));
+
+  server.Get(R"(/runs/(\d+)/export)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    store::Database db(ctx.db_path);
+    store::RunStore runs(db);
+    load_run_or_404(runs, id);
+    const std::string device = req.has_param("device") ? req.get_param_value("device") : "";
+    res.status = 200;
+    res.set_header("Content-Disposition", fmt::format("attachment; filename=\"run-{}.tar\"", id));
+    res.set_content(export_run_archive(db, id, device), "application/x-tar");
+  }));
+
+  server.Post(R"(/runs/(\d+)/pause)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    require_run(ctx, id);
+    const auto body = parse_json_body(req, nlohmann::json::object());
+    bool immediate = false;
+    if (body.is_object() && body.contains("immediate")) {
+      if (!body["immediate"].is_boolean()) throw BadRequest(400, "body.immediate", "must be true or false");
+      immediate = body["immediate"].get<bool>();
+    }
+    ctx.service.pause(id, immediate, who_of(req));
+    send_json(res, 202, {{"id", id}, {"requested", immediate ? "pause at once" : "pause at step boundary"}});
+  }));
+
+  server.Post(R"(/runs/(\d+)/resume)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    require_run(ctx, id);
+    ctx.service.resume(id, who_of(req));
+    send_json(res, 202, {{"id", id}, {"requested", "resume"}});
+  }));
+
+  server.Post(R"(/runs/(\d+)/abort)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    require_run(ctx, id);
+    const auto body = parse_json_body(req, nlohmann::json::object());
+    std::string reason = "operator request";
+    if (body.is_object() && body.contains("reason")) {
+      if (!body["reason"].is_string()) throw BadRequest(400, "body.reason", "must be a string");
+      reason = body["reason"].get<std::string>().substr(0, 500);
+    }
+    ctx.service.abort(id, reason, who_of(req));
+    send_json(res, 202, {{"id", id}, {"requested", "abort"}});
+  }));
+}
+
+}  // namespace calstand::daemon::api

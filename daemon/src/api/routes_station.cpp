@@ -1,0 +1,112 @@
+// /station, /calibrations/{id} and the live stream /events.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "core/error.hpp"
+#include "daemon/service/observed_journal.hpp"
+#include "http_util.hpp"
+#include "routes.hpp"
+#include "store/calibrations.hpp"
+#include "store/database.hpp"
+#include "store/run_queue.hpp"
+
+namespace calstand::daemon::api {
+namespace {
+
+// How long a stream waits for a message before sending a keep-alive comment: also how soon a
+// closed client connection is noticed.
+constexpr auto kKeepAlive = std::chrono::milliseconds(1000);
+
+nlohmann::json station_json(const RouteContext& ctx) {
+  const service::LiveSnapshot live = ctx.service.snapshot();
+  nlohmann::json devices = nlohmann::json::array();
+  for (const auto& d : live.devices) {
+    devices.push_back({{"kind", d.kind},
+                       {"name", d.name},
+                       {"backend", d.backend},
+                       {"state", d.state},
+                       {"fault_counters", d.fault_counters}});
+  }
+  store::Database db(ctx.db_path);
+  nlohmann::json queue = nlohmann::json::array();
+  for (const auto& q : store::queued_runs(db)) {
+    queue.push_back({{"run", q.run}, {"submitted_utc", q.submitted_utc}, {"submitted_by", q.submitted_by}});
+  }
+  nlohmann::json j = {{"name", ctx.service.options().station.name},
+                      {"devices", devices},
+                      {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
+                      {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
+                      {"queue", queue},
+                      {"telemetry", {{"table", live.table ? service::to_json(*live.table) : nlohmann::json()},
+                                     {"chamber", live.chamber ? service::to_json(*live.chamber) : nlohmann::json()}}}};
+  if (live.run) {
+    j["progress"] = {{"state", std::string(to_string(live.progress.state))},
+                     {"step", live.progress.step},
+                     {"steps", live.progress.steps},
+                     {"label", live.progress.label},
+                     {"phase", live.progress.phase},
+                     {"station_time_s", live.progress.station_time_s},
+                     {"eta_s", live.progress.eta_s}};
+  }
+  return j;
+}
+
+std::string sse_message(const service::LiveEvent& e) {
+  return fmt::format("id: {}\nevent: {}\ndata: {}\n\n", e.seq, e.type,
+                     e.data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
+
+}  // namespace
+
+void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
+  server.Get("/station", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
+    send_json(res, 200, station_json(ctx));
+  }));
+
+  server.Get(R"(/calibrations/(\d+))", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    store::Database db(ctx.db_path);
+    store::CalibrationRow row;
+    try {
+      row = store::load_calibration(db, id);
+    } catch (const core::InputError&) {
+      throw BadRequest(404, req.path, fmt::format("no calibration {}", id));
+    }
+    send_json(res, 200, {{"id", row.id}, {"run", row.run}, {"imu", row.imu}, {"model", row.model},
+                         {"created_utc", row.created_utc}, {"record", row.record}});
+  }));
+
+  // Server-sent events: first a "station" message with the whole status, then every message
+  // the hub publishes (step, run, event, fault, telemetry), each with its sequence number as id.
+  server.Get("/events", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
+    auto last_seq = std::make_shared<std::uint64_t>(ctx.hub.last_seq());
+    auto greeting = std::make_shared<std::string>(
+        sse_message({*last_seq, "station", station_json(ctx)}));
+    res.set_header("Cache-Control", "no-cache");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [hub = &ctx.hub, last_seq, greeting](std::size_t, httplib::DataSink& sink) {
+          if (!greeting->empty()) {
+            const std::string first = std::move(*greeting);
+            greeting->clear();
+            return sink.write(first.data(), first.size());
+          }
+          if (hub->closed()) {
+            sink.done();
+            return true;
+          }
+          const auto events = hub->wait_after(*last_seq, kKeepAlive);
+          if (events.empty()) {
+            static constexpr std::string_view kPing = ": keep-alive\n\n";
+            return sink.write(kPing.data(), kPing.size());
+          }
+          std::string chunk;
+          for (const auto& e : events) chunk += sse_message(e);
+          *last_seq = events.back().seq;
+          return sink.write(chunk.data(), chunk.size());
+        });
+  }));
+}
+
+}  // namespace calstand::daemon::api

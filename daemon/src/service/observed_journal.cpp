@@ -1,0 +1,115 @@
+#include "daemon/service/observed_journal.hpp"
+
+#include <string>
+
+namespace calstand::daemon::service {
+namespace {
+
+nlohmann::json axis_json(const core::AxisState& a) {
+  nlohmann::json j = {{"angle_deg", a.angle_deg},
+                      {"rate_dps", a.rate_dps},
+                      {"mode", std::string(to_string(a.mode))},
+                      {"in_position", a.in_position},
+                      {"fault", a.fault}};
+  if (a.fault) j["fault_text"] = a.fault_text;
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json to_json(const core::TableState& table) {
+  return {{"time_s", table.time_s}, {"outer", axis_json(table.outer)}, {"inner", axis_json(table.inner)}};
+}
+
+nlohmann::json to_json(const core::ChamberState& chamber) {
+  nlohmann::json j = {{"time_s", chamber.time_s},
+                      {"air_c", chamber.air_temperature_c},
+                      {"setpoint_c", chamber.setpoint_c},
+                      {"mode", std::string(to_string(chamber.mode))},
+                      {"fault", chamber.fault}};
+  if (chamber.fault) j["fault_text"] = chamber.fault_text;
+  return j;
+}
+
+ObservedJournal::ObservedJournal(RunJournal& inner, EventHub& hub, LiveStatus& live,
+                                 std::int64_t run_id, std::chrono::milliseconds telemetry_period)
+    : inner_(inner), hub_(hub), live_(live), run_id_(run_id), telemetry_period_(telemetry_period) {}
+
+void ObservedJournal::publish_step(std::size_t step, int attempt, double t_s, const char* status,
+                                   const std::string& why) {
+  nlohmann::json data = {{"run", run_id_}, {"step", step},     {"attempt", attempt},
+                         {"time_s", t_s},  {"status", status}};
+  if (!why.empty()) data["reason"] = why;
+  hub_.publish("step", std::move(data));
+}
+
+void ObservedJournal::step_started(std::size_t step, int attempt, double t_s) {
+  inner_.step_started(step, attempt, t_s);
+  publish_step(step, attempt, t_s, "running");
+}
+
+bool ObservedJournal::add_samples(std::size_t step, int attempt, const std::string& device,
+                                  const std::vector<core::ImuSample>& samples) {
+  return inner_.add_samples(step, attempt, device, samples);
+}
+
+void ObservedJournal::discard_attempt(std::size_t step, int attempt, const std::string& why) {
+  inner_.discard_attempt(step, attempt, why);
+  hub_.publish("step", {{"run", run_id_}, {"step", step}, {"attempt", attempt},
+                        {"status", "discarded"}, {"reason", why}});
+}
+
+void ObservedJournal::step_completed(std::size_t step, int attempt, double t_s) {
+  inner_.step_completed(step, attempt, t_s);
+  publish_step(step, attempt, t_s, "completed");
+}
+
+void ObservedJournal::step_failed(std::size_t step, int attempt, double t_s,
+                                  const std::string& why) {
+  inner_.step_failed(step, attempt, t_s, why);
+  publish_step(step, attempt, t_s, "failed", why);
+}
+
+void ObservedJournal::event(double t_s, EventKind kind, const std::string& source,
+                            const std::string& message) {
+  inner_.event(t_s, kind, source, message);
+  // Faults and interlocks get their own message type, so a client can watch only those.
+  const bool fault = kind == EventKind::kFault || kind == EventKind::kInterlock;
+  hub_.publish(fault ? "fault" : "event", {{"run", run_id_},
+                                           {"time_s", t_s},
+                                           {"kind", std::string(to_string(kind))},
+                                           {"source", source},
+                                           {"message", message}});
+}
+
+void ObservedJournal::table_telemetry(const core::TableState& state) {
+  inner_.table_telemetry(state);
+  live_.update([&](LiveSnapshot& s) { s.table = state; });
+  publish_telemetry_when_due();
+}
+
+void ObservedJournal::chamber_telemetry(const core::ChamberState& state) {
+  inner_.chamber_telemetry(state);
+  live_.update([&](LiveSnapshot& s) { s.chamber = state; });
+  publish_telemetry_when_due();
+}
+
+void ObservedJournal::publish_telemetry_when_due() {
+  const auto now = std::chrono::steady_clock::now();
+  if (now < next_telemetry_) return;
+  next_telemetry_ = now + telemetry_period_;
+  const LiveSnapshot s = live_.snapshot();
+  nlohmann::json data = {{"run", run_id_}};
+  if (s.table) data["table"] = to_json(*s.table);
+  if (s.chamber) data["chamber"] = to_json(*s.chamber);
+  hub_.publish("telemetry", std::move(data));
+}
+
+void ObservedJournal::run_state(RunState state, double t_s, const std::string& reason) {
+  inner_.run_state(state, t_s, reason);
+  nlohmann::json data = {{"run", run_id_}, {"state", std::string(to_string(state))}, {"time_s", t_s}};
+  if (!reason.empty()) data["reason"] = reason;
+  hub_.publish("run", std::move(data));
+}
+
+}  // namespace calstand::daemon::service

@@ -1,0 +1,430 @@
+#include "daemon/service/run_service.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "core/error.hpp"
+#include "daemon/campaign.hpp"
+#include "daemon/run_engine.hpp"
+#include "daemon/service/observed_journal.hpp"
+#include "daemon/store_journal.hpp"
+#include "daemon/stored_run.hpp"
+#include "drivers/station.hpp"
+#include "procedures/plan.hpp"
+#include "store/capture_writer.hpp"
+#include "store/database.hpp"
+#include "store/run_queue.hpp"
+#include "store/run_store.hpp"
+
+namespace calstand::daemon::service {
+namespace {
+
+// Device states and fault counters are read this often while a run goes (wall time): cheap,
+// but a simulated station ticks thousands of times a second.
+constexpr auto kDeviceReadPeriod = std::chrono::milliseconds(250);
+
+std::vector<DeviceStatus> offline_devices(const core::StationConfig& config) {
+  std::vector<DeviceStatus> out{{"table", "table", config.table.backend, "offline", {}},
+                                {"chamber", "chamber", config.chamber.backend, "offline", {}}};
+  for (const auto& imu : config.imus) out.push_back({"imu", imu.name, imu.backend, "offline", {}});
+  return out;
+}
+
+std::vector<DeviceStatus> read_devices(drivers::Station& station) {
+  const auto& config = station.config();
+  auto status = [](const char* kind, drivers::Device& d, const std::string& backend) {
+    return DeviceStatus{kind, d.name(), backend, std::string(to_string(d.state())), d.fault_counters()};
+  };
+  std::vector<DeviceStatus> out{status("table", station.table(), config.table.backend),
+                                status("chamber", station.chamber(), config.chamber.backend)};
+  for (std::size_t i = 0; i < station.imu_count(); ++i) {
+    out.push_back(status("imu", station.imu(i), config.imus.at(i).backend));
+  }
+  return out;
+}
+
+// The latest station time a run recorded [s] (where a stopped run's clock stands).
+double last_station_time_s(const store::RunRecord& record) {
+  double t = record.started_clock_s.value_or(0.0);
+  for (const auto& s : record.steps) {
+    t = std::max({t, s.started_clock_s.value_or(0.0), s.ended_clock_s.value_or(0.0)});
+  }
+  for (const auto& e : record.events) t = std::max(t, e.time_s);
+  return t;
+}
+
+bool has_ended(const std::string& status) {
+  return status == "completed" || status == "aborted" || status == "failed" || status == "imported";
+}
+
+}  // namespace
+
+RecoveryPolicy parse_recovery_policy(const std::string& name, const std::string& where) {
+  if (name == "auto") return RecoveryPolicy::kAuto;
+  if (name == "hold") return RecoveryPolicy::kHold;
+  throw core::InputError(where, fmt::format("'{}' is not a recovery policy (auto or hold)", name));
+}
+
+RunService::RunService(ServiceOptions options, EventHub& hub)
+    : options_(std::move(options)), hub_(hub) {
+  live_.update([&](LiveSnapshot& s) { s.devices = offline_devices(options_.station); });
+}
+
+RunService::~RunService() { stop("service destroyed"); }
+
+void RunService::start() {
+  std::lock_guard lock(mutex_);
+  if (thread_.joinable() || stopping_) return;
+  thread_ = std::thread([this] { run_thread(); });
+}
+
+void RunService::stop(const std::string& why) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!stopping_) {
+      stopping_ = true;
+      stop_reason_ = why;
+      if (current_) {
+        commands_.push_back({Command::Kind::kAbort, false, "daemon stopping: " + why, "daemon", true});
+      }
+    }
+    ++generation_;
+  }
+  wake_.notify_all();
+  if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+}
+
+void RunService::run_thread() {
+  while (true) {
+    std::uint64_t seen = 0;
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) break;
+      seen = generation_;
+    }
+    bool failed = false;
+    try {
+      if (const auto next = next_run()) {
+        execute(next->first, next->second);
+        continue;
+      }
+    } catch (const std::exception& e) {
+      // A storage failure: logged, and retried after the wait below rather than in a loop.
+      spdlog::error("run queue: {}", e.what());
+      failed = true;
+    }
+    std::unique_lock lock(mutex_);
+    wake_.wait_for(lock, std::chrono::seconds(failed ? 5 : 2),
+                   [&] { return stopping_ || (!failed && generation_ != seen); });
+  }
+}
+
+std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return std::nullopt;
+    if (held_) {
+      if (!resume_held_) return std::nullopt;
+      const std::int64_t run = *held_;
+      held_.reset();
+      resume_held_ = false;
+      live_.update([](LiveSnapshot& s) { s.held.reset(); });
+      return std::make_pair(run, true);
+    }
+  }
+  store::Database db(options_.db_path);
+  const auto interrupted = store::interrupted_runs(db);
+  if (!interrupted.empty()) {
+    if (options_.recovery == RecoveryPolicy::kAuto) return std::make_pair(interrupted.front(), true);
+    hold(interrupted.front());
+    return std::nullopt;
+  }
+  const auto queued = store::queued_runs(db);
+  if (!queued.empty()) return std::make_pair(queued.front().run, false);
+  return std::nullopt;
+}
+
+void RunService::hold(std::int64_t run) {
+  spdlog::warn("run {}: interrupted; held with the station safe until an operator resumes or aborts it", run);
+  {
+    std::lock_guard lock(mutex_);
+    held_ = run;
+    resume_held_ = false;
+  }
+  store::Database db(options_.db_path);
+  store::mark_run_resumable(db, run, store::kHeldStatus,
+                            "interrupted; held for an operator (recovery policy hold)");
+  // The devices may be wherever the interruption left them: bring them up and make them safe.
+  std::string safe_outcome = "station made safe";
+  try {
+    auto station = drivers::make_station(options_.station);
+    if (auto r = station->bring_up(); !r) {
+      safe_outcome = "station bring-up failed: " + r.message;
+    } else if (auto s = station->make_safe(); !s) {
+      safe_outcome = "making the station safe failed: " + s.message;
+    }
+  } catch (const std::exception& e) {
+    safe_outcome = std::string("station unavailable: ") + e.what();
+  }
+  record_event(run, "daemon", "held after an interruption (recovery policy hold): " + safe_outcome +
+                                  "; waiting for resume or abort", false);
+  live_.update([&](LiveSnapshot& s) { s.held = run; });
+  hub_.publish("run", {{"run", run}, {"state", store::kHeldStatus}, {"reason", safe_outcome}});
+}
+
+void RunService::fail_before_start(std::int64_t run, const std::string& why) {
+  spdlog::error("run {}: cannot start: {}", run, why);
+  store::Database db(options_.db_path);
+  store::RunStore runs(db);
+  runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(0.0), "cannot start: " + why);
+  record_event(run, "daemon", "cannot start: " + why, false);
+  hub_.publish("run", {{"run", run}, {"state", "failed"}, {"reason", why}});
+}
+
+void RunService::execute(std::int64_t run, bool resuming) {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;  // a queued run stays queued; an interrupted one stays interrupted
+    current_ = run;
+    commands_.clear();
+  }
+  struct ClearCurrent {
+    RunService& s;
+    ~ClearCurrent() {
+      std::lock_guard lock(s.mutex_);
+      s.current_.reset();
+      s.commands_.clear();
+    }
+  } clear_current{*this};
+
+  store::Database db(options_.db_path);
+  store::RunStore runs(db);
+  std::optional<StoredRun> stored;
+  std::unique_ptr<drivers::Station> station;
+  try {
+    stored = prepare_stored_run(runs, run);
+    station = drivers::make_station(stored->station, stored->start.start_time_s);
+  } catch (const std::exception& e) {
+    fail_before_start(run, e.what());
+    return;
+  }
+  if (resuming) {
+    record_event(run, "daemon", fmt::format("resuming at step {} after an interruption",
+                                            stored->start.first_step), false);
+  }
+  spdlog::info("run {}: {} {} at step {}/{}", run, resuming ? "resuming" : "starting",
+               stored->procedure_name, stored->start.first_step + 1, stored->plan.steps.size());
+  live_.update([&](LiveSnapshot& s) {
+    s.run = run;
+    s.progress = {};
+    s.progress.step = stored->start.first_step;
+    s.progress.steps = stored->plan.steps.size();
+  });
+
+  store::CaptureWriter writer(options_.db_path);
+  StoreJournal store_journal(runs, writer, run, 0.1, station->clock().is_virtual());
+  ObservedJournal journal(store_journal, hub_, live_, run);
+  EngineOptions engine_options = EngineOptions::from_policy(stored->station.policy);
+  RunEngine* engine = nullptr;
+  bool checkpointing = false;
+  auto next_device_read = std::chrono::steady_clock::now();
+  engine_options.on_progress = [&](const Progress& p) {
+    std::vector<Command> todo;
+    {
+      std::lock_guard lock(mutex_);
+      todo.swap(commands_);
+    }
+    for (const auto& c : todo) {
+      if (!engine) break;
+      switch (c.kind) {
+        case Command::Kind::kPause: engine->pause(c.immediate, c.who); break;
+        case Command::Kind::kResume: engine->resume(c.who); break;
+        case Command::Kind::kAbort:
+          checkpointing = checkpointing || c.checkpoint;
+          engine->abort(c.why, c.who);
+          break;
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    const bool read_devices_now = now >= next_device_read;
+    if (read_devices_now) next_device_read = now + kDeviceReadPeriod;
+    live_.update([&](LiveSnapshot& s) {
+      s.progress = p;
+      if (read_devices_now) s.devices = read_devices(*station);
+    });
+  };
+  RunEngine run_engine(*station, journal, stored->plan, engine_options);
+  engine = &run_engine;
+
+  RunState final_state = RunState::kFailed;
+  std::string reason;
+  try {
+    final_state = run_engine.run(stored->start.first_step, stored->start.first_attempt);
+    reason = run_engine.exit_reason();
+  } catch (const std::exception& e) {
+    // Storage failure: the engine made the station safe before this propagated.
+    reason = std::string("internal error: ") + e.what();
+    spdlog::error("run {}: {}", run, reason);
+    try {
+      runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(station->clock().now_s()), reason);
+    } catch (const std::exception& e2) {
+      spdlog::error("run {}: recording the failure: {}", run, e2.what());
+    }
+  }
+  writer.flush();
+
+  if (checkpointing && final_state == RunState::kAborted) {
+    std::string why;
+    {
+      std::lock_guard lock(mutex_);
+      why = stop_reason_;
+    }
+    const auto first = runs.first_unfinished_step(run);
+    const std::string message = fmt::format(
+        "checkpointed: daemon stopped ({}); station made safe; resumes at step {} on restart", why,
+        first ? *first : 0);
+    store::mark_run_resumable(db, run, store::kInterruptedStatus, message);
+    record_event(run, "daemon", message, false);
+    hub_.publish("run", {{"run", run}, {"state", store::kInterruptedStatus}, {"reason", message}});
+    spdlog::warn("run {}: {}", run, message);
+  } else {
+    store::dequeue_run(db, run);
+    spdlog::info("run {}: {}{}", run, to_string(final_state), reason.empty() ? "" : " (" + reason + ")");
+  }
+  live_.update([&](LiveSnapshot& s) {
+    s.run.reset();
+    s.progress = {};
+    for (auto& d : s.devices) d.state = "offline";
+  });
+}
+
+void RunService::record_event(std::int64_t run, const std::string& who, const std::string& message,
+                              bool operator_action) {
+  store::Database db(options_.db_path);
+  store::RunStore runs(db);
+  store::EventRecord e;
+  e.run_id = run;
+  e.time_s = last_station_time_s(runs.load_run(run));
+  e.kind = operator_action ? store::EventKind::kOperator : store::EventKind::kInfo;
+  e.source = who;
+  e.message = message;
+  runs.add_event(e);
+  hub_.publish("event", {{"run", run},
+                         {"time_s", e.time_s},
+                         {"kind", std::string(to_string(e.kind))},
+                         {"source", who},
+                         {"message", message}});
+}
+
+std::int64_t RunService::submit(const procedures::Procedure& procedure,
+                                const procedures::Overrides& overrides, const std::string& who) {
+  const procedures::Plan plan = procedures::make_plan(procedure, options_.station, overrides);
+  procedures::require_valid(plan);  // every violation, before anything is written
+  std::int64_t run = 0;
+  {
+    store::Database db(options_.db_path);
+    store::RunStore runs(db);
+    run = create_run_record(runs, options_.station, procedure, plan);
+    // Enqueued before it is marked queued: a crash in between leaves an idle run, never a
+    // queued run outside the queue.
+    store::enqueue_run(db, run, who);
+    runs.set_run_status(run, store::kQueuedStatus);
+  }
+  record_event(run, who, fmt::format("submitted {} ({} steps, estimated {:.0f} s)", procedure.name,
+                                     plan.steps.size(), plan.total_s));
+  hub_.publish("run", {{"run", run}, {"state", store::kQueuedStatus}});
+  {
+    std::lock_guard lock(mutex_);
+    ++generation_;
+  }
+  wake_.notify_all();
+  return run;
+}
+
+std::string RunService::status_of(std::int64_t run) {
+  store::Database db(options_.db_path);
+  return store::RunStore(db).load_run(run).summary.status;  // InputError when there is none
+}
+
+void RunService::command_current(std::int64_t run, Command command) {
+  std::lock_guard lock(mutex_);
+  if (current_ != run) {
+    throw ActionRefused(fmt::format("run {} is not on the station", run));
+  }
+  commands_.push_back(std::move(command));
+}
+
+void RunService::pause(std::int64_t run, bool immediate, const std::string& who) {
+  const std::string status = status_of(run);
+  if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({})", run, status));
+  const Progress p = live_.snapshot().progress;
+  {
+    std::lock_guard lock(mutex_);
+    if (current_ != run) {
+      throw ActionRefused(fmt::format("run {} is {}; only the running run can be paused", run, status));
+    }
+  }
+  if (p.state == RunState::kPaused) throw ActionRefused(fmt::format("run {} is already paused", run));
+  command_current(run, {Command::Kind::kPause, immediate, "", who});
+}
+
+void RunService::resume(std::int64_t run, const std::string& who) {
+  const std::string status = status_of(run);
+  bool was_held = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (held_ == run) {
+      resume_held_ = true;
+      was_held = true;
+      ++generation_;
+    }
+  }
+  if (was_held) {
+    record_event(run, who, "resume requested (held run)");
+    wake_.notify_all();
+    return;
+  }
+  const LiveSnapshot live = live_.snapshot();
+  if (live.run != run || live.progress.state != RunState::kPaused) {
+    throw ActionRefused(fmt::format("run {} is {}; only a paused or held run can be resumed", run, status));
+  }
+  command_current(run, {Command::Kind::kResume, false, "", who});
+}
+
+void RunService::abort(std::int64_t run, const std::string& why, const std::string& who) {
+  const std::string status = status_of(run);
+  // Checked first: an ended run may still be on the station for a moment while it winds up.
+  if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({}); there is nothing to abort", run, status));
+  bool was_held = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (current_ == run) {
+      commands_.push_back({Command::Kind::kAbort, false, why, who});
+      return;
+    }
+    if (held_ == run) {
+      held_.reset();
+      resume_held_ = false;
+      was_held = true;
+      ++generation_;
+    }
+  }
+  if (!was_held && status != store::kQueuedStatus) {
+    throw ActionRefused(fmt::format("run {} is {}; there is nothing to abort", run, status));
+  }
+  store::Database db(options_.db_path);
+  store::RunStore runs(db);
+  const double t_s = last_station_time_s(runs.load_run(run));
+  const std::string reason = fmt::format("aborted by {}: {}", who, why);
+  runs.set_run_status(run, "aborted", std::nullopt, store::Stamp::now(t_s), reason);
+  store::dequeue_run(db, run);
+  record_event(run, who, (was_held ? "abort of the held run: " : "abort of the queued run: ") + why);
+  if (was_held) live_.update([](LiveSnapshot& s) { s.held.reset(); });
+  hub_.publish("run", {{"run", run}, {"state", "aborted"}, {"reason", reason}});
+  wake_.notify_all();
+}
+
+}  // namespace calstand::daemon::service

@@ -1,0 +1,381 @@
+// The control API of calstandd against a daemon started in-process on an ephemeral loopback
+// port with the simulated station: submit and watch, queue, pause/resume, abort, the refused
+// requests (401/400/404/409/413/422), and stop/restart with both recovery policies.
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "daemon/api/api_server.hpp"
+#include "daemon/service/event_hub.hpp"
+#include "daemon/service/run_service.hpp"
+#include "daemon_test_support.hpp"
+#include "sim/sim_world.hpp"
+#include "store/database.hpp"
+#include "store/run_store.hpp"
+
+namespace {
+
+using namespace calstand;
+using calstand::testing::ApiClient;
+using calstand::testing::EventStreamReader;
+using calstand::testing::Reply;
+using calstand::testing::wait_until;
+using daemon::service::RecoveryPolicy;
+
+// Six static positions, 12 steps: with 5 s captures a run takes a fraction of a second of
+// wall time; with 300 s captures a few seconds (each capture ~0.3 s on an idle machine), long
+// enough to act on mid-run without racing the run's end.
+const nlohmann::json kShort = {{"capture_s", 5}};
+const nlohmann::json kLong = {{"capture_s", 300}};
+
+// calstandd in-process: hub, run service and API, as calstandd_main.cpp puts them together.
+class InProcessDaemon {
+ public:
+  explicit InProcessDaemon(const std::string& db, RecoveryPolicy recovery = RecoveryPolicy::kAuto)
+      : service_({sim::load_station_or_default(""), db, recovery}, hub_),
+        server_(service_, hub_, options()) {
+    port_ = server_.start();
+    service_.start();
+  }
+  ~InProcessDaemon() {
+    service_.stop("test over");
+    server_.stop();
+  }
+  int port() const { return port_; }
+
+ private:
+  static daemon::api::ApiOptions options() {
+    daemon::api::ApiOptions o;
+    o.port = 0;
+    o.token = calstand::testing::kTestToken;
+    o.max_body_bytes = 64 * 1024;
+    return o;
+  }
+  daemon::service::EventHub hub_;
+  daemon::service::RunService service_;
+  daemon::api::ApiServer server_;
+  int port_ = 0;
+};
+
+std::string status_of(ApiClient& api, std::int64_t run) {
+  const Reply r = api.get("/runs/" + std::to_string(run));
+  return r.status == 200 ? r.body.value("status", "") : "";
+}
+
+bool wait_for_status(ApiClient& api, std::int64_t run, const std::string& status) {
+  return wait_until([&] { return status_of(api, run) == status; });
+}
+
+// True once the run is on the station, running, with at least `steps` steps done.
+bool running_with_steps_done(ApiClient& api, std::int64_t run, std::size_t steps) {
+  const Reply r = api.get("/runs/" + std::to_string(run));
+  return r.status == 200 && r.body.contains("live") && r.body["live"]["state"] == "running" &&
+         r.body["steps_done"].get<std::size_t>() >= steps;
+}
+
+bool has_event(const Reply& events, const std::string& source, const std::string& text) {
+  for (const auto& e : events.body) {
+    if (e["source"] == source && e["message"].get<std::string>().find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(DaemonApi, SubmitsAndWatchesARunToCompletion) {
+  InProcessDaemon d(calstand::testing::fresh_dir("watch") + "/station.db");
+  ApiClient api(d.port());
+  EventStreamReader stream(d.port());
+  ASSERT_TRUE(wait_until([&] { return stream.saw([](const auto& m) { return m.type == "station"; }); }));
+
+  const Reply submitted = api.post_json("/runs", {{"procedure", "six-position"}, {"parameters", kShort}});
+  ASSERT_EQ(submitted.status, 201) << submitted.raw;
+  const std::int64_t run = submitted.body.at("id");
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+
+  const Reply status = api.get("/runs/" + std::to_string(run));
+  EXPECT_EQ(status.body["steps_done"], 12);
+  EXPECT_EQ(status.body["steps_total"], 12);
+  EXPECT_DOUBLE_EQ(status.body["progress"].get<double>(), 1.0);
+  EXPECT_EQ(status.body["parameters"]["capture_s"], 5);
+
+  const Reply steps = api.get("/runs/" + std::to_string(run) + "/steps");
+  ASSERT_EQ(steps.body.size(), 12u);
+  for (const auto& s : steps.body) EXPECT_EQ(s["status"], "completed") << s.dump();
+
+  const Reply events = api.get("/runs/" + std::to_string(run) + "/events");
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "submitted six-position")) << events.raw;
+
+  // The live stream told the story: the run starting and ending, every step completing, and
+  // telemetry on the way.
+  ASSERT_TRUE(wait_until([&] {
+    return stream.saw([&](const auto& m) { return m.type == "run" && m.data["state"] == "completed"; });
+  }));
+  for (int i = 0; i < 12; ++i) {
+    EXPECT_TRUE(stream.saw([&](const auto& m) {
+      return m.type == "step" && m.data["step"] == i && m.data["status"] == "completed" && m.data["run"] == run;
+    })) << "step " << i;
+  }
+  EXPECT_TRUE(stream.saw([](const auto& m) { return m.type == "run" && m.data["state"] == "running"; }));
+  EXPECT_TRUE(stream.saw([](const auto& m) { return m.type == "telemetry" && m.data.contains("table"); }));
+
+  const Reply listing = api.get("/runs");
+  ASSERT_EQ(listing.status, 200);
+  ASSERT_EQ(listing.body.size(), 1u);
+  EXPECT_EQ(listing.body[0]["id"], run);
+
+  const Reply station = api.get("/station");
+  ASSERT_EQ(station.status, 200);
+  EXPECT_GE(station.body["devices"].size(), 3u);
+  EXPECT_TRUE(station.body["run"].is_null());
+  EXPECT_FALSE(station.body["telemetry"]["table"].is_null());
+}
+
+TEST(DaemonApi, ExportsARunAsAUstarArchive) {
+  InProcessDaemon d(calstand::testing::fresh_dir("export") + "/station.db");
+  ApiClient api(d.port());
+  const std::int64_t run = api.submit("six-position", kShort);
+  ASSERT_GT(run, 0);
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+  httplib::Client c("127.0.0.1", d.port());
+  const auto res = c.Get(("/runs/" + std::to_string(run) + "/export").c_str());
+  ASSERT_TRUE(res);
+  ASSERT_EQ(res->status, 200) << res->body;
+  EXPECT_EQ(res->get_header_value("Content-Type"), "application/x-tar");
+  const std::string& tar = res->body;
+  ASSERT_GT(tar.size(), 4u * 512u);
+  EXPECT_EQ(tar.size() % 512, 0u);
+  const std::string first_name = "run-" + std::to_string(run) + "/meta.json";
+  EXPECT_EQ(tar.substr(0, first_name.size()), first_name);
+  EXPECT_EQ(tar.substr(257, 5), "ustar");
+  EXPECT_NE(tar.find("run-" + std::to_string(run) + "/samples.csv"), std::string::npos);
+  EXPECT_NE(tar.find("\"format\""), std::string::npos);  // meta.json's content follows its header
+}
+
+TEST(DaemonApi, QueuedRunsRunOneAtATimeInOrder) {
+  InProcessDaemon d(calstand::testing::fresh_dir("queue") + "/station.db");
+  ApiClient api(d.port());
+  const std::int64_t first = api.submit("six-position", kLong);
+  const std::int64_t second = api.submit("six-position", kShort);
+  ASSERT_GT(first, 0);
+  ASSERT_GT(second, 0);
+  ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, first, 1); }));
+  EXPECT_EQ(status_of(api, second), "queued");  // the station is busy with the first
+  const Reply station = api.get("/station");
+  EXPECT_EQ(station.body["run"], first);
+  ASSERT_EQ(station.body["queue"].size(), 1u);
+  EXPECT_EQ(station.body["queue"][0]["run"], second);
+  EXPECT_EQ(station.body["queue"][0]["submitted_by"], "tester@127.0.0.1");
+  // Once the first ends, the second goes.
+  ASSERT_EQ(api.post("/runs/" + std::to_string(first) + "/abort", "").status, 202);
+  ASSERT_TRUE(wait_for_status(api, second, "completed"));
+  EXPECT_EQ(status_of(api, first), "aborted");
+  const Reply a = api.get("/runs/" + std::to_string(first));
+  const Reply b = api.get("/runs/" + std::to_string(second));
+  EXPECT_LE(a.body["ended_utc"].get<std::string>(), b.body["started_utc"].get<std::string>());
+}
+
+TEST(DaemonApi, PausesAndResumesARun) {
+  InProcessDaemon d(calstand::testing::fresh_dir("pause") + "/station.db");
+  ApiClient api(d.port());
+  const std::int64_t run = api.submit("six-position", kLong);
+  ASSERT_GT(run, 0);
+  ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, run, 1); }));
+  const std::string path = "/runs/" + std::to_string(run);
+
+  const Reply paused = api.post_json(path + "/pause", {{"immediate", true}});
+  ASSERT_EQ(paused.status, 202) << paused.raw;
+  ASSERT_TRUE(wait_for_status(api, run, "paused"));
+  const auto done_when_paused = api.get(path).body["steps_done"].get<int>();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(status_of(api, run), "paused");
+  EXPECT_EQ(api.get(path).body["steps_done"].get<int>(), done_when_paused);  // nothing advances
+  EXPECT_EQ(api.post(path + "/pause", "").status, 409);                        // already paused
+
+  const Reply resumed = api.post(path + "/resume", "");
+  ASSERT_EQ(resumed.status, 202) << resumed.raw;
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+  const Reply events = api.get(path + "/events");
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "pause requested (at once)")) << events.raw;
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "resume requested")) << events.raw;
+  EXPECT_EQ(api.post(path + "/resume", "").status, 409);  // completed: nothing to resume
+}
+
+TEST(DaemonApi, AbortsARunToTheSafeState) {
+  InProcessDaemon d(calstand::testing::fresh_dir("abort") + "/station.db");
+  ApiClient api(d.port());
+  EventStreamReader stream(d.port());
+  const std::int64_t run = api.submit("six-position", kLong);
+  ASSERT_GT(run, 0);
+  ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, run, 1); }));
+  const std::string path = "/runs/" + std::to_string(run);
+
+  ASSERT_EQ(api.post_json(path + "/abort", {{"reason", "fixture loose"}}).status, 202);
+  ASSERT_TRUE(wait_for_status(api, run, "aborted"));
+  const Reply status = api.get(path);
+  const std::string reason = status.body["exit_reason"];
+  EXPECT_NE(reason.find("tester@127.0.0.1"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("fixture loose"), std::string::npos) << reason;
+  EXPECT_LT(status.body["steps_done"].get<int>(), 12);
+  // The engine made the station safe without a fault, and said so on the stream.
+  const Reply events = api.get(path + "/events");
+  for (const auto& e : events.body) {
+    EXPECT_EQ(e["message"].get<std::string>().find("making the station safe"), std::string::npos) << e.dump();
+  }
+  ASSERT_TRUE(wait_until([&] {
+    return stream.saw([&](const auto& m) { return m.type == "run" && m.data["state"] == "aborted"; });
+  }));
+  EXPECT_EQ(api.post(path + "/abort", "").status, 409);  // already ended
+  // The station is free again: the next run goes.
+  const std::int64_t next = api.submit("six-position", kShort);
+  EXPECT_TRUE(wait_for_status(api, next, "completed"));
+}
+
+TEST(DaemonApi, AbortsAQueuedRunBeforeItStarts) {
+  InProcessDaemon d(calstand::testing::fresh_dir("abort-queued") + "/station.db");
+  ApiClient api(d.port());
+  const std::int64_t first = api.submit("six-position", kLong);
+  const std::int64_t second = api.submit("six-position", kShort);
+  ASSERT_EQ(status_of(api, second), "queued");
+  ASSERT_EQ(api.post("/runs/" + std::to_string(second) + "/abort", "").status, 202);
+  EXPECT_EQ(status_of(api, second), "aborted");
+  EXPECT_EQ(api.get("/runs/" + std::to_string(second)).body["steps_done"], 0);
+  ASSERT_EQ(api.post("/runs/" + std::to_string(first) + "/abort", "").status, 202);
+  EXPECT_TRUE(wait_for_status(api, first, "aborted"));
+}
+
+TEST(DaemonApi, RefusesBadRequestsWithClearErrorsAndKeepsServing) {
+  InProcessDaemon d(calstand::testing::fresh_dir("refuse") + "/station.db");
+  ApiClient api(d.port());
+  const std::string good = nlohmann::json{{"procedure", "six-position"}, {"parameters", kShort}}.dump();
+
+  // 401: no token, a wrong one, a prefix of the right one; reads need none.
+  EXPECT_EQ(api.post("/runs", good, "").status, 401);
+  EXPECT_EQ(api.post("/runs", good, "wrong").status, 401);
+  EXPECT_EQ(api.post("/runs", good, std::string(calstand::testing::kTestToken).substr(0, 10)).status, 401);
+  EXPECT_EQ(api.get("/runs").status, 200);
+
+  // 400: malformed JSON, with the place.
+  const Reply malformed = api.post("/runs", "{\n  \"procedure\": \"six-position\",,\n}");
+  EXPECT_EQ(malformed.status, 400);
+  EXPECT_NE(malformed.body.value("where", "").find("line 2, column"), std::string::npos) << malformed.raw;
+  EXPECT_NE(malformed.body.value("error", "").find("malformed JSON"), std::string::npos) << malformed.raw;
+  EXPECT_EQ(api.post("/runs", "").status, 400);
+
+  // 404: unknown routes and ids.
+  EXPECT_EQ(api.get("/nope").status, 404);
+  EXPECT_EQ(api.get("/runs/999").status, 404);
+  EXPECT_EQ(api.get("/runs/abc").status, 404);
+  EXPECT_EQ(api.get("/runs/99999999999999999999999").status, 404);
+  EXPECT_EQ(api.post("/runs/999/pause", "").status, 404);
+  EXPECT_EQ(api.get("/calibrations/5").status, 404);
+  EXPECT_FALSE(api.get("/nope").body.value("error", "").empty());
+
+  // 413: a body beyond the limit (64 KiB in this daemon).
+  const Reply too_large = api.post("/runs", std::string(200 * 1024, ' '));
+  EXPECT_EQ(too_large.status, 413);
+
+  // 422: every violation, as the plan check gives them.
+  const Reply unknown = api.post_json("/runs", {{"procedure", "no-such-procedure"}});
+  EXPECT_EQ(unknown.status, 422);
+  EXPECT_EQ(unknown.body["violations"][0]["path"], "procedure");
+  const Reply bad_params = api.post_json(
+      "/runs", {{"procedure", "six-position"}, {"parameters", {{"capture_s", -5}, {"bogus", 1}}}});
+  ASSERT_EQ(bad_params.status, 422) << bad_params.raw;
+  EXPECT_GE(bad_params.body["violations"].size(), 2u) << bad_params.raw;
+  const Reply bad_inline = api.post_json(
+      "/runs", {{"procedure", {{"name", "x"}, {"steps", {{{"kind", "fly"}}}}}}});
+  ASSERT_EQ(bad_inline.status, 422) << bad_inline.raw;
+  EXPECT_FALSE(bad_inline.body["violations"].empty());
+  const Reply bad_shape = api.post_json("/runs", {{"procedure", 3}, {"extra", true}});
+  ASSERT_EQ(bad_shape.status, 422);
+  EXPECT_EQ(bad_shape.body["violations"].size(), 2u) << bad_shape.raw;
+  EXPECT_EQ(api.get("/runs").body.size(), 0u);  // nothing refused was written
+
+  // 400 on a bad action body; the daemon still works after all of it.
+  const std::int64_t run = api.submit("six-position", kShort);
+  ASSERT_GT(run, 0);
+  EXPECT_EQ(api.post("/runs/" + std::to_string(run) + "/pause", "{\"immediate\": 3}").status, 400);
+  EXPECT_TRUE(wait_for_status(api, run, "completed"));
+  EXPECT_EQ(api.get("/station").status, 200);
+}
+
+// A daemon stop mid-run (what SIGTERM does) checkpoints the run; a restart resumes it where
+// it was, leaving completed steps untouched.
+TEST(DaemonApi, StopCheckpointsTheRunAndARestartResumesIt) {
+  const std::string db = calstand::testing::fresh_dir("checkpoint") + "/station.db";
+  std::int64_t run = 0;
+  std::vector<store::StepRecord> before;
+  {
+    InProcessDaemon d(db);
+    ApiClient api(d.port());
+    run = api.submit("six-position", kLong);
+    ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, run, 3); }));
+  }
+  {
+    store::Database database(db);
+    const auto record = store::RunStore(database).load_run(run);
+    EXPECT_EQ(record.summary.status, "interrupted");
+    EXPECT_NE(record.summary.exit_reason.find("checkpointed"), std::string::npos) << record.summary.exit_reason;
+    before = record.steps;
+  }
+  InProcessDaemon d(db);
+  ApiClient api(d.port());
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+  store::Database database(db);
+  const auto after = store::RunStore(database).load_steps(run);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(after[i].status, store::StepStatus::kCompleted) << i;
+    if (before[i].status == store::StepStatus::kCompleted) {
+      EXPECT_EQ(after[i].good_attempt, before[i].good_attempt) << i;
+      EXPECT_EQ(after[i].ended_clock_s, before[i].ended_clock_s) << i;
+    }
+  }
+  EXPECT_TRUE(has_event(api.get("/runs/" + std::to_string(run) + "/events"), "daemon", "resuming at step"));
+}
+
+TEST(DaemonApi, HoldPolicyKeepsAnInterruptedRunUntilAnOperatorResumesIt) {
+  const std::string db = calstand::testing::fresh_dir("hold") + "/station.db";
+  std::int64_t run = 0;
+  {
+    InProcessDaemon d(db);
+    ApiClient api(d.port());
+    run = api.submit("six-position", kLong);
+    ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, run, 1); }));
+  }
+  InProcessDaemon d(db, RecoveryPolicy::kHold);
+  ApiClient api(d.port());
+  ASSERT_TRUE(wait_for_status(api, run, "held"));
+  // Held: a new submission waits behind it, and nothing moves until the operator decides.
+  const std::int64_t queued = api.submit("six-position", kShort);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(status_of(api, run), "held");
+  EXPECT_EQ(status_of(api, queued), "queued");
+  EXPECT_EQ(api.get("/station").body["held"], run);
+  EXPECT_EQ(api.post("/runs/" + std::to_string(run) + "/pause", "").status, 409);
+
+  ASSERT_EQ(api.post("/runs/" + std::to_string(run) + "/resume", "").status, 202);
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+  EXPECT_TRUE(wait_for_status(api, queued, "completed"));
+  const Reply events = api.get("/runs/" + std::to_string(run) + "/events");
+  EXPECT_TRUE(has_event(events, "daemon", "held after an interruption")) << events.raw;
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "resume requested")) << events.raw;
+}
+
+TEST(DaemonApi, HoldPolicyLetsAnOperatorAbortTheInterruptedRun) {
+  const std::string db = calstand::testing::fresh_dir("hold-abort") + "/station.db";
+  std::int64_t run = 0;
+  {
+    InProcessDaemon d(db);
+    ApiClient api(d.port());
+    run = api.submit("six-position", kLong);
+    ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, run, 1); }));
+  }
+  InProcessDaemon d(db, RecoveryPolicy::kHold);
+  ApiClient api(d.port());
+  ASSERT_TRUE(wait_for_status(api, run, "held"));
+  ASSERT_EQ(api.post_json("/runs/" + std::to_string(run) + "/abort", {{"reason", "unit removed"}}).status, 202);
+  EXPECT_EQ(status_of(api, run), "aborted");
+  EXPECT_TRUE(api.get("/station").body["held"].is_null());
+}
+
+}  // namespace

@@ -1,0 +1,92 @@
+// The `calstand` client commands (submit, status, watch, pause, resume, abort) against
+// calstandd running as a process, as an operator uses them.
+#include <gtest/gtest.h>
+
+#include "cli_runner.hpp"
+#include "daemon_test_support.hpp"
+
+namespace {
+
+using calstand::testing::DaemonProcess;
+
+class DaemonClientCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = calstand::testing::fresh_dir("client-cli");
+    daemon_ = std::make_unique<DaemonProcess>(dir_ + "/station.db", dir_ + "/calstandd.log");
+    ASSERT_GT(daemon_->port(), 0);
+    setenv("CALSTAND_TOKEN", calstand::testing::kTestToken, 1);
+  }
+  void TearDown() override { unsetenv("CALSTAND_TOKEN"); }
+  // `calstand ARGS --daemon 127.0.0.1:PORT`.
+  calstand::testing::Result calstand(const std::string& args) {
+    return calstand::testing::run(args + " --daemon 127.0.0.1:" + std::to_string(daemon_->port()));
+  }
+  std::string dir_;
+  std::unique_ptr<DaemonProcess> daemon_;
+};
+
+TEST_F(DaemonClientCli, SubmitWatchAndStatus) {
+  const auto submitted = calstand("submit six-position --set capture_s=5 --operator alice");
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out;
+  EXPECT_EQ(submitted.out, "run 1 queued\n");
+
+  const auto watched = calstand("watch 1");
+  EXPECT_EQ(watched.exit_code, 0) << watched.out;
+  EXPECT_NE(watched.out.find("run 1 completed: 12/12 steps"), std::string::npos) << watched.out;
+
+  const auto one = calstand("status 1 --json");
+  ASSERT_EQ(one.exit_code, 0) << one.out;
+  EXPECT_EQ(nlohmann::json::parse(one.out)["status"], "completed");
+  const auto station = calstand("status");
+  ASSERT_EQ(station.exit_code, 0) << station.out;
+  EXPECT_NE(station.out.find("station sim-station"), std::string::npos) << station.out;
+  EXPECT_NE(station.out.find("idle"), std::string::npos) << station.out;
+}
+
+TEST_F(DaemonClientCli, RefusalsAreErrorsWithTheDaemonsReason) {
+  const auto invalid = calstand("submit six-position --set capture_s=-5");
+  EXPECT_EQ(invalid.exit_code, 2) << invalid.out;
+  EXPECT_NE(invalid.out.find("HTTP 422"), std::string::npos) << invalid.out;
+  EXPECT_NE(invalid.out.find("--set capture_s: -5 is below the minimum 1"), std::string::npos) << invalid.out;
+
+  const auto unknown = calstand("pause 42");
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.out;
+  EXPECT_NE(unknown.out.find("HTTP 404"), std::string::npos) << unknown.out;
+
+  unsetenv("CALSTAND_TOKEN");
+  const auto no_token = calstand("submit six-position");
+  EXPECT_EQ(no_token.exit_code, 2) << no_token.out;
+  EXPECT_NE(no_token.out.find("HTTP 401"), std::string::npos) << no_token.out;
+
+  const auto nobody = calstand::testing::run("status --daemon 127.0.0.1:1");
+  EXPECT_EQ(nobody.exit_code, 1) << nobody.out;
+  EXPECT_NE(nobody.out.find("no answer from calstandd"), std::string::npos) << nobody.out;
+}
+
+TEST_F(DaemonClientCli, PauseResumeAndAbortARun) {
+  ASSERT_EQ(calstand("submit six-position --set capture_s=300").exit_code, 0);
+  calstand::testing::ApiClient api(daemon_->port());
+  ASSERT_TRUE(calstand::testing::wait_until([&] {
+    const auto r = api.get("/runs/1");
+    return r.body.contains("live") && r.body["live"]["state"] == "running";
+  }));
+  const auto paused = calstand("pause 1 --now --operator bob");
+  ASSERT_EQ(paused.exit_code, 0) << paused.out;
+  EXPECT_EQ(paused.out, "run 1: pause at once requested\n");
+  ASSERT_TRUE(calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
+  EXPECT_EQ(calstand("resume 1").exit_code, 0);
+  const auto aborted = calstand("abort 1 --reason 'unit mounted wrong'");
+  EXPECT_EQ(aborted.exit_code, 0) << aborted.out;
+  const auto watched = calstand("watch 1");
+  EXPECT_EQ(watched.exit_code, 1) << watched.out;
+  EXPECT_NE(watched.out.find("unit mounted wrong"), std::string::npos) << watched.out;
+  bool bob_paused = false;
+  for (const auto& e : api.get("/runs/1/events").body) {
+    bob_paused = bob_paused || (e["source"].get<std::string>().rfind("bob@", 0) == 0 &&
+                                e["message"] == "pause requested (at once)");
+  }
+  EXPECT_TRUE(bob_paused);
+}
+
+}  // namespace

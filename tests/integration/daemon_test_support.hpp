@@ -1,0 +1,203 @@
+#pragma once
+// Helpers of the calstandd tests: a JSON client for the control API, polling with a deadline,
+// and a server-sent-events reader on its own thread.
+
+#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
+#include <httplib.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace calstand::testing {
+
+inline constexpr const char* kTestToken = "test-token-0123456789abcdef";
+
+/// A fresh directory for one test's database.
+inline std::string fresh_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("calstandd-test-" + std::to_string(::getpid()) + "-" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+struct Reply {
+  int status = 0;  ///< 0: no answer (connection failed)
+  nlohmann::json body;
+  std::string raw;
+};
+
+/// Requests against the API on 127.0.0.1:port; POSTs carry the token unless told otherwise.
+class ApiClient {
+ public:
+  explicit ApiClient(int port) : port_(port) {}
+
+  Reply get(const std::string& path) {
+    httplib::Client c("127.0.0.1", port_);
+    c.set_read_timeout(10, 0);
+    return reply(c.Get(path.c_str()));
+  }
+  Reply post(const std::string& path, const std::string& body, const std::string& token = kTestToken) {
+    httplib::Client c("127.0.0.1", port_);
+    c.set_read_timeout(10, 0);
+    httplib::Headers headers{{"X-Calstand-Operator", "tester"}};
+    if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
+    return reply(c.Post(path.c_str(), headers, body, "application/json"));
+  }
+  Reply post_json(const std::string& path, const nlohmann::json& body) { return post(path, body.dump()); }
+
+  /// POST /runs of a library procedure with parameters; the run id (0 when refused).
+  std::int64_t submit(const std::string& procedure, const nlohmann::json& parameters) {
+    const Reply r = post_json("/runs", {{"procedure", procedure}, {"parameters", parameters}});
+    return r.status == 201 ? r.body.at("id").get<std::int64_t>() : 0;
+  }
+
+ private:
+  static Reply reply(const httplib::Result& res) {
+    Reply r;
+    if (!res) return r;
+    r.status = res->status;
+    r.raw = res->body;
+    r.body = nlohmann::json::parse(res->body, nullptr, false);
+    return r;
+  }
+  int port_;
+};
+
+/// Polls `done` every 20 ms until it holds or `timeout` passes; true when it held. The
+/// timeout only bounds a hung test: on two busy cores a run can take ten times its idle time.
+inline bool wait_until(const std::function<bool()>& done,
+                       std::chrono::milliseconds timeout = std::chrono::seconds(120)) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return done();
+}
+
+/// Reads GET /events on its own thread and keeps every message (type and data).
+class EventStreamReader {
+ public:
+  struct Message {
+    std::string type;
+    nlohmann::json data;
+  };
+
+  explicit EventStreamReader(int port) : client_("127.0.0.1", port) {
+    client_.set_read_timeout(5, 0);
+    thread_ = std::thread([this] {
+      client_.Get("/events", [this](const char* data, std::size_t n) {
+        buffer_.append(data, n);
+        for (std::size_t end; (end = buffer_.find("\n\n")) != std::string::npos;) {
+          parse(buffer_.substr(0, end));
+          buffer_.erase(0, end + 2);
+        }
+        return !stop_;
+      });
+    });
+  }
+  ~EventStreamReader() {
+    stop_ = true;
+    client_.stop();
+    thread_.join();
+  }
+  std::vector<Message> messages() const {
+    std::lock_guard lock(mutex_);
+    return messages_;
+  }
+  bool saw(const std::function<bool(const Message&)>& pred) const {
+    std::lock_guard lock(mutex_);
+    for (const auto& m : messages_) {
+      if (pred(m)) return true;
+    }
+    return false;
+  }
+
+ private:
+  void parse(const std::string& block) {
+    Message m;
+    std::size_t pos = 0;
+    while (pos < block.size()) {
+      auto eol = block.find('\n', pos);
+      if (eol == std::string::npos) eol = block.size();
+      const std::string line = block.substr(pos, eol - pos);
+      if (line.rfind("event: ", 0) == 0) m.type = line.substr(7);
+      if (line.rfind("data: ", 0) == 0) m.data = nlohmann::json::parse(line.substr(6), nullptr, false);
+      pos = eol + 1;
+    }
+    if (m.type.empty()) return;  // a keep-alive comment
+    std::lock_guard lock(mutex_);
+    messages_.push_back(std::move(m));
+  }
+
+  httplib::Client client_;
+  std::string buffer_;
+  std::atomic<bool> stop_{false};
+  mutable std::mutex mutex_;
+  std::vector<Message> messages_;
+  std::thread thread_;
+};
+
+#ifdef CALSTANDD_BIN
+// calstandd started with --listen 127.0.0.1:0; the port is read from its first stdout line.
+class DaemonProcess {
+ public:
+  DaemonProcess(const std::string& db, const std::string& log) {
+    int out[2];
+    if (pipe(out) != 0) return;
+    pid_ = fork();
+    if (pid_ == 0) {
+      dup2(out[1], STDOUT_FILENO);
+      const int err = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+      dup2(err, STDERR_FILENO);
+      close(out[0]);
+      setenv("CALSTAND_TOKEN", kTestToken, 1);
+      execl(CALSTANDD_BIN, CALSTANDD_BIN, "--db", db.c_str(), "--listen", "127.0.0.1:0", nullptr);
+      _exit(127);
+    }
+    close(out[1]);
+    std::string line;
+    char c = 0;
+    while (read(out[0], &c, 1) == 1 && c != '\n') line += c;
+    close(out[0]);
+    const auto colon = line.rfind(':');
+    if (line.find("listening on") != std::string::npos && colon != std::string::npos) {
+      port_ = std::atoi(line.c_str() + colon + 1);
+    }
+  }
+  ~DaemonProcess() {
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  int port() const { return port_; }
+  /// Sends `sig` and waits for the process; its exit code (-signal when killed by one).
+  int signal_and_wait(int sig) {
+    kill(pid_, sig);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+  }
+
+ private:
+  pid_t pid_ = -1;
+  int port_ = 0;
+};
+
+#endif  // CALSTANDD_BIN
+
+}  // namespace calstand::testing
