@@ -8,6 +8,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <csignal>
@@ -22,6 +23,7 @@
 #include "daemon/service/run_service.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
+#include "store/database_lock.hpp"
 
 namespace {
 
@@ -81,6 +83,10 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   std::tie(api_options.host, api_options.port) = api::parse_listen_address(opt.listen);
   api_options.token = read_token(opt);
   api_options.validate();  // before anything is opened: refuses an open port without a token
+  // This daemon alone drives the database's station (released by the kernel if it dies).
+  const calstand::store::DatabaseLock owner(
+      opt.db, calstand::store::DatabaseLock::Mode::kExclusive,
+      fmt::format("calstandd pid {} listening on {}", ::getpid(), opt.listen));
   { calstand::store::Database migrate(opt.db); }  // opens (and migrates) once, or fails here
 
   svc::EventHub hub;

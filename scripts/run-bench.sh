@@ -1,9 +1,15 @@
 #!/usr/bin/env bash
 # The benchmarks (bench/), from a bare machine. Extra arguments go to Google Benchmark,
-# e.g. --benchmark_filter=World.
+# e.g. --benchmark_filter=World; `daemon-load [ARGS]` runs the calstandd load bench instead.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Explicit: the test command configures the same build folder without benchmarks.
 bash "$root/scripts/build.sh" -DCALSTAND_BUILD_BENCHMARKS=ON \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g -DNDEBUG"
-exec "${CALSTAND_BUILD_DIR:-$root/build}/bench/calstand_bench" "$@"
+bench="${CALSTAND_BUILD_DIR:-$root/build}/bench"
+# `run-bench.sh daemon-load [--drivers] ...`: calstandd under load (its own program).
+if [ "${1:-}" = "daemon-load" ]; then
+  shift
+  exec "$bench/calstand_daemon_load_bench" "$@"
+fi
+exec "$bench/calstand_bench" "$@"

@@ -10,8 +10,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
   libmuparser-dev libfftw3-dev libboost-math-dev
-  libmodbus-dev python3-pymodbus python3-serial libcpp-httplib-dev
+  libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev
   gnuplot-nox chromium
+  systemd
 )
 
 missing=()

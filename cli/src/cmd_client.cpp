@@ -1,10 +1,11 @@
-// Client commands of calstandd: `submit`, `status`, `pause`, `resume`, `abort` (and `watch`,
+// Client commands of calstandd: `submit`, `status`, `pause`, `resume`, `abort`, `skip` (and `watch`,
 // in cmd_client_watch.cpp). They talk to the daemon's control API; nothing runs here.
 #include <fmt/format.h>
 
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -25,6 +26,7 @@ struct ClientOptions {
   bool json = false;
   bool now = false;
   std::string reason = "operator request";
+  std::optional<std::size_t> step;  ///< skip: the step meant (refused when the run is elsewhere)
 };
 
 // A library name goes by name; a file is read here and sent inline (the daemon never reads
@@ -109,7 +111,8 @@ int status(const ClientOptions& opt) {
 int action(const ClientOptions& opt, const std::string& verb) {
   nlohmann::json body = nlohmann::json::object();
   if (verb == "pause") body["immediate"] = opt.now;
-  if (verb == "abort") body["reason"] = opt.reason;
+  if (verb == "abort" || verb == "skip") body["reason"] = opt.reason;
+  if (verb == "skip" && opt.step) body["step"] = *opt.step;
   const auto reply = DaemonClient(opt.address).post(fmt::format("/runs/{}/{}", opt.run, verb), body);
   fmt::print("run {}: {} requested\n", opt.run, reply.value("requested", verb));
   return 0;
@@ -150,6 +153,13 @@ void register_client(CLI::App& app) {
   abort_cmd->add_option("run", opt->run, "Run id")->required();
   abort_cmd->add_option("--reason", opt->reason, "Why (recorded)")->capture_default_str();
   abort_cmd->callback([opt] { action(*opt, "abort"); });
+
+  CLI::App* skip_cmd = add_client_command(
+      app, "skip", "Skip the step in progress of a run on calstandd (or the next one while paused)", opt);
+  skip_cmd->add_option("run", opt->run, "Run id")->required();
+  skip_cmd->add_option("--step", opt->step, "The step meant: refused when the run is at another");
+  skip_cmd->add_option("--reason", opt->reason, "Why (recorded)")->capture_default_str();
+  skip_cmd->callback([opt] { action(*opt, "skip"); });
 }
 
 }  // namespace calstand::cli

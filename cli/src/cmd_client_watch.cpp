@@ -16,6 +16,7 @@ namespace {
 struct WatchOptions {
   DaemonAddress address;
   std::int64_t run = 0;
+  double reconnect_s = 60.0;  ///< how long a lost stream is retried
 };
 
 bool is_end_state(const std::string& state) {
@@ -25,7 +26,7 @@ bool is_end_state(const std::string& state) {
 daemon::RunState state_named(const std::string& name) {
   for (auto s : {daemon::RunState::kIdle, daemon::RunState::kRunning, daemon::RunState::kPaused,
                  daemon::RunState::kAborting, daemon::RunState::kCompleted, daemon::RunState::kAborted,
-                 daemon::RunState::kFailed}) {
+                 daemon::RunState::kFailed, daemon::RunState::kInterrupted}) {
     if (to_string(s) == name) return s;
   }
   return daemon::RunState::kIdle;
@@ -58,8 +59,23 @@ int watch(const WatchOptions& opt) {
   std::string final_state = status["status"];
   if (!is_end_state(final_state)) {
     bar.update(progress_of(status));
-    client.stream_events([&](const std::string& type, const nlohmann::json& data) {
-      if (!data.is_object() || data.value("run", std::int64_t{0}) != opt.run) return true;
+    // A daemon restart (kill -9 and a supervisor bringing it back) is ridden out: the stream
+    // reconnects and the run's own status says where it is.
+    client.stream_events(opt.reconnect_s, [&](const std::string& type, const nlohmann::json& data) {
+      if (type == "station" || type == "gap") {
+        // The stream is (again) open, or messages were lost: the run may have ended meanwhile.
+        const auto now = client.get(path);
+        if (is_end_state(now["status"].get<std::string>())) {
+          final_state = now["status"];
+          return false;
+        }
+        bar.update(progress_of(now));
+        return true;
+      }
+      // Messages of other runs, and of the station between runs ("run": null), are not ours.
+      const bool ours = data.is_object() && data.contains("run") && data["run"].is_number_integer() &&
+                        data["run"].get<std::int64_t>() == opt.run;
+      if (!ours) return true;
       if (type == "fault" || (type == "event" && data.value("kind", "") == "operator")) {
         bar.finish();
         fmt::print("{}: {}: {}\n", type, data.value("source", ""), data.value("message", ""));
@@ -90,6 +106,8 @@ void register_client_watch(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("watch", "Follow a run on calstandd live, with a progress bar");
   add_daemon_options(*cmd, opt->address);
   cmd->add_option("run", opt->run, "Run id")->required();
+  cmd->add_option("--reconnect", opt->reconnect_s, "Seconds to keep reopening a lost stream")
+      ->capture_default_str();
   cmd->callback([opt] {
     if (const int code = watch(*opt); code != 0) throw CLI::RuntimeError(code);
   });

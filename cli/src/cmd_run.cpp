@@ -22,6 +22,7 @@
 #include "progress_bar.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
+#include "store/database_lock.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::cli {
@@ -88,6 +89,7 @@ int run_new(const RunOptions& opt) {
   const procedures::Plan plan =
       procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));
   procedures::require_valid(plan);  // every violation, before anything is written or moves
+  const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared, "calstand run");
 
   std::int64_t run_id = 0;
   {
@@ -102,9 +104,16 @@ int run_new(const RunOptions& opt) {
 }
 
 int run_resume(const RunOptions& opt) {
+  const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared, "calstand run --resume");
   store::Database db(opt.db);
   store::RunStore run_store(db);
   // The run's own procedure, parameters and station; cut-off attempts discarded.
+  if (const std::string status = run_store.load_run(opt.resume_run).summary.status; status == "queued") {
+    // Never started; it waits in calstandd's queue (the daemon is not running, or the lock
+    // above would have refused this): start the daemon, or abort it there.
+    throw core::InputError("--resume", fmt::format("run {} is queued for calstandd and never started; "
+                                                   "start the daemon or abort the run", opt.resume_run));
+  }
   const daemon::StoredRun stored = daemon::prepare_stored_run(run_store, opt.resume_run);
   store::EventRecord e;
   e.run_id = opt.resume_run;

@@ -4,12 +4,15 @@
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
+#include <thread>
 
 #include "core/error.hpp"
 #include "daemon/api/api_server.hpp"
+#include "daemon/api/sse_parser.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -82,37 +85,36 @@ nlohmann::json DaemonClient::post(const std::string& path, const nlohmann::json&
 }
 
 void DaemonClient::stream_events(
-    const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const {
-  httplib::Client c(host_, port_);
-  c.set_read_timeout(10, 0);  // the daemon sends a keep-alive every second
-  std::string buffer;
-  bool stopped = false;
-  const auto res = c.Get("/events", [&](const char* data, std::size_t n) {
-    buffer.append(data, n);
-    for (std::size_t end; (end = buffer.find("\n\n")) != std::string::npos;) {
-      const std::string block = buffer.substr(0, end);
-      buffer.erase(0, end + 2);
-      std::string type;
-      nlohmann::json payload;
-      std::size_t pos = 0;
-      while (pos < block.size()) {
-        auto eol = block.find('\n', pos);
-        if (eol == std::string::npos) eol = block.size();
-        const std::string line = block.substr(pos, eol - pos);
-        if (line.rfind("event: ", 0) == 0) type = line.substr(7);
-        if (line.rfind("data: ", 0) == 0) payload = nlohmann::json::parse(line.substr(6), nullptr, false);
-        pos = eol + 1;
-      }
-      if (!type.empty() && !on_message(type, payload)) {
-        stopped = true;
-        return false;
-      }
+    double reconnect_s, const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const {
+  std::string last_id;  // of the last message with an id: where a reconnection resumes
+  auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(reconnect_s);
+  for (;;) {
+    httplib::Client c(host_, port_);
+    c.set_read_timeout(10, 0);  // the daemon sends a keep-alive every second
+    httplib::Headers headers;
+    if (!last_id.empty()) headers.emplace("Last-Event-ID", last_id);
+    bool stopped = false;
+    daemon::api::SseParser parser([&](const daemon::api::SseMessage& m) {
+      if (!m.id.empty()) last_id = m.id;
+      if (on_message(m.type, nlohmann::json::parse(m.data, nullptr, false))) return true;
+      stopped = true;
+      return false;
+    });
+    const auto res = c.Get("/events", headers,
+                           [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
+    if (stopped) return;
+    const bool connected = res && res->status == 200;
+    if (connected) {
+      // It was up: the reconnection window counts from the break.
+      give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(reconnect_s);
     }
-    return true;
-  });
-  if (!res && !stopped) {
-    throw std::runtime_error(fmt::format("GET /events: the stream from calstandd at {}:{} ended ({})",
-                                         host_, port_, httplib::to_string(res.error())));
+    if (std::chrono::steady_clock::now() >= give_up) {
+      throw std::runtime_error(fmt::format(
+          "GET /events: the stream from calstandd at {}:{} ended ({}) and did not come back within {:.0f} s",
+          host_, port_, res ? fmt::format("HTTP {}", res->status) : httplib::to_string(res.error()),
+          reconnect_s));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
 }
 

@@ -29,8 +29,12 @@ class DaemonClient {
   nlohmann::json get(const std::string& path) const;
   /// POST `path` with `body` (and the bearer token); as get().
   nlohmann::json post(const std::string& path, const nlohmann::json& body) const;
-  /// Reads GET /events until `on_message(type, data)` returns false or the stream ends.
-  void stream_events(const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const;
+  /// Reads GET /events until `on_message(type, data)` returns false. A stream that breaks
+  /// (the daemon restarting, a network hiccup) is opened again with Last-Event-ID for up to
+  /// `reconnect_s` seconds, so nothing the daemon still keeps is missed (a "gap" message says
+  /// when something was); throws std::runtime_error naming the daemon when it stays away.
+  void stream_events(double reconnect_s,
+                     const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const;
 
  private:
   std::string host_;

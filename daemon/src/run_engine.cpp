@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <thread>
 
@@ -44,6 +46,11 @@ Progress RunEngine::progress() const {
   return progress_;
 }
 
+std::string RunEngine::abort_reason() const {
+  std::lock_guard lock(mutex_);
+  return abort_reason_;
+}
+
 std::string RunEngine::exit_reason() const {
   std::lock_guard lock(mutex_);
   return exit_reason_;
@@ -70,6 +77,65 @@ void RunEngine::abort(const std::string& why, const std::string& who) {
   record_event(EventKind::kOperator, who, "abort requested: " + why);
 }
 
+void RunEngine::interrupt(const std::string& why, const std::string& who) {
+  {
+    std::lock_guard lock(mutex_);
+    abort_reason_ = fmt::format("interrupted by {}: {}", who, why);
+  }
+  interrupt_requested_ = true;
+  abort_requested_ = true;
+  record_event(EventKind::kOperator, who, "interrupt requested (checkpoint): " + why);
+}
+
+void RunEngine::skip(const std::string& why, const std::string& who,
+                     std::optional<std::size_t> step) {
+  {
+    std::lock_guard lock(mutex_);
+    skip_reason_ = fmt::format("skipped by {}: {}", who, why);
+    skip_step_ = step;
+  }
+  skip_requested_ = true;
+  record_event(EventKind::kOperator, who,
+               step ? fmt::format("skip of step {} requested: {}", *step, why)
+                    : "skip requested: " + why);
+}
+
+bool RunEngine::skip_wanted() {
+  if (!skip_requested_ || reestablishing_) return false;
+  std::optional<std::size_t> meant;
+  std::size_t current = 0;
+  {
+    std::lock_guard lock(mutex_);
+    meant = skip_step_;
+    current = progress_.step;
+  }
+  if (meant && *meant != current) {
+    // The step the operator meant ended before the request arrived: skipping the next one
+    // instead would skip what nobody asked to skip.
+    skip_requested_ = false;
+    record_event(EventKind::kInfo, "engine",
+                 fmt::format("skip of step {} not applied: the run is at step {}", *meant, current));
+    return false;
+  }
+  return true;
+}
+
+void RunEngine::skip_step(std::size_t index) {
+  skip_requested_ = false;
+  std::string why;
+  {
+    std::lock_guard lock(mutex_);
+    why = skip_reason_;
+  }
+  const Step& step = plan_.steps[index];
+  if (step.kind == StepKind::kRate && step.rest_after) {
+    // The next step expects the table at rest, as after a completed rate step.
+    const auto axis = step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
+    station_.table().set_rate(axis, 0.0);
+  }
+  journal_.step_skipped(index, station_.clock().now_s(), why);
+}
+
 void RunEngine::record_event(EventKind kind, const std::string& source,
                              const std::string& message) {
   journal_.event(station_.clock().now_s(), kind, source, message);
@@ -94,24 +160,40 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt) {
     if (auto r = station_.bring_up(); !r) throw StepFailed{"station bring-up: " + r.message};
     // Stream health counts from now: a resumed run's clock does not start at 0.
     for (auto& h : imu_health_) h.last_sample_s = station_.clock().now_s();
-    if (first_step > 0) reestablish(first_step);
+    if (first_step > 0) {
+      reestablishing_ = true;
+      reestablish(first_step);
+      reestablishing_ = false;
+    }
     std::size_t i = first_step;
     while (i < plan_.steps.size()) {
-      handle_pause_at_boundary();
+      {
+        // While paused before step i, the progress names step i (the one a skip would skip).
+        std::lock_guard lock(mutex_);
+        progress_.step = i;
+        progress_.label = plan_.steps[i].label;
+        step_started_s_ = std::numeric_limits<double>::quiet_NaN();  // not started yet
+      }
       try {
+        handle_pause_at_boundary();
         execute(i);
         attempt_ = 1;
         ++i;
       } catch (const Interrupted&) {
-        // Paused mid-step: wait for resume, then redo the step from its start with a new
-        // attempt number (the interrupted attempt's samples were discarded).
+        // Paused mid-step: the next pass waits for resume, then redoes the step from its start
+        // with a new attempt number (the interrupted attempt's samples were discarded).
         ++attempt_;
-        handle_pause_at_boundary();
+      } catch (const Skipped&) {
+        skip_step(i);
+        attempt_ = 1;
+        ++i;
       }
     }
     finish(RunState::kCompleted, "");
   } catch (const Aborted& a) {
-    finish(RunState::kAborted, a.why);
+    // A checkpoint ends the run resumable; a fault during it (an interlock) still aborts it.
+    const bool checkpoint = interrupt_requested_ && a.why == abort_reason();
+    finish(checkpoint ? RunState::kInterrupted : RunState::kAborted, a.why);
   } catch (const StepFailed& f) {
     finish(RunState::kFailed, f.why);
   } catch (...) {
@@ -158,14 +240,22 @@ void RunEngine::finish(RunState final_state, const std::string& reason) {
 void RunEngine::handle_pause_at_boundary() {
   if (!pause_requested_) return;
   pause_requested_ = false;
-  resume_requested_ = false;
-  state_ = RunState::kPaused;
-  journal_.run_state(RunState::kPaused, station_.clock().now_s(), "paused");
+  // Still paused after skipping a step while paused: nothing to record again.
+  if (state_ != RunState::kPaused) {
+    resume_requested_ = false;
+    state_ = RunState::kPaused;
+    journal_.run_state(RunState::kPaused, station_.clock().now_s(), "paused");
+  }
   set_phase("paused");
   while (!resume_requested_) {
     if (abort_requested_) {
       std::lock_guard lock(mutex_);
       throw Aborted{abort_reason_};
+    }
+    if (skip_wanted()) {
+      // Skips the step that would run next; the run stays paused before the one after it.
+      pause_requested_ = true;
+      throw Skipped{};
     }
     // Time passes while paused (the chamber keeps holding); on a virtual clock the loop would
     // otherwise run as fast as the CPU allows, so it also sleeps a little real time.
@@ -188,7 +278,8 @@ void RunEngine::execute(std::size_t index) {
     progress_.step = index;
     progress_.label = step.label;
   }
-  journal_.step_started(index, attempt_, station_.clock().now_s());
+  step_started_s_ = station_.clock().now_s();
+  journal_.step_started(index, attempt_, step_started_s_);
   switch (step.kind) {
     case StepKind::kSetTemperature:
       set_temperature(step, index);
@@ -379,7 +470,8 @@ void RunEngine::tick() {
     std::lock_guard lock(mutex_);
     throw Aborted{abort_reason_};
   }
-  if (pause_requested_ && pause_immediate_) throw Interrupted{};
+  if (pause_requested_ && pause_immediate_ && !reestablishing_) throw Interrupted{};
+  if (skip_wanted()) throw Skipped{};
   const double now = station_.clock().now_s();
   station_.wait_until(now + options_.tick_s);
   poll_imus();
@@ -396,7 +488,13 @@ void RunEngine::tick() {
     std::lock_guard lock(mutex_);
     progress_.state = state_.load();
     progress_.station_time_s = t;
+    // The current step's estimate less the time it has run (never below zero: a soak may
+    // take longer than planned), then the steps after it.
     double remaining = 0.0;
+    if (progress_.step < plan_.step_duration_s.size()) {
+      const double planned = plan_.step_duration_s[progress_.step];
+      remaining = std::isnan(step_started_s_) ? planned : std::max(0.0, planned - (t - step_started_s_));
+    }
     for (std::size_t i = progress_.step + 1; i < plan_.step_duration_s.size(); ++i) {
       remaining += plan_.step_duration_s[i];
     }

@@ -11,6 +11,7 @@ std::string_view to_string(RunState state) {
     case RunState::kCompleted: return "completed";
     case RunState::kAborted: return "aborted";
     case RunState::kFailed: return "failed";
+    case RunState::kInterrupted: return "interrupted";
   }
   return "unknown";
 }

@@ -62,6 +62,10 @@ void StoreJournal::step_failed(std::size_t step, int /*attempt*/, double t_s,
   store_.mark_step_failed(run_id_, step, store::Stamp::now(t_s), why);
 }
 
+void StoreJournal::step_skipped(std::size_t step, double /*t_s*/, const std::string& why) {
+  store_.mark_step_skipped(run_id_, step, why);
+}
+
 void StoreJournal::event(double t_s, EventKind kind, const std::string& source,
                          const std::string& message) {
   store::EventRecord e;

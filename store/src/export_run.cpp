@@ -75,30 +75,45 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
           : detail::guarded("read run for export",
                             [&] { return meta_from_station(db, run, record.station_snapshot, device); });
 
-  fmt::memory_buffer csv;
-  fmt::format_to(std::back_inserter(csv), "{}\n", detail::kImportCsvHeader);
-  for (const StepData& data : read_step_data(db, run, device)) {
-    const auto& c = data.step.commanded;
-    const std::int64_t step_value = c.contains("import_step") && c["import_step"].is_number_integer()
-                                        ? c["import_step"].get<std::int64_t>()
-                                        : static_cast<std::int64_t>(data.step.index);
-    for (std::size_t i = 0; i < data.samples.size(); ++i) {
-      const core::ImuSample& s = data.samples[i];
-      const TableSample& t = data.table[i];
-      fmt::format_to(std::back_inserter(csv),
-                     "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
-                     "{:.17g},{:.17g},{:.17g}\n",
-                     s.receive_time_s, step_value, t.outer_deg, t.inner_deg, t.outer_rate_dps,
-                     t.inner_rate_dps, s.temperature_c, s.gyro_dps.x(), s.gyro_dps.y(),
-                     s.gyro_dps.z(), s.accel_mps2.x(), s.accel_mps2.y(), s.accel_mps2.z());
-    }
-  }
-
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec) throw std::runtime_error(out_dir.string() + ": cannot create the folder: " + ec.message());
+
+  // One step at a time: a long run's CSV (a gigabyte for an hour of two 1 kHz IMUs) never
+  // sits in memory whole. Written under a temporary name and renamed when whole, meta.json
+  // last: a failure leaves no folder that looks complete.
+  const std::filesystem::path csv_path = out_dir / "samples.csv";
+  const std::filesystem::path part_path = out_dir / "samples.csv.part";
+  try {
+    std::ofstream out(part_path, std::ios::binary | std::ios::trunc);
+    out << detail::kImportCsvHeader << "\n";
+    fmt::memory_buffer csv;
+    for_each_step_data(db, run, device, [&](const StepData& data) {
+      const auto& c = data.step.commanded;
+      const std::int64_t step_value = c.contains("import_step") && c["import_step"].is_number_integer()
+                                          ? c["import_step"].get<std::int64_t>()
+                                          : static_cast<std::int64_t>(data.step.index);
+      csv.clear();
+      for (std::size_t i = 0; i < data.samples.size(); ++i) {
+        const core::ImuSample& s = data.samples[i];
+        const TableSample& t = data.table[i];
+        fmt::format_to(std::back_inserter(csv),
+                       "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
+                       "{:.17g},{:.17g},{:.17g}\n",
+                       s.receive_time_s, step_value, t.outer_deg, t.inner_deg, t.outer_rate_dps,
+                       t.inner_rate_dps, s.temperature_c, s.gyro_dps.x(), s.gyro_dps.y(),
+                       s.gyro_dps.z(), s.accel_mps2.x(), s.accel_mps2.y(), s.accel_mps2.z());
+      }
+      out.write(csv.data(), static_cast<std::streamsize>(csv.size()));
+    });
+    out.close();
+    if (!out) throw std::runtime_error(csv_path.string() + ": cannot write the file");
+    std::filesystem::rename(part_path, csv_path);
+  } catch (...) {
+    std::filesystem::remove(part_path, ec);
+    throw;
+  }
   write_file(out_dir / "meta.json", meta.dump(2) + "\n");
-  write_file(out_dir / "samples.csv", fmt::to_string(csv));
 }
 
 }  // namespace calstand::store

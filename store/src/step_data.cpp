@@ -115,12 +115,12 @@ std::string choose_device(Database& db, std::int64_t run, const std::string& dev
   return devices.front();
 }
 
-std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device) {
+void for_each_step_data(Database& db, std::int64_t run, const std::string& device,
+                        const std::function<void(const StepData&)>& use) {
   RunStore runs(db);
   const std::vector<StepRecord> steps = runs.load_steps(run);
   const std::vector<TimedTable> run_table = detail::guarded(
       "read table telemetry", [&] { return read_table(db.sql(), "run_id", run); });
-  std::vector<StepData> out;
   for (const StepRecord& step : steps) {
     if (step.status != StepStatus::kCompleted) continue;
     StepData data;
@@ -138,8 +138,13 @@ std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::
                                            : commanded_table(step.commanded));
     }
     data.step = step;
-    out.push_back(std::move(data));
+    use(data);
   }
+}
+
+std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device) {
+  std::vector<StepData> out;
+  for_each_step_data(db, run, device, [&](const StepData& data) { out.push_back(data); });
   return out;
 }
 

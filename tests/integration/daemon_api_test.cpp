@@ -188,6 +188,16 @@ TEST(DaemonApi, PausesAndResumesARun) {
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(status_of(api, run), "paused");
   EXPECT_EQ(api.get(path).body["steps_done"].get<int>(), done_when_paused);  // nothing advances
+  // Where it stands: the step it will redo, and the station time still needed.
+  const Reply where = api.get(path);
+  EXPECT_EQ(where.body["live"]["state"], "paused");
+  ASSERT_TRUE(where.body["current_step"].is_object()) << where.raw;
+  EXPECT_GE(where.body["current_step"]["index"].get<int>(), done_when_paused);
+  EXPECT_FALSE(where.body["current_step"]["label"].get<std::string>().empty());
+  // At least the captures not yet done (300 s each; six-position has 6), at most the plan.
+  const double eta_s = where.body["eta_s"].get<double>();
+  EXPECT_GE(eta_s, 300.0 * (12 - where.body["current_step"]["index"].get<int>()) / 2 - 300.0) << where.raw;
+  EXPECT_LE(eta_s, 12 * 400.0) << where.raw;
   EXPECT_EQ(api.post(path + "/pause", "").status, 409);                        // already paused
 
   const Reply resumed = api.post(path + "/resume", "");
@@ -259,6 +269,11 @@ TEST(DaemonApi, RefusesBadRequestsWithClearErrorsAndKeepsServing) {
   EXPECT_NE(malformed.body.value("where", "").find("line 2, column"), std::string::npos) << malformed.raw;
   EXPECT_NE(malformed.body.value("error", "").find("malformed JSON"), std::string::npos) << malformed.raw;
   EXPECT_EQ(api.post("/runs", "").status, 400);
+  // Nested without end: refused before anything recurses over it (it overflowed the stack).
+  const Reply deep = api.post("/runs", "{\"procedure\": \"six-position\", \"parameters\": {\"x\": " +
+                                           std::string(20000, '[') + std::string(20000, ']') + "}}");
+  EXPECT_EQ(deep.status, 400) << deep.raw.substr(0, 200);
+  EXPECT_NE(deep.body.value("error", "").find("nested deeper than"), std::string::npos) << deep.raw.substr(0, 200);
 
   // 404: unknown routes and ids.
   EXPECT_EQ(api.get("/nope").status, 404);
@@ -314,7 +329,12 @@ TEST(DaemonApi, StopCheckpointsTheRunAndARestartResumesIt) {
     store::Database database(db);
     const auto record = store::RunStore(database).load_run(run);
     EXPECT_EQ(record.summary.status, "interrupted");
-    EXPECT_NE(record.summary.exit_reason.find("checkpointed"), std::string::npos) << record.summary.exit_reason;
+    EXPECT_NE(record.summary.exit_reason.find("checkpoint: daemon stopping"), std::string::npos)
+        << record.summary.exit_reason;
+    EXPECT_TRUE(record.summary.ended_utc.empty());  // not ended: it resumes
+    bool said = false;
+    for (const auto& e : record.events) said = said || e.message.find("checkpointed: station made safe") == 0;
+    EXPECT_TRUE(said);
     before = record.steps;
   }
   InProcessDaemon d(db);
@@ -376,6 +396,195 @@ TEST(DaemonApi, HoldPolicyLetsAnOperatorAbortTheInterruptedRun) {
   ASSERT_EQ(api.post_json("/runs/" + std::to_string(run) + "/abort", {{"reason", "unit removed"}}).status, 202);
   EXPECT_EQ(status_of(api, run), "aborted");
   EXPECT_TRUE(api.get("/station").body["held"].is_null());
+}
+
+TEST(DaemonApi, SkipsTheStepInProgressAndRecordsWhoAndWhy) {
+  InProcessDaemon d(calstand::testing::fresh_dir("skip") + "/station.db");
+  ApiClient api(d.port());
+  EventStreamReader stream(d.port());
+  const std::int64_t run = api.submit("six-position", kLong);
+  ASSERT_GT(run, 0);
+  const std::string path = "/runs/" + std::to_string(run);
+  // Wait for a capture (odd steps of six-position: move, capture, move, ...), then skip it,
+  // naming it so that a run that moved on in between is not skipped by mistake.
+  std::size_t step = 0;
+  ASSERT_TRUE(wait_until([&] {
+    const Reply r = api.get(path);
+    if (r.status != 200 || !r.body.contains("live") || r.body["live"]["phase"] != "capturing") return false;
+    step = r.body["current_step"]["index"].get<std::size_t>();
+    return true;
+  }));
+  Reply skipped = api.post_json(path + "/skip", {{"step", step}, {"reason", "connector re-seated"}});
+  if (skipped.status == 409) {
+    // The capture ended between the read and the request: take the next one.
+    ASSERT_TRUE(wait_until([&] {
+      const Reply r = api.get(path);
+      if (!r.body.contains("live") || r.body["live"]["phase"] != "capturing") return false;
+      step = r.body["current_step"]["index"].get<std::size_t>();
+      return true;
+    }));
+    skipped = api.post_json(path + "/skip", {{"step", step}, {"reason", "connector re-seated"}});
+  }
+  ASSERT_EQ(skipped.status, 202) << skipped.raw;
+  ASSERT_TRUE(wait_for_status(api, run, "completed"));
+
+  const Reply steps = api.get(path + "/steps");
+  int skipped_steps = 0;
+  for (const auto& s : steps.body) {
+    if (s["status"] == "skipped") {
+      ++skipped_steps;
+      EXPECT_EQ(s["index"], step);
+      EXPECT_EQ(s["reason"], "skipped by tester@127.0.0.1: connector re-seated");
+      EXPECT_TRUE(s["good_attempt"].is_null());
+    } else {
+      EXPECT_EQ(s["status"], "completed") << s.dump();
+    }
+  }
+  // The engine applies a step-named skip only to that step: either it was skipped, or (the
+  // capture ended first) an event says it was not applied. Never another step.
+  const Reply events = api.get(path + "/events");
+  if (skipped_steps == 0) {
+    EXPECT_TRUE(has_event(events, "engine", "not applied")) << events.raw;
+  } else {
+    EXPECT_EQ(skipped_steps, 1);
+    EXPECT_TRUE(stream.saw([&](const auto& m) {
+      return m.type == "step" && m.data["status"] == "skipped" && m.data["step"] == step;
+    }));
+    EXPECT_EQ(api.get(path).body["steps_done"], 11);  // the skipped step is not done
+  }
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "skip of step " + std::to_string(step))) << events.raw;
+  // Refusals: a run that has ended, a bad body, an unknown run.
+  EXPECT_EQ(api.post(path + "/skip", "").status, 409);
+  EXPECT_EQ(api.post(path + "/skip", "{\"step\": -1}").status, 400);
+  EXPECT_EQ(api.post("/runs/999/skip", "").status, 404);
+}
+
+TEST(DaemonApi, SkipRefusesARunNotOnTheStationOrAStepItIsNotAt) {
+  InProcessDaemon d(calstand::testing::fresh_dir("skip-refused") + "/station.db");
+  ApiClient api(d.port());
+  const std::int64_t first = api.submit("six-position", kLong);
+  const std::int64_t second = api.submit("six-position", kShort);
+  ASSERT_TRUE(wait_until([&] { return running_with_steps_done(api, first, 1); }));
+  const Reply queued = api.post("/runs/" + std::to_string(second) + "/skip", "");
+  EXPECT_EQ(queued.status, 409) << queued.raw;
+  const Reply elsewhere = api.post_json("/runs/" + std::to_string(first) + "/skip", {{"step", 11}});
+  EXPECT_EQ(elsewhere.status, 409) << elsewhere.raw;
+  EXPECT_NE(elsewhere.body.value("error", "").find("not step 11"), std::string::npos) << elsewhere.raw;
+  ASSERT_EQ(api.post("/runs/" + std::to_string(first) + "/abort", "").status, 202);
+  ASSERT_TRUE(wait_for_status(api, second, "completed"));
+  const Reply steps = api.get("/runs/" + std::to_string(second) + "/steps");
+  for (const auto& s : steps.body) EXPECT_EQ(s["status"], "completed");
+}
+
+// A reader that reconnects with Last-Event-ID gets what it missed; one whose id is no longer
+// kept is told how much it lost.
+TEST(DaemonApi, EventStreamReplaysWhatAReconnectingReaderMissed) {
+  InProcessDaemon d(calstand::testing::fresh_dir("replay") + "/station.db");
+  ApiClient api(d.port());
+  std::string first_id;
+  {
+    // Read the first message with an id, then go away.
+    httplib::Client c("127.0.0.1", d.port());
+    c.set_read_timeout(10, 0);
+    std::string buffer;
+    const std::int64_t run = api.submit("six-position", kShort);
+    ASSERT_GT(run, 0);
+    c.Get("/events", [&](const char* data, std::size_t n) {
+      buffer.append(data, n);
+      const auto at = buffer.find("id: ");
+      if (at == std::string::npos) return true;
+      const auto eol = buffer.find('\n', at);
+      if (eol == std::string::npos) return true;
+      first_id = buffer.substr(at + 4, eol - at - 4);
+      return false;
+    });
+    ASSERT_FALSE(first_id.empty());
+    ASSERT_TRUE(wait_for_status(api, run, "completed"));
+  }
+  // Everything after that id, in order, ending with the run's completion.
+  httplib::Client c("127.0.0.1", d.port());
+  c.set_read_timeout(10, 0);
+  bool saw_station = false, saw_gap = false, saw_completed = false;
+  std::vector<std::uint64_t> seqs;
+  calstand::daemon::api::SseParser parser([&](const calstand::daemon::api::SseMessage& m) {
+    saw_station = saw_station || m.type == "station";
+    saw_gap = saw_gap || m.type == "gap";
+    if (!m.id.empty()) seqs.push_back(std::stoull(m.id.substr(m.id.find('-') + 1)));
+    if (m.type == "run" && m.data.find("\"completed\"") != std::string::npos) {
+      saw_completed = true;
+      return false;
+    }
+    return true;
+  });
+  c.Get("/events", {{"Last-Event-ID", first_id}},
+        [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
+  EXPECT_TRUE(saw_station);
+  EXPECT_FALSE(saw_gap);
+  EXPECT_TRUE(saw_completed);
+  ASSERT_FALSE(seqs.empty());
+  EXPECT_EQ(seqs.front(), std::stoull(first_id.substr(first_id.find('-') + 1)) + 1);
+  for (std::size_t i = 1; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], seqs[i - 1] + 1);
+}
+
+// Between runs the table and the chamber are read (never commanded): the station screen shows
+// them; the IMUs are closed.
+TEST(DaemonApi, StationBetweenRunsShowsTheTableAndTheChamber) {
+  InProcessDaemon d(calstand::testing::fresh_dir("idle") + "/station.db");
+  ApiClient api(d.port());
+  EventStreamReader stream(d.port());
+  ASSERT_TRUE(wait_until([&] {
+    const Reply r = api.get("/station");
+    return r.status == 200 && !r.body["telemetry"]["chamber"].is_null() && !r.body["telemetry"]["table"].is_null();
+  }));
+  const Reply station = api.get("/station");
+  EXPECT_TRUE(station.body["run"].is_null());
+  EXPECT_FALSE(station.body.contains("progress"));
+  for (const auto& dev : station.body["devices"]) {
+    EXPECT_EQ(dev["state"], dev["kind"] == "imu" ? "offline" : "inactive") << dev.dump();
+  }
+  const auto& chamber = station.body["telemetry"]["chamber"];
+  EXPECT_FALSE(chamber["fault"].get<bool>());
+  EXPECT_GT(chamber["air_c"].get<double>(), 10.0);  // the lab's air, not a made-up zero
+  EXPECT_LT(chamber["air_c"].get<double>(), 40.0);
+  EXPECT_TRUE(wait_until([&] {
+    return stream.saw([](const auto& m) { return m.type == "telemetry" && m.data["run"].is_null(); });
+  }));
+  // And a run still takes the station as before.
+  const std::int64_t run = api.submit("six-position", kShort);
+  EXPECT_TRUE(wait_for_status(api, run, "completed"));
+}
+
+// Live streams hold a connection thread each: beyond the cap they are refused, so requests
+// (an operator's abort) always get through.
+TEST(DaemonApi, LiveStreamsAreCappedSoRequestsStillGetThrough) {
+  InProcessDaemon d(calstand::testing::fresh_dir("streams") + "/station.db");
+  ApiClient api(d.port());
+  std::vector<std::unique_ptr<EventStreamReader>> readers;
+  for (int i = 0; i < 8; ++i) readers.push_back(std::make_unique<EventStreamReader>(d.port()));
+  ASSERT_TRUE(wait_until([&] {
+    for (const auto& r : readers) {
+      if (!r->saw([](const auto& m) { return m.type == "station"; })) return false;
+    }
+    return true;
+  }));
+  httplib::Client c("127.0.0.1", d.port());
+  c.set_read_timeout(5, 0);
+  const auto refused = c.Get("/events");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 503);
+  EXPECT_EQ(refused->get_header_value("Retry-After"), "5");
+  EXPECT_EQ(api.get("/station").status, 200);
+  const std::int64_t run = api.submit("six-position", kLong);
+  ASSERT_GT(run, 0);
+  ASSERT_EQ(api.post("/runs/" + std::to_string(run) + "/abort", "").status, 202);
+  EXPECT_TRUE(wait_for_status(api, run, "aborted"));
+  // A reader that goes gives its place back.
+  readers.pop_back();
+  EXPECT_TRUE(wait_until([&] {
+    EventStreamReader again(d.port());
+    return wait_until([&] { return again.saw([](const auto& m) { return m.type == "station"; }); },
+                      std::chrono::milliseconds(500));
+  }));
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// The `calstand` client commands (submit, status, watch, pause, resume, abort) against
+// The `calstand` client commands (submit, status, watch, pause, resume, abort, skip) against
 // calstandd running as a process, as an operator uses them.
 #include <gtest/gtest.h>
 
@@ -87,6 +87,33 @@ TEST_F(DaemonClientCli, PauseResumeAndAbortARun) {
                                 e["message"] == "pause requested (at once)");
   }
   EXPECT_TRUE(bob_paused);
+}
+
+TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
+  ASSERT_EQ(calstand("submit six-position --set capture_s=300").exit_code, 0);
+  calstand::testing::ApiClient api(daemon_->port());
+  ASSERT_TRUE(calstand::testing::wait_until([&] {
+    const auto r = api.get("/runs/1");
+    return r.body.contains("live") && r.body["live"]["state"] == "running";
+  }));
+  ASSERT_EQ(calstand("pause 1").exit_code, 0);  // at the next step boundary
+  ASSERT_TRUE(calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
+  const std::size_t next = api.get("/runs/1").body["current_step"]["index"].get<std::size_t>();
+  const auto wrong = calstand("skip 1 --step " + std::to_string(next + 1));
+  EXPECT_EQ(wrong.exit_code, 2) << wrong.out;
+  EXPECT_NE(wrong.out.find("HTTP 409"), std::string::npos) << wrong.out;
+  const auto skipped = calstand("skip 1 --step " + std::to_string(next) + " --reason 'not needed' --operator carol");
+  ASSERT_EQ(skipped.exit_code, 0) << skipped.out;
+  EXPECT_EQ(skipped.out, "run 1: skip requested\n");
+  // Still paused, now before the step after the skipped one.
+  ASSERT_TRUE(calstand::testing::wait_until([&] {
+    return api.get("/runs/1/steps").body[next]["status"] == "skipped";
+  }));
+  EXPECT_EQ(api.get("/runs/1").body["status"], "paused");
+  EXPECT_EQ(api.get("/runs/1").body["current_step"]["index"], next + 1);
+  const auto step = api.get("/runs/1/steps").body[next];
+  EXPECT_EQ(step["reason"].get<std::string>().rfind("skipped by carol@", 0), 0u) << step.dump();
+  EXPECT_EQ(calstand("abort 1").exit_code, 0);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <fstream>
 #include <map>
 
 #include "daemon_test_support.hpp"
@@ -74,8 +75,12 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
     ApiClient api(d.port());
     run = api.submit("six-position", {{"capture_s", 300}});
     ASSERT_GT(run, 0);
-    // Mid-run: several steps done, a capture in progress.
-    ASSERT_TRUE(wait_until([&] { return steps_done(api, run) >= 4; }));
+    // Mid-run: several steps done, a capture in progress (its cut-off attempt must go).
+    ASSERT_TRUE(wait_until([&] {
+      const auto r = api.get("/runs/" + std::to_string(run));
+      return r.status == 200 && r.body["steps_done"].get<std::size_t>() >= 4 && r.body.contains("live") &&
+             r.body["live"]["phase"] == "capturing";
+    }));
     EXPECT_EQ(d.signal_and_wait(SIGKILL), -SIGKILL);
   }
   before = read_steps(db, run);
@@ -85,6 +90,10 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
   }
   ASSERT_LT(std::count_if(before.begin(), before.end(), [](const auto& s) { return s.status == "completed"; }), 12)
       << "the run finished before the kill";
+  // The step cut off mid-capture: its first attempt was under way.
+  const auto cut = std::find_if(before.begin(), before.end(), [](const auto& s) { return s.status != "completed"; });
+  ASSERT_NE(cut, before.end());
+  const std::size_t cut_step = static_cast<std::size_t>(cut - before.begin());
 
   DaemonProcess d(db, dir + "/calstandd.log");
   ASSERT_GT(d.port(), 0);
@@ -109,6 +118,11 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
     }
   }
   EXPECT_TRUE(capture_count.has_value());
+  // The cut-off capture was redone as a new attempt; the old attempt's samples are gone
+  // (read_steps checked that only the good attempt's chunks remain).
+  ASSERT_TRUE(after[cut_step].good_attempt.has_value());
+  EXPECT_GE(*after[cut_step].good_attempt, 2) << "step " << cut_step;
+  EXPECT_GT(after[cut_step].count, 0u);
 }
 
 TEST(DaemonProcess, SigtermCheckpointsTheRunAndExitsCleanly) {
@@ -135,6 +149,41 @@ TEST(DaemonProcess, RefusesToListenBeyondLoopbackWithoutAToken) {
   std::ifstream err(dir + "/err.txt");
   const std::string text((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("a token is required"), std::string::npos) << text;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// One process drives a database's station: a second daemon and a foreground `calstand run`
+// are refused while a daemon runs (naming it), and the lock dies with the daemon.
+TEST(DaemonProcess, OwnsItsDatabaseAlone) {
+  const std::string dir = calstand::testing::fresh_dir("lock");
+  const std::string db = dir + "/station.db";
+  {
+    DaemonProcess d(db, dir + "/calstandd.log");
+    ASSERT_GT(d.port(), 0);
+    const std::string second = std::string("env CALSTAND_TOKEN=") + calstand::testing::kTestToken + " " +
+                               CALSTANDD_BIN + " --db " + db + " --listen 127.0.0.1:0 >/dev/null 2>" + dir +
+                               "/second.txt";
+    EXPECT_EQ(WEXITSTATUS(std::system(second.c_str())), 1);
+    EXPECT_NE(read_text(dir + "/second.txt").find("in use by another calstandd"), std::string::npos)
+        << read_text(dir + "/second.txt");
+
+    const std::string run = std::string(CALSTAND_BIN) + " run two-position --quiet --db " + db + " >" + dir +
+                            "/run.txt 2>&1";
+    EXPECT_NE(WEXITSTATUS(std::system(run.c_str())), 0);
+    const std::string said = read_text(dir + "/run.txt");
+    EXPECT_NE(said.find("a station daemon owns this database (calstandd pid"), std::string::npos) << said;
+    ApiClient api(d.port());
+    EXPECT_EQ(api.get("/runs").body.size(), 0u);  // the refused run wrote nothing
+    EXPECT_EQ(d.signal_and_wait(SIGKILL), -SIGKILL);
+  }
+  // Killed: the kernel released the lock, a foreground run may use the database now.
+  const std::string run = std::string(CALSTAND_BIN) + " run two-position --quiet --set capture_s=2 --db " + db +
+                          " >" + dir + "/run2.txt 2>&1";
+  EXPECT_EQ(WEXITSTATUS(std::system(run.c_str())), 0) << read_text(dir + "/run2.txt");
 }
 
 }  // namespace

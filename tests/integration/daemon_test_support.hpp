@@ -19,6 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "daemon/api/sse_parser.hpp"
+
 namespace calstand::testing {
 
 inline constexpr const char* kTestToken = "test-token-0123456789abcdef";
@@ -95,17 +97,15 @@ class EventStreamReader {
     nlohmann::json data;
   };
 
-  explicit EventStreamReader(int port) : client_("127.0.0.1", port) {
+  explicit EventStreamReader(int port)
+      : client_("127.0.0.1", port), parser_([this](const daemon::api::SseMessage& m) {
+          std::lock_guard lock(mutex_);
+          messages_.push_back({m.type, nlohmann::json::parse(m.data, nullptr, false)});
+          return true;
+        }) {
     client_.set_read_timeout(5, 0);
     thread_ = std::thread([this] {
-      client_.Get("/events", [this](const char* data, std::size_t n) {
-        buffer_.append(data, n);
-        for (std::size_t end; (end = buffer_.find("\n\n")) != std::string::npos;) {
-          parse(buffer_.substr(0, end));
-          buffer_.erase(0, end + 2);
-        }
-        return !stop_;
-      });
+      client_.Get("/events", [this](const char* data, std::size_t n) { return parser_.feed({data, n}) && !stop_; });
     });
   }
   ~EventStreamReader() {
@@ -126,24 +126,8 @@ class EventStreamReader {
   }
 
  private:
-  void parse(const std::string& block) {
-    Message m;
-    std::size_t pos = 0;
-    while (pos < block.size()) {
-      auto eol = block.find('\n', pos);
-      if (eol == std::string::npos) eol = block.size();
-      const std::string line = block.substr(pos, eol - pos);
-      if (line.rfind("event: ", 0) == 0) m.type = line.substr(7);
-      if (line.rfind("data: ", 0) == 0) m.data = nlohmann::json::parse(line.substr(6), nullptr, false);
-      pos = eol + 1;
-    }
-    if (m.type.empty()) return;  // a keep-alive comment
-    std::lock_guard lock(mutex_);
-    messages_.push_back(std::move(m));
-  }
-
   httplib::Client client_;
-  std::string buffer_;
+  daemon::api::SseParser parser_;
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::vector<Message> messages_;

@@ -90,6 +90,19 @@ class RunEngine {
   void resume(const std::string& who = "operator");
   /// Abort: the station goes to its safe state and the reason is recorded.
   void abort(const std::string& why, const std::string& who = "operator");
+  /// Stop for a checkpoint (the daemon is stopping): the station goes to its safe state as for
+  /// an abort, but the run ends interrupted, not aborted, in one journal write: the step in
+  /// progress stays unfinished and a resume redoes it.
+  void interrupt(const std::string& why, const std::string& who = "daemon");
+  /// Skip the step in progress (a capture in progress is discarded, a rate step's axis comes
+  /// to rest), or, while paused, the step that would run next (the run stays paused). The step
+  /// is recorded as skipped with who and why; the run goes on with the next one. A skipped
+  /// temperature step leaves its setpoint commanded: the following captures still hold the
+  /// chamber air to its band, and re-soak when it is out of it.
+  /// `step`: the index the operator means; when the run has moved past it by the time the
+  /// request is applied, nothing is skipped and an event says so.
+  void skip(const std::string& why, const std::string& who = "operator",
+            std::optional<std::size_t> step = std::nullopt);
 
   RunState state() const { return state_.load(); }
   Progress progress() const;
@@ -104,6 +117,7 @@ class RunEngine {
   struct StepFailed {
     std::string why;
   };
+  struct Skipped {};  // unwinds the current step on an operator skip
 
   void execute(std::size_t index);
   void set_temperature(const procedures::Step& step, std::size_t index);
@@ -120,9 +134,16 @@ class RunEngine {
   void check_interlocks();
   void record_device_events();
   void handle_pause_at_boundary();
+  /// Records step `index` as skipped (the operator's request) and leaves the station as the
+  /// next step expects it (a skipped rate step's axis at rest).
+  void skip_step(std::size_t index);
+  /// True when a skip request applies to the current step now (false while re-establishing
+  /// the station after a crash; a request meant for a step that has ended is dropped).
+  bool skip_wanted();
   void finish(RunState final_state, const std::string& reason);
   void set_phase(const char* phase);
   void record_event(EventKind kind, const std::string& source, const std::string& message);
+  std::string abort_reason() const;
 
   drivers::Station& station_;
   RunJournal& journal_;
@@ -134,9 +155,14 @@ class RunEngine {
   std::atomic<bool> pause_immediate_{false};
   std::atomic<bool> resume_requested_{false};
   std::atomic<bool> abort_requested_{false};
-  mutable std::mutex mutex_;  // guards progress_, abort_reason_, exit_reason_
+  std::atomic<bool> interrupt_requested_{false};  // the abort is a checkpoint (see interrupt())
+  std::atomic<bool> skip_requested_{false};
+  std::optional<std::size_t> skip_step_;  // the step a skip request means (guarded by mutex_)
+  bool reestablishing_ = false;  // resuming after a crash: pause and skip wait for the first step
+  mutable std::mutex mutex_;  // guards progress_, abort_reason_, skip_reason_, exit_reason_
   Progress progress_;
   std::string abort_reason_;
+  std::string skip_reason_;
   std::string exit_reason_;
 
   // Capture in progress (nullopt between captures).
@@ -148,6 +174,7 @@ class RunEngine {
   };
   std::optional<Capturing> capturing_;
   int attempt_ = 1;  // attempt number of the current step
+  double step_started_s_ = 0.0;  // station time the current step (attempt) started [s]
 
   // Temperature band of the last set_temperature step (captures must stay in it).
   std::optional<double> setpoint_c_;

@@ -33,6 +33,9 @@ class RunJournal {
   /// Makes the step and the samples of `attempt` durable, then returns.
   virtual void step_completed(std::size_t step, int attempt, double t_s) = 0;
   virtual void step_failed(std::size_t step, int attempt, double t_s, const std::string& why) = 0;
+  /// The operator skipped the step (`why` says who and why); a resumed run does not redo it.
+  /// Any capture attempt in progress was discarded before this.
+  virtual void step_skipped(std::size_t step, double t_s, const std::string& why) = 0;
   virtual void event(double t_s, EventKind kind, const std::string& source,
                      const std::string& message) = 0;
   virtual void table_telemetry(const core::TableState& state) = 0;

@@ -31,6 +31,7 @@ class StoreJournal final : public RunJournal {
   void discard_attempt(std::size_t step, int attempt, const std::string& why) override;
   void step_completed(std::size_t step, int attempt, double t_s) override;
   void step_failed(std::size_t step, int attempt, double t_s, const std::string& why) override;
+  void step_skipped(std::size_t step, double t_s, const std::string& why) override;
   void event(double t_s, EventKind kind, const std::string& source,
              const std::string& message) override;
   void table_telemetry(const core::TableState& state) override;

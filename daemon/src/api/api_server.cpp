@@ -21,11 +21,15 @@ void ApiOptions::validate() const {
   if (port < 0 || port > 65535) throw core::InputError("--listen", fmt::format("port {} is not 0..65535", port));
   if (threads < 1) throw core::InputError("threads", "at least one connection thread is needed");
   if (max_body_bytes == 0) throw core::InputError("max_body_bytes", "must be > 0");
+  if (max_streams < 1 || max_streams >= threads) {
+    throw core::InputError("max_streams", fmt::format("{} live streams on {} threads: need 1 .. threads - 1",
+                                                      max_streams, threads));
+  }
 }
 
 struct ApiServer::Impl {
   Impl(service::RunService& service, service::EventHub& hub, ApiOptions opts)
-      : options(std::move(opts)), ctx{service, hub, service.options().db_path} {}
+      : options(std::move(opts)), ctx{service, hub, service.options().db_path, options.max_streams} {}
 
   ApiOptions options;
   RouteContext ctx;
@@ -40,6 +44,11 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   const int threads = impl_->options.threads;
   server.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
   server.set_payload_max_length(impl_->options.max_body_bytes);
+  // Small JSON answers on kept-alive connections: without TCP_NODELAY each waits for the
+  // client's delayed ACK (~40 ms). httplib closes a connection after 5 requests by default,
+  // and its listen backlog is 5: pollers reconnecting together would see dropped SYNs (1 s).
+  server.set_tcp_nodelay(true);
+  server.set_keep_alive_max_count(1000);
 
   // Every mutating request carries the token when one is configured; reads stay open so a
   // status display needs no secret (they reveal no more than the lab's station screen).

@@ -26,8 +26,17 @@ void send_error(httplib::Response& res, int status, const std::string& where, co
 
 nlohmann::json parse_json_body(const httplib::Request& req, const std::optional<nlohmann::json>& empty_as) {
   if (req.body.empty() && empty_as) return *empty_as;
+  // Copying, printing and validating a JSON value recurse once per level: a body of a million
+  // '[' would overflow the handler's stack. No request needs more than a few levels.
+  const nlohmann::json::parser_callback_t depth_limit = [](int depth, nlohmann::json::parse_event_t,
+                                                               nlohmann::json&) {
+    if (depth > kMaxJsonDepth) {
+      throw BadRequest(400, "body", fmt::format("JSON nested deeper than {} levels", kMaxJsonDepth));
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(req.body);
+    return nlohmann::json::parse(req.body, depth_limit);
   } catch (const nlohmann::json::parse_error& e) {
     // e.byte is 1-based; turn it into line and column for people.
     std::size_t line = 1;

@@ -30,8 +30,11 @@ void send_json(httplib::Response& res, int status, const nlohmann::json& body);
 /// {"error": why, "where": where} with `status`.
 void send_error(httplib::Response& res, int status, const std::string& where, const std::string& why);
 
+/// Request bodies nested deeper than this are refused (400).
+inline constexpr int kMaxJsonDepth = 64;
+
 /// The body as JSON; an empty body is `empty_as` when given. Throws BadRequest 400 naming the
-/// line and column of a syntax error.
+/// line and column of a syntax error, or saying the body is nested deeper than kMaxJsonDepth.
 nlohmann::json parse_json_body(const httplib::Request& req,
                                const std::optional<nlohmann::json>& empty_as = std::nullopt);
 

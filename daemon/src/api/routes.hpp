@@ -4,6 +4,7 @@
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
 
+#include <atomic>
 #include <string>
 
 #include "daemon/service/event_hub.hpp"
@@ -17,9 +18,15 @@ struct RouteContext {
   service::RunService& service;
   service::EventHub& hub;
   std::string db_path;
+  /// Live streams (GET /events) open at most at once: each holds a connection thread for as
+  /// long as it lasts, and the rest must stay free for requests (an operator's abort).
+  int max_streams = 8;
+  mutable std::atomic<int> open_streams{0};
+  /// An export is being written (one at a time: each writes the run's CSV to disk first).
+  mutable std::atomic<bool> exporting{false};
 };
 
-/// /runs, /runs/{id}, /runs/{id}/steps|events|export, /runs/{id}/pause|resume|abort.
+/// /runs, /runs/{id}, /runs/{id}/steps|events|export, /runs/{id}/pause|resume|abort|skip.
 void register_run_routes(httplib::Server& server, const RouteContext& ctx);
 /// /station, /calibrations/{id}, /events (server-sent events).
 void register_station_routes(httplib::Server& server, const RouteContext& ctx);

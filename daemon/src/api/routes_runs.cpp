@@ -32,6 +32,13 @@ void require_run(const RouteContext& ctx, std::int64_t id) {
   load_run_or_404(runs, id);
 }
 
+// The optional `reason` of an action body (recorded with the action), at most 500 characters.
+std::string reason_field(const nlohmann::json& body) {
+  if (!body.is_object() || !body.contains("reason")) return "operator request";
+  if (!body["reason"].is_string()) throw BadRequest(400, "body.reason", "must be a string");
+  return body["reason"].get<std::string>().substr(0, 500);
+}
+
 nlohmann::json summary_json(const store::RunSummary& s) {
   return {{"id", s.id},
           {"procedure", s.procedure_name},
@@ -142,13 +149,32 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
 
   server.Get(R"(/runs/(\d+)/export)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
     const std::int64_t id = id_from_path(req);
+    // One export at a time: each writes the run's CSV to a temporary file before sending it.
+    if (ctx.exporting.exchange(true)) {
+      res.set_header("Retry-After", "10");
+      throw BadRequest(503, req.path, "another export is being prepared; try again shortly");
+    }
+    struct Done {
+      std::atomic<bool>& flag;
+      ~Done() { flag = false; }
+    } done{ctx.exporting};
     store::Database db(ctx.db_path);
     store::RunStore runs(db);
     load_run_or_404(runs, id);
     const std::string device = req.has_param("device") ? req.get_param_value("device") : "";
+    // Sent piece by piece from the temporary folder, which goes when the response does.
+    auto archive = std::make_shared<ExportArchive>(db, id, device);
     res.status = 200;
     res.set_header("Content-Disposition", fmt::format("attachment; filename=\"run-{}.tar\"", id));
-    res.set_content(export_run_archive(db, id, device), "application/x-tar");
+    res.set_content_provider(
+        static_cast<std::size_t>(archive->size()), "application/x-tar",
+        [archive, given = std::make_shared<std::uint64_t>(0)](std::size_t offset, std::size_t,
+                                                              httplib::DataSink& sink) {
+          if (offset != *given) return false;  // the archive is read in order only (no ranges)
+          const std::string chunk = archive->next_chunk();
+          *given += chunk.size();
+          return chunk.empty() || sink.write(chunk.data(), chunk.size());
+        });
   }));
 
   server.Post(R"(/runs/(\d+)/pause)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
@@ -175,13 +201,24 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
     const std::int64_t id = id_from_path(req);
     require_run(ctx, id);
     const auto body = parse_json_body(req, nlohmann::json::object());
-    std::string reason = "operator request";
-    if (body.is_object() && body.contains("reason")) {
-      if (!body["reason"].is_string()) throw BadRequest(400, "body.reason", "must be a string");
-      reason = body["reason"].get<std::string>().substr(0, 500);
-    }
-    ctx.service.abort(id, reason, who_of(req));
+    ctx.service.abort(id, reason_field(body), who_of(req));
     send_json(res, 202, {{"id", id}, {"requested", "abort"}});
+  }));
+
+  server.Post(R"(/runs/(\d+)/skip)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const std::int64_t id = id_from_path(req);
+    require_run(ctx, id);
+    const auto body = parse_json_body(req, nlohmann::json::object());
+    const std::string reason = reason_field(body);
+    std::optional<std::size_t> step;
+    if (body.is_object() && body.contains("step")) {
+      if (!body["step"].is_number_unsigned()) throw BadRequest(400, "body.step", "must be a step index (0, 1, ...)");
+      step = body["step"].get<std::size_t>();
+    }
+    ctx.service.skip(id, step, reason, who_of(req));
+    nlohmann::json answer = {{"id", id}, {"requested", "skip"}};
+    if (step) answer["step"] = *step;
+    send_json(res, 202, answer);
   }));
 }
 

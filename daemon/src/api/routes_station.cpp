@@ -52,9 +52,23 @@ nlohmann::json station_json(const RouteContext& ctx) {
   return j;
 }
 
-std::string sse_message(const service::LiveEvent& e) {
-  return fmt::format("id: {}\nevent: {}\ndata: {}\n\n", e.seq, e.type,
-                     e.data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+// A live stream's place among RouteContext::max_streams, given back when it is destroyed.
+class StreamSlot {
+ public:
+  explicit StreamSlot(std::atomic<int>& open) : open_(open) {}
+  ~StreamSlot() { open_.fetch_sub(1); }
+  StreamSlot(const StreamSlot&) = delete;
+  StreamSlot& operator=(const StreamSlot&) = delete;
+
+ private:
+  std::atomic<int>& open_;
+};
+
+// One message; `id` empty for the greeting, which is a snapshot, not one of the hub's messages
+// (a reader that reconnects names the last real message it saw).
+std::string sse_message(const std::string& id, const std::string& type, const nlohmann::json& data) {
+  return fmt::format("{}event: {}\ndata: {}\n\n", id.empty() ? "" : "id: " + id + "\n", type,
+                     data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 }  // namespace
@@ -78,15 +92,28 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
   }));
 
   // Server-sent events: first a "station" message with the whole status, then every message
-  // the hub publishes (step, run, event, fault, telemetry), each with its sequence number as id.
-  server.Get("/events", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
-    auto last_seq = std::make_shared<std::uint64_t>(ctx.hub.last_seq());
-    auto greeting = std::make_shared<std::string>(
-        sse_message({*last_seq, "station", station_json(ctx)}));
+  // the hub publishes (step, run, event, fault, telemetry), each with its id. A reader that
+  // reconnects with Last-Event-ID first gets what it missed that the hub still keeps; when
+  // messages were lost (too far behind, or no longer kept) a "gap" message says how many.
+  server.Get("/events", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    if (ctx.open_streams.fetch_add(1) >= ctx.max_streams) {
+      ctx.open_streams.fetch_sub(1);
+      res.set_header("Retry-After", "5");
+      throw BadRequest(503, "GET /events", fmt::format("{} live streams are open already (the most this "
+                                                       "daemon serves at once); try again later", ctx.max_streams));
+    }
+    // The stream's slot is given back when its response goes away, however the stream ended.
+    auto slot = std::make_shared<StreamSlot>(ctx.open_streams);
+    std::uint64_t after = ctx.hub.last_seq();
+    if (req.has_header("Last-Event-ID")) {
+      if (const auto replay = ctx.hub.replay_after(req.get_header_value("Last-Event-ID"))) after = *replay;
+    }
+    auto last_seq = std::make_shared<std::uint64_t>(after);
+    auto greeting = std::make_shared<std::string>(sse_message("", "station", station_json(ctx)));
     res.set_header("Cache-Control", "no-cache");
     res.set_chunked_content_provider(
         "text/event-stream",
-        [hub = &ctx.hub, last_seq, greeting](std::size_t, httplib::DataSink& sink) {
+        [hub = &ctx.hub, last_seq, greeting, slot](std::size_t, httplib::DataSink& sink) {
           if (!greeting->empty()) {
             const std::string first = std::move(*greeting);
             greeting->clear();
@@ -102,7 +129,11 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
             return sink.write(kPing.data(), kPing.size());
           }
           std::string chunk;
-          for (const auto& e : events) chunk += sse_message(e);
+          if (events.front().seq > *last_seq + 1) {
+            chunk += sse_message("", "gap", {{"missed", events.front().seq - *last_seq - 1},
+                                             {"after_id", hub->event_id(*last_seq)}});
+          }
+          for (const auto& e : events) chunk += sse_message(hub->event_id(e.seq), e.type, e.data);
           *last_seq = events.back().seq;
           return sink.write(chunk.data(), chunk.size());
         });

@@ -6,10 +6,10 @@
 namespace calstand::daemon::api {
 namespace {
 
-constexpr std::size_t kBlock = 512;
+constexpr std::size_t kBlock = kUstarBlock;
 
 // Writes `value` as width-1 zero-padded octal digits and a NUL (a value too large for the
-// field keeps its low digits; sizes here stay far below 8 GiB).
+// field keeps its low digits: 11 octal digits hold sizes below 8 GiB).
 void put_octal(char* field, std::size_t width, std::uint64_t value) {
   field[width - 1] = '\0';
   for (std::size_t i = width - 1; i-- > 0;) {
@@ -20,7 +20,7 @@ void put_octal(char* field, std::size_t width, std::uint64_t value) {
 
 }  // namespace
 
-void UstarWriter::add_file(std::string_view name, std::string_view content, std::int64_t mtime_s) {
+std::string ustar_header(std::string_view name, std::uint64_t size, std::int64_t mtime_s) {
   if (name.empty() || name.size() > 100 || name.front() == '/' ||
       name.find("..") != std::string_view::npos) {
     throw std::invalid_argument("ustar: file name '" + std::string(name) + "' not admitted");
@@ -30,7 +30,7 @@ void UstarWriter::add_file(std::string_view name, std::string_view content, std:
   put_octal(header + 100, 8, 0644);                  // mode
   put_octal(header + 108, 8, 0);                     // uid
   put_octal(header + 116, 8, 0);                     // gid
-  put_octal(header + 124, 12, content.size());       // size
+  put_octal(header + 124, 12, size);                 // size
   put_octal(header + 136, 12, static_cast<std::uint64_t>(mtime_s < 0 ? 0 : mtime_s));
   std::memset(header + 148, ' ', 8);                 // checksum counts as spaces
   header[156] = '0';                                 // typeflag: regular file
@@ -40,9 +40,15 @@ void UstarWriter::add_file(std::string_view name, std::string_view content, std:
   for (unsigned char c : header) checksum += c;
   put_octal(header + 148, 7, checksum);  // six digits and a NUL, then the space kept
   header[155] = ' ';
-  out_.append(header, kBlock);
+  return std::string(header, kBlock);
+}
+
+std::size_t ustar_padding(std::uint64_t size) { return (kBlock - size % kBlock) % kBlock; }
+
+void UstarWriter::add_file(std::string_view name, std::string_view content, std::int64_t mtime_s) {
+  out_.append(ustar_header(name, content.size(), mtime_s));
   out_.append(content);
-  out_.append((kBlock - content.size() % kBlock) % kBlock, '\0');
+  out_.append(ustar_padding(content.size()), '\0');
 }
 
 std::string UstarWriter::finish() && {

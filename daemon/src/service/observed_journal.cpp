@@ -70,6 +70,12 @@ void ObservedJournal::step_failed(std::size_t step, int attempt, double t_s,
   publish_step(step, attempt, t_s, "failed", why);
 }
 
+void ObservedJournal::step_skipped(std::size_t step, double t_s, const std::string& why) {
+  inner_.step_skipped(step, t_s, why);
+  hub_.publish("step", {{"run", run_id_}, {"step", step}, {"time_s", t_s}, {"status", "skipped"},
+                        {"reason", why}});
+}
+
 void ObservedJournal::event(double t_s, EventKind kind, const std::string& source,
                             const std::string& message) {
   inner_.event(t_s, kind, source, message);
@@ -82,27 +88,17 @@ void ObservedJournal::event(double t_s, EventKind kind, const std::string& sourc
                                            {"message", message}});
 }
 
-void ObservedJournal::table_telemetry(const core::TableState& state) {
-  inner_.table_telemetry(state);
-  live_.update([&](LiveSnapshot& s) { s.table = state; });
-  publish_telemetry_when_due();
-}
+void ObservedJournal::table_telemetry(const core::TableState& state) { inner_.table_telemetry(state); }
 
-void ObservedJournal::chamber_telemetry(const core::ChamberState& state) {
-  inner_.chamber_telemetry(state);
-  live_.update([&](LiveSnapshot& s) { s.chamber = state; });
-  publish_telemetry_when_due();
-}
+void ObservedJournal::chamber_telemetry(const core::ChamberState& state) { inner_.chamber_telemetry(state); }
 
-void ObservedJournal::publish_telemetry_when_due() {
-  const auto now = std::chrono::steady_clock::now();
-  if (now < next_telemetry_) return;
-  next_telemetry_ = now + telemetry_period_;
-  const LiveSnapshot s = live_.snapshot();
-  nlohmann::json data = {{"run", run_id_}};
-  if (s.table) data["table"] = to_json(*s.table);
-  if (s.chamber) data["chamber"] = to_json(*s.chamber);
-  hub_.publish("telemetry", std::move(data));
+void ObservedJournal::publish_telemetry(const core::TableState& table, const core::ChamberState& chamber) {
+  next_telemetry_ = std::chrono::steady_clock::now() + telemetry_period_;
+  live_.update([&](LiveSnapshot& s) {
+    s.table = table;
+    s.chamber = chamber;
+  });
+  hub_.publish("telemetry", {{"run", run_id_}, {"table", to_json(table)}, {"chamber", to_json(chamber)}});
 }
 
 void ObservedJournal::run_state(RunState state, double t_s, const std::string& reason) {

@@ -10,12 +10,14 @@
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
 #include "daemon/service/observed_journal.hpp"
+#include "daemon/service/station_watch.hpp"
 #include "daemon/store_journal.hpp"
 #include "daemon/stored_run.hpp"
 #include "drivers/station.hpp"
 #include "procedures/plan.hpp"
 #include "store/capture_writer.hpp"
 #include "store/database.hpp"
+#include "store/error.hpp"
 #include "store/run_queue.hpp"
 #include "store/run_store.hpp"
 
@@ -25,26 +27,8 @@ namespace {
 // Device states and fault counters are read this often while a run goes (wall time): cheap,
 // but a simulated station ticks thousands of times a second.
 constexpr auto kDeviceReadPeriod = std::chrono::milliseconds(250);
-
-std::vector<DeviceStatus> offline_devices(const core::StationConfig& config) {
-  std::vector<DeviceStatus> out{{"table", "table", config.table.backend, "offline", {}},
-                                {"chamber", "chamber", config.chamber.backend, "offline", {}}};
-  for (const auto& imu : config.imus) out.push_back({"imu", imu.name, imu.backend, "offline", {}});
-  return out;
-}
-
-std::vector<DeviceStatus> read_devices(drivers::Station& station) {
-  const auto& config = station.config();
-  auto status = [](const char* kind, drivers::Device& d, const std::string& backend) {
-    return DeviceStatus{kind, d.name(), backend, std::string(to_string(d.state())), d.fault_counters()};
-  };
-  std::vector<DeviceStatus> out{status("table", station.table(), config.table.backend),
-                                status("chamber", station.chamber(), config.chamber.backend)};
-  for (std::size_t i = 0; i < station.imu_count(); ++i) {
-    out.push_back(status("imu", station.imu(i), config.imus.at(i).backend));
-  }
-  return out;
-}
+// Between runs the table and the chamber are read this often (and the queue looked at).
+constexpr auto kIdleReadPeriod = std::chrono::seconds(1);
 
 // The latest station time a run recorded [s] (where a stopped run's clock stands).
 double last_station_time_s(const store::RunRecord& record) {
@@ -69,7 +53,7 @@ RecoveryPolicy parse_recovery_policy(const std::string& name, const std::string&
 }
 
 RunService::RunService(ServiceOptions options, EventHub& hub)
-    : options_(std::move(options)), hub_(hub) {
+    : options_(std::move(options)), hub_(hub), idle_watch_(options_.station) {
   live_.update([&](LiveSnapshot& s) { s.devices = offline_devices(options_.station); });
 }
 
@@ -86,9 +70,8 @@ void RunService::stop(const std::string& why) {
     std::lock_guard lock(mutex_);
     if (!stopping_) {
       stopping_ = true;
-      stop_reason_ = why;
       if (current_) {
-        commands_.push_back({Command::Kind::kAbort, false, "daemon stopping: " + why, "daemon", true});
+        commands_.push_back({Command::Kind::kAbort, false, std::nullopt, "checkpoint: daemon stopping (" + why + ")", "daemon", true});
       }
     }
     ++generation_;
@@ -115,11 +98,37 @@ void RunService::run_thread() {
       // A storage failure: logged, and retried after the wait below rather than in a loop.
       spdlog::error("run queue: {}", e.what());
       failed = true;
+    } catch (...) {
+      // Nothing else may end the run thread (the daemon would serve a station nobody drives).
+      spdlog::error("run queue: unknown exception");
+      failed = true;
     }
+    if (!failed) watch_idle();
     std::unique_lock lock(mutex_);
-    wake_.wait_for(lock, std::chrono::seconds(failed ? 5 : 2),
+    wake_.wait_for(lock, failed ? std::chrono::seconds(5) : kIdleReadPeriod,
                    [&] { return stopping_ || (!failed && generation_ != seen); });
   }
+  idle_watch_.release();
+}
+
+void RunService::watch_idle() {
+  IdleStationWatch::Reading reading;
+  try {
+    reading = idle_watch_.read();
+  } catch (const std::exception& e) {
+    spdlog::warn("station between runs: {}", e.what());
+    return;
+  }
+  live_.update([&](LiveSnapshot& s) {
+    s.devices = reading.devices;
+    if (reading.table) s.table = reading.table;
+    if (reading.chamber) s.chamber = reading.chamber;
+  });
+  if (!reading.table && !reading.chamber) return;
+  nlohmann::json data = {{"run", nullptr}};
+  if (reading.table) data["table"] = to_json(*reading.table);
+  if (reading.chamber) data["chamber"] = to_json(*reading.chamber);
+  hub_.publish("telemetry", std::move(data));
 }
 
 std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
@@ -158,6 +167,7 @@ void RunService::hold(std::int64_t run) {
   store::mark_run_resumable(db, run, store::kHeldStatus,
                             "interrupted; held for an operator (recovery policy hold)");
   // The devices may be wherever the interruption left them: bring them up and make them safe.
+  idle_watch_.release();
   std::string safe_outcome = "station made safe";
   try {
     auto station = drivers::make_station(options_.station);
@@ -180,6 +190,7 @@ void RunService::fail_before_start(std::int64_t run, const std::string& why) {
   store::Database db(options_.db_path);
   store::RunStore runs(db);
   runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(0.0), "cannot start: " + why);
+  store::dequeue_run(db, run);
   record_event(run, "daemon", "cannot start: " + why, false);
   hub_.publish("run", {{"run", run}, {"state", "failed"}, {"reason", why}});
 }
@@ -188,18 +199,28 @@ void RunService::execute(std::int64_t run, bool resuming) {
   {
     std::lock_guard lock(mutex_);
     if (stopping_) return;  // a queued run stays queued; an interrupted one stays interrupted
+    // Claimed under the lock abort() holds while it ends a queued run: a run aborted while it
+    // was being picked from the queue does not start.
+    if (has_ended(status_of(run))) return;
     current_ = run;
     commands_.clear();
   }
+  // However execute() ends (a storage error included), the station is free afterwards.
   struct ClearCurrent {
     RunService& s;
     ~ClearCurrent() {
+      s.live_.update([](LiveSnapshot& live) {
+        live.run.reset();
+        live.progress = {};
+        for (auto& d : live.devices) d.state = "offline";
+      });
       std::lock_guard lock(s.mutex_);
       s.current_.reset();
       s.commands_.clear();
     }
   } clear_current{*this};
 
+  idle_watch_.release();  // the run opens the devices for itself
   store::Database db(options_.db_path);
   store::RunStore runs(db);
   std::optional<StoredRun> stored;
@@ -207,6 +228,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
   try {
     stored = prepare_stored_run(runs, run);
     station = drivers::make_station(stored->station, stored->start.start_time_s);
+  } catch (const store::StoreError&) {
+    throw;  // the database's trouble, not the run's: it stays as it is and is tried again
   } catch (const std::exception& e) {
     fail_before_start(run, e.what());
     return;
@@ -229,7 +252,6 @@ void RunService::execute(std::int64_t run, bool resuming) {
   ObservedJournal journal(store_journal, hub_, live_, run);
   EngineOptions engine_options = EngineOptions::from_policy(stored->station.policy);
   RunEngine* engine = nullptr;
-  bool checkpointing = false;
   auto next_device_read = std::chrono::steady_clock::now();
   engine_options.on_progress = [&](const Progress& p) {
     std::vector<Command> todo;
@@ -242,12 +264,18 @@ void RunService::execute(std::int64_t run, bool resuming) {
       switch (c.kind) {
         case Command::Kind::kPause: engine->pause(c.immediate, c.who); break;
         case Command::Kind::kResume: engine->resume(c.who); break;
+        case Command::Kind::kSkip: engine->skip(c.why, c.who, c.step); break;
         case Command::Kind::kAbort:
-          checkpointing = checkpointing || c.checkpoint;
-          engine->abort(c.why, c.who);
+          if (c.checkpoint) {
+            engine->interrupt(c.why, c.who);
+          } else {
+            engine->abort(c.why, c.who);
+          }
           break;
       }
     }
+    // Live telemetry about twice a second of wall time, paused or not (this runs every tick).
+    if (journal.telemetry_due()) journal.publish_telemetry(station->table().read_state(), station->chamber().read_state());
     const auto now = std::chrono::steady_clock::now();
     const bool read_devices_now = now >= next_device_read;
     if (read_devices_now) next_device_read = now + kDeviceReadPeriod;
@@ -276,29 +304,18 @@ void RunService::execute(std::int64_t run, bool resuming) {
   }
   writer.flush();
 
-  if (checkpointing && final_state == RunState::kAborted) {
-    std::string why;
-    {
-      std::lock_guard lock(mutex_);
-      why = stop_reason_;
-    }
+  if (final_state == RunState::kInterrupted) {
+    // The engine recorded the run as interrupted in the same write that ended it: a crash from
+    // here on still leaves it resumable.
     const auto first = runs.first_unfinished_step(run);
-    const std::string message = fmt::format(
-        "checkpointed: daemon stopped ({}); station made safe; resumes at step {} on restart", why,
-        first ? *first : 0);
-    store::mark_run_resumable(db, run, store::kInterruptedStatus, message);
+    const std::string message = fmt::format("checkpointed: station made safe; resumes at step {} on restart",
+                                            first ? *first : 0);
     record_event(run, "daemon", message, false);
-    hub_.publish("run", {{"run", run}, {"state", store::kInterruptedStatus}, {"reason", message}});
-    spdlog::warn("run {}: {}", run, message);
+    spdlog::warn("run {}: {} ({})", run, message, reason);
   } else {
     store::dequeue_run(db, run);
     spdlog::info("run {}: {}{}", run, to_string(final_state), reason.empty() ? "" : " (" + reason + ")");
   }
-  live_.update([&](LiveSnapshot& s) {
-    s.run.reset();
-    s.progress = {};
-    for (auto& d : s.devices) d.state = "offline";
-  });
 }
 
 void RunService::record_event(std::int64_t run, const std::string& who, const std::string& message,
@@ -368,7 +385,7 @@ void RunService::pause(std::int64_t run, bool immediate, const std::string& who)
     }
   }
   if (p.state == RunState::kPaused) throw ActionRefused(fmt::format("run {} is already paused", run));
-  command_current(run, {Command::Kind::kPause, immediate, "", who});
+  command_current(run, {Command::Kind::kPause, immediate, std::nullopt, "", who});
 }
 
 void RunService::resume(std::int64_t run, const std::string& who) {
@@ -391,7 +408,7 @@ void RunService::resume(std::int64_t run, const std::string& who) {
   if (live.run != run || live.progress.state != RunState::kPaused) {
     throw ActionRefused(fmt::format("run {} is {}; only a paused or held run can be resumed", run, status));
   }
-  command_current(run, {Command::Kind::kResume, false, "", who});
+  command_current(run, {Command::Kind::kResume, false, std::nullopt, "", who});
 }
 
 void RunService::abort(std::int64_t run, const std::string& why, const std::string& who) {
@@ -399,10 +416,11 @@ void RunService::abort(std::int64_t run, const std::string& why, const std::stri
   // Checked first: an ended run may still be on the station for a moment while it winds up.
   if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({}); there is nothing to abort", run, status));
   bool was_held = false;
+  const std::string reason = fmt::format("aborted by {}: {}", who, why);
   {
     std::lock_guard lock(mutex_);
     if (current_ == run) {
-      commands_.push_back({Command::Kind::kAbort, false, why, who});
+      commands_.push_back({Command::Kind::kAbort, false, std::nullopt, why, who});
       return;
     }
     if (held_ == run) {
@@ -410,21 +428,39 @@ void RunService::abort(std::int64_t run, const std::string& why, const std::stri
       resume_held_ = false;
       was_held = true;
       ++generation_;
+    } else if (const std::string now = status_of(run); now != store::kQueuedStatus) {
+      // Read again under the lock: the run thread may have taken the run meanwhile.
+      throw ActionRefused(fmt::format("run {} is {}; there is nothing to abort", run, now));
     }
+    // Ended under the lock execute() claims a run under: a queued run cannot start meanwhile.
+    store::Database db(options_.db_path);
+    store::RunStore runs(db);
+    const double t_s = last_station_time_s(runs.load_run(run));
+    runs.set_run_status(run, "aborted", std::nullopt, store::Stamp::now(t_s), reason);
+    store::dequeue_run(db, run);
   }
-  if (!was_held && status != store::kQueuedStatus) {
-    throw ActionRefused(fmt::format("run {} is {}; there is nothing to abort", run, status));
-  }
-  store::Database db(options_.db_path);
-  store::RunStore runs(db);
-  const double t_s = last_station_time_s(runs.load_run(run));
-  const std::string reason = fmt::format("aborted by {}: {}", who, why);
-  runs.set_run_status(run, "aborted", std::nullopt, store::Stamp::now(t_s), reason);
-  store::dequeue_run(db, run);
   record_event(run, who, (was_held ? "abort of the held run: " : "abort of the queued run: ") + why);
   if (was_held) live_.update([](LiveSnapshot& s) { s.held.reset(); });
   hub_.publish("run", {{"run", run}, {"state", "aborted"}, {"reason", reason}});
   wake_.notify_all();
+}
+
+void RunService::skip(std::int64_t run, std::optional<std::size_t> step, const std::string& why,
+                      const std::string& who) {
+  const std::string status = status_of(run);
+  if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({})", run, status));
+  const LiveSnapshot live = live_.snapshot();
+  if (live.run != run) {
+    throw ActionRefused(fmt::format("run {} is {}; only a step of the run on the station can be skipped",
+                                    run, status));
+  }
+  if (step && *step != live.progress.step) {
+    throw ActionRefused(fmt::format("run {} is at step {}, not step {}", run, live.progress.step, *step));
+  }
+  if (step && *step >= live.progress.steps) {
+    throw ActionRefused(fmt::format("run {} has no step {}", run, *step));
+  }
+  command_current(run, {Command::Kind::kSkip, false, step, why, who});
 }
 
 }  // namespace calstand::daemon::service

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,11 @@ struct StepData {
 /// row advanced at its rates), else the step's commanded state. Throws core::InputError for an unknown
 /// run, StoreError when reading fails.
 std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device);
+
+/// As read_step_data(), one step at a time: `use` gets each step's data in turn, and only one
+/// step's samples are in memory at once (an export of a long run).
+void for_each_step_data(Database& db, std::int64_t run, const std::string& device,
+                        const std::function<void(const StepData&)>& use);
 
 /// The device of `run` to analyse: `device` when given (an error when it has no samples), else
 /// the run's only IMU with samples (an error when it has none or several). Throws

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <thread>
 
 namespace {
@@ -51,6 +52,27 @@ TEST(EventHub, AWaitingReaderWakesOnPublishAndOnClose) {
   closer.join();
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 4s);
   EXPECT_TRUE(hub.closed());
+}
+
+TEST(EventHub, EventIdsNameTheProcessAndTheSequence) {
+  EventHub hub(4096, "1700000000000");
+  hub.publish("step", {});
+  hub.publish("step", {});
+  hub.publish("step", {});
+  EXPECT_EQ(hub.event_id(2), "1700000000000-2");
+  // Ours: resume after that message.
+  EXPECT_EQ(hub.replay_after("1700000000000-2"), std::optional<std::uint64_t>(2));
+  EXPECT_EQ(hub.replay_after("1700000000000-0"), std::optional<std::uint64_t>(0));
+  // An earlier process of the daemon (restarted since): everything this one kept is news.
+  EXPECT_EQ(hub.replay_after("1600000000000-900"), std::optional<std::uint64_t>(0));
+  // Not ours, or in the future: start live.
+  EXPECT_FALSE(hub.replay_after("1700000000000-4").has_value());
+  EXPECT_FALSE(hub.replay_after("abc-1").has_value());
+  EXPECT_FALSE(hub.replay_after("17").has_value());
+  EXPECT_FALSE(hub.replay_after("1700000000000-").has_value());
+  EXPECT_FALSE(hub.replay_after("1700000000000-2x").has_value());
+  EXPECT_FALSE(hub.replay_after("").has_value());
+  EXPECT_FALSE(hub.replay_after("-5").has_value());
 }
 
 }  // namespace

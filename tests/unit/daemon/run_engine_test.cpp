@@ -46,6 +46,9 @@ class MemoryJournal final : public RunJournal {
   void step_failed(std::size_t step, int, double, const std::string& why) override {
     failed.push_back({step, why});
   }
+  void step_skipped(std::size_t step, double, const std::string& why) override {
+    skipped.push_back({step, why});
+  }
   void event(double, EventKind kind, const std::string& source, const std::string& message) override {
     events.push_back({kind, source + ": " + message});
   }
@@ -62,7 +65,7 @@ class MemoryJournal final : public RunJournal {
 
   std::vector<std::pair<std::size_t, int>> started, completed, discarded;
   std::vector<std::string> discard_reasons;
-  std::vector<std::pair<std::size_t, std::string>> failed;
+  std::vector<std::pair<std::size_t, std::string>> failed, skipped;
   std::map<std::tuple<std::size_t, int, std::string>, Attempt> attempts;
   std::vector<std::pair<EventKind, std::string>> events;
   std::vector<RunState> states;
@@ -353,6 +356,140 @@ TEST(RunEngine, ResumeReestablishesTemperatureAndPositionThenSkipsDoneSteps) {
   for (const auto& [step, attempt] : f.journal.started) EXPECT_GE(step, 2u);
   EXPECT_EQ(f.journal.completed.front(), std::make_pair(std::size_t{2}, 3));
   EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "resuming at step 2"));
+}
+
+TEST(RunEngine, SkipDuringACaptureDiscardsItAndGoesOn) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool skipped_once = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing" && p.station_time_s > 2.0 && !skipped_once) {
+      skipped_once = true;
+      e->skip("sensor warming up", "alice");
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(30.0), capture(1.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.skipped.size(), 1u);
+  EXPECT_EQ(f.journal.skipped[0].first, 1u);
+  EXPECT_EQ(f.journal.skipped[0].second, "skipped by alice: sensor warming up");
+  // The interrupted attempt is gone; the steps either side completed.
+  ASSERT_EQ(f.journal.discarded.size(), 1u);
+  EXPECT_EQ(f.journal.discarded[0].first, 1u);
+  EXPECT_EQ(samples_of(f.journal, 1), 0u);
+  ASSERT_EQ(f.journal.completed.size(), 2u);
+  EXPECT_EQ(f.journal.completed[0].first, 0u);
+  EXPECT_EQ(f.journal.completed[1].first, 2u);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kOperator, "alice: skip requested: sensor warming up"));
+  // Far less than the 30 s capture passed.
+  EXPECT_LT(f.station.clock().now_s(), 10.0);
+}
+
+TEST(RunEngine, SkippedRateStepLeavesTheTableAtRest) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  double rate_when_next_step_ran = -1.0;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 0 && p.phase == "capturing" && f.journal.skipped.empty()) e->skip("enough");
+    if (p.step == 1 && p.phase == "capturing") {
+      rate_when_next_step_ran = std::abs(f.station.table().read_state().inner.rate_dps);  // the last one stays
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({rate("inner", 60.0, 100.0), capture(3.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.skipped.size(), 1u);
+  EXPECT_EQ(f.journal.skipped[0].first, 0u);
+  // Commanded to rest when skipped: by the end of the 3 s capture after it the axis has
+  // stopped (a skipped step without the rest command would leave it at 60 deg/s).
+  EXPECT_GE(rate_when_next_step_ran, 0.0);
+  EXPECT_LT(rate_when_next_step_ran, 0.01);
+  EXPECT_NEAR(f.station.table().read_state().inner.rate_dps, 0.0, 1e-6);
+}
+
+TEST(RunEngine, SkipWhilePausedSkipsTheNextStepAndStaysPaused) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  int paused_ticks = 0;
+  bool pause_asked = false, skipped = false;
+  EngineOptions opt;
+  opt.paused_real_sleep_s = 0.0;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 0 && p.phase == "capturing" && !pause_asked) {
+      pause_asked = true;
+      e->pause(false);
+    }
+    if (p.state != RunState::kPaused) return;
+    ++paused_ticks;
+    if (!skipped) {
+      EXPECT_EQ(p.step, 1u);  // paused before step 1: that is the one a skip skips
+      skipped = true;
+      e->skip("not needed today");
+    } else if (paused_ticks > 20) {
+      e->resume();
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(1.0), capture(1.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  ASSERT_EQ(f.journal.skipped.size(), 1u);
+  EXPECT_EQ(f.journal.skipped[0].first, 1u);
+  EXPECT_GT(paused_ticks, 20);  // still paused after the skip, until the resume
+  ASSERT_EQ(f.journal.completed.size(), 2u);
+  EXPECT_EQ(f.journal.completed[1].first, 2u);
+  EXPECT_TRUE(f.journal.discarded.empty());  // step 1 never started
+  // Paused once, resumed once: the skip did not record a second pause.
+  EXPECT_EQ(std::count(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused), 1);
+}
+
+TEST(RunEngine, SkipMeantForAStepThatHasEndedIsNotApplied) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool asked = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing" && !asked) {
+      asked = true;
+      e->skip("late", "bob", 0);  // the operator saw step 0; it has already ended
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(2.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_TRUE(f.journal.skipped.empty());
+  EXPECT_EQ(f.journal.completed.size(), 2u);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "skip of step 0 not applied"));
+}
+
+// Operator requests that arrive while a resumed run re-establishes its temperature and position
+// wait for the first step: a pause at once then pauses it (before that, it crashed the daemon).
+TEST(RunEngine, PauseAtOnceWhileReestablishingPausesTheFirstStep) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool asked = false;
+  EngineOptions opt;
+  opt.paused_real_sleep_s = 0.0;
+  opt.on_progress = [&](const Progress& p) {
+    if (!asked && (p.phase == "soaking" || p.phase == "moving")) {
+      asked = true;
+      e->pause(true);
+      e->skip("also wait");
+    }
+    if (p.state == RunState::kPaused) e->resume();
+  };
+  RunEngine engine(f.station, f.journal,
+                   plan_of({temperature(35.0), move(180.0, 0.0), capture(2.0), capture(2.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(2, 3), RunState::kCompleted);
+  EXPECT_TRUE(asked);
+  EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "resuming at step 2"));
+  // The skip applied to step 2 (the first step), not to the re-established ones.
+  ASSERT_EQ(f.journal.skipped.size(), 1u);
+  EXPECT_EQ(f.journal.skipped[0].first, 2u);
+  EXPECT_EQ(f.journal.completed.back().first, 3u);
 }
 
 }  // namespace

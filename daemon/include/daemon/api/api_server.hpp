@@ -18,9 +18,11 @@ struct ApiOptions {
   std::string token;
   std::size_t max_body_bytes = 1 << 20;  ///< larger request bodies get 413
   int threads = 32;  ///< connection threads: each keep-alive client and SSE stream holds one
+  /// Live streams (GET /events) served at once; more get 503. Must leave threads for requests.
+  int max_streams = 8;
 
   /// Throws core::InputError naming the field: a host beyond loopback without a token, a port
-  /// outside 0..65535, no threads or no body.
+  /// outside 0..65535, no threads or no body, streams that would take every thread.
   void validate() const;
 };
 

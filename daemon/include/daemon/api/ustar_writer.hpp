@@ -6,6 +6,15 @@
 
 namespace calstand::daemon::api {
 
+inline constexpr std::size_t kUstarBlock = 512;
+
+/// The 512-byte ustar header of a regular file `name` of `size` bytes (mode 0644, owner 0/0,
+/// modification time `mtime_s` [Unix s]). Throws std::invalid_argument for a name the format or
+/// the rules of UstarWriter do not admit.
+std::string ustar_header(std::string_view name, std::uint64_t size, std::int64_t mtime_s = 0);
+/// The zero bytes that fill a file of `size` bytes up to whole blocks.
+std::size_t ustar_padding(std::uint64_t size);
+
 /// Builds a POSIX ustar archive in memory (regular files only), so that an export can be sent
 /// as one download without running `tar`. Names must be relative, at most 100 bytes, without
 /// "..": the archive's names are chosen by the daemon, never by a client.

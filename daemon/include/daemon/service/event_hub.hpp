@@ -6,6 +6,7 @@
 #include <deque>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,9 @@ struct LiveEvent {
 /// record). Thread safe.
 class EventHub {
  public:
-  explicit EventHub(std::size_t capacity = 4096) : capacity_(capacity) {}
+  /// `epoch` names this hub's sequence (a daemon process): ids of another epoch are from a
+  /// daemon that has since restarted. Default: the wall clock in milliseconds.
+  explicit EventHub(std::size_t capacity = 4096, std::string epoch = "");
 
   void publish(std::string type, nlohmann::json data);
 
@@ -37,12 +40,21 @@ class EventHub {
   /// Sequence number of the last message published (0 before the first).
   std::uint64_t last_seq() const;
 
+  /// The server-sent event id of message `seq`: "EPOCH-SEQ".
+  std::string event_id(std::uint64_t seq) const;
+  /// Where a reader that reconnects with `Last-Event-ID: last_event_id` resumes: the sequence
+  /// number after which it has seen nothing. An id of this hub gives its sequence number; an
+  /// id of an earlier epoch (the daemon restarted since) gives 0, everything kept; an id that
+  /// is not one of ours, or lies in the future, gives nullopt (start live).
+  std::optional<std::uint64_t> replay_after(const std::string& last_event_id) const;
+
   /// Wakes every waiting reader and makes later waits return at once (server shutdown).
   void close();
   bool closed() const;
 
  private:
   const std::size_t capacity_;
+  const std::string epoch_;
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<LiveEvent> kept_;

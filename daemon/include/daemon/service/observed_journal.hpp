@@ -10,9 +10,11 @@
 namespace calstand::daemon::service {
 
 /// A RunJournal that records through `inner` (the store) and also tells live readers: step
-/// changes, run state changes and events as they happen, telemetry at most every
-/// `telemetry_period` of wall time (a simulated station produces it far faster than anyone
-/// reads). Called on the engine thread only, like any journal.
+/// changes, run state changes and events as they happen, and telemetry every
+/// `telemetry_period` of wall time (publish_telemetry(), which the daemon calls from the
+/// engine's progress callback: the journal's own telemetry comes once a station second, too
+/// slowly in real time and far too fast on a simulated clock). Called on the engine thread
+/// only, like any journal.
 class ObservedJournal final : public RunJournal {
  public:
   ObservedJournal(RunJournal& inner, EventHub& hub, LiveStatus& live, std::int64_t run_id,
@@ -25,16 +27,21 @@ class ObservedJournal final : public RunJournal {
   void discard_attempt(std::size_t step, int attempt, const std::string& why) override;
   void step_completed(std::size_t step, int attempt, double t_s) override;
   void step_failed(std::size_t step, int attempt, double t_s, const std::string& why) override;
+  void step_skipped(std::size_t step, double t_s, const std::string& why) override;
   void event(double t_s, EventKind kind, const std::string& source,
              const std::string& message) override;
   void table_telemetry(const core::TableState& state) override;
   void chamber_telemetry(const core::ChamberState& state) override;
   void run_state(RunState state, double t_s, const std::string& reason) override;
 
+  /// True when the next telemetry message is due (wall time).
+  bool telemetry_due() const { return std::chrono::steady_clock::now() >= next_telemetry_; }
+  /// Publishes the station's state now as the live telemetry (and the latest in /station).
+  void publish_telemetry(const core::TableState& table, const core::ChamberState& chamber);
+
  private:
   void publish_step(std::size_t step, int attempt, double t_s, const char* status,
                     const std::string& why = "");
-  void publish_telemetry_when_due();
 
   RunJournal& inner_;
   EventHub& hub_;

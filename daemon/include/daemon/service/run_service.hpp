@@ -12,6 +12,7 @@
 #include "core/station_config.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/live_status.hpp"
+#include "daemon/service/station_watch.hpp"
 #include "procedures/procedure.hpp"
 
 namespace calstand::daemon::service {
@@ -74,20 +75,28 @@ class RunService {
   void resume(std::int64_t run, const std::string& who);
   /// abort: the running or paused run (to the safe state), a held run, or a queued one.
   void abort(std::int64_t run, const std::string& why, const std::string& who);
+  /// skip: the step in progress of the run on the station (or, while it is paused, the step
+  /// that would run next). `step`, when given, is the step the operator means: refused when
+  /// the run is elsewhere now, and not applied when the run moves on before the engine sees it.
+  void skip(std::int64_t run, std::optional<std::size_t> step, const std::string& why,
+            const std::string& who);
 
   LiveSnapshot snapshot() const { return live_.snapshot(); }
   const ServiceOptions& options() const { return options_; }
 
  private:
   struct Command {
-    enum class Kind { kPause, kResume, kAbort } kind;
+    enum class Kind { kPause, kResume, kAbort, kSkip } kind;
     bool immediate = false;
+    std::optional<std::size_t> step;  ///< kSkip: the step meant
     std::string why;
     std::string who;
     bool checkpoint = false;  ///< an abort for a daemon stop: the run is set back to interrupted
   };
 
   void run_thread();
+  /// Between runs: reads the table and the chamber into the live status and the stream.
+  void watch_idle();
   /// The next run to execute and whether it resumes an interrupted one; none when there is
   /// nothing to do now (or a run is held).
   std::optional<std::pair<std::int64_t, bool>> next_run();
@@ -103,11 +112,11 @@ class RunService {
   ServiceOptions options_;
   EventHub& hub_;
   LiveStatus live_;
+  IdleStationWatch idle_watch_;  // run thread only
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;
-  std::string stop_reason_;
   std::uint64_t generation_ = 0;         // bumped on every change the run thread waits for
   std::optional<std::int64_t> current_;  // the run on the station
   std::optional<std::int64_t> held_;     // the interrupted run waiting for an operator
