@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <sys/socket.h>
+
 #include <charconv>
 #include <thread>
 
@@ -12,6 +14,12 @@
 #include "routes.hpp"
 
 namespace calstand::daemon::api {
+namespace {
+
+// Connections waiting to be accepted: room for every client of a busy lab connecting at once.
+constexpr int kListenBacklog = 128;
+
+}  // namespace
 
 void ApiOptions::validate() const {
   if (!is_loopback_address(host) && token.empty()) {
@@ -35,6 +43,7 @@ struct ApiServer::Impl {
   RouteContext ctx;
   httplib::Server server;
   std::thread listener;
+  socket_t listen_socket = -1;  // set while binding (set_socket_options)
 };
 
 ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOptions options) {
@@ -49,6 +58,12 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   // and its listen backlog is 5: pollers reconnecting together would see dropped SYNs (1 s).
   server.set_tcp_nodelay(true);
   server.set_keep_alive_max_count(1000);
+  // The listening socket is remembered so start() can lengthen its accept queue (httplib's is
+  // compiled in at 5, and a burst of clients connecting at once would wait 1 s for a SYN retry).
+  server.set_socket_options([this](socket_t sock) {
+    httplib::default_socket_options(sock);
+    impl_->listen_socket = sock;
+  });
 
   // Every mutating request carries the token when one is configured; reads stay open so a
   // status display needs no secret (they reveal no more than the lab's station screen).
@@ -106,6 +121,7 @@ int ApiServer::start() {
     throw std::runtime_error(fmt::format("cannot listen on {}:{} (in use, or not an address of this machine)",
                                          o.host, port));
   }
+  if (impl_->listen_socket >= 0) ::listen(impl_->listen_socket, kListenBacklog);  // best effort
   impl_->listener = std::thread([&server] { server.listen_after_bind(); });
   spdlog::info("control API on http://{}:{} ({})", o.host, port,
                o.token.empty() ? "no token: loopback only" : "bearer token required for changes");
