@@ -4,8 +4,10 @@
 #include <fmt/format.h>
 
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
+#include "core/error.hpp"
 #include "daemon/run_state.hpp"
 #include "daemon_client.hpp"
 #include "progress_bar.hpp"
@@ -19,14 +21,16 @@ struct WatchOptions {
   double reconnect_s = 60.0;  ///< how long a lost stream is retried
 };
 
+// A checkpointed run (interrupted, held) is not at its end: the daemon resumes it after its
+// restart, or an operator does.
 bool is_end_state(const std::string& state) {
-  return state == "completed" || state == "aborted" || state == "failed" || state == "interrupted";
+  return state == "completed" || state == "aborted" || state == "failed";
 }
 
 daemon::RunState state_named(const std::string& name) {
   for (auto s : {daemon::RunState::kIdle, daemon::RunState::kRunning, daemon::RunState::kPaused,
                  daemon::RunState::kAborting, daemon::RunState::kCompleted, daemon::RunState::kAborted,
-                 daemon::RunState::kFailed, daemon::RunState::kInterrupted}) {
+                 daemon::RunState::kFailed, daemon::RunState::kInterrupted, daemon::RunState::kHeld}) {
     if (to_string(s) == name) return s;
   }
   return daemon::RunState::kIdle;
@@ -61,15 +65,26 @@ int watch(const WatchOptions& opt) {
     bar.update(progress_of(status));
     // A daemon restart (kill -9 and a supervisor bringing it back) is ridden out: the stream
     // reconnects and the run's own status says where it is.
+    // The run's status for a redraw; none when the daemon went away in between (the stream then
+    // breaks too, and reconnects). A refusal (4xx) is an error as ever.
+    auto current = [&]() -> std::optional<nlohmann::json> {
+      try {
+        return client.get(path);
+      } catch (const core::InputError&) {
+        throw;
+      } catch (const std::runtime_error&) {
+        return std::nullopt;
+      }
+    };
     client.stream_events(opt.reconnect_s, [&](const std::string& type, const nlohmann::json& data) {
       if (type == "station" || type == "gap") {
         // The stream is (again) open, or messages were lost: the run may have ended meanwhile.
-        const auto now = client.get(path);
-        if (is_end_state(now["status"].get<std::string>())) {
-          final_state = now["status"];
+        const auto now = current();
+        if (now && is_end_state((*now)["status"].get<std::string>())) {
+          final_state = (*now)["status"];
           return false;
         }
-        bar.update(progress_of(now));
+        if (now) bar.update(progress_of(*now));
         return true;
       }
       // Messages of other runs, and of the station between runs ("run": null), are not ours.
@@ -85,14 +100,17 @@ int watch(const WatchOptions& opt) {
         return false;
       }
       // Step changes and telemetry (about 2 Hz) pace the redraws.
-      bar.update(progress_of(client.get(path)));
+      if (const auto now = current()) bar.update(progress_of(*now));
       return true;
     });
   }
   bar.finish();
   status = client.get(path);
-  fmt::print("run {} {}: {}/{} steps{}\n", opt.run, status["status"].get<std::string>(),
+  int skipped = 0;
+  for (const auto& step : client.get(path + "/steps")) skipped += step.value("status", "") == "skipped";
+  fmt::print("run {} {}: {}/{} steps{}{}\n", opt.run, status["status"].get<std::string>(),
              status["steps_done"].get<int>(), status["steps_total"].get<int>(),
+             skipped > 0 ? fmt::format(", {} skipped", skipped) : "",
              status["exit_reason"].get<std::string>().empty()
                  ? ""
                  : " (" + status["exit_reason"].get<std::string>() + ")");

@@ -94,6 +94,7 @@ void DaemonClient::stream_events(
     httplib::Headers headers;
     if (!last_id.empty()) headers.emplace("Last-Event-ID", last_id);
     bool stopped = false;
+    bool received = false;  // anything: the daemon was up, the reconnection window starts again
     daemon::api::SseParser parser([&](const daemon::api::SseMessage& m) {
       if (!m.id.empty()) last_id = m.id;
       if (on_message(m.type, nlohmann::json::parse(m.data, nullptr, false))) return true;
@@ -101,9 +102,13 @@ void DaemonClient::stream_events(
       return false;
     });
     const auto res = c.Get("/events", headers,
-                           [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
+                           [&](const char* data, std::size_t n) {
+                             received = true;
+                             return parser.feed({data, n});
+                           });
     if (stopped) return;
-    const bool connected = res && res->status == 200;
+    // A stream that broke mid-body gives no response, only the bytes it delivered.
+    const bool connected = received || (res && res->status == 200);
     if (connected) {
       // It was up: the reconnection window counts from the break.
       give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(reconnect_s);

@@ -45,7 +45,7 @@ CampaignResult run_campaign(const core::StationConfig& station_config,
   RunEngine engine(*station, journal, plan, options);
   engine_ptr = &engine;
   CampaignResult result;
-  result.state = engine.run(start.first_step, start.first_attempt);
+  result.state = engine.run(start.first_step, start.first_attempt, start.skipped_steps);
   result.exit_reason = engine.exit_reason();
   result.station_time_s = station->clock().now_s();
   return result;

@@ -72,6 +72,7 @@ void RunEngine::abort(const std::string& why, const std::string& who) {
   {
     std::lock_guard lock(mutex_);
     abort_reason_ = fmt::format("aborted by {}: {}", who, why);
+    interrupt_requested_ = false;  // an operator's abort ends the run, checkpoint or not
   }
   abort_requested_ = true;
   record_event(EventKind::kOperator, who, "abort requested: " + why);
@@ -80,9 +81,10 @@ void RunEngine::abort(const std::string& why, const std::string& who) {
 void RunEngine::interrupt(const std::string& why, const std::string& who) {
   {
     std::lock_guard lock(mutex_);
+    if (abort_requested_) return;  // already ending: an operator's abort stays an abort
     abort_reason_ = fmt::format("interrupted by {}: {}", who, why);
+    interrupt_requested_ = true;
   }
-  interrupt_requested_ = true;
   abort_requested_ = true;
   record_event(EventKind::kOperator, who, "interrupt requested (checkpoint): " + why);
 }
@@ -152,7 +154,7 @@ void RunEngine::set_phase(const char* phase) {
   if (options_.on_progress) options_.on_progress(snapshot);
 }
 
-RunState RunEngine::run(std::size_t first_step, int first_attempt) {
+RunState RunEngine::run(std::size_t first_step, int first_attempt, const std::vector<std::size_t>& skipped) {
   state_ = RunState::kRunning;
   attempt_ = first_attempt;
   journal_.run_state(RunState::kRunning, station_.clock().now_s(), "");
@@ -160,9 +162,16 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt) {
     if (auto r = station_.bring_up(); !r) throw StepFailed{"station bring-up: " + r.message};
     // Stream health counts from now: a resumed run's clock does not start at 0.
     for (auto& h : imu_health_) h.last_sample_s = station_.clock().now_s();
-    if (first_step > 0) {
+    if (first_step > 0 && first_step < plan_.steps.size()) {
+      {
+        // Progress names the step the run resumes at while the station is made ready for it.
+        std::lock_guard lock(mutex_);
+        progress_.step = first_step;
+        progress_.label = plan_.steps[first_step].label;
+        step_started_s_ = std::numeric_limits<double>::quiet_NaN();
+      }
       reestablishing_ = true;
-      reestablish(first_step);
+      reestablish(first_step, skipped);
       reestablishing_ = false;
     }
     std::size_t i = first_step;
@@ -192,8 +201,10 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt) {
     finish(RunState::kCompleted, "");
   } catch (const Aborted& a) {
     // A checkpoint ends the run resumable; a fault during it (an interlock) still aborts it.
+    // A run the operator had paused stays in the operator's hands after the restart: held.
     const bool checkpoint = interrupt_requested_ && a.why == abort_reason();
-    finish(checkpoint ? RunState::kInterrupted : RunState::kAborted, a.why);
+    const bool paused = state_ == RunState::kPaused;
+    finish(!checkpoint ? RunState::kAborted : paused ? RunState::kHeld : RunState::kInterrupted, a.why);
   } catch (const StepFailed& f) {
     finish(RunState::kFailed, f.why);
   } catch (...) {
@@ -450,12 +461,15 @@ void RunEngine::wait_for(double duration_s, const char* phase) {
   while (station_.clock().now_s() < end - 1e-9) tick();
 }
 
-void RunEngine::reestablish(std::size_t first_step) {
+void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped) {
   // Resuming after a crash: the step about to run needs the temperature and the table
   // position the steps before it left. Re-run the last temperature step (with its soak) and
   // the last move; a rate step sets its own rate.
   std::optional<std::size_t> last_temperature, last_move;
   for (std::size_t i = 0; i < first_step && i < plan_.steps.size(); ++i) {
+    // A skipped step left nothing to re-establish (a soak the chamber could not reach must
+    // not be commanded again after a restart).
+    if (std::find(skipped.begin(), skipped.end(), i) != skipped.end()) continue;
     if (plan_.steps[i].kind == StepKind::kSetTemperature) last_temperature = i;
     if (plan_.steps[i].kind == StepKind::kMove) last_move = i;
   }

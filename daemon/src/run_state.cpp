@@ -12,6 +12,7 @@ std::string_view to_string(RunState state) {
     case RunState::kAborted: return "aborted";
     case RunState::kFailed: return "failed";
     case RunState::kInterrupted: return "interrupted";
+    case RunState::kHeld: return "held";
   }
   return "unknown";
 }

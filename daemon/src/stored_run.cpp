@@ -44,7 +44,10 @@ StoredRun prepare_stored_run(store::RunStore& runs, std::int64_t run) {
     if (s.index == *first) next_attempt = s.attempts + 1;
   }
   for (const auto& e : record.events) last_time_s = std::max(last_time_s, e.time_s);
-  out.start = {*first, next_attempt, last_time_s};
+  out.start = {*first, next_attempt, last_time_s, {}};
+  for (const auto& s : record.steps) {
+    if (s.status == store::StepStatus::kSkipped && s.index < *first) out.start.skipped_steps.push_back(s.index);
+  }
   return out;
 }
 

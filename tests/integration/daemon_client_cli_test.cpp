@@ -2,6 +2,9 @@
 // calstandd running as a process, as an operator uses them.
 #include <gtest/gtest.h>
 
+#include <future>
+#include <thread>
+
 #include "cli_runner.hpp"
 #include "daemon_test_support.hpp"
 
@@ -113,7 +116,39 @@ TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
   EXPECT_EQ(api.get("/runs/1").body["current_step"]["index"], next + 1);
   const auto step = api.get("/runs/1/steps").body[next];
   EXPECT_EQ(step["reason"].get<std::string>().rfind("skipped by carol@", 0), 0u) << step.dump();
-  EXPECT_EQ(calstand("abort 1").exit_code, 0);
+  ASSERT_EQ(calstand("resume 1").exit_code, 0);
+  const auto watched = calstand("watch 1");
+  EXPECT_EQ(watched.exit_code, 0) << watched.out;
+  EXPECT_NE(watched.out.find("run 1 completed: 11/12 steps, 1 skipped"), std::string::npos) << watched.out;
+}
+
+// `calstand watch` rides out a daemon killed and brought back (as systemd's Restart= does):
+// the stream reconnects and the resumed run is followed to its end.
+TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) {
+  const std::string dir = calstand::testing::fresh_dir("watch-restart");
+  const std::string listen = "127.0.0.1:" + std::to_string(calstand::testing::free_loopback_port());
+  auto daemon = std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
+  ASSERT_GT(daemon->port(), 0);
+  calstand::testing::ApiClient api(daemon->port());
+  // 1000 s captures: about a second of wall time each, so the kill lands mid-run.
+  const std::int64_t run = api.submit("six-position", {{"capture_s", 1000}});
+  ASSERT_EQ(run, 1);
+  ASSERT_TRUE(calstand::testing::wait_until([&] {
+    const auto r = api.get("/runs/1");
+    return r.body.contains("live") && r.body["steps_done"].get<int>() >= 1;
+  }));
+  auto watched = std::async(std::launch::async, [&] {
+    return calstand::testing::run("watch 1 --reconnect 30 --daemon " + listen);
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // watching
+  EXPECT_EQ(daemon->signal_and_wait(SIGKILL), -SIGKILL);
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // the daemon is away a while
+  daemon = std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
+  ASSERT_GT(daemon->port(), 0);
+  ASSERT_EQ(watched.wait_for(std::chrono::seconds(120)), std::future_status::ready);
+  const auto result = watched.get();
+  EXPECT_EQ(result.exit_code, 0) << result.out;
+  EXPECT_NE(result.out.find("run 1 completed: 12/12 steps"), std::string::npos) << result.out;
 }
 
 }  // namespace

@@ -178,6 +178,14 @@ TEST(DaemonProcess, OwnsItsDatabaseAlone) {
     EXPECT_NE(said.find("a station daemon owns this database (calstandd pid"), std::string::npos) << said;
     ApiClient api(d.port());
     EXPECT_EQ(api.get("/runs").body.size(), 0u);  // the refused run wrote nothing
+
+    // Nor can another daemon (of another database) share its port and take half its requests.
+    const std::string same_port = std::string("env CALSTAND_TOKEN=") + calstand::testing::kTestToken + " " +
+                                  CALSTANDD_BIN + " --db " + dir + "/other.db --listen 127.0.0.1:" +
+                                  std::to_string(d.port()) + " >/dev/null 2>" + dir + "/port.txt";
+    EXPECT_EQ(WEXITSTATUS(std::system(same_port.c_str())), 1);
+    EXPECT_NE(read_text(dir + "/port.txt").find("cannot listen on 127.0.0.1:"), std::string::npos)
+        << read_text(dir + "/port.txt");
     EXPECT_EQ(d.signal_and_wait(SIGKILL), -SIGKILL);
   }
   // Killed: the kernel released the lock, a foreground run may use the database now.

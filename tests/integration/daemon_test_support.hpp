@@ -4,7 +4,10 @@
 
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -135,10 +138,11 @@ class EventStreamReader {
 };
 
 #ifdef CALSTANDD_BIN
-// calstandd started with --listen 127.0.0.1:0; the port is read from its first stdout line.
+// calstandd started with --listen LISTEN (any free loopback port by default); the port is read
+// from its first stdout line.
 class DaemonProcess {
  public:
-  DaemonProcess(const std::string& db, const std::string& log) {
+  DaemonProcess(const std::string& db, const std::string& log, const std::string& listen = "127.0.0.1:0") {
     int out[2];
     if (pipe(out) != 0) return;
     pid_ = fork();
@@ -148,7 +152,7 @@ class DaemonProcess {
       dup2(err, STDERR_FILENO);
       close(out[0]);
       setenv("CALSTAND_TOKEN", kTestToken, 1);
-      execl(CALSTANDD_BIN, CALSTANDD_BIN, "--db", db.c_str(), "--listen", "127.0.0.1:0", nullptr);
+      execl(CALSTANDD_BIN, CALSTANDD_BIN, "--db", db.c_str(), "--listen", listen.c_str(), nullptr);
       _exit(127);
     }
     close(out[1]);
@@ -183,5 +187,23 @@ class DaemonProcess {
 };
 
 #endif  // CALSTANDD_BIN
+
+/// A loopback port free now (the kernel's pick, released at once): for a daemon that must come
+/// back on the same port after a restart.
+inline int free_loopback_port() {
+  const int sock = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = 0;
+  socklen_t len = sizeof addr;
+  int port = 0;
+  if (::bind(sock, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0 &&
+      ::getsockname(sock, reinterpret_cast<sockaddr*>(&addr), &len) == 0) {
+    port = ntohs(addr.sin_port);
+  }
+  ::close(sock);
+  return port;
+}
 
 }  // namespace calstand::testing

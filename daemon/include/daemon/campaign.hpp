@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "core/station_config.hpp"
 #include "daemon/run_engine.hpp"
@@ -31,6 +32,9 @@ struct CampaignStart {
   std::size_t first_step = 0;
   int first_attempt = 1;
   double start_time_s = 0.0;
+  /// Steps before `first_step` the operator skipped: a resumed run re-establishes the state
+  /// the completed steps left, not what a skipped one would have.
+  std::vector<std::size_t> skipped_steps;
 };
 
 /// Runs run `run_id` (already recorded in the database at `db_path`) on the station of

@@ -82,7 +82,9 @@ class RunEngine {
   /// re-established first). Blocks until the run is completed, aborted or failed.
   /// `first_attempt` numbers the first step's attempt (after a crash: one more than the
   /// attempts already recorded, whose samples the caller discarded).
-  RunState run(std::size_t first_step = 0, int first_attempt = 1);
+  /// `skipped`: steps before `first_step` the operator skipped (re-establishing ignores them).
+  RunState run(std::size_t first_step = 0, int first_attempt = 1,
+               const std::vector<std::size_t>& skipped = {});
 
   /// Pause at the next step boundary, or at once (`immediate`: an interrupted capture is
   /// discarded and repeated on resume).
@@ -91,8 +93,9 @@ class RunEngine {
   /// Abort: the station goes to its safe state and the reason is recorded.
   void abort(const std::string& why, const std::string& who = "operator");
   /// Stop for a checkpoint (the daemon is stopping): the station goes to its safe state as for
-  /// an abort, but the run ends interrupted, not aborted, in one journal write: the step in
-  /// progress stays unfinished and a resume redoes it.
+  /// an abort, but the run ends interrupted (held when it was paused), not aborted, in one
+  /// journal write: the step in progress stays unfinished and a resume redoes it. An abort
+  /// requested before or after stays an abort.
   void interrupt(const std::string& why, const std::string& who = "daemon");
   /// Skip the step in progress (a capture in progress is discarded, a rate step's axis comes
   /// to rest), or, while paused, the step that would run next (the run stays paused). The step
@@ -128,7 +131,7 @@ class RunEngine {
   int capture(std::size_t index, double duration_s, int first_attempt);
   void wait_for(double duration_s, const char* phase);
   void wait_for_streams();
-  void reestablish(std::size_t first_step);
+  void reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped);
   void tick();
   void poll_imus();
   void check_interlocks();

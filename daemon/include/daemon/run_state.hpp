@@ -8,7 +8,9 @@ namespace calstand::daemon {
 
 /// The states of a run. Terminal: completed, aborted, failed. Interrupted: stopped with the
 /// station safe for a checkpoint (a daemon stopping); it resumes at its first unfinished step.
-enum class RunState { kIdle, kRunning, kPaused, kAborting, kCompleted, kAborted, kFailed, kInterrupted };
+/// Held: interrupted while an operator had it paused, or waiting for an operator after a crash
+/// (recovery policy hold); it resumes only when an operator says so.
+enum class RunState { kIdle, kRunning, kPaused, kAborting, kCompleted, kAborted, kFailed, kInterrupted, kHeld };
 
 std::string_view to_string(RunState state);
 bool is_terminal(RunState state);

@@ -61,7 +61,11 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   // The listening socket is remembered so start() can lengthen its accept queue (httplib's is
   // compiled in at 5, and a burst of clients connecting at once would wait 1 s for a SYN retry).
   server.set_socket_options([this](socket_t sock) {
-    httplib::default_socket_options(sock);
+    // SO_REUSEADDR (a restart binds at once, past TIME_WAIT) but not httplib's default
+    // SO_REUSEPORT, with which a second daemon would bind the same port and silently take
+    // half of the requests.
+    const int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
     impl_->listen_socket = sock;
   });
 

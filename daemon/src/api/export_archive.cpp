@@ -4,33 +4,56 @@
 #include <stdlib.h>
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "daemon/api/ustar_writer.hpp"
 #include "store/import_export.hpp"
+#include "store/run_store.hpp"
 
 namespace calstand::daemon::api {
+namespace {
 
-ExportArchive::ExportArchive(store::Database& db, std::int64_t run, const std::string& device) {
-  std::string pattern = (std::filesystem::temp_directory_path() / "calstandd-export-XXXXXX").string();
-  if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("export: cannot create a temporary directory");
+// "2026-12-01T16:07:00.914Z" (the store's UTC stamps) as Unix seconds; 0 when unreadable.
+std::int64_t unix_seconds(const std::string& utc) {
+  std::tm tm{};
+  std::istringstream in(utc);
+  in >> std::get_time(&tm, "%Y-%m-%dT%H:%M:%S");
+  if (in.fail()) return 0;
+  return static_cast<std::int64_t>(timegm(&tm));
+}
+
+}  // namespace
+
+ExportArchive::ExportArchive(store::Database& db, std::int64_t run, const std::string& device,
+                             const std::filesystem::path& work_dir) {
+  std::string pattern = (work_dir / ".calstandd-export-XXXXXX").string();
+  if (mkdtemp(pattern.data()) == nullptr) {
+    throw std::runtime_error("export: cannot create a temporary directory in " + work_dir.string());
+  }
   dir_ = pattern;
   try {
     // export_run() writes files; the archive holds exactly what `calstand export` would write.
     store::export_run(db, run, dir_, store::ExportOptions{device});
     const std::string folder = fmt::format("run-{}/", run);
+    std::uint64_t offset = 0;
     for (const char* name : {"meta.json", "samples.csv"}) {
       const auto path = dir_ / name;
-      entries_.push_back({folder + name, path, std::filesystem::file_size(path)});
+      const std::uint64_t size = std::filesystem::file_size(path);
+      entries_.push_back({folder + name, path, size, offset});
+      offset += kUstarBlock + size + ustar_padding(size);
     }
   } catch (...) {
     std::error_code ignored;
     std::filesystem::remove_all(dir_, ignored);
     throw;
   }
-  mtime_s_ = std::chrono::duration_cast<std::chrono::seconds>(
-                 std::chrono::system_clock::now().time_since_epoch()).count();
+  // The files' time in the archive is the run's (its end, else its creation), not the request's:
+  // two requests for the same run give the same bytes, so a download can go on by ranges.
+  const store::RunSummary summary = store::RunStore(db).load_run(run).summary;
+  mtime_s_ = unix_seconds(summary.ended_utc.empty() ? summary.created_utc : summary.ended_utc);
 }
 
 ExportArchive::~ExportArchive() {
@@ -40,62 +63,53 @@ ExportArchive::~ExportArchive() {
 }
 
 std::uint64_t ExportArchive::size() const {
-  std::uint64_t total = 2 * kUstarBlock;  // the end blocks
-  for (const auto& e : entries_) total += kUstarBlock + e.size + ustar_padding(e.size);
-  return total;
+  const Entry& last = entries_.back();
+  return last.offset + kUstarBlock + last.size + ustar_padding(last.size) + 2 * kUstarBlock;
 }
 
-std::string ExportArchive::next_chunk() {
-  for (;;) {
-    switch (part_) {
-      case Part::kHeader: {
-        if (entry_ == entries_.size()) {
-          part_ = Part::kEnd;
-          continue;
-        }
-        const Entry& e = entries_[entry_];
-        file_ = std::ifstream(e.path, std::ios::binary);
-        if (!file_) throw std::runtime_error("export: cannot read " + e.path.string());
-        sent_of_file_ = 0;
-        part_ = Part::kContent;
-        return ustar_header(e.name, e.size, mtime_s_);
-      }
-      case Part::kContent: {
-        const Entry& e = entries_[entry_];
-        if (sent_of_file_ == e.size) {
-          part_ = Part::kPadding;
-          continue;
-        }
-        std::string chunk(std::min<std::uint64_t>(kChunkBytes, e.size - sent_of_file_), '\0');
-        file_.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-        if (static_cast<std::size_t>(file_.gcount()) != chunk.size()) {
-          throw std::runtime_error("export: " + e.path.string() + " ended early");
-        }
-        sent_of_file_ += chunk.size();
-        return chunk;
-      }
-      case Part::kPadding: {
-        const std::size_t padding = ustar_padding(entries_[entry_].size);
-        file_.close();
-        ++entry_;
-        part_ = Part::kHeader;
-        if (padding > 0) return std::string(padding, '\0');
-        continue;
-      }
-      case Part::kEnd:
-        part_ = Part::kDone;
-        return std::string(2 * kUstarBlock, '\0');
-      case Part::kDone:
-        return {};
+std::string ExportArchive::read_at(std::uint64_t offset, std::size_t max_bytes) {
+  // The archive: for each entry its header, its content, its padding; then two zero blocks.
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    const Entry& e = entries_[i];
+    const std::uint64_t content = e.offset + kUstarBlock;
+    const std::uint64_t padding = content + e.size;
+    const std::uint64_t next = padding + ustar_padding(e.size);
+    if (offset >= next) continue;
+    if (offset < content) {
+      const std::string header = ustar_header(e.name, e.size, mtime_s_);
+      const std::size_t from = static_cast<std::size_t>(offset - e.offset);
+      return header.substr(from, std::min(max_bytes, header.size() - from));
     }
+    if (offset < padding) {
+      if (!file_open_ || open_entry_ != i) {
+        file_.close();
+        file_.clear();
+        file_.open(e.path, std::ios::binary);
+        if (!file_) throw std::runtime_error("export: cannot read " + e.path.string());
+        open_entry_ = i;
+        file_open_ = true;
+      }
+      std::string chunk(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, padding - offset)), '\0');
+      file_.seekg(static_cast<std::streamoff>(offset - content));
+      file_.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+      if (static_cast<std::size_t>(file_.gcount()) != chunk.size()) {
+        throw std::runtime_error("export: " + e.path.string() + " ended early");
+      }
+      return chunk;
+    }
+    return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, next - offset)), '\0');
   }
+  const std::uint64_t end = size();
+  if (offset >= end) return {};
+  return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, end - offset)), '\0');
 }
 
-std::string export_run_archive(store::Database& db, std::int64_t run, const std::string& device) {
-  ExportArchive archive(db, run, device);
+std::string export_run_archive(store::Database& db, std::int64_t run, const std::string& device,
+                               const std::filesystem::path& work_dir) {
+  ExportArchive archive(db, run, device, work_dir);
   std::string out;
   out.reserve(archive.size());
-  for (std::string chunk; !(chunk = archive.next_chunk()).empty();) out += chunk;
+  for (std::string chunk; !(chunk = archive.read_at(out.size())).empty();) out += chunk;
   return out;
 }
 

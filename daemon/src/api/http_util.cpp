@@ -30,7 +30,7 @@ nlohmann::json parse_json_body(const httplib::Request& req, const std::optional<
   // '[' would overflow the handler's stack. No request needs more than a few levels.
   const nlohmann::json::parser_callback_t depth_limit = [](int depth, nlohmann::json::parse_event_t,
                                                                nlohmann::json&) {
-    if (depth > kMaxJsonDepth) {
+    if (depth >= kMaxJsonDepth) {  // the outermost value is at depth 0
       throw BadRequest(400, "body", fmt::format("JSON nested deeper than {} levels", kMaxJsonDepth));
     }
     return true;

@@ -1,5 +1,9 @@
 // /runs: submit, list, one run's status, steps, events and export; operator actions.
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <filesystem>
 
 #include "core/error.hpp"
 #include "daemon/api/access.hpp"
@@ -162,18 +166,23 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
     store::RunStore runs(db);
     load_run_or_404(runs, id);
     const std::string device = req.has_param("device") ? req.get_param_value("device") : "";
-    // Sent piece by piece from the temporary folder, which goes when the response does.
-    auto archive = std::make_shared<ExportArchive>(db, id, device);
-    res.status = 200;
+    // Sent piece by piece from a temporary folder beside the database (not /tmp, which may be
+    // in memory), removed when the response goes. Any byte range can be asked for.
+    const auto db_dir = std::filesystem::absolute(ctx.db_path).parent_path();
+    auto archive = std::make_shared<ExportArchive>(db, id, device, db_dir);
+    // No status set here: httplib answers 200, or 206 for a range.
     res.set_header("Content-Disposition", fmt::format("attachment; filename=\"run-{}.tar\"", id));
     res.set_content_provider(
         static_cast<std::size_t>(archive->size()), "application/x-tar",
-        [archive, given = std::make_shared<std::uint64_t>(0)](std::size_t offset, std::size_t,
-                                                              httplib::DataSink& sink) {
-          if (offset != *given) return false;  // the archive is read in order only (no ranges)
-          const std::string chunk = archive->next_chunk();
-          *given += chunk.size();
-          return chunk.empty() || sink.write(chunk.data(), chunk.size());
+        [archive, id](std::size_t offset, std::size_t length, httplib::DataSink& sink) {
+          // No exception may leave a content provider: httplib's writer would terminate.
+          try {
+            const std::string chunk = archive->read_at(offset, std::min(length, ExportArchive::kChunkBytes));
+            return !chunk.empty() && sink.write(chunk.data(), chunk.size());
+          } catch (const std::exception& e) {
+            spdlog::error("GET /runs/{}/export: {}", id, e.what());
+            return false;
+          }
         });
   }));
 

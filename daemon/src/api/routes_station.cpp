@@ -1,5 +1,6 @@
 // /station, /calibrations/{id} and the live stream /events.
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <memory>
 
@@ -105,37 +106,51 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
     // The stream's slot is given back when its response goes away, however the stream ended.
     auto slot = std::make_shared<StreamSlot>(ctx.open_streams);
     std::uint64_t after = ctx.hub.last_seq();
+    std::string restart_gap;
     if (req.has_header("Last-Event-ID")) {
-      if (const auto replay = ctx.hub.replay_after(req.get_header_value("Last-Event-ID"))) after = *replay;
+      const std::string last_id = req.get_header_value("Last-Event-ID");
+      if (const auto replay = ctx.hub.replay_after(last_id)) {
+        after = replay->after_seq;
+        if (replay->restarted) {
+          restart_gap = sse_message("", "gap", {{"missed", nullptr}, {"after_id", last_id},
+                                                {"reason", "the daemon restarted since that message"}});
+        }
+      }
     }
     auto last_seq = std::make_shared<std::uint64_t>(after);
-    auto greeting = std::make_shared<std::string>(sse_message("", "station", station_json(ctx)));
+    auto greeting = std::make_shared<std::string>(sse_message("", "station", station_json(ctx)) + restart_gap);
     res.set_header("Cache-Control", "no-cache");
     res.set_chunked_content_provider(
         "text/event-stream",
         [hub = &ctx.hub, last_seq, greeting, slot](std::size_t, httplib::DataSink& sink) {
-          if (!greeting->empty()) {
-            const std::string first = std::move(*greeting);
-            greeting->clear();
-            return sink.write(first.data(), first.size());
+          // No exception may leave a content provider: httplib's writer would terminate.
+          try {
+            if (!greeting->empty()) {
+              const std::string first = std::move(*greeting);
+              greeting->clear();
+              return sink.write(first.data(), first.size());
+            }
+            if (hub->closed()) {
+              sink.done();
+              return true;
+            }
+            const auto events = hub->wait_after(*last_seq, kKeepAlive);
+            if (events.empty()) {
+              static constexpr std::string_view kPing = ": keep-alive\n\n";
+              return sink.write(kPing.data(), kPing.size());
+            }
+            std::string chunk;
+            if (events.front().seq > *last_seq + 1) {
+              chunk += sse_message("", "gap", {{"missed", events.front().seq - *last_seq - 1},
+                                               {"after_id", hub->event_id(*last_seq)}});
+            }
+            for (const auto& e : events) chunk += sse_message(hub->event_id(e.seq), e.type, e.data);
+            *last_seq = events.back().seq;
+            return sink.write(chunk.data(), chunk.size());
+          } catch (const std::exception& e) {
+            spdlog::error("GET /events: {}", e.what());
+            return false;
           }
-          if (hub->closed()) {
-            sink.done();
-            return true;
-          }
-          const auto events = hub->wait_after(*last_seq, kKeepAlive);
-          if (events.empty()) {
-            static constexpr std::string_view kPing = ": keep-alive\n\n";
-            return sink.write(kPing.data(), kPing.size());
-          }
-          std::string chunk;
-          if (events.front().seq > *last_seq + 1) {
-            chunk += sse_message("", "gap", {{"missed", events.front().seq - *last_seq - 1},
-                                             {"after_id", hub->event_id(*last_seq)}});
-          }
-          for (const auto& e : events) chunk += sse_message(hub->event_id(e.seq), e.type, e.data);
-          *last_seq = events.back().seq;
-          return sink.write(chunk.data(), chunk.size());
         });
   }));
 }

@@ -9,7 +9,7 @@ namespace {
 constexpr std::size_t kBlock = kUstarBlock;
 
 // Writes `value` as width-1 zero-padded octal digits and a NUL (a value too large for the
-// field keeps its low digits: 11 octal digits hold sizes below 8 GiB).
+// field keeps its low digits).
 void put_octal(char* field, std::size_t width, std::uint64_t value) {
   field[width - 1] = '\0';
   for (std::size_t i = width - 1; i-- > 0;) {
@@ -30,7 +30,13 @@ std::string ustar_header(std::string_view name, std::uint64_t size, std::int64_t
   put_octal(header + 100, 8, 0644);                  // mode
   put_octal(header + 108, 8, 0);                     // uid
   put_octal(header + 116, 8, 0);                     // gid
-  put_octal(header + 124, 12, size);                 // size
+  if (size < (std::uint64_t{1} << 33)) {
+    put_octal(header + 124, 12, size);               // size: 11 octal digits hold < 8 GiB
+  } else {
+    // Larger: the base-256 size field GNU tar and bsdtar read (high bit set, big-endian).
+    header[124] = static_cast<char>(0x80);
+    for (int i = 11; i >= 1; --i, size >>= 8) header[124 + i] = static_cast<char>(size & 0xFF);
+  }
   put_octal(header + 136, 12, static_cast<std::uint64_t>(mtime_s < 0 ? 0 : mtime_s));
   std::memset(header + 148, ' ', 8);                 // checksum counts as spaces
   header[156] = '0';                                 // typeflag: regular file

@@ -18,7 +18,7 @@ EventHub::EventHub(std::size_t capacity, std::string epoch)
 
 std::string EventHub::event_id(std::uint64_t seq) const { return epoch_ + "-" + std::to_string(seq); }
 
-std::optional<std::uint64_t> EventHub::replay_after(const std::string& last_event_id) const {
+std::optional<EventHub::Replay> EventHub::replay_after(const std::string& last_event_id) const {
   const auto dash = last_event_id.rfind('-');
   if (dash == std::string::npos || dash == 0) return std::nullopt;
   std::uint64_t seq = 0;
@@ -30,10 +30,10 @@ std::optional<std::uint64_t> EventHub::replay_after(const std::string& last_even
   if (epoch != epoch_) {
     // Digits only: an epoch of ours, from before a restart; anything else is not our id.
     if (epoch.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
-    return 0;
+    return Replay{0, true};
   }
   if (seq > last_seq()) return std::nullopt;
-  return seq;
+  return Replay{seq, false};
 }
 
 void EventHub::publish(std::string type, nlohmann::json data) {

@@ -147,7 +147,10 @@ std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
   store::Database db(options_.db_path);
   const auto interrupted = store::interrupted_runs(db);
   if (!interrupted.empty()) {
-    if (options_.recovery == RecoveryPolicy::kAuto) return std::make_pair(interrupted.front(), true);
+    // A run already held (paused by an operator when the daemon stopped, or held before a
+    // crash) waits for an operator whatever the policy.
+    const bool held = store::RunStore(db).load_run(interrupted.front()).summary.status == store::kHeldStatus;
+    if (options_.recovery == RecoveryPolicy::kAuto && !held) return std::make_pair(interrupted.front(), true);
     hold(interrupted.front());
     return std::nullopt;
   }
@@ -164,8 +167,10 @@ void RunService::hold(std::int64_t run) {
     resume_held_ = false;
   }
   store::Database db(options_.db_path);
+  const bool was_held = store::RunStore(db).load_run(run).summary.status == store::kHeldStatus;
   store::mark_run_resumable(db, run, store::kHeldStatus,
-                            "interrupted; held for an operator (recovery policy hold)");
+                            was_held ? "interrupted while paused; held for an operator"
+                                     : "interrupted; held for an operator (recovery policy hold)");
   // The devices may be wherever the interruption left them: bring them up and make them safe.
   idle_watch_.release();
   std::string safe_outcome = "station made safe";
@@ -179,8 +184,10 @@ void RunService::hold(std::int64_t run) {
   } catch (const std::exception& e) {
     safe_outcome = std::string("station unavailable: ") + e.what();
   }
-  record_event(run, "daemon", "held after an interruption (recovery policy hold): " + safe_outcome +
-                                  "; waiting for resume or abort", false);
+  record_event(run, "daemon",
+               fmt::format("held after an interruption ({}): {}; waiting for resume or abort",
+                           was_held ? "it was paused" : "recovery policy hold", safe_outcome),
+               false);
   live_.update([&](LiveSnapshot& s) { s.held = run; });
   hub_.publish("run", {{"run", run}, {"state", store::kHeldStatus}, {"reason", safe_outcome}});
 }
@@ -256,8 +263,11 @@ void RunService::execute(std::int64_t run, bool resuming) {
   engine_options.on_progress = [&](const Progress& p) {
     std::vector<Command> todo;
     {
-      std::lock_guard lock(mutex_);
-      todo.swap(commands_);
+      // Never waits: an API thread may hold the lock while it writes to the database (the
+      // abort of a queued run), and the control loop must not stall behind SQLite. Commands
+      // not taken now are taken at the next tick.
+      std::unique_lock lock(mutex_, std::try_to_lock);
+      if (lock.owns_lock()) todo.swap(commands_);
     }
     for (const auto& c : todo) {
       if (!engine) break;
@@ -290,7 +300,7 @@ void RunService::execute(std::int64_t run, bool resuming) {
   RunState final_state = RunState::kFailed;
   std::string reason;
   try {
-    final_state = run_engine.run(stored->start.first_step, stored->start.first_attempt);
+    final_state = run_engine.run(stored->start.first_step, stored->start.first_attempt, stored->start.skipped_steps);
     reason = run_engine.exit_reason();
   } catch (const std::exception& e) {
     // Storage failure: the engine made the station safe before this propagated.
@@ -304,12 +314,15 @@ void RunService::execute(std::int64_t run, bool resuming) {
   }
   writer.flush();
 
-  if (final_state == RunState::kInterrupted) {
-    // The engine recorded the run as interrupted in the same write that ended it: a crash from
-    // here on still leaves it resumable.
+  if (final_state == RunState::kInterrupted || final_state == RunState::kHeld) {
+    // The engine recorded the run as interrupted (or held) in the same write that ended it: a
+    // crash from here on still leaves it resumable.
     const auto first = runs.first_unfinished_step(run);
-    const std::string message = fmt::format("checkpointed: station made safe; resumes at step {} on restart",
-                                            first ? *first : 0);
+    const std::string message =
+        final_state == RunState::kHeld
+            ? fmt::format("checkpointed while paused: station made safe; held at step {} for an "
+                          "operator's resume or abort on restart", first ? *first : 0)
+            : fmt::format("checkpointed: station made safe; resumes at step {} on restart", first ? *first : 0);
     record_event(run, "daemon", message, false);
     spdlog::warn("run {}: {} ({})", run, message, reason);
   } else {

@@ -61,10 +61,15 @@ TEST(EventHub, EventIdsNameTheProcessAndTheSequence) {
   hub.publish("step", {});
   EXPECT_EQ(hub.event_id(2), "1700000000000-2");
   // Ours: resume after that message.
-  EXPECT_EQ(hub.replay_after("1700000000000-2"), std::optional<std::uint64_t>(2));
-  EXPECT_EQ(hub.replay_after("1700000000000-0"), std::optional<std::uint64_t>(0));
-  // An earlier process of the daemon (restarted since): everything this one kept is news.
-  EXPECT_EQ(hub.replay_after("1600000000000-900"), std::optional<std::uint64_t>(0));
+  ASSERT_TRUE(hub.replay_after("1700000000000-2").has_value());
+  EXPECT_EQ(hub.replay_after("1700000000000-2")->after_seq, 2u);
+  EXPECT_FALSE(hub.replay_after("1700000000000-2")->restarted);
+  EXPECT_EQ(hub.replay_after("1700000000000-0")->after_seq, 0u);
+  // An earlier process of the daemon (restarted since): everything this one kept is news, and
+  // what the old one had not sent is lost.
+  ASSERT_TRUE(hub.replay_after("1600000000000-900").has_value());
+  EXPECT_EQ(hub.replay_after("1600000000000-900")->after_seq, 0u);
+  EXPECT_TRUE(hub.replay_after("1600000000000-900")->restarted);
   // Not ours, or in the future: start live.
   EXPECT_FALSE(hub.replay_after("1700000000000-4").has_value());
   EXPECT_FALSE(hub.replay_after("abc-1").has_value());

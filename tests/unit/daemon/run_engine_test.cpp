@@ -486,10 +486,28 @@ TEST(RunEngine, PauseAtOnceWhileReestablishingPausesTheFirstStep) {
   EXPECT_EQ(engine.run(2, 3), RunState::kCompleted);
   EXPECT_TRUE(asked);
   EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "resuming at step 2"));
+  EXPECT_NE(std::find(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused), f.journal.states.end());
   // The skip applied to step 2 (the first step), not to the re-established ones.
   ASSERT_EQ(f.journal.skipped.size(), 1u);
   EXPECT_EQ(f.journal.skipped[0].first, 2u);
   EXPECT_EQ(f.journal.completed.back().first, 3u);
+}
+
+// After a restart the station is re-established from the steps that completed: a temperature
+// the operator skipped (say the chamber could not reach it) is not commanded again.
+TEST(RunEngine, ResumeDoesNotReestablishASkippedTemperature) {
+  Fixture f;
+  double setpoint_at_capture = 0.0;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.phase == "capturing" && setpoint_at_capture == 0.0) {
+      setpoint_at_capture = f.station.chamber().read_state().setpoint_c;
+    }
+  };
+  RunEngine engine(f.station, f.journal,
+                   plan_of({temperature(35.0), move(90.0, 0.0), temperature(80.0), capture(2.0)}), opt);
+  EXPECT_EQ(engine.run(3, 1, {2}), RunState::kCompleted);
+  EXPECT_NEAR(setpoint_at_capture, 35.0, 1e-9);
 }
 
 }  // namespace

@@ -47,4 +47,19 @@ TEST(UstarWriter, RefusesNamesThatEscapeOrDoNotFit) {
   EXPECT_THROW(tar.add_file("", "x"), std::invalid_argument);
 }
 
+// A file of 8 GiB or more (a long run's CSV) does not fit the octal size field: its header
+// says the size in base-256, which GNU tar reads. The archive is a sparse file: no disk used.
+TEST(UstarWriter, SizesOfEightGibibytesAndMoreAreWrittenSoTarReadsThem) {
+  const std::uint64_t size = (std::uint64_t{9} << 30) + 123;  // 9 GiB and a bit
+  const std::string header = calstand::daemon::api::ustar_header("run-1/samples.csv", size, 1700000000);
+  ASSERT_EQ(header.size(), 512u);
+  const auto path = std::filesystem::temp_directory_path() / ("ustar-big-" + std::to_string(getpid()) + ".tar");
+  std::ofstream(path, std::ios::binary) << header;
+  std::filesystem::resize_file(path, 512 + size + calstand::daemon::api::ustar_padding(size) + 1024);
+  const std::string listing = run("tar -tvf " + path.string() + " 2>&1");
+  std::filesystem::remove(path);
+  EXPECT_NE(listing.find(std::to_string(size)), std::string::npos) << listing;
+  EXPECT_NE(listing.find("run-1/samples.csv"), std::string::npos) << listing;
+}
+
 }  // namespace

@@ -42,11 +42,16 @@ class EventHub {
 
   /// The server-sent event id of message `seq`: "EPOCH-SEQ".
   std::string event_id(std::uint64_t seq) const;
-  /// Where a reader that reconnects with `Last-Event-ID: last_event_id` resumes: the sequence
-  /// number after which it has seen nothing. An id of this hub gives its sequence number; an
-  /// id of an earlier epoch (the daemon restarted since) gives 0, everything kept; an id that
-  /// is not one of ours, or lies in the future, gives nullopt (start live).
-  std::optional<std::uint64_t> replay_after(const std::string& last_event_id) const;
+  /// Where a reader that reconnects with `Last-Event-ID` resumes.
+  struct Replay {
+    std::uint64_t after_seq = 0;  ///< the sequence number after which it has seen nothing
+    bool restarted = false;       ///< its id is of an earlier epoch: what that process had not
+                                  ///< sent it is lost, however much it was
+  };
+  /// An id of this hub gives its sequence number; an id of an earlier epoch (the daemon
+  /// restarted since) gives 0 (everything kept) and `restarted`; an id that is not one of ours,
+  /// or lies in the future, gives nullopt (start live).
+  std::optional<Replay> replay_after(const std::string& last_event_id) const;
 
   /// Wakes every waiting reader and makes later waits return at once (server shutdown).
   void close();
