@@ -220,6 +220,14 @@ Plan make_plan(const Procedure& procedure, const core::StationConfig& station,
   plan.parameters = detail::resolve_parameters_collecting(procedure, overrides, ignored);
   plan.steps = expand_collecting(procedure, overrides, plan.violations);
   Planner(station, plan).run();
+  // Every value may be in range and the whole still absurd (a capture of 1e308 s): a run that
+  // would never end is refused here, not left to spin in the engine.
+  if (!std::isfinite(plan.total_s) || plan.total_s > kMaxPlanDuration_s) {
+    plan.violations.push_back(
+        {"procedure", fmt::format("the plan takes {:.3g} s of station time, more than a year ({:.3g} s): "
+                                  "a duration or a count is out of proportion",
+                                  plan.total_s, kMaxPlanDuration_s)});
+  }
   return plan;
 }
 

@@ -29,6 +29,13 @@ store::RunRecord load_run_or_404(store::RunStore& runs, std::int64_t id) {
   }
 }
 
+// The run of a /runs/{id}... request, read on a connection of its own; 404 when there is none.
+store::RunRecord run_of(const RouteContext& ctx, const httplib::Request& req) {
+  store::Database db(ctx.db_path);
+  store::RunStore runs(db);
+  return load_run_or_404(runs, id_from_path(req));
+}
+
 // Operator actions on an unknown run answer 404 (the service's own check would say 400).
 void require_run(const RouteContext& ctx, std::int64_t id) {
   store::Database db(ctx.db_path);
@@ -127,25 +134,19 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
   }));
 
   server.Get(R"(/runs/(\d+))", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    store::Database db(ctx.db_path);
-    store::RunStore runs(db);
-    const auto record = load_run_or_404(runs, id_from_path(req));
+    const store::RunRecord record = run_of(ctx, req);
     send_json(res, 200, run_status_json(record, ctx.service.snapshot()));
   }));
 
   server.Get(R"(/runs/(\d+)/steps)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    store::Database db(ctx.db_path);
-    store::RunStore runs(db);
-    const auto record = load_run_or_404(runs, id_from_path(req));
+    const store::RunRecord record = run_of(ctx, req);
     nlohmann::json out = nlohmann::json::array();
     for (const auto& s : record.steps) out.push_back(step_json(s));
     send_json(res, 200, out);
   }));
 
   server.Get(R"(/runs/(\d+)/events)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    store::Database db(ctx.db_path);
-    store::RunStore runs(db);
-    const auto record = load_run_or_404(runs, id_from_path(req));
+    const store::RunRecord record = run_of(ctx, req);
     nlohmann::json out = nlohmann::json::array();
     for (const auto& e : record.events) out.push_back(event_json(e));
     send_json(res, 200, out);

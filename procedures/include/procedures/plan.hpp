@@ -11,6 +11,10 @@
 
 namespace calstand::procedures {
 
+/// The longest plan accepted [s of station time]: a year. Longer is a mistake (a capture of
+/// 1e308 s), and the run would never end.
+inline constexpr double kMaxPlanDuration_s = 365.25 * 86400.0;
+
 /// What one table axis is asked to do over a whole procedure.
 struct AxisEnvelope {
   double max_rate_dps = 0.0;       ///< largest |rate| of its rate steps [deg/s]

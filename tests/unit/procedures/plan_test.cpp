@@ -187,5 +187,16 @@ TEST(PlanJson, HoldsStepsEstimatesEnvelopeAndViolations) {
   EXPECT_EQ(j["violations"][0]["path"], "steps[1].rate_dps");
 }
 
+TEST(PlanLimits, APlanLongerThanAYearIsRefusedWithTheReason) {
+  const Plan ok = plan_of(R"([{"kind": "capture", "label": "a day", "duration_s": 86400}])");
+  EXPECT_TRUE(ok.ok()) << test::lines(ok.violations);
+  const Plan absurd = plan_of(R"([{"kind": "capture", "label": "c", "duration_s": "${capture_s}"}])",
+                              R"({"capture_s": {"default": 1, "min": 1, "description": "s"}})", {{"capture_s", 1e308}});
+  ASSERT_FALSE(absurd.ok());
+  ASSERT_EQ(absurd.violations.size(), 1u) << test::lines(absurd.violations);
+  EXPECT_EQ(absurd.violations[0].path, "procedure");
+  EXPECT_NE(absurd.violations[0].message.find("more than a year"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace calstand::procedures
