@@ -19,6 +19,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "open_database.hpp"
 #include "solver/allan.hpp"
 #include "solver/kalibr.hpp"
 #include "solver/noise_fit.hpp"
@@ -175,7 +176,7 @@ void run_allan(const AllanArgs& a) {
     }
     channel = solver::parse_channel(a.channel);
     const std::int64_t run = parse_int(a.run, "--run", 1);
-    store::Database db(a.db);
+    store::Database db = open_existing_database(a.db);
     const std::size_t step = solver::choose_noise_step(db, run, parse_step(a.step));
     std::string device = a.device;
     if (device.empty()) {
@@ -293,7 +294,7 @@ void run_noise(const NoiseArgs& a) {
   options.step = parse_step(a.step);
   options.allan.taus = solver::TauSet::parse(a.taus);
   const std::int64_t run = parse_int(a.run, "--run", 1);
-  store::Database db(a.db);
+  store::Database db = open_existing_database(a.db);
   const solver::RunNoise r = solver::analyse_run_noise(db, run, options);
 
   if (!a.kalibr.empty()) {

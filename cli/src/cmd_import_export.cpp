@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "open_database.hpp"
 #include "store/database.hpp"
 #include "store/import_export.hpp"
 
@@ -41,7 +42,7 @@ void run_import(const ImportOptions& o) {
 }
 
 void run_export(const ExportOptions& o) {
-  store::Database db(o.db);
+  store::Database db = open_existing_database(o.db);
   store::export_run(db, o.run, o.out, {o.device});
 }
 

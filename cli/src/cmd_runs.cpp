@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "open_database.hpp"
 #include "store/database.hpp"
 #include "store/run_store.hpp"
 
@@ -31,7 +32,7 @@ nlohmann::json summary_json(const store::RunSummary& r) {
 }
 
 void list_runs(const RunsOptions& opt) {
-  store::Database db(opt.db);
+  store::Database db = open_existing_database(opt.db);
   store::RunStore runs(db);
   const auto list = runs.list_runs();
   if (opt.as_json) {
@@ -50,7 +51,7 @@ void list_runs(const RunsOptions& opt) {
 }
 
 void show_run(const RunsOptions& opt) {
-  store::Database db(opt.db);
+  store::Database db = open_existing_database(opt.db);
   store::RunStore runs(db);
   const store::RunRecord r = runs.load_run(opt.run);
   if (opt.as_json) {

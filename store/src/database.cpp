@@ -2,9 +2,13 @@
 
 #include <SQLiteCpp/Statement.h>
 #include <SQLiteCpp/Transaction.h>
+#include <sqlite3.h>
 
+#include <algorithm>
+#include <chrono>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "sql_util.hpp"
 
@@ -34,7 +38,11 @@ SQLite::Database open_connection(const std::string& path, int busy_timeout_ms) {
 }
 
 // Refuses files that are not (or not yet) calstand databases, before anything is written.
+// The three reads share one read transaction: another process creating the same new database
+// may commit migration 1 between them, and tables with version 0 read from two snapshots
+// looked like a foreign database.
 void check_identity(SQLite::Database& db, const std::string& path) {
+  SQLite::Transaction snapshot(db, SQLite::TransactionBehavior::DEFERRED);
   const int app_id = pragma_int(db, "application_id");
   const int version = pragma_int(db, "user_version");
   if (app_id != 0 && app_id != kApplicationId) {
@@ -55,18 +63,44 @@ void check_identity(SQLite::Database& db, const std::string& path) {
                          " is newer than this calstand's " +
                          std::to_string(latest_schema_version()) + "; use a newer calstand");
   }
+  snapshot.commit();  // read only: ends the snapshot
 }
 
-void migrate(SQLite::Database& db, const std::string& path) {
+bool is_busy(const SQLite::Exception& e) {
+  return (e.getErrorCode() & 0xff) == SQLITE_BUSY || (e.getErrorCode() & 0xff) == SQLITE_LOCKED;
+}
+
+// Runs `fn` again while SQLite says the database is busy, for up to `timeout_ms`. Needed where
+// SQLite returns SQLITE_BUSY without calling the busy handler: switching a new file to WAL while
+// another process reads it, or upgrading a read snapshot that another process's commit made
+// stale. Two processes opening the same new database at once (`calstand run` and a `calstand
+// show` polling it) met exactly that.
+template <class F>
+void retry_while_busy(int timeout_ms, F&& fn) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  for (auto pause = std::chrono::milliseconds(1);; pause = std::min(pause * 2, std::chrono::milliseconds(50))) {
+    try {
+      fn();
+      return;
+    } catch (const SQLite::Exception& e) {
+      if (!is_busy(e) || std::chrono::steady_clock::now() + pause > deadline) throw;
+    }
+    std::this_thread::sleep_for(pause);
+  }
+}
+
+void migrate(SQLite::Database& db, const std::string& path, int busy_timeout_ms) {
   for (const auto& m : migrations()) {
     if (pragma_int(db, "user_version") >= m.version) continue;
     detail::guarded("migrate " + path + " to version " + std::to_string(m.version), [&] {
-      SQLite::Transaction tx(db, SQLite::TransactionBehavior::IMMEDIATE);
-      // Another process may have migrated while this one waited for the write lock.
-      if (pragma_int(db, "user_version") >= m.version) return;
-      db.exec(m.sql);
-      db.exec("PRAGMA user_version = " + std::to_string(m.version));
-      tx.commit();
+      retry_while_busy(busy_timeout_ms, [&] {
+        SQLite::Transaction tx(db, SQLite::TransactionBehavior::IMMEDIATE);
+        // Another process may have migrated while this one waited for the write lock.
+        if (pragma_int(db, "user_version") >= m.version) return;
+        db.exec(m.sql);
+        db.exec("PRAGMA user_version = " + std::to_string(m.version));
+        tx.commit();
+      });
     });
   }
 }
@@ -78,14 +112,16 @@ int latest_schema_version() { return static_cast<int>(migrations().size()); }
 Database::Database(const std::string& path, DatabaseOptions options)
     : path_(path), db_(open_connection(path, options.busy_timeout_ms)) {
   detail::guarded("open " + path, [&] {
-    check_identity(db_, path_);
-    // journal_mode cannot change inside a transaction, and sticks to the file; an in-memory
-    // database answers "memory", which is fine.
-    db_.exec("PRAGMA journal_mode = WAL");
+    retry_while_busy(options.busy_timeout_ms, [&] {
+      check_identity(db_, path_);
+      // journal_mode cannot change inside a transaction, and sticks to the file; an in-memory
+      // database answers "memory", which is fine.
+      db_.exec("PRAGMA journal_mode = WAL");
+    });
     db_.exec("PRAGMA synchronous = NORMAL");
     db_.exec("PRAGMA foreign_keys = ON");
   });
-  migrate(db_, path_);
+  migrate(db_, path_, options.busy_timeout_ms);
 }
 
 int Database::schema_version() const {

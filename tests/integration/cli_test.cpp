@@ -389,4 +389,22 @@ TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
   EXPECT_TRUE(nlohmann::json::parse(r.out).empty()) << r.out;
 }
 
+// A command that only reads a database refuses a path that does not exist, naming it, and
+// leaves no file behind: a typo in --db is not a new empty database, and a poll for a database
+// another process is about to create must not race that process in creating it.
+TEST(CliReadOnly, MissingDatabaseIsExitCode2AndNotCreated) {
+  const std::string db = ::testing::TempDir() + "calstand-typo-" + std::to_string(::getpid()) + ".db";
+  for (const std::string args : {"runs --db " + db, "show --run 1 --db " + db,
+                                 "fit --run 1 --db " + db, "export --run 1 --out x --db " + db,
+                                 "allan --run 1 --channel gx --db " + db,
+                                 "noise --run 1 --db " + db,
+                                 "report --run 1 --out r.html --db " + db}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.out;
+    EXPECT_NE(r.out.find("no such database file"), std::string::npos) << args << ": " << r.out;
+    EXPECT_FALSE(std::filesystem::exists(db)) << args << " created " << db;
+    std::filesystem::remove(db);
+  }
+}
+
 }  // namespace

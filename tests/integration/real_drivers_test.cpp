@@ -141,8 +141,10 @@ struct FaultedRun {
   json shown;
 };
 
-/// Waits (up to 60 s) until the run in `db` is in its first capture or rate step.
-void wait_until_capturing(const std::string& db) {
+/// Waits (up to 60 s) until the run in `db` is in its first capture or rate step, or `running`
+/// (the `calstand run` process) has ended; says whether it is capturing.
+bool wait_until_capturing(const std::string& db,
+                          const std::future<calstand::testing::Result>& running) {
   for (int i = 0; i < 600; ++i) {
     const auto r = run("show --db " + db + " --run 1 --json");
     if (r.exit_code == 0) {
@@ -150,13 +152,15 @@ void wait_until_capturing(const std::string& db) {
       if (!shown.is_discarded()) {
         for (const auto& step : shown["steps"]) {
           const bool records = step["kind"] == "capture" || step["kind"] == "rate";
-          if (records && step["status"] == "running") return;
+          if (records && step["status"] == "running") return true;
         }
       }
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (running.wait_for(std::chrono::milliseconds(100)) == std::future_status::ready) {
+      return false;
+    }
   }
-  ADD_FAILURE() << "the run never started capturing";
+  return false;
 }
 
 FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
@@ -174,14 +178,24 @@ FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
     return run("run " + procedure + " --station " + out.lab + " --db " + db + " --quiet");
   });
   // The fault strikes during the first capture, whatever the machine's load.
-  wait_until_capturing(db);
+  if (!wait_until_capturing(db, running)) {
+    const auto r = running.get();
+    ADD_FAILURE() << "the run never started capturing; calstand run exited " << r.exit_code
+                  << ":\n" << r.out;
+    out.result = r;
+    return out;
+  }
   std::this_thread::sleep_for(std::chrono::duration<double>(after_wall_s));
   const auto answer = out.station->command(fault);
   EXPECT_TRUE(answer.value("ok", false)) << answer.dump();
   if (after_fault) after_fault(out);
   out.result = running.get();
   const auto shown = run("show --db " + db + " --run 1 --json");
-  out.shown = json::parse(shown.out);
+  out.shown = json::parse(shown.out, nullptr, false);
+  if (out.shown.is_discarded()) {
+    ADD_FAILURE() << "show after the run: " << shown.out << "\ncalstand run said:\n" << out.result.out;
+    out.shown = json::object();
+  }
   return out;
 }
 

@@ -2,8 +2,13 @@
 
 #include <SQLiteCpp/Database.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <fstream>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include "store/error.hpp"
 #include "temp_dir.hpp"
@@ -105,6 +110,51 @@ TEST(Database, ForeignKeysAreEnforced) {
   EXPECT_THROW(db.sql().exec("INSERT INTO steps (run_id, idx, kind, label, commanded, origin) "
                              "VALUES (99, 0, 'wait', 'w', '{}', 'steps[0]')"),
                SQLite::Exception);
+}
+
+// Processes that open the same new database at once (`calstand run` creating it while a
+// `calstand show` polls for it, two factory scripts, the daemon and an import) must all get a
+// migrated database: before, about one pair in thirty failed with "database is locked" or took
+// the half-created file for a foreign one.
+TEST(Database, ProcessesOpeningTheSameNewFileAtOnceAllSucceed) {
+  constexpr int kRounds = 40;
+  constexpr int kProcesses = 4;
+  TempDir dir;
+  std::vector<std::string> failures;
+  for (int round = 0; round < kRounds; ++round) {
+    const std::string db_path = dir.file("race-" + std::to_string(round) + ".db");
+    int gate[2];
+    ASSERT_EQ(::pipe(gate), 0);
+    std::vector<pid_t> children;
+    for (int p = 0; p < kProcesses; ++p) {
+      const pid_t pid = ::fork();
+      ASSERT_GE(pid, 0);
+      if (pid == 0) {
+        ::close(gate[1]);
+        char c;
+        (void)::read(gate[0], &c, 1);  // returns 0 when the parent closes the gate: all go
+        const std::string error = open_error(db_path);
+        if (!error.empty()) std::ofstream(db_path + "." + std::to_string(p) + ".err") << error;
+        ::_exit(error.empty() ? 0 : 1);
+      }
+      children.push_back(pid);
+    }
+    ::close(gate[0]);
+    ::close(gate[1]);
+    for (int p = 0; p < kProcesses; ++p) {
+      int status = 0;
+      ::waitpid(children[p], &status, 0);
+      if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::ifstream err(db_path + "." + std::to_string(p) + ".err");
+        failures.push_back("round " + std::to_string(round) + " process " + std::to_string(p) +
+                           ": " + std::string(std::istreambuf_iterator<char>(err), {}));
+      }
+    }
+    Database db(db_path);
+    EXPECT_EQ(db.schema_version(), latest_schema_version()) << "round " << round;
+  }
+  EXPECT_TRUE(failures.empty()) << failures.size() << " of " << kRounds * kProcesses
+                                << " failed, first: " << failures.front();
 }
 
 }  // namespace
