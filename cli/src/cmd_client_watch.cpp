@@ -21,21 +21,6 @@ struct WatchOptions {
   double reconnect_s = 60.0;  ///< how long a lost stream is retried
 };
 
-// A checkpointed run (interrupted, held) is not at its end: the daemon resumes it after its
-// restart, or an operator does.
-bool is_end_state(const std::string& state) {
-  return state == "completed" || state == "aborted" || state == "failed";
-}
-
-daemon::RunState state_named(const std::string& name) {
-  for (auto s : {daemon::RunState::kIdle, daemon::RunState::kRunning, daemon::RunState::kPaused,
-                 daemon::RunState::kAborting, daemon::RunState::kCompleted, daemon::RunState::kAborted,
-                 daemon::RunState::kFailed, daemon::RunState::kInterrupted, daemon::RunState::kHeld}) {
-    if (to_string(s) == name) return s;
-  }
-  return daemon::RunState::kIdle;
-}
-
 // The bar's progress from GET /runs/RUN.
 daemon::Progress progress_of(const nlohmann::json& r) {
   daemon::Progress p;
@@ -45,7 +30,7 @@ daemon::Progress progress_of(const nlohmann::json& r) {
     p.label = r["current_step"]["label"].get<std::string>();
   }
   if (r.contains("live")) {
-    p.state = state_named(r["live"]["state"].get<std::string>());
+    p.state = daemon::run_state_named(r["live"]["state"].get<std::string>()).value_or(daemon::RunState::kIdle);
     p.phase = r["live"]["phase"].get<std::string>();
     p.eta_s = r["live"]["eta_s"].get<double>();
     p.station_time_s = r["live"]["station_time_s"].get<double>();
@@ -61,7 +46,7 @@ int watch(const WatchOptions& opt) {
   auto status = client.get(path);
   ProgressBar bar;
   std::string final_state = status["status"];
-  if (!is_end_state(final_state)) {
+  if (!daemon::has_ended(final_state)) {
     bar.update(progress_of(status));
     // A daemon restart (kill -9 and a supervisor bringing it back) is ridden out: the stream
     // reconnects and the run's own status says where it is.
@@ -80,7 +65,7 @@ int watch(const WatchOptions& opt) {
       if (type == "station" || type == "gap") {
         // The stream is (again) open, or messages were lost: the run may have ended meanwhile.
         const auto now = current();
-        if (now && is_end_state((*now)["status"].get<std::string>())) {
+        if (now && daemon::has_ended((*now)["status"].get<std::string>())) {
           final_state = (*now)["status"];
           return false;
         }
@@ -95,7 +80,7 @@ int watch(const WatchOptions& opt) {
         bar.finish();
         fmt::print("{}: {}: {}\n", type, data.value("source", ""), data.value("message", ""));
       }
-      if (type == "run" && is_end_state(data.value("state", ""))) {
+      if (type == "run" && daemon::has_ended(data.value("state", ""))) {
         final_state = data["state"];
         return false;
       }

@@ -17,9 +17,23 @@ std::string_view to_string(RunState state) {
   return "unknown";
 }
 
+std::optional<RunState> run_state_named(std::string_view name) {
+  for (auto s : {RunState::kIdle, RunState::kRunning, RunState::kPaused, RunState::kAborting,
+                 RunState::kCompleted, RunState::kAborted, RunState::kFailed,
+                 RunState::kInterrupted, RunState::kHeld}) {
+    if (to_string(s) == name) return s;
+  }
+  return std::nullopt;
+}
+
 bool is_terminal(RunState state) {
   return state == RunState::kCompleted || state == RunState::kAborted ||
          state == RunState::kFailed;
+}
+
+bool has_ended(std::string_view status) {
+  const auto state = run_state_named(status);
+  return (state && is_terminal(*state)) || status == "imported";
 }
 
 }  // namespace calstand::daemon

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "core/error.hpp"
+#include "daemon/run_state.hpp"
 #include "procedures/procedure.hpp"
 
 namespace calstand::daemon {
@@ -12,7 +13,7 @@ namespace calstand::daemon {
 StoredRun prepare_stored_run(store::RunStore& runs, std::int64_t run) {
   const store::RunRecord record = runs.load_run(run);
   const auto& status = record.summary.status;
-  if (status == "completed" || status == "aborted" || status == "failed" || status == "imported") {
+  if (has_ended(status)) {
     throw core::InputError(fmt::format("run {}", run),
                            fmt::format("the run is {}; only an interrupted run can resume", status));
   }

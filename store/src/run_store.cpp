@@ -390,6 +390,16 @@ std::vector<StepRecord> RunStore::load_steps(std::int64_t run) {
   });
 }
 
+std::string RunStore::run_status(std::int64_t run) {
+  require_run(run);
+  return guarded("read run status", [&] {
+    SQLite::Statement q(db_.sql(), "SELECT status FROM runs WHERE id = ?");
+    q.bind(1, run);
+    q.executeStep();
+    return q.getColumn(0).getString();
+  });
+}
+
 RunRecord RunStore::load_run(std::int64_t run) {
   require_run(run);
   RunRecord r = guarded("load run", [&] {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string_view>
 
 #include "store/records.hpp"
@@ -13,7 +14,13 @@ namespace calstand::daemon {
 enum class RunState { kIdle, kRunning, kPaused, kAborting, kCompleted, kAborted, kFailed, kInterrupted, kHeld };
 
 std::string_view to_string(RunState state);
+/// The state named `name` as to_string() writes it; nullopt for any other text.
+std::optional<RunState> run_state_named(std::string_view name);
 bool is_terminal(RunState state);
+/// Whether a run whose stored status is `status` is over for good: a terminal state, or
+/// "imported" (recorded elsewhere, never run here). Interrupted and held runs are not: the
+/// daemon or an operator resumes them.
+bool has_ended(std::string_view status);
 
 /// What kind of thing an event records (the store's kinds: info, fault, interlock, operator).
 using EventKind = store::EventKind;

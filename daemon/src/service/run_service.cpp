@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
+#include "daemon/run_state.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "daemon/service/station_watch.hpp"
 #include "daemon/store_journal.hpp"
@@ -38,10 +39,6 @@ double last_station_time_s(const store::RunRecord& record) {
   }
   for (const auto& e : record.events) t = std::max(t, e.time_s);
   return t;
-}
-
-bool has_ended(const std::string& status) {
-  return status == "completed" || status == "aborted" || status == "failed" || status == "imported";
 }
 
 }  // namespace
@@ -149,7 +146,7 @@ std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
   if (!interrupted.empty()) {
     // A run already held (paused by an operator when the daemon stopped, or held before a
     // crash) waits for an operator whatever the policy.
-    const bool held = store::RunStore(db).load_run(interrupted.front()).summary.status == store::kHeldStatus;
+    const bool held = store::RunStore(db).run_status(interrupted.front()) == store::kHeldStatus;
     if (options_.recovery == RecoveryPolicy::kAuto && !held) return std::make_pair(interrupted.front(), true);
     hold(interrupted.front());
     return std::nullopt;
@@ -167,7 +164,7 @@ void RunService::hold(std::int64_t run) {
     resume_held_ = false;
   }
   store::Database db(options_.db_path);
-  const bool was_held = store::RunStore(db).load_run(run).summary.status == store::kHeldStatus;
+  const bool was_held = store::RunStore(db).run_status(run) == store::kHeldStatus;
   store::mark_run_resumable(db, run, store::kHeldStatus,
                             was_held ? "interrupted while paused; held for an operator"
                                      : "interrupted; held for an operator (recovery policy hold)");
@@ -376,7 +373,7 @@ std::int64_t RunService::submit(const procedures::Procedure& procedure,
 
 std::string RunService::status_of(std::int64_t run) {
   store::Database db(options_.db_path);
-  return store::RunStore(db).load_run(run).summary.status;  // InputError when there is none
+  return store::RunStore(db).run_status(run);  // InputError when there is none
 }
 
 void RunService::command_current(std::int64_t run, Command command) {

@@ -77,6 +77,8 @@ class RunStore {
   std::vector<RunSummary> list_runs();
   /// One run with its steps (by index) and events (in order).
   RunRecord load_run(std::int64_t run);
+  /// The stored status of `run` alone (one row; the daemon asks it on every operator action).
+  std::string run_status(std::int64_t run);
   /// The steps of `run` by index.
   std::vector<StepRecord> load_steps(std::int64_t run);
   /// Index of the first step that is not completed or skipped (where a resumed run starts);

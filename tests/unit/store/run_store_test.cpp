@@ -161,6 +161,8 @@ TEST_F(RunStoreTest, RunStatusListAndCounts) {
   EXPECT_EQ(runs[0].exit_reason, "operator abort");
   EXPECT_EQ(store_.load_run(b).started_clock_s, 1.0);
   EXPECT_EQ(store_.load_run(b).ended_clock_s, 20.0);
+  EXPECT_EQ(store_.run_status(b), "aborted");
+  EXPECT_EQ(store_.run_status(a), store_.load_run(a).summary.status);
   // The plain-SQL view agrees.
   EXPECT_EQ(db_.sql().execAndGet("SELECT steps_done FROM run_overview WHERE id = " +
                                  std::to_string(b)).getInt(), 1);
@@ -219,6 +221,7 @@ TEST_F(RunStoreTest, DiscardAttemptDeletesOnlyThatAttempt) {
 
 TEST_F(RunStoreTest, UnknownRunOrStepIsAnInputError) {
   EXPECT_THROW(store_.load_run(42), core::InputError);
+  EXPECT_THROW(store_.run_status(42), core::InputError);
   EXPECT_THROW(store_.add_steps(42, three_steps()), core::InputError);
   const auto run = store_.create_run(six_position_run());
   EXPECT_THROW(store_.mark_step_running(run, 7, 1, {0.0, "t"}), core::InputError);
