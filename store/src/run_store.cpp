@@ -3,6 +3,9 @@
 #include <SQLiteCpp/Statement.h>
 #include <SQLiteCpp/Transaction.h>
 
+#include <algorithm>
+#include <limits>
+
 #include "core/error.hpp"
 #include "sql_util.hpp"
 #include "store/hash.hpp"
@@ -373,6 +376,19 @@ void RunStore::set_run_status(std::int64_t run, const std::string& status,
 std::vector<RunSummary> RunStore::list_runs() {
   return guarded("list runs", [&] {
     SQLite::Statement q(db_.sql(), std::string(kSummaryQuery) + " ORDER BY r.id DESC");
+    std::vector<RunSummary> out;
+    while (q.executeStep()) out.push_back(read_summary(q));
+    return out;
+  });
+}
+
+std::vector<RunSummary> RunStore::list_runs(std::size_t limit, std::optional<std::int64_t> before_id) {
+  return guarded("list runs", [&] {
+    // The step counts are subqueries per run: with the limit in SQL only this page pays them.
+    SQLite::Statement q(db_.sql(), std::string(kSummaryQuery) +
+                                       " WHERE r.id < ? ORDER BY r.id DESC LIMIT ?");
+    q.bind(1, before_id.value_or(std::numeric_limits<std::int64_t>::max()));
+    q.bind(2, static_cast<std::int64_t>(std::min<std::size_t>(limit, std::numeric_limits<std::int64_t>::max())));
     std::vector<RunSummary> out;
     while (q.executeStep()) out.push_back(read_summary(q));
     return out;

@@ -177,6 +177,51 @@ TEST(DaemonApi, QueuedRunsRunOneAtATimeInOrder) {
   EXPECT_LE(a.body["ended_utc"].get<std::string>(), b.body["started_utc"].get<std::string>());
 }
 
+// A long history comes a page at a time, newest first; each full page links the next, and
+// following the links gives every run once.
+TEST(DaemonApi, ListsRunsAPageAtATime) {
+  InProcessDaemon d(calstand::testing::fresh_dir("pages") + "/station.db");
+  ApiClient api(d.port());
+  std::vector<std::int64_t> submitted;
+  for (int i = 0; i < 5; ++i) submitted.push_back(api.submit("six-position", kLong));
+  ASSERT_EQ(std::count(submitted.begin(), submitted.end(), 0), 0);
+
+  std::vector<std::int64_t> listed;
+  std::string next = "/runs?limit=2";
+  int pages = 0;
+  while (!next.empty() && pages < 10) {
+    const Reply page = api.get(next);
+    ASSERT_EQ(page.status, 200) << next << ": " << page.raw;
+    EXPECT_LE(page.body.size(), 2u) << page.raw;
+    for (const auto& r : page.body) listed.push_back(r["id"].get<std::int64_t>());
+    ++pages;
+    next.clear();
+    if (const auto link = page.headers.find("Link"); link != page.headers.end()) {
+      const auto& value = link->second;  // </runs?limit=2&before=ID>; rel="next"
+      ASSERT_NE(value.find("rel=\"next\""), std::string::npos) << value;
+      next = value.substr(1, value.find('>') - 1);
+    }
+  }
+  EXPECT_EQ(pages, 3);
+  std::vector<std::int64_t> newest_first(submitted.rbegin(), submitted.rend());
+  EXPECT_EQ(listed, newest_first);
+  // Without a limit, one page of up to 100 and no link.
+  const Reply all = api.get("/runs");
+  EXPECT_EQ(all.body.size(), 5u);
+  EXPECT_EQ(all.headers.count("Link"), 0u);
+
+  for (const char* bad : {"/runs?limit=0", "/runs?limit=1001", "/runs?limit=two", "/runs?before=-3",
+                          "/runs?limit=5x"}) {
+    const Reply r = api.get(bad);
+    EXPECT_EQ(r.status, 400) << bad << ": " << r.raw;
+    EXPECT_EQ(r.body.value("where", "").substr(0, 1), "?") << bad << ": " << r.raw;
+  }
+  for (auto it = submitted.rbegin(); it != submitted.rend(); ++it) {
+    EXPECT_EQ(api.post("/runs/" + std::to_string(*it) + "/abort", "").status, 202);
+  }
+  EXPECT_TRUE(wait_for_status(api, submitted.front(), "aborted"));
+}
+
 TEST(DaemonApi, PausesAndResumesARun) {
   InProcessDaemon d(calstand::testing::fresh_dir("pause") + "/station.db");
   ApiClient api(d.port());
@@ -705,7 +750,9 @@ TEST(DaemonApi, MangledRequestsGetClearRefusalsAndTheDaemonServesOn) {
     const Reply r = pick(5) == 0 ? api.get(path) : api.post(path, body);
     ++statuses[r.status];
     ASSERT_TRUE(r.status >= 200 && r.status < 500) << r.status << " for " << path << " " << body << ": " << r.raw;
-    if (r.status >= 400) EXPECT_TRUE(r.body.is_object() && r.body.contains("error")) << path << ": " << r.raw;
+    if (r.status >= 400) {
+      EXPECT_TRUE(r.body.is_object() && r.body.contains("error")) << path << ": " << r.raw;
+    }
   }
   EXPECT_GT(statuses[400] + statuses[422], 60);  // most submissions were refused, each with its reason
   EXPECT_EQ(api.get("/station").status, 200);

@@ -41,6 +41,7 @@ struct Reply {
   int status = 0;  ///< 0: no answer (connection failed)
   nlohmann::json body;
   std::string raw;
+  httplib::Headers headers;
 };
 
 /// Requests against the API on 127.0.0.1:port; POSTs carry the token unless told otherwise.
@@ -74,6 +75,7 @@ class ApiClient {
     if (!res) return r;
     r.status = res->status;
     r.raw = res->body;
+    r.headers = res->headers;
     r.body = nlohmann::json::parse(res->body, nullptr, false);
     return r;
   }

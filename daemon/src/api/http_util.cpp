@@ -65,6 +65,19 @@ std::int64_t id_from_path(const httplib::Request& req, std::size_t match) {
   return id;
 }
 
+std::optional<std::int64_t> int_param(const httplib::Request& req, const std::string& name,
+                                      std::int64_t min, std::int64_t max) {
+  if (!req.has_param(name)) return std::nullopt;
+  const std::string text = req.get_param_value(name);
+  std::int64_t value = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (ec != std::errc() || ptr != text.data() + text.size() || value < min || value > max) {
+    throw BadRequest(400, "?" + name, fmt::format("must be a whole number from {} to {} (got \"{}\")",
+                                                  min, max, text));
+  }
+  return value;
+}
+
 httplib::Server::Handler guarded(std::function<void(const httplib::Request&, httplib::Response&)> fn) {
   return [fn = std::move(fn)](const httplib::Request& req, httplib::Response& res) {
     try {

@@ -42,6 +42,11 @@ nlohmann::json parse_json_body(const httplib::Request& req,
 /// of range (no such id can exist).
 std::int64_t id_from_path(const httplib::Request& req, std::size_t match = 1);
 
+/// The query parameter `name` as an integer in [min, max]; nullopt when absent. Throws
+/// BadRequest 400 naming `?name` when it is not a whole number in range.
+std::optional<std::int64_t> int_param(const httplib::Request& req, const std::string& name,
+                                      std::int64_t min, std::int64_t max);
+
 /// Wraps a handler so that no exception leaves it: BadRequest -> its status, a procedure
 /// error -> 422 with every violation, ActionRefused -> 409, core::InputError -> 400, anything
 /// else -> 500 (logged).

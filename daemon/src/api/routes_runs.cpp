@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 
 #include "core/error.hpp"
 #include "daemon/api/access.hpp"
@@ -16,6 +17,10 @@
 
 namespace calstand::daemon::api {
 namespace {
+
+// GET /runs pages: the default and the most one answer holds.
+constexpr std::int64_t kDefaultRunsPage = 100;
+constexpr std::int64_t kMaxRunsPage = 1000;
 
 std::string who_of(const httplib::Request& req) {
   return operator_name(req.get_header_value("X-Calstand-Operator"), req.remote_addr);
@@ -126,10 +131,19 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
     send_json(res, 201, {{"id", id}});
   }));
 
-  server.Get("/runs", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
+  // One page of runs, newest first; a full page links the next (years of a factory station's
+  // runs are not one answer).
+  server.Get("/runs", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+    const auto limit = int_param(req, "limit", 1, kMaxRunsPage).value_or(kDefaultRunsPage);
+    const auto before = int_param(req, "before", 1, std::numeric_limits<std::int64_t>::max());
     store::Database db(ctx.db_path);
+    auto page = store::RunStore(db).list_runs(static_cast<std::size_t>(limit) + 1, before);
+    if (page.size() > static_cast<std::size_t>(limit)) {
+      page.pop_back();
+      res.set_header("Link", fmt::format("</runs?limit={}&before={}>; rel=\"next\"", limit, page.back().id));
+    }
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& s : store::RunStore(db).list_runs()) out.push_back(summary_json(s));
+    for (const auto& s : page) out.push_back(summary_json(s));
     send_json(res, 200, out);
   }));
 
