@@ -69,7 +69,7 @@ void print_run(const nlohmann::json& r) {
   fmt::print("\n");
 }
 
-int status(const ClientOptions& opt) {
+int client_status(const ClientOptions& opt) {
   const DaemonClient client(opt.address);
   if (opt.run > 0) {
     const auto r = client.get(fmt::format("/runs/{}", opt.run));
@@ -138,7 +138,7 @@ void register_client(CLI::App& app) {
   CLI::App* status_cmd = add_client_command(app, "status", "The daemon's station, run and queue, or one run", opt);
   status_cmd->add_option("run", opt->run, "Run id (default: the whole station)");
   status_cmd->add_flag("--json", opt->json, "JSON as the API gives it");
-  status_cmd->callback([opt] { status(*opt); });
+  status_cmd->callback([opt] { client_status(*opt); });
 
   CLI::App* pause_cmd = add_client_command(app, "pause", "Pause a run on calstandd", opt);
   pause_cmd->add_option("run", opt->run, "Run id")->required();

@@ -107,7 +107,7 @@ void print(const json& j) { fmt::print("{}\n", j.dump()); }
 /// A driver that polls in the background needs a moment for its first reading.
 void settle_first_reading() { std::this_thread::sleep_for(300ms); }
 
-void status(const DeviceOptions& opt) {
+void device_status(const DeviceOptions& opt) {
   auto station = open_station(opt);
   json devices = json::array();
   std::vector<drivers::Device*> all{&station->table(), &station->chamber()};
@@ -276,7 +276,7 @@ void register_device(CLI::App& app) {
   cmd->require_subcommand(1);
 
   cmd->add_subcommand("status", "configure every device; state, fault counters and events")
-      ->callback([opt] { status(*opt); });
+      ->callback([opt] { device_status(*opt); });
 
   auto* chamber = cmd->add_subcommand("chamber", "temperature chamber");
   chamber->require_subcommand(1);

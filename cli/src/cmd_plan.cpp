@@ -36,36 +36,36 @@ std::string hms(double seconds, int decimals = 0) {
                                      decimals + 3, decimals);
 }
 
-std::string num(double v) { return fmt::format("{:g}", v); }
+std::string format_number(double v) { return fmt::format("{:g}", v); }
 
 // The commanded values of a step, in the file's terms.
 std::string commanded(const procedures::Step& s) {
   using procedures::StepKind;
   switch (s.kind) {
     case StepKind::kSetTemperature: {
-      std::string text = fmt::format("target {} degC", num(s.target_c));
-      if (s.ramp_c_per_min) text += fmt::format(", ramp {} degC/min", num(*s.ramp_c_per_min));
+      std::string text = fmt::format("target {} degC", format_number(s.target_c));
+      if (s.ramp_c_per_min) text += fmt::format(", ramp {} degC/min", format_number(*s.ramp_c_per_min));
       if (s.wait_for_soak) {
-        text += fmt::format(", soak +-{} degC for {} s (timeout {} s)", num(s.soak.tolerance_c),
-                            num(s.soak.stable_s), num(s.soak.timeout_s));
+        text += fmt::format(", soak +-{} degC for {} s (timeout {} s)", format_number(s.soak.tolerance_c),
+                            format_number(s.soak.stable_s), format_number(s.soak.timeout_s));
       } else {
         text += ", no soak (ramps on)";
       }
       return text;
     }
     case StepKind::kMove:
-      return fmt::format("outer {} deg, inner {} deg", num(s.outer_deg), num(s.inner_deg));
+      return fmt::format("outer {} deg, inner {} deg", format_number(s.outer_deg), format_number(s.inner_deg));
     case StepKind::kRate: {
       std::string text = fmt::format("{} {:+g} deg/s, settle {} s, record {} s", s.axis, s.rate_dps,
-                                     num(s.settle_s), num(s.duration_s));
-      if (s.revolutions) text += fmt::format(" ({} rev)", num(*s.revolutions));
+                                     format_number(s.settle_s), format_number(s.duration_s));
+      if (s.revolutions) text += fmt::format(" ({} rev)", format_number(*s.revolutions));
       if (!s.rest_after) text += ", stays at rate";
       return text;
     }
     case StepKind::kCapture:
-      return fmt::format("record {} s", num(s.duration_s));
+      return fmt::format("record {} s", format_number(s.duration_s));
     case StepKind::kWait:
-      return fmt::format("{} s", num(s.duration_s));
+      return fmt::format("{} s", format_number(s.duration_s));
   }
   return "";
 }
@@ -86,8 +86,8 @@ void print_axis(const char* name, const procedures::AxisEnvelope& a, const core:
   fmt::print(
       "  {} axis    rate steps up to {} deg/s, moves up to {} deg/s, accel {} deg/s^2 "
       "(limits {} deg/s, {} deg/s^2)\n",
-      name, num(a.max_rate_dps), num(a.max_move_rate_dps), num(a.max_accel_dps2),
-      num(cfg.max_rate_dps), num(cfg.max_accel_dps2));
+      name, format_number(a.max_rate_dps), format_number(a.max_move_rate_dps), format_number(a.max_accel_dps2),
+      format_number(cfg.max_rate_dps), format_number(cfg.max_accel_dps2));
 }
 
 void print_text(const procedures::Plan& plan, const core::StationConfig& station) {
@@ -113,9 +113,9 @@ void print_text(const procedures::Plan& plan, const core::StationConfig& station
     fmt::print(
         "  temperature  {} to {} degC, ramps up to {} degC/min (chamber {} to {} degC, "
         "{} degC/min)\n",
-        num(*e.min_temperature_c), num(*e.max_temperature_c), num(e.max_ramp_c_per_min),
-        num(station.chamber.min_c), num(station.chamber.max_c),
-        num(station.chamber.max_ramp_c_per_min));
+        format_number(*e.min_temperature_c), format_number(*e.max_temperature_c), format_number(e.max_ramp_c_per_min),
+        format_number(station.chamber.min_c), format_number(station.chamber.max_c),
+        format_number(station.chamber.max_ramp_c_per_min));
   } else {
     fmt::print("  temperature  chamber not used\n");
   }
@@ -128,7 +128,7 @@ void print_text(const procedures::Plan& plan, const core::StationConfig& station
   }
 }
 
-void run(const PlanOptions& opt) {
+void run_plan(const PlanOptions& opt) {
   const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const procedures::Overrides overrides = procedures::parse_overrides(opt.set_args);
   const procedures::Procedure procedure = procedures::load_procedure(opt.procedure);
@@ -156,7 +156,7 @@ void register_plan(CLI::App& app) {
                   "Parameter override NAME=VALUE, VALUE as JSON (e.g. temperatures=[-40,25,85])")
       ->allow_extra_args(false);
   cmd->add_flag("--json", opt->as_json, "The plan as JSON");
-  cmd->callback([opt] { run(*opt); });
+  cmd->callback([opt] { run_plan(*opt); });
 }
 
 }  // namespace calstand::cli

@@ -48,7 +48,7 @@ extern "C" void on_pause_signal(int sig) { g_pause_signal = sig; }
 extern "C" void on_resume_signal(int) { g_resume_signal = true; }
 
 // Runs `plan` as run `run_id` from `start`; returns the process exit code.
-int execute(const core::StationConfig& station_config, const procedures::Plan& plan,
+int execute_plan(const core::StationConfig& station_config, const procedures::Plan& plan,
             const std::string& db_path, std::int64_t run_id, const daemon::CampaignStart& start,
             bool quiet) {
   ProgressBar bar;
@@ -100,7 +100,7 @@ int run_new(const RunOptions& opt) {
   fmt::print("run {}: {} ({} steps, estimated {}) into {}\n", run_id, procedure.name,
              plan.steps.size(), format_duration(plan.total_s), opt.db);
   std::fflush(stdout);
-  return execute(station, plan, opt.db, run_id, {}, opt.quiet);
+  return execute_plan(station, plan, opt.db, run_id, {}, opt.quiet);
 }
 
 int run_resume(const RunOptions& opt) {
@@ -125,7 +125,7 @@ int run_resume(const RunOptions& opt) {
   fmt::print("run {}: resuming {} at step {}/{}\n", opt.resume_run, stored.procedure_name,
              stored.start.first_step + 1, stored.plan.steps.size());
   std::fflush(stdout);
-  return execute(stored.station, stored.plan, opt.db, opt.resume_run, stored.start, opt.quiet);
+  return execute_plan(stored.station, stored.plan, opt.db, opt.resume_run, stored.start, opt.quiet);
 }
 
 }  // namespace

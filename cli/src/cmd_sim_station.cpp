@@ -51,7 +51,7 @@ drivers::TableAxis parse_axis(const std::string& word) {
 }
 
 /// Executes one stdin command; returns the answer line. "quit" sets `quit`.
-json execute(drivers::ProtocolSimulator& sim, const std::string& line, bool& quit) {
+json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& line, bool& quit) {
   std::istringstream in(line);
   std::string verb, what, arg;
   in >> verb >> what >> arg;
@@ -95,7 +95,7 @@ json execute(drivers::ProtocolSimulator& sim, const std::string& line, bool& qui
                                                 "NAME, status, quit)", line));
 }
 
-void run(SimStationOptions opt) {
+void run_sim_station(SimStationOptions opt) {
   const auto config = sim::load_station_or_default(opt.station_file);
   if (!config.is_simulated()) {
     throw core::InputError(opt.station_file, "sim-station serves a simulated station; every "
@@ -153,7 +153,7 @@ void run(SimStationOptions opt) {
       if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
       json answer;
       try {
-        answer = execute(sim, line, quit);
+        answer = execute_fault_command(sim, line, quit);
       } catch (const std::exception& e) {
         answer = {{"ok", false}, {"error", e.what()}};
       }
@@ -186,7 +186,7 @@ void register_sim_station(CLI::App& app) {
   cmd->add_option("--station-out", opt->station_out,
                   "write the station file for the real drivers here");
   cmd->add_option("--duration", opt->duration_s, "stop after this many wall seconds (0: never)");
-  cmd->callback([opt] { run(*opt); });
+  cmd->callback([opt] { run_sim_station(*opt); });
 }
 
 }  // namespace calstand::cli

@@ -27,7 +27,7 @@ std::string figure(const nlohmann::json& v) {
                      v[2].get<double>());
 }
 
-void run(const StationOptions& opt) {
+void check_station(const StationOptions& opt) {
   const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const Eigen::Vector3d earth_dph =
       station.site.earth_rate_level_radps() * core::kRadToDeg * 3600.0;
@@ -94,7 +94,7 @@ void register_station(CLI::App& app) {
       "station", "Check a station file (or the built-in simulated station) and show it");
   cmd->add_option("--station", opt->station_file, "Station file (default: built-in simulator)");
   cmd->add_flag("--json", opt->as_json, "The resolved station, with each simulated IMU's truth");
-  cmd->callback([opt] { run(*opt); });
+  cmd->callback([opt] { check_station(*opt); });
 }
 
 }  // namespace calstand::cli

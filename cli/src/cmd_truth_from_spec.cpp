@@ -24,7 +24,7 @@ struct TruthFromSpecOptions {
   std::string out;
 };
 
-void run(const TruthFromSpecOptions& opt) {
+void write_truth_from_spec(const TruthFromSpecOptions& opt) {
   nlohmann::json spec;
   std::string name = opt.spec;
   if (auto builtin = sim::builtin_spec(opt.spec)) {
@@ -81,7 +81,7 @@ void register_truth_from_spec(CLI::App& app) {
       ->required();
   cmd->add_option("--seed", opt->seed, "Seed of the draw")->capture_default_str();
   cmd->add_option("--out", opt->out, "Write the truth file here instead of stdout");
-  cmd->callback([opt] { run(*opt); });
+  cmd->callback([opt] { write_truth_from_spec(*opt); });
 }
 
 }  // namespace calstand::cli

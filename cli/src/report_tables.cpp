@@ -31,7 +31,7 @@ std::string row(std::initializer_list<std::string> cells) {
 }
 
 std::string td(std::string_view text) { return "<td>" + html_escape(text) + "</td>"; }
-std::string num(std::string_view text) {
+std::string num_cell(std::string_view text) {
   return "<td class=\"num\">" + html_escape(text) + "</td>";
 }
 
@@ -47,7 +47,7 @@ std::string history_table(const ReportData& r) {
     std::string model = f.model;
     for (const auto& c : f.custom_terms) model += " (" + c + ")";
     out += row({td(r.history_labels[i]), td(f.created_utc), td(f.command),
-                num(std::to_string(f.parameters)),
+                num_cell(std::to_string(f.parameters)),
                 f.chi2_dof ? chi2_cell(*f.chi2_dof) : std::string("<td>&ndash;</td>"),
                 "<td class=\"num\">" + optional_number(f.rms_gyro_dps) + "</td>",
                 "<td class=\"num\">" + optional_number(f.rms_accel_mps2) + "</td>",
@@ -65,7 +65,7 @@ std::string groups_table(const ReportData& r) {
         "</thead><tbody>\n";
     for (std::size_t i = 0; i < groups.size() && i < 8; ++i) {
       out += row({td(groups[i].group), chi2_cell(groups[i].chi2_dof),
-                  num(std::to_string(groups[i].steps.size()))});
+                  num_cell(std::to_string(groups[i].steps.size()))});
     }
     out += "</tbody></table>\n";
   }
@@ -89,7 +89,7 @@ std::string signals_table(const ReportData& r) {
       "</tr></thead><tbody>\n";
   for (std::size_t i = 0; i < signals.size() && i < 8; ++i) {
     out += row({td(signals[i].signal), td(signals[i].channel),
-                num(fmt::format("{:+.2f}", signals[i].correlation))});
+                num_cell(fmt::format("{:+.2f}", signals[i].correlation))});
   }
   return out + "</tbody></table>\n";
 }
@@ -108,10 +108,10 @@ std::string quality_table(const ReportData& r) {
   for (int sensor = 0; sensor < 2; ++sensor) {
     if (std::find(used.begin(), used.end(), sensor * 3) == used.end()) continue;
     const double rms = sensor == 0 ? fit.residual_rms_gyro_dps : fit.residual_rms_accel_mps2;
-    out += row({td(sensor == 0 ? "gyro" : "accelerometer"), num(fmt::format("{:.3g}", rms)),
-                num(fmt::format("{:.3g}", fit.noise_floor[sensor * 3])),
-                num(fmt::format("{:.3g}", fit.noise_floor[sensor * 3 + 1])),
-                num(fmt::format("{:.3g}", fit.noise_floor[sensor * 3 + 2])),
+    out += row({td(sensor == 0 ? "gyro" : "accelerometer"), num_cell(fmt::format("{:.3g}", rms)),
+                num_cell(fmt::format("{:.3g}", fit.noise_floor[sensor * 3])),
+                num_cell(fmt::format("{:.3g}", fit.noise_floor[sensor * 3 + 1])),
+                num_cell(fmt::format("{:.3g}", fit.noise_floor[sensor * 3 + 2])),
                 td(sensor == 0 ? "deg/s" : "m/s^2")});
   }
   return out + "</tbody></table>\n";
@@ -124,8 +124,8 @@ std::string parameter_tables(const ReportData& r) {
       "<th>unit</th><th>|value| / sigma</th></tr></thead><tbody>\n";
   for (const auto& p : fit.parameters) {
     const double significance = p.sigma > 0 ? std::abs(p.value) / p.sigma : 0.0;
-    out += row({td(p.name), num(fmt::format("{:.6g}", p.value)),
-                num(fmt::format("{:.2g}", p.sigma)), td(p.unit),
+    out += row({td(p.name), num_cell(fmt::format("{:.6g}", p.value)),
+                num_cell(fmt::format("{:.2g}", p.sigma)), td(p.unit),
                 fmt::format("<td class=\"num{}\">{:.1f}</td>", significance < 2.0 ? " dim" : "",
                             significance)});
   }
@@ -151,8 +151,8 @@ std::string candidates_table(const ReportData& r) {
         "<th>chi2/dof after</th><th>what it is</th></tr></thead><tbody>\n";
     for (std::size_t i = 0; i < d.candidates.size() && i < 15; ++i) {
       const auto& c = d.candidates[i];
-      out += row({td(c.term), num(fmt::format("{:.1f}", c.delta_bic)),
-                  num(fmt::format("{:.2g}", c.p_value)), chi2_cell(c.chi2_dof_after),
+      out += row({td(c.term), num_cell(fmt::format("{:.1f}", c.delta_bic)),
+                  num_cell(fmt::format("{:.2g}", c.p_value)), chi2_cell(c.chi2_dof_after),
                   td(c.explanation)});
     }
     out += "</tbody></table>\n";
@@ -184,7 +184,7 @@ std::string noise_figures_table(const ReportData& r, bool gyro) {
         continue;
       }
       const auto& f = c->figures[i];
-      out += num(!f.resolved              ? std::string("-")
+      out += num_cell(!f.resolved              ? std::string("-")
                  : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
                                           : fmt::format("{:.3g}", f.value));
     }

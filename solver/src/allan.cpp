@@ -18,16 +18,11 @@
 #endif
 
 #include "core/error.hpp"
+#include "core/text.hpp"
 #include "solver/edf.hpp"
 
 namespace calstand::solver {
 namespace {
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
 
 void add_factor(std::vector<std::size_t>& out, double m, std::size_t max_m) {
   const auto k = static_cast<std::size_t>(std::llround(m));
@@ -237,7 +232,7 @@ AllanKind parse_allan_kind(std::string_view text) {
 }
 
 TauSet TauSet::parse(std::string_view text) {
-  const std::string_view t = trim(text);
+  const std::string_view t = core::trim_blanks(text);
   if (t == "octave") return {TauSpacing::kOctave, {}};
   if (t == "decade") return {TauSpacing::kDecade, {}};
   if (t == "dense") return {TauSpacing::kDense, {}};
@@ -245,7 +240,7 @@ TauSet TauSet::parse(std::string_view text) {
   std::string_view rest = t;
   while (true) {
     const std::size_t comma = rest.find(',');
-    const std::string_view item = trim(rest.substr(0, comma));
+    const std::string_view item = core::trim_blanks(rest.substr(0, comma));
     double value = 0.0;
     const auto [ptr, ec] = std::from_chars(item.data(), item.data() + item.size(), value);
     if (item.empty() || ec != std::errc() || ptr != item.data() + item.size() ||

@@ -19,6 +19,11 @@ void require_finite(double v, const std::string& where, const std::string& what)
     throw core::InputError(where, fmt::format("{} is not finite ({})", what, v));
 }
 
+void require_sigma(double sigma, const std::string& where, const std::string& what) {
+  require_finite(sigma, where, what);
+  if (sigma < 0.0) throw core::InputError(where, fmt::format("{} {} must not be negative", what, sigma));
+}
+
 const std::vector<std::string>& matrix_unknown_names() {
   static const std::vector<std::string> names{"ref_x", "ref_y", "ref_z", "bias"};
   return names;

@@ -14,6 +14,9 @@ namespace calstand::solver::detail {
 /// Throws core::InputError(where, "<what> is not finite") unless every entry is finite.
 void require_finite(const Eigen::MatrixXd& m, const std::string& where, const std::string& what);
 void require_finite(double v, const std::string& where, const std::string& what);
+/// Throws core::InputError(where, ...) unless the standard deviation `sigma` named `what` is
+/// finite and not negative.
+void require_sigma(double sigma, const std::string& where, const std::string& what);
 
 /// Least-squares solution of U (3xN) = X (3xp) A (pxN), one independent LS per row of U.
 struct RowLeastSquares {

@@ -16,13 +16,6 @@ namespace calstand::solver {
 
 namespace {
 
-void check_sigma(double sigma, const char* where, const char* name) {
-  detail::require_finite(sigma, where, name);
-  if (sigma < 0.0) {
-    throw core::InputError(where, fmt::format("{} {} must not be negative", name, sigma));
-  }
-}
-
 }  // namespace
 
 RateTestResult rate_test_cw_ccw(double angle_cw_deg, double angle_ccw_deg,
@@ -34,7 +27,7 @@ RateTestResult rate_test_cw_ccw(double angle_cw_deg, double angle_ccw_deg,
   detail::require_finite(reference_angle_deg, kWhere, "reference_angle");
   detail::require_finite(duration_s, kWhere, "duration");
   detail::require_finite(earth_rate_component_dps, kWhere, "earth_rate_component");
-  check_sigma(angle_sigma_deg, kWhere, "angle_sigma");
+  detail::require_sigma(angle_sigma_deg, kWhere, "angle_sigma");
   if (reference_angle_deg == 0.0) {
     throw core::InputError(kWhere, "reference_angle is 0 deg: the turns must reverse an angle");
   }
@@ -79,7 +72,7 @@ RateTestResult rate_steps(const std::vector<RateStep>& steps, double earth_rate_
                           double mean_sigma_dps) {
   constexpr const char* kWhere = "rate_steps";
   detail::require_finite(earth_rate_component_dps, kWhere, "earth_rate_component");
-  check_sigma(mean_sigma_dps, kWhere, "mean_sigma");
+  detail::require_sigma(mean_sigma_dps, kWhere, "mean_sigma");
   std::set<double> distinct;
   for (const RateStep& s : steps) {
     detail::require_finite(s.table_rate_dps, kWhere, "table_rate");

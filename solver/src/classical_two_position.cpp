@@ -25,13 +25,6 @@ TwoPositionResult solve_pair(double up, double down, double reference, double me
   return r;
 }
 
-void check_sigma(double mean_sigma, const char* where) {
-  detail::require_finite(mean_sigma, where, "mean_sigma");
-  if (mean_sigma < 0.0) {
-    throw core::InputError(where, fmt::format("mean_sigma {} must not be negative", mean_sigma));
-  }
-}
-
 }  // namespace
 
 TwoPositionResult two_position(double f_up_mps2, double f_down_mps2, double gravity_mps2,
@@ -41,7 +34,7 @@ TwoPositionResult two_position(double f_up_mps2, double f_down_mps2, double grav
   detail::require_finite(f_down_mps2, kWhere, "f_down");
   detail::require_finite(gravity_mps2, kWhere, "gravity");
   detail::require_finite(tilt_rad, kWhere, "tilt_rad");
-  check_sigma(mean_sigma, kWhere);
+  detail::require_sigma(mean_sigma, kWhere, "mean_sigma");
   if (gravity_mps2 <= 0.0) {
     throw core::InputError(kWhere, fmt::format("gravity {} m/s^2 must be positive", gravity_mps2));
   }
@@ -61,7 +54,7 @@ TwoPositionResult two_position_gyro(double w_up_dps, double w_down_dps,
   detail::require_finite(w_up_dps, kWhere, "w_up");
   detail::require_finite(w_down_dps, kWhere, "w_down");
   detail::require_finite(earth_rate_component_dps, kWhere, "earth_rate_component");
-  check_sigma(mean_sigma, kWhere);
+  detail::require_sigma(mean_sigma, kWhere, "mean_sigma");
   if (earth_rate_component_dps == 0.0) {
     throw core::InputError(kWhere,
                            "earth_rate_component is 0 deg/s: the up/down pair reverses nothing "

@@ -12,8 +12,6 @@
 namespace calstand::solver {
 namespace {
 
-constexpr double kPlateauGapC = 2.0;
-
 bool uses_channel(SensorRows rows, int channel) {
   if (rows == SensorRows::kGyro) return channel < kAx;
   if (rows == SensorRows::kAccel) return channel >= kAx;

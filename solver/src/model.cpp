@@ -8,17 +8,12 @@
 #include "core/rotation.hpp"
 #include "core/site.hpp"
 #include "core/suggest.hpp"
+#include "core/text.hpp"
 
 namespace calstand::solver {
 namespace {
 
 constexpr int kMaxTemperatureOrder = 9;
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
 
 std::string term_name(const core::ErrorTermInfo& info, int order) {
   return info.polynomial_order && order != 1 ? fmt::format("{}:{}", info.name, order)
@@ -58,7 +53,7 @@ Model Model::parse(std::string_view terms, const std::vector<std::string>& custo
   std::size_t start = 0;
   while (start <= terms.size()) {
     const std::size_t comma = std::min(terms.find(',', start), terms.size());
-    const std::string_view item = trim(terms.substr(start, comma - start));
+    const std::string_view item = core::trim_blanks(terms.substr(start, comma - start));
     start = comma + 1;
     if (item.empty()) {
       if (comma >= terms.size() && list.empty() && customs.empty()) {

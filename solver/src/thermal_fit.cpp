@@ -16,8 +16,6 @@ namespace calstand::solver {
 namespace {
 
 constexpr const char* kWhere = "fit_per_plateau";
-// Must equal the gap rule of temperature_plateaus() (fit.cpp); checked against it below.
-constexpr double kPlateauGapC = 2.0;
 
 /// Step indices per plateau, ascending temperature: step mean temperatures split at gaps over
 /// kPlateauGapC, the clustering temperature_plateaus() uses. Assigning each step to the nearest

@@ -394,7 +394,7 @@ TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
 // another process is about to create must not race that process in creating it.
 TEST(CliReadOnly, MissingDatabaseIsExitCode2AndNotCreated) {
   const std::string db = ::testing::TempDir() + "calstand-typo-" + std::to_string(::getpid()) + ".db";
-  for (const std::string args : {"runs --db " + db, "show --run 1 --db " + db,
+  for (const std::string& args : {"runs --db " + db, "show --run 1 --db " + db,
                                  "fit --run 1 --db " + db, "export --run 1 --out x --db " + db,
                                  "allan --run 1 --channel gx --db " + db,
                                  "noise --run 1 --db " + db,

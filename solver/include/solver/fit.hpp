@@ -75,7 +75,10 @@ struct FitResult {
 FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
                     const NoiseFloor& floor, const FitOptions& options = {});
 
-/// Temperature plateaus of a run: step mean temperatures clustered with gaps over 2 degC.
+/// Step mean temperatures further apart than this [degC] are on different plateaus.
+inline constexpr double kPlateauGapC = 2.0;
+
+/// Temperature plateaus of a run: step mean temperatures clustered with gaps over kPlateauGapC.
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps);
 
 /// The fit as the `calstand fit --json` document.

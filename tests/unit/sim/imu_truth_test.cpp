@@ -158,7 +158,7 @@ TEST(DeterministicErrors, TermsAdd) {
 
 core::TableGeometry default_table() { return {}; }
 
-const Eigen::Vector2d kLevel = Eigen::Vector2d::Zero();
+const Eigen::Vector2d kNoTilt = Eigen::Vector2d::Zero();
 
 core::Site site_at(double lat) {
   core::Site s;
@@ -170,7 +170,7 @@ core::Site site_at(double lat) {
 TEST(ImuInputs, StaticLevelSeesGravityUpAndEarthRate) {
   const ImuTruth truth;
   const auto in =
-      imu_inputs(truth, default_table(), site_at(30.0), kLevel, TableKinematics{}, 25.0);
+      imu_inputs(truth, default_table(), site_at(30.0), kNoTilt, TableKinematics{}, 25.0);
   EXPECT_NEAR((in.force_mps2 - Eigen::Vector3d(0, 0, 9.8)).norm(), 0.0, 1e-12);
   const double W = core::kEarthRateRadPerS * core::kRadToDeg;
   EXPECT_NEAR((in.rate_dps - Eigen::Vector3d(0, W * std::cos(core::kPi / 6), W * 0.5)).norm(), 0.0,
@@ -181,7 +181,7 @@ TEST(ImuInputs, TableRateAddsToEarthRateInBody) {
   const ImuTruth truth;
   TableKinematics k;
   k.inner_rate_dps = -50.0;  // CW about Up, body z up
-  const auto in = imu_inputs(truth, default_table(), site_at(0.0), kLevel, k, 25.0);
+  const auto in = imu_inputs(truth, default_table(), site_at(0.0), kNoTilt, k, 25.0);
   EXPECT_NEAR(in.rate_dps.z(), -50.0, 1e-12);  // Earth rate has no Up part at the equator
   EXPECT_NEAR(in.rate_dps.y(), core::kEarthRateRadPerS * core::kRadToDeg, 1e-15);
 }
@@ -250,14 +250,14 @@ TEST(ImuInputs, LeverArmAddsCentripetalAndTangentialAcceleration) {
   truth.accel_lever_arm = {0.1, 0.0, 0.0};  // 10 cm along body x
   TableKinematics k;
   k.inner_rate_dps = 180.0;  // pi rad/s about Up (body z)
-  const auto spin = imu_inputs(truth, default_table(), site_at(0.0), kLevel, k, 25.0);
+  const auto spin = imu_inputs(truth, default_table(), site_at(0.0), kNoTilt, k, 25.0);
   // wt x (wt x r) = -wt^2 r for r normal to wt: -pi^2 * 0.1 along x.
   EXPECT_NEAR(spin.force_mps2.x(), -core::kPi * core::kPi * 0.1, 1e-12);
   EXPECT_NEAR(spin.force_mps2.z(), 9.8, 1e-12);
 
   TableKinematics accel;
   accel.inner_accel_dps2 = 90.0;  // pi/2 rad/s^2 about z, at rest
-  const auto tangential = imu_inputs(truth, default_table(), site_at(0.0), kLevel, accel, 25.0);
+  const auto tangential = imu_inputs(truth, default_table(), site_at(0.0), kNoTilt, accel, 25.0);
   // dwt/dt x r = (0,0,pi/2) x (0.1,0,0) = (0, 0.1 pi/2, 0).
   EXPECT_NEAR(tangential.force_mps2.y(), 0.1 * core::kPi / 2, 1e-12);
 }
@@ -418,7 +418,7 @@ TEST(ImuInputs, FastModelAgreesWithCoreGeometry) {
   for (int trial = 0; trial < 50; ++trial) {
     TableKinematics k{rnd.next() * 100, rnd.next() * 50, rnd.next() * 20,
                       rnd.next() * 100, rnd.next() * 80, rnd.next() * 30};
-    const auto in = imu_inputs(truth, geo, site, kLevel, k, 25.0);
+    const auto in = imu_inputs(truth, geo, site, kNoTilt, k, 25.0);
     const Eigen::Matrix3d C_BL = geo.body_to_level(k.outer_deg, k.inner_deg).transpose();
     const Eigen::Vector3d w_table =
         geo.table_rate_level_dps(k.outer_deg, k.outer_rate_dps, k.inner_rate_dps);

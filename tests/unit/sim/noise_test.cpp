@@ -21,7 +21,7 @@
 namespace calstand::sim {
 namespace {
 
-constexpr double kZ = 4.0;
+constexpr double kZTolerance = 4.0;
 
 // ---------------------------------------------------------------------------------------------
 // Allan deviation helper (the production one will live in solver/).
@@ -158,8 +158,8 @@ TEST(DeriveSeed, StreamsFromDifferentNamesAreUncorrelated) {
     ab += x * b.next();
     ac += x * c.next();
   }
-  EXPECT_LT(std::abs(ab / kN), kZ / std::sqrt(kN));
-  EXPECT_LT(std::abs(ac / kN), kZ / std::sqrt(kN));
+  EXPECT_LT(std::abs(ab / kN), kZTolerance / std::sqrt(kN));
+  EXPECT_LT(std::abs(ac / kN), kZTolerance / std::sqrt(kN));
 }
 
 TEST(NormalSource, SameSeedSameSequence) {
@@ -190,12 +190,12 @@ TEST(NormalSource, MomentsAndDistributionAreStandardNormal) {
     for (std::size_t j = 0; j < zs.size(); ++j) below[j] += x < zs[j] ? 1 : 0;
   }
   const double n = kN;
-  EXPECT_NEAR(s1 / n, 0.0, kZ / std::sqrt(n));
-  EXPECT_NEAR(s2 / n, 1.0, kZ * std::sqrt(2.0 / n));   // var(x^2) = 2
-  EXPECT_NEAR(s4 / n, 3.0, kZ * std::sqrt(96.0 / n));  // var(x^4) = 105 - 9 = 96
+  EXPECT_NEAR(s1 / n, 0.0, kZTolerance / std::sqrt(n));
+  EXPECT_NEAR(s2 / n, 1.0, kZTolerance * std::sqrt(2.0 / n));   // var(x^2) = 2
+  EXPECT_NEAR(s4 / n, 3.0, kZTolerance * std::sqrt(96.0 / n));  // var(x^4) = 105 - 9 = 96
   for (std::size_t j = 0; j < zs.size(); ++j) {
     const double p = normal_cdf(zs[j]);
-    EXPECT_NEAR(below[j] / n, p, kZ * std::sqrt(p * (1.0 - p) / n) + 1.0 / n) << "z " << zs[j];
+    EXPECT_NEAR(below[j] / n, p, kZTolerance * std::sqrt(p * (1.0 - p) / n) + 1.0 / n) << "z " << zs[j];
   }
 }
 
@@ -210,7 +210,7 @@ TEST(WhiteNoise, SampleSigmaMatchesDensity) {
   EXPECT_DOUBLE_EQ(white.sigma(), 0.1);
   std::vector<double> y(kN);
   for (double& v : y) v = white.next();
-  EXPECT_NEAR(sample_std(y), 0.1, 0.1 * kZ / std::sqrt(2.0 * kN));
+  EXPECT_NEAR(sample_std(y), 0.1, 0.1 * kZTolerance / std::sqrt(2.0 * kN));
 }
 
 TEST(WhiteNoise, AllanDeviationIsDensityOverRootTau) {
@@ -227,7 +227,7 @@ TEST(WhiteNoise, AllanDeviationIsDensityOverRootTau) {
     const double adev = overlapping_adev(theta, kDt, m);
     const double expected = kDensity / std::sqrt(tau);
     const double rel = adev_rel_error(edf_white_fm(n_phase, static_cast<double>(m)));
-    EXPECT_NEAR(adev / expected, 1.0, kZ * rel) << "tau " << tau;
+    EXPECT_NEAR(adev / expected, 1.0, kZTolerance * rel) << "tau " << tau;
     taus.push_back(tau);
     adevs.push_back(adev);
   }
@@ -257,7 +257,7 @@ TEST(RandomWalk, VarianceGrowsAsKSquaredT) {
   for (std::size_t c = 0; c < checkpoints.size(); ++c) {
     const double t = checkpoints[c] * kDt;
     EXPECT_NEAR(variance_about_zero(at[c]) / (kK * kK * t), 1.0,
-                kZ * std::sqrt(2.0 / kRealisations))
+                kZTolerance * std::sqrt(2.0 / kRealisations))
         << "t " << t;
   }
 }
@@ -277,13 +277,13 @@ TEST(RandomWalk, AllanDeviationIsKRootTauOverThree) {
     const double tau = static_cast<double>(m) * kDt;
     const double adev = overlapping_adev(theta, kDt, m);
     const double rel = adev_rel_error(edf_random_walk_fm(n_phase, static_cast<double>(m)));
-    EXPECT_NEAR(adev / (kK * std::sqrt(tau / 3.0)), 1.0, kZ * rel) << "tau " << tau;
+    EXPECT_NEAR(adev / (kK * std::sqrt(tau / 3.0)), 1.0, kZTolerance * rel) << "tau " << tau;
     taus.push_back(tau);
     adevs.push_back(adev);
     rels.push_back(rel);
   }
   // Slope error ~ rel at the longest tau (7 %) over ln(100): 0.016 per sd.
-  EXPECT_NEAR(log_log_slope(taus, adevs), 0.5, kZ * rels.back() / std::log(100.0));
+  EXPECT_NEAR(log_log_slope(taus, adevs), 0.5, kZTolerance * rels.back() / std::log(100.0));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -310,23 +310,23 @@ TEST(GaussMarkov, StationaryVarianceAndAutocorrelation) {
   }
   // Variance of an AR(1) sample variance: (2 sigma^4 / n)(1 + phi^2)/(1 - phi^2), rel sd 1 %.
   const double var_rel = std::sqrt(2.0 * (1.0 + phi * phi) / (kN * (1.0 - phi * phi)));
-  EXPECT_NEAR(c0 / kN / (kSigma * kSigma), 1.0, kZ * var_rel);
+  EXPECT_NEAR(c0 / kN / (kSigma * kSigma), 1.0, kZTolerance * var_rel);
   // Lag-1 sample autocorrelation of an AR(1): sd sqrt((1 - phi^2) / n) = 2e-4. Using dt twice
   // (phi = 0.961) or not at all would miss by ~100 sd.
-  EXPECT_NEAR(c1 / c0, phi, kZ * std::sqrt((1.0 - phi * phi) / kN));
+  EXPECT_NEAR(c1 / c0, phi, kZTolerance * std::sqrt((1.0 - phi * phi) / kN));
   // Lag tau/dt = 50: exp(-1). Bartlett: var ~ ((1+phi^2)(1-phi^100)/(1-phi^2) - 100 phi^100)/n,
   // sd 0.0055.
   const double p100 = std::pow(phi, 100.0);
   const double sd50 =
       std::sqrt(((1.0 + phi * phi) * (1.0 - p100) / (1.0 - phi * phi) - 100.0 * p100) / kN);
-  EXPECT_NEAR(c50 / c0, std::exp(-1.0), kZ * sd50);
+  EXPECT_NEAR(c50 / c0, std::exp(-1.0), kZTolerance * sd50);
 }
 
 TEST(GaussMarkov, VarianceGrowsFromZeroOrStartsStationary) {
   // Relative sd of a variance about the known zero mean over R realisations: sqrt(2/R) = 2.2 %.
   constexpr double kSigma = 1.5, kTau = 1.0, kDt = 0.01;
   constexpr int kRealisations = 4000;
-  const double tol = kZ * std::sqrt(2.0 / kRealisations);
+  const double tol = kZTolerance * std::sqrt(2.0 / kRealisations);
   const std::vector<int> checkpoints{10, 50, 100, 200};  // 0.1, 0.5, 1 and 2 tau
   std::vector<std::vector<double>> at(checkpoints.size(), std::vector<double>(kRealisations));
   std::vector<double> stationary_start(kRealisations), stationary_later(kRealisations);
@@ -404,7 +404,7 @@ TEST(GaussMarkovAllanVariance, MatchesSimulation) {
     const double md = static_cast<double>(m);
     const double edf = std::min(edf_white_fm(n_phase, md), edf_random_walk_fm(n_phase, md));
     const double expected = std::sqrt(gauss_markov_allan_variance(kSigma, kTau, t));
-    EXPECT_NEAR(overlapping_adev(theta, kDt, m) / expected, 1.0, kZ * adev_rel_error(edf) + 1e-3)
+    EXPECT_NEAR(overlapping_adev(theta, kDt, m) / expected, 1.0, kZTolerance * adev_rel_error(edf) + 1e-3)
         << "T " << t;
   }
 }
@@ -450,7 +450,7 @@ TEST(BiasInstability, SimulatedAllanFloorIsFlat) {
     const double rel = adev_rel_error(edf_flicker_fm(n_phase, static_cast<double>(m)));
     EXPECT_NEAR(adev / bi.allan_floor(), 1.0, 0.15) << "T " << t;
     // The tighter check: against the model itself, within the statistical error.
-    EXPECT_NEAR(adev / bi.model_allan_deviation(t), 1.0, kZ * rel) << "T " << t;
+    EXPECT_NEAR(adev / bi.model_allan_deviation(t), 1.0, kZTolerance * rel) << "T " << t;
   }
 }
 
@@ -592,7 +592,7 @@ TEST(ButterworthLowPass, PowerGainEqualsMeasuredVarianceRatio) {
   }
   const double beta = lp.noise_equivalent_bandwidth_hz() / (0.5 * kFs);
   const double rel = std::sqrt(2.0 * 0.75 / (kN * beta)) + std::sqrt(2.0 / kN);
-  EXPECT_NEAR(out_sq / in_sq / gain, 1.0, kZ * rel);
+  EXPECT_NEAR(out_sq / in_sq / gain, 1.0, kZTolerance * rel);
   // Near Nyquist the bilinear zeros at fs/2 remove power: the digital gain at fc = fs/10 is below
   // the analog ENBW / (fs/2) (by 3.5 %), which is why the noise study's 100 Hz row reads low.
   ButterworthLowPass wide(2, 100.0, kFs);

@@ -29,7 +29,7 @@ double run_until_settled(TableAxisSim& axis, double max_s, double dt = kDt) {
   return t;
 }
 
-void run_for(TableAxisSim& axis, double seconds, double dt = kDt) {
+void run_axis_for(TableAxisSim& axis, double seconds, double dt = kDt) {
   const auto steps = static_cast<long>(std::llround(seconds / dt));
   for (long i = 0; i < steps; ++i) axis.step(dt);
 }
@@ -68,7 +68,7 @@ TEST(TableAxisSim, PositionMoveLandsAndSettlesOnlyAfterSettleTime) {
   EXPECT_NEAR(axis.state().angle_deg, 90.0, limits.position_tolerance_deg);
 
   // Holding: the error keeps shrinking and in_position stays.
-  run_for(axis, 1.0);
+  run_axis_for(axis, 1.0);
   EXPECT_TRUE(axis.state().in_position);
   EXPECT_NEAR(axis.true_angle_deg(), 90.0, 1e-9);
   EXPECT_NEAR(axis.true_rate_dps(), 0.0, 1e-9);
@@ -110,7 +110,7 @@ TEST(TableAxisSim, TakesTheShortestWayRound) {
 
   // Any wrap of the same angle is the same target.
   ASSERT_TRUE(axis.command_position(-170.0 + 720.0));
-  run_for(axis, 1.0);
+  run_axis_for(axis, 1.0);
   EXPECT_NEAR(axis.true_angle_deg() - start, 20.0, 1e-3);
 }
 
@@ -164,7 +164,7 @@ TEST(TableAxisSim, RateModeReachesTheRateAndTheAngleAdvances) {
   EXPECT_NEAR(axis.state().rate_dps, -45.0, limits.rate_tolerance_dps);
 
   const double a0 = axis.true_angle_deg();
-  run_for(axis, 2.0);
+  run_axis_for(axis, 2.0);
   EXPECT_NEAR(axis.true_angle_deg() - a0, -90.0, 1e-6);
   EXPECT_NEAR(axis.true_rate_dps(), -45.0, 1e-9);
 }
@@ -173,14 +173,14 @@ TEST(TableAxisSim, StopRampsDownAndHolds) {
   AxisLimits limits;
   TableAxisSim axis(limits);
   ASSERT_TRUE(axis.command_rate(100.0));
-  run_for(axis, 2.0);
+  run_axis_for(axis, 2.0);
   axis.stop();
   EXPECT_EQ(axis.state().mode, core::AxisMode::kRest);
   EXPECT_FALSE(axis.state().in_position);
   run_until_settled(axis, 5.0);
   ASSERT_TRUE(axis.state().in_position);
   const double held = axis.true_angle_deg();
-  run_for(axis, 1.0);
+  run_axis_for(axis, 1.0);
   // Settled means the rate is below tolerance; the servo lag still creeps the last nanodegrees.
   EXPECT_NEAR(axis.true_angle_deg(), held, 1e-6);
   EXPECT_NEAR(axis.true_rate_dps(), 0.0, 1e-9);
@@ -294,7 +294,7 @@ TEST(TableAxisSim, OutOfLimitCommandsAreRefusedNamingTheLimit) {
   EXPECT_FALSE(axis.command_position(std::numeric_limits<double>::quiet_NaN()));
   EXPECT_FALSE(axis.command_position(-std::numeric_limits<double>::infinity()));
   // Nothing moved and the mode is unchanged.
-  run_for(axis, 0.1);
+  run_axis_for(axis, 0.1);
   EXPECT_EQ(axis.state().mode, core::AxisMode::kRest);
   EXPECT_DOUBLE_EQ(axis.true_angle_deg(), 0.0);
 
@@ -305,7 +305,7 @@ TEST(TableAxisSim, FaultBrakesToRestAndRefusesCommandsUntilCleared) {
   AxisLimits limits;
   TableAxisSim axis(limits);
   ASSERT_TRUE(axis.command_rate(200.0));
-  run_for(axis, 2.0);
+  run_axis_for(axis, 2.0);
   ASSERT_NEAR(axis.true_rate_dps(), 200.0, 1e-6);
 
   axis.inject_fault("amplifier trip");
@@ -331,7 +331,7 @@ TEST(TableAxisSim, FaultBrakesToRestAndRefusesCommandsUntilCleared) {
   const double brake_time = 200.0 / limits.max_accel_dps2;
   EXPECT_GT(t, brake_time);
   EXPECT_LT(t, brake_time + 20.0 * limits.servo_time_constant_s);
-  run_for(axis, 1.0);
+  run_axis_for(axis, 1.0);
   EXPECT_TRUE(axis.state().fault);
   EXPECT_FALSE(axis.state().in_position);
 
@@ -341,7 +341,7 @@ TEST(TableAxisSim, FaultBrakesToRestAndRefusesCommandsUntilCleared) {
   EXPECT_FALSE(s.fault);
   EXPECT_TRUE(s.fault_text.empty());
   const double held = axis.true_angle_deg();
-  run_for(axis, 1.0);
+  run_axis_for(axis, 1.0);
   EXPECT_NEAR(axis.true_angle_deg(), held, 1e-9) << "clear_fault holds where the axis is";
   EXPECT_TRUE(axis.state().in_position);
   EXPECT_TRUE(axis.command_position(0.0));
@@ -350,7 +350,7 @@ TEST(TableAxisSim, FaultBrakesToRestAndRefusesCommandsUntilCleared) {
 TEST(TableAxisSim, NonPositiveStepsAreIgnored) {
   TableAxisSim axis;
   ASSERT_TRUE(axis.command_rate(100.0));
-  run_for(axis, 0.5);
+  run_axis_for(axis, 0.5);
   const double angle = axis.true_angle_deg();
   const double rate = axis.true_rate_dps();
   axis.step(0.0);
@@ -364,7 +364,7 @@ TEST(TableAxisSim, NewTargetMidMoveStillLandsOnIt) {
   AxisLimits limits;
   TableAxisSim axis(limits);
   ASSERT_TRUE(axis.command_position(150.0));
-  run_for(axis, 0.8);  // at speed, moving positive
+  run_axis_for(axis, 0.8);  // at speed, moving positive
   ASSERT_GT(axis.true_rate_dps(), 100.0);
   ASSERT_TRUE(axis.command_position(20.0));  // behind it now: must brake, reverse, come back
   run_until_settled(axis, 10.0);

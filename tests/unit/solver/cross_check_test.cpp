@@ -39,7 +39,7 @@ constexpr double kSigmaRel = 1e-7;
 constexpr double kSampleRateHz = 100.0;  // white_noise_truth()'s output rate
 
 /// A unit with bias, scale and misalignment drawn per seed (LN200-class magnitudes).
-sim::ImuTruth random_unit(std::uint64_t seed, double gyro_noise_dps_rthz = 2e-3) {
+sim::ImuTruth random_cross_check_unit(std::uint64_t seed, double gyro_noise_dps_rthz = 2e-3) {
   sim::NormalSource n(seed * 7919 + 3);
   sim::ImuTruth t = white_noise_truth(gyro_noise_dps_rthz);
   testing::draw_classical_errors(t, n);
@@ -69,7 +69,7 @@ SimStep position(double outer_deg, double inner_deg, double duration_s = 20.0) {
   return s;
 }
 
-const FittedParameter* find(const FitResult& fit, const std::string& name) {
+const FittedParameter* find_parameter(const FitResult& fit, const std::string& name) {
   for (const auto& p : fit.parameters) {
     if (p.name == name) return &p;
   }
@@ -85,7 +85,7 @@ bool unidentifiable(const FitResult& fit, const std::string& name) {
 
 /// Classical estimate vs the general fit's parameter of the same contract name.
 void expect_agree(const FitResult& fit, const ClassicalEstimate& c, bool compare_sigma = true) {
-  const FittedParameter* p = find(fit, c.name);
+  const FittedParameter* p = find_parameter(fit, c.name);
   ASSERT_NE(p, nullptr) << c.name << " not identified by the general fit";
   EXPECT_EQ(p->unit, c.unit) << c.name;
   EXPECT_NEAR(c.value, p->value, kValueRel * std::max(std::abs(p->value), p->sigma))
@@ -96,7 +96,7 @@ void expect_agree(const FitResult& fit, const ClassicalEstimate& c, bool compare
 }
 
 void expect_agree(const FitResult& fit, const std::string& name, double value, double sigma) {
-  const FittedParameter* p = find(fit, name);
+  const FittedParameter* p = find_parameter(fit, name);
   ASSERT_NE(p, nullptr) << name << " not identified by the general fit";
   EXPECT_NEAR(value, p->value, kValueRel * std::max(std::abs(p->value), p->sigma))
       << name << " classical " << value << " general " << p->value << " sigma " << p->sigma;
@@ -132,7 +132,7 @@ const char* kAccelMatrixModel = "accel_bias,accel_scale,accel_misalignment";
 TEST(CrossCheck, SixPositionMatchesGeneralFit) {
   const std::vector<SimStep> steps = testing::six_positions();
   const Model model = Model::parse(kAccelMatrixModel);
-  const Summaries s = summarize(simulate_run(random_unit(1), steps, 11), model);
+  const Summaries s = summarize(simulate_run(random_cross_check_unit(1), steps, 11), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kAccel));
   ASSERT_TRUE(fit.unidentifiable.empty()) << fit.unidentifiable.front().name;
 
@@ -155,7 +155,7 @@ TEST(CrossCheck, SixPositionMatchesGeneralFit) {
 TEST(CrossCheck, SixPositionResidualScatterSigmasAreProportional) {
   const std::vector<SimStep> steps = testing::six_positions();
   const Model model = Model::parse(kAccelMatrixModel);
-  const Summaries s = summarize(simulate_run(random_unit(2), steps, 12), model);
+  const Summaries s = summarize(simulate_run(random_cross_check_unit(2), steps, 12), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kAccel));
   Eigen::Matrix3Xd U;
   Eigen::Matrix4Xd A;
@@ -166,7 +166,7 @@ TEST(CrossCheck, SixPositionResidualScatterSigmasAreProportional) {
   const Eigen::Vector3d floor_sigma = s.floor.step_sigma(s.steps.front().count).tail<3>();
   for (const auto& c : named_parameters(six, ClassicalSensor::kAccel)) {
     expect_agree(fit, c, /*compare_sigma=*/false);
-    const FittedParameter* p = find(fit, c.name);
+    const FittedParameter* p = find_parameter(fit, c.name);
     ASSERT_NE(p, nullptr);
     const std::string axis_letter = c.name.substr(c.name.find('.') + 1, 1);
     const int axis = axis_letter[0] - 'x';
@@ -184,7 +184,7 @@ TEST(CrossCheck, MultiPositionMatchesGeneralFit) {
                                       position(45, 30),   position(-60, 120), position(135, -45),
                                       position(30, 200)};
   const Model model = Model::parse(kAccelMatrixModel);
-  const Summaries s = summarize(simulate_run(random_unit(3), steps, 13), model);
+  const Summaries s = summarize(simulate_run(random_cross_check_unit(3), steps, 13), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kAccel));
   ASSERT_TRUE(fit.unidentifiable.empty()) << fit.unidentifiable.front().name;
   Eigen::Matrix3Xd U;
@@ -205,7 +205,7 @@ TEST(CrossCheck, TwelvePositionMatchesGeneralFitForBothTriads) {
   }
   // A quiet gyro: on the Earth rate alone the gyro scale sigma is step sigma / W (W = 4.2e-3
   // deg/s); the general fit refuses sigmas beyond 1e4 ppm as "barely excited".
-  const sim::ImuTruth truth = random_unit(4, /*gyro_noise_dps_rthz=*/2e-5);
+  const sim::ImuTruth truth = random_cross_check_unit(4, /*gyro_noise_dps_rthz=*/2e-5);
   const Model model = Model::parse(
       "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment");
   const Summaries s = summarize(simulate_run(truth, steps, 14), model);
@@ -245,7 +245,7 @@ TEST(CrossCheck, TwoPositionMatchesGeneralFitOnTheExcitedAxis) {
     SCOPED_TRACE(::testing::Message() << "tilt " << tilt_deg << " deg");
     const std::vector<SimStep> steps = {position(tilt_deg, 0), position(180.0 + tilt_deg, 0)};
     const Model model = Model::parse("accel_bias,accel_scale");
-    const Summaries s = summarize(simulate_run(random_unit(5), steps, 15), model);
+    const Summaries s = summarize(simulate_run(random_cross_check_unit(5), steps, 15), model);
     const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kAccel));
     // The tilt turns z about the outer axis (North) towards body x: y is never excited.
     EXPECT_TRUE(unidentifiable(fit, "accel_scale.y"));
@@ -280,7 +280,7 @@ std::vector<SimStep> vertical_rate_steps(const std::vector<double>& rates_dps) {
   return out;
 }
 
-double vertical_earth_rate_dps(const core::Site& site) {
+double vertical_earth_rate_at_dps(const core::Site& site) {
   return site.earth_rate_level_radps().z() * kDegPerRad;
 }
 
@@ -288,13 +288,13 @@ TEST(CrossCheck, RateTestCwCcwMatchesGeneralFit) {
   const std::vector<SimStep> steps = vertical_rate_steps({20.0});
   const Model model = Model::parse("gyro_bias,gyro_scale,earth_rate");
   // The truth keeps its misalignment: z must still come out exact (whole turns).
-  const Summaries s = summarize(simulate_run(random_unit(6), steps, 16), model);
+  const Summaries s = summarize(simulate_run(random_cross_check_unit(6), steps, 16), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kGyro));
   // The horizontal axes see no mean rate over whole turns.
   EXPECT_TRUE(unidentifiable(fit, "gyro_scale.x"));
   EXPECT_TRUE(unidentifiable(fit, "gyro_scale.y"));
 
-  const double w_z = vertical_earth_rate_dps(s.data.setup.site);
+  const double w_z = vertical_earth_rate_at_dps(s.data.setup.site);
   const double sigma_z = s.floor.step_sigma(s.steps.front().count)[kGz];
   const double rate = steps[0].inner_rate_dps;
   const RateTestResult by_rates = rate_test_cw_ccw_rates(s.steps[0].measured[kGz],
@@ -315,7 +315,7 @@ TEST(CrossCheck, RateTestCwCcwMatchesGeneralFit) {
 TEST(CrossCheck, RateStepsLineMatchesGeneralFit) {
   const std::vector<SimStep> steps = vertical_rate_steps({20.0, 100.0});
   const Model model = Model::parse("gyro_bias,gyro_scale,earth_rate");
-  const Summaries s = summarize(simulate_run(random_unit(7), steps, 17), model);
+  const Summaries s = summarize(simulate_run(random_cross_check_unit(7), steps, 17), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kGyro));
   std::vector<RateStep> rate_steps_in;
   for (std::size_t k = 0; k < steps.size(); ++k) {
@@ -323,7 +323,7 @@ TEST(CrossCheck, RateStepsLineMatchesGeneralFit) {
   }
   const double sigma_z = s.floor.step_sigma(s.steps.front().count)[kGz];
   const RateTestResult line =
-      rate_steps(rate_steps_in, vertical_earth_rate_dps(s.data.setup.site), sigma_z);
+      rate_steps(rate_steps_in, vertical_earth_rate_at_dps(s.data.setup.site), sigma_z);
   expect_agree(fit, "gyro_bias.z", line.bias_dps, line.bias_sigma_dps);
   expect_agree(fit, "gyro_scale.z", line.scale_ppm, line.scale_sigma_ppm);
 }
@@ -335,7 +335,7 @@ TEST(CrossCheck, RateStepsLineMatchesGeneralFit) {
 // polynomial (thermal_calibration) solve exactly the normal equations of one fit with the
 // temperature terms: the two must agree to rounding.
 TEST(CrossCheck, ThermalPerPlateauMatchesSingleFitWithTemperatureTerms) {
-  sim::ImuTruth truth = random_unit(8, /*gyro_noise_dps_rthz=*/2e-5);
+  sim::ImuTruth truth = random_cross_check_unit(8, /*gyro_noise_dps_rthz=*/2e-5);
   truth.gyro_temp_bias = {Eigen::Vector3d(4e-5, -2e-5, 1e-5), Eigen::Vector3d(5e-7, 3e-7, -4e-7)};
   truth.accel_temp_bias = {Eigen::Vector3d(1e-4, -5e-5, 2e-5), Eigen::Vector3d(2e-6, -1e-6, 1e-6)};
   truth.accel_temp_scale = Eigen::Vector3d(2.0, -1.5, 1.0);
@@ -393,7 +393,7 @@ TEST(CrossCheck, ThermalPerPlateauMatchesSingleFitWithTemperatureTerms) {
     for (const ClassicalEstimate& e : thermal_estimates) {
       // Units: the fit's catalogue writes temp_bias units with a literal "^k"
       // ("deg/s/degC^k"), thermal_calibration with the power ("deg/s/degC^2"): compare values.
-      const FittedParameter* p = find(single, e.name);
+      const FittedParameter* p = find_parameter(single, e.name);
       ASSERT_NE(p, nullptr) << e.name;
       EXPECT_NEAR(e.value, p->value, kValueRel * std::max(std::abs(p->value), p->sigma))
           << e.name << " thermal " << e.value << " single fit " << p->value;

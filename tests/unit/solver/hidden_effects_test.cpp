@@ -21,7 +21,7 @@ constexpr const char* kBase =
 
 /// Three plateaus; at each the six positions and turns about every body axis at three rates in
 /// both directions, each over a whole revolution.
-std::vector<SimStep> campaign(double ramp_cpm = 0.0) {
+std::vector<SimStep> hidden_effects_campaign(double ramp_cpm = 0.0) {
   std::vector<SimStep> steps;
   for (double temp : {-20.0, 25.0, 70.0}) {
     for (auto s : testing::six_positions(temp, 10.0)) steps.push_back(s);
@@ -92,7 +92,7 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndTheRefitReachesTheNoise) {
     sim::ImuTruth probe = base_unit();
     tilt.setZero();
     set_effect(probe, tilt, term, probe_strength);
-    c1 = base_chi2_dof(testing::simulate_run(probe, campaign(), 5, tilt));
+    c1 = base_chi2_dof(testing::simulate_run(probe, hidden_effects_campaign(), 5, tilt));
   }
   probe_strength /= 10.0;
   ASSERT_GT(c1, 3.0) << term << " does not show even at " << probe_strength << " probe sizes";
@@ -101,7 +101,7 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndTheRefitReachesTheNoise) {
   sim::ImuTruth truth = base_unit();
   tilt.setZero();
   set_effect(truth, tilt, term, strength);
-  const RunData data = testing::simulate_run(truth, campaign(), 6, tilt);
+  const RunData data = testing::simulate_run(truth, hidden_effects_campaign(), 6, tilt);
   const Diagnosis d = diagnose(data, Model::parse(kBase));
   EXPECT_GT(d.fit.chi2_dof, 5.0) << term;
   EXPECT_LT(d.fit.chi2_dof, 30.0) << term;
@@ -131,7 +131,7 @@ TEST(HiddenEffects, TwoEffectsAreFoundInTwoRounds) {
   truth.gyro_g_sensitivity(0, 2) = 3e-3;
   truth.gyro_g_sensitivity(1, 0) = -2e-3;
   truth.accel_temp_bias = {Eigen::Vector3d(2e-5, -1.5e-5, 1e-5)};
-  const RunData data = testing::simulate_run(truth, campaign(), 7);
+  const RunData data = testing::simulate_run(truth, hidden_effects_campaign(), 7);
   Model model = Model::parse(kBase);
   std::vector<std::string> found;
   for (int round = 0; round < 2; ++round) {
@@ -148,7 +148,7 @@ TEST(HiddenEffects, TwoEffectsAreFoundInTwoRounds) {
 }
 
 TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
-  const RunData clean = testing::simulate_run(base_unit(), campaign(3.0), 8);
+  const RunData clean = testing::simulate_run(base_unit(), hidden_effects_campaign(3.0), 8);
   RunData data = clean;
   // Gyro bias following the rate of temperature change: 2e-3 deg/s per degC/min on x and y.
   for (auto& step : data.steps) {

@@ -21,7 +21,7 @@ using testing::SimStep;
 using testing::simulate_run;
 using testing::white_noise_truth;
 
-const char* kBaseModel =
+const char* kThermalBaseModel =
     "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 const std::vector<double> kPlateausC = {-20.0, 5.0, 30.0, 60.0};
 
@@ -41,7 +41,7 @@ sim::ImuTruth thermal_unit(std::uint64_t seed) {
 }
 
 /// Six positions and rate steps (whole turns) on each plateau.
-std::vector<SimStep> campaign(const std::vector<double>& plateaus_c) {
+std::vector<SimStep> plateau_campaign(const std::vector<double>& plateaus_c) {
   std::vector<SimStep> steps;
   for (double temp : plateaus_c) {
     for (const SimStep& s : testing::six_positions(temp)) steps.push_back(s);
@@ -50,7 +50,7 @@ std::vector<SimStep> campaign(const std::vector<double>& plateaus_c) {
   return steps;
 }
 
-const ClassicalEstimate* find(const std::vector<ClassicalEstimate>& list, const std::string& name) {
+const ClassicalEstimate* find_estimate(const std::vector<ClassicalEstimate>& list, const std::string& name) {
   for (const auto& e : list) {
     if (e.name == name) return &e;
   }
@@ -59,8 +59,8 @@ const ClassicalEstimate* find(const std::vector<ClassicalEstimate>& list, const 
 
 TEST(ThermalFit, RecoversTemperatureTermsWithinThreeSigma) {
   const sim::ImuTruth truth = thermal_unit(1);
-  const RunData data = simulate_run(truth, campaign(kPlateausC), 1);
-  const Model model = Model::parse(kBaseModel);
+  const RunData data = simulate_run(truth, plateau_campaign(kPlateausC), 1);
+  const Model model = Model::parse(kThermalBaseModel);
   const std::vector<StepSummary> steps = summarize_steps(data, model);
   ThermalFitOptions options;
   options.temperature_ref_c = data.setup.temperature_ref_c;
@@ -84,7 +84,7 @@ TEST(ThermalFit, RecoversTemperatureTermsWithinThreeSigma) {
       for (const std::string& name : {s + "_bias." + a, s + "_temp_bias." + a + "1",
                                       s + "_temp_bias." + a + "2", s + "_scale." + a,
                                       s + "_temp_scale." + a}) {
-        const ClassicalEstimate* e = find(r.coefficients, name);
+        const ClassicalEstimate* e = find_estimate(r.coefficients, name);
         ASSERT_NE(e, nullptr) << name;
         const double want = truth.parameter(name);
         EXPECT_NEAR(e->value, want, 3.0 * e->sigma) << name;
@@ -98,8 +98,8 @@ TEST(ThermalFit, RecoversTemperatureTermsWithinThreeSigma) {
   for (const ClassicalEstimate& e : r.constants) {
     EXPECT_NEAR(e.value, truth.parameter(e.name), 3.0 * e.sigma) << e.name;
   }
-  EXPECT_EQ(find(r.coefficients, "gyro_temp_bias.x2")->unit, "deg/s/degC^2");
-  EXPECT_EQ(find(r.coefficients, "accel_temp_scale.z")->unit, "ppm/degC");
+  EXPECT_EQ(find_estimate(r.coefficients, "gyro_temp_bias.x2")->unit, "deg/s/degC^2");
+  EXPECT_EQ(find_estimate(r.coefficients, "accel_temp_scale.z")->unit, "ppm/degC");
 }
 
 // Six positions per plateau: bias, scale and misalignment columns are orthogonal on each
@@ -136,8 +136,8 @@ TEST(ThermalFit, EqualsOneFitWithTemperatureTermsOnAnOrthogonalDesign) {
 }
 
 TEST(ThermalFit, TooFewPlateausIsAnInputErrorNamingOrderAndCount) {
-  const RunData data = simulate_run(thermal_unit(3), campaign({10.0, 40.0}), 3);
-  const Model model = Model::parse(kBaseModel);
+  const RunData data = simulate_run(thermal_unit(3), plateau_campaign({10.0, 40.0}), 3);
+  const Model model = Model::parse(kThermalBaseModel);
   const std::vector<StepSummary> steps = summarize_steps(data, model);
   try {
     (void)fit_per_plateau(steps, model, 2, measure_noise_floor(steps));
@@ -173,8 +173,8 @@ TEST(ThermalFit, PlateauWithTooFewStepsIsAnInputErrorNamingIt) {
 }
 
 TEST(ThermalFit, RejectsTemperatureTermsAndOrderBelowOne) {
-  const RunData data = simulate_run(thermal_unit(5), campaign({10.0, 40.0}), 5);
-  const Model with_temp = Model::parse(std::string(kBaseModel) + ",gyro_temp_scale");
+  const RunData data = simulate_run(thermal_unit(5), plateau_campaign({10.0, 40.0}), 5);
+  const Model with_temp = Model::parse(std::string(kThermalBaseModel) + ",gyro_temp_scale");
   const std::vector<StepSummary> steps = summarize_steps(data, with_temp);
   const NoiseFloor floor = measure_noise_floor(steps);
   try {
@@ -183,13 +183,13 @@ TEST(ThermalFit, RejectsTemperatureTermsAndOrderBelowOne) {
   } catch (const core::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("gyro_temp_scale"), std::string::npos) << e.what();
   }
-  const Model model = Model::parse(kBaseModel);
+  const Model model = Model::parse(kThermalBaseModel);
   EXPECT_THROW((void)fit_per_plateau(summarize_steps(data, model), model, 0, floor), core::InputError);
 }
 
 TEST(ThermalFit, JsonHasTheDocumentedFields) {
-  const RunData data = simulate_run(thermal_unit(6), campaign({0.0, 25.0, 50.0}), 6);
-  const Model model = Model::parse(kBaseModel);
+  const RunData data = simulate_run(thermal_unit(6), plateau_campaign({0.0, 25.0, 50.0}), 6);
+  const Model model = Model::parse(kThermalBaseModel);
   const std::vector<StepSummary> steps = summarize_steps(data, model);
   const nlohmann::json j = thermal_fit_to_json(fit_per_plateau(steps, model, 2, measure_noise_floor(steps)));
   for (const char* key : {"model", "order", "temperature_ref_c", "plateaus", "coefficients",

@@ -16,7 +16,7 @@ namespace {
 using can_test::float_map_json;
 using nlohmann::json;
 
-const std::string kWhere = "imus[0].connection.map";
+const std::string kMapWhere = "imus[0].connection.map";
 
 TEST(CanSignalMapTest, ExampleMapParses) {
   const CanSignalMap map = can_test::example_map();
@@ -34,7 +34,7 @@ TEST(CanSignalMapTest, ExtendedIdsCarryTheFlag) {
   json doc = float_map_json();
   doc["signals"]["gyro_x"]["id"] = "0x18FF0001";
   doc["signals"]["gyro_x"]["extended"] = true;
-  const auto map = CanSignalMap::from_json(doc, kWhere);
+  const auto map = CanSignalMap::from_json(doc, kMapWhere);
   EXPECT_TRUE(map.frame_index(0x18FF0001u | CAN_EFF_FLAG).has_value());
   EXPECT_TRUE(map.frame_index(0x201).has_value());  // temperature stays there alone
 }
@@ -60,10 +60,10 @@ TEST_P(CanSignalMapErrorTest, NamesTheFieldAndWhy) {
     doc[ptr] = c.value;
   }
   try {
-    CanSignalMap::from_json(doc, kWhere);
+    CanSignalMap::from_json(doc, kMapWhere);
     FAIL() << "accepted a map with " << c.name;
   } catch (const core::InputError& e) {
-    EXPECT_EQ(e.where(), kWhere + c.where) << e.what();
+    EXPECT_EQ(e.where(), kMapWhere + c.where) << e.what();
     EXPECT_NE(std::string(e.what()).find(c.why), std::string::npos) << e.what();
   }
 }
@@ -181,7 +181,7 @@ TEST(CanSignalMapTest, EncodeThenDecodeRoundTripsWithinQuantisation) {
 }
 
 TEST(CanSignalMapTest, FloatMapRoundTripsAtFloatPrecision) {
-  const CanSignalMap map = CanSignalMap::from_json(float_map_json(), kWhere);
+  const CanSignalMap map = CanSignalMap::from_json(float_map_json(), kMapWhere);
   EXPECT_FALSE(map.has_device_time);
   CanSampleAssembler assembler(map, 256, 100.0);
   std::vector<core::ImuSample> out;

@@ -14,7 +14,7 @@ namespace {
 using namespace std::chrono_literals;
 using nlohmann::json;
 
-core::ImuSample make_sample(std::uint32_t sequence) {
+core::ImuSample make_serial_sample(std::uint32_t sequence) {
   core::ImuSample s;
   s.sequence = sequence;
   s.device_time_s = 100.0 + 0.01 * sequence;
@@ -55,12 +55,12 @@ TEST(SerialImu, DeliversFramesFromTheLineStampedOnTheStationClock) {
   ASSERT_TRUE(imu.activate());
   EXPECT_EQ(imu.state(), DeviceState::kActive);
   const double before = clock.now_s();
-  for (std::uint32_t i = 0; i < 50; ++i) send(pty, encode_imu_frame(make_sample(i)));
+  for (std::uint32_t i = 0; i < 50; ++i) send(pty, encode_imu_frame(make_serial_sample(i)));
   const auto got = collect(imu, 50);
   const double after = clock.now_s();
   ASSERT_EQ(got.size(), 50u);
   for (std::uint32_t i = 0; i < 50; ++i) {
-    const auto want = make_sample(i);
+    const auto want = make_serial_sample(i);
     EXPECT_EQ(got[i].sequence, i);
     EXPECT_DOUBLE_EQ(got[i].device_time_s, want.device_time_s);
     EXPECT_DOUBLE_EQ(got[i].gyro_dps.x(), want.gyro_dps.x());  // exact in f32
@@ -83,12 +83,12 @@ TEST(SerialImu, CountsCorruptFramesAsEventsAndInventsNothing) {
   SerialImu imu(serial_config(pty.slave_path()), clock, "imus[0].connection");
   ASSERT_TRUE(imu.configure());
   ASSERT_TRUE(imu.activate());
-  send(pty, encode_imu_frame(make_sample(0)));
+  send(pty, encode_imu_frame(make_serial_sample(0)));
   send(pty, {0x00, 0x13, 0x37, 0xA5});                     // garbage
-  auto corrupt = encode_imu_frame(make_sample(1));
+  auto corrupt = encode_imu_frame(make_serial_sample(1));
   corrupt[20] ^= 0x40;                                     // CRC error
   send(pty, corrupt);
-  send(pty, encode_imu_frame(make_sample(3)));             // sample 2 never sent: a gap
+  send(pty, encode_imu_frame(make_serial_sample(3)));             // sample 2 never sent: a gap
   const auto got = collect(imu, 2);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].sequence, 0u);
@@ -127,11 +127,11 @@ TEST(SerialImu, InactiveDeviceDropsWhatArrivedBeforeActivation) {
   core::SteadyClock clock;
   SerialImu imu(serial_config(pty.slave_path()), clock, "imus[0].connection");
   ASSERT_TRUE(imu.configure());
-  send(pty, encode_imu_frame(make_sample(0)));
+  send(pty, encode_imu_frame(make_serial_sample(0)));
   std::this_thread::sleep_for(50ms);
   EXPECT_TRUE(imu.poll().empty());
   ASSERT_TRUE(imu.activate());
-  send(pty, encode_imu_frame(make_sample(1)));
+  send(pty, encode_imu_frame(make_serial_sample(1)));
   const auto got = collect(imu, 1);
   ASSERT_FALSE(got.empty());
   EXPECT_EQ(got.back().sequence, 1u);

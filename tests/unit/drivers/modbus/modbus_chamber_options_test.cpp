@@ -18,7 +18,7 @@ core::ChamberConfig chamber_with(json connection) {
   return c;
 }
 
-std::string error_where(const json& connection) {
+std::string options_error_where(const json& connection) {
   try {
     ModbusChamberOptions::from_config(chamber_with(connection));
   } catch (const core::InputError& e) {
@@ -84,29 +84,29 @@ TEST(ModbusChamberOptions, ErrorsNameTheConnectionField) {
     j.erase(key);
     return j;
   };
-  EXPECT_EQ(error_where(tcp), "");
-  EXPECT_EQ(error_where(rtu), "");
-  EXPECT_EQ(error_where(without(tcp, "transport")), at + "transport");
-  EXPECT_EQ(error_where(with(tcp, "transport", "udp")), at + "transport");
-  EXPECT_EQ(error_where(without(tcp, "host")), at + "host");
-  EXPECT_EQ(error_where(with(tcp, "port", 70000)), at + "port");
-  EXPECT_EQ(error_where(with(tcp, "port", "502")), at + "port");
-  EXPECT_EQ(error_where(with(tcp, "unit_id", 256)), at + "unit_id");
-  EXPECT_EQ(error_where(with(rtu, "unit_id", 0)), at + "unit_id");  // broadcast on a bus
-  EXPECT_EQ(error_where(without(rtu, "path")), at + "path");
-  EXPECT_EQ(error_where(with(rtu, "baud", 12345)), at + "baud");
-  EXPECT_EQ(error_where(with(rtu, "parity", "mark")), at + "parity");
-  EXPECT_EQ(error_where(with(tcp, "word_order", "middle")), at + "word_order");
-  EXPECT_EQ(error_where(without(tcp, "map")), at + "map");
+  EXPECT_EQ(options_error_where(tcp), "");
+  EXPECT_EQ(options_error_where(rtu), "");
+  EXPECT_EQ(options_error_where(without(tcp, "transport")), at + "transport");
+  EXPECT_EQ(options_error_where(with(tcp, "transport", "udp")), at + "transport");
+  EXPECT_EQ(options_error_where(without(tcp, "host")), at + "host");
+  EXPECT_EQ(options_error_where(with(tcp, "port", 70000)), at + "port");
+  EXPECT_EQ(options_error_where(with(tcp, "port", "502")), at + "port");
+  EXPECT_EQ(options_error_where(with(tcp, "unit_id", 256)), at + "unit_id");
+  EXPECT_EQ(options_error_where(with(rtu, "unit_id", 0)), at + "unit_id");  // broadcast on a bus
+  EXPECT_EQ(options_error_where(without(rtu, "path")), at + "path");
+  EXPECT_EQ(options_error_where(with(rtu, "baud", 12345)), at + "baud");
+  EXPECT_EQ(options_error_where(with(rtu, "parity", "mark")), at + "parity");
+  EXPECT_EQ(options_error_where(with(tcp, "word_order", "middle")), at + "word_order");
+  EXPECT_EQ(options_error_where(without(tcp, "map")), at + "map");
   const json half_map = {{"process_value", {{"address", 1}, {"encoding", "int16"}}},
                          {"setpoint", {{"address", 2}}}};
-  EXPECT_EQ(error_where(with(tcp, "map", half_map)), at + "map.setpoint.encoding");
-  EXPECT_EQ(error_where(with(tcp, "timeout_ms", 0)), at + "timeout_ms");
-  EXPECT_EQ(error_where(with(tcp, "poll_period_ms", -5)), at + "poll_period_ms");
-  EXPECT_EQ(error_where(with(tcp, "stale_after_s", 0)), at + "stale_after_s");
-  EXPECT_EQ(error_where(with(tcp, "hots", "x")), at + "hots");
-  EXPECT_EQ(error_where(with(tcp, "path", "/dev/ttyS0")), "chamber.connection");
-  EXPECT_EQ(error_where(json::array()), "chamber.connection");
+  EXPECT_EQ(options_error_where(with(tcp, "map", half_map)), at + "map.setpoint.encoding");
+  EXPECT_EQ(options_error_where(with(tcp, "timeout_ms", 0)), at + "timeout_ms");
+  EXPECT_EQ(options_error_where(with(tcp, "poll_period_ms", -5)), at + "poll_period_ms");
+  EXPECT_EQ(options_error_where(with(tcp, "stale_after_s", 0)), at + "stale_after_s");
+  EXPECT_EQ(options_error_where(with(tcp, "hots", "x")), at + "hots");
+  EXPECT_EQ(options_error_where(with(tcp, "path", "/dev/ttyS0")), "chamber.connection");
+  EXPECT_EQ(options_error_where(json::array()), "chamber.connection");
 }
 
 TEST(ModbusChamberOptions, FactoryParsesWithoutIo) {
