@@ -91,9 +91,10 @@ void retry_while_busy(int timeout_ms, F&& fn) {
 
 void migrate(SQLite::Database& db, const std::string& path, int busy_timeout_ms) {
   for (const auto& m : migrations()) {
-    if (pragma_int(db, "user_version") >= m.version) continue;
     detail::guarded("migrate " + path + " to version " + std::to_string(m.version), [&] {
       retry_while_busy(busy_timeout_ms, [&] {
+        // Read first: an up-to-date database is opened without taking the write lock.
+        if (pragma_int(db, "user_version") >= m.version) return;
         SQLite::Transaction tx(db, SQLite::TransactionBehavior::IMMEDIATE);
         // Another process may have migrated while this one waited for the write lock.
         if (pragma_int(db, "user_version") >= m.version) return;

@@ -386,9 +386,11 @@ std::vector<RunSummary> RunStore::list_runs(std::size_t limit, std::optional<std
   return guarded("list runs", [&] {
     // The step counts are subqueries per run: with the limit in SQL only this page pays them.
     SQLite::Statement q(db_.sql(), std::string(kSummaryQuery) +
-                                       " WHERE r.id < ? ORDER BY r.id DESC LIMIT ?");
-    q.bind(1, before_id.value_or(std::numeric_limits<std::int64_t>::max()));
-    q.bind(2, static_cast<std::int64_t>(std::min<std::size_t>(limit, std::numeric_limits<std::int64_t>::max())));
+                                       (before_id ? " WHERE r.id < :before" : "") +
+                                       " ORDER BY r.id DESC LIMIT :limit");
+    if (before_id) q.bind(":before", *before_id);
+    q.bind(":limit", static_cast<std::int64_t>(
+                         std::min<std::size_t>(limit, std::numeric_limits<std::int64_t>::max())));
     std::vector<RunSummary> out;
     while (q.executeStep()) out.push_back(read_summary(q));
     return out;

@@ -205,10 +205,21 @@ TEST(DaemonApi, ListsRunsAPageAtATime) {
   EXPECT_EQ(pages, 3);
   std::vector<std::int64_t> newest_first(submitted.rbegin(), submitted.rend());
   EXPECT_EQ(listed, newest_first);
-  // Without a limit, one page of up to 100 and no link.
+  // Without a limit, one page of up to 100 and no link; a page that takes exactly the last runs
+  // links nothing further, and nothing is before the first run.
   const Reply all = api.get("/runs");
   EXPECT_EQ(all.body.size(), 5u);
   EXPECT_EQ(all.headers.count("Link"), 0u);
+  const Reply exact = api.get("/runs?limit=5");
+  EXPECT_EQ(exact.body.size(), 5u);
+  EXPECT_EQ(exact.headers.count("Link"), 0u) << exact.raw;
+  const Reply last_two = api.get("/runs?limit=2&before=" + std::to_string(submitted[2]));
+  ASSERT_EQ(last_two.body.size(), 2u) << last_two.raw;
+  EXPECT_EQ(last_two.body[0]["id"], submitted[1]);
+  EXPECT_EQ(last_two.headers.count("Link"), 0u) << last_two.raw;
+  const Reply none = api.get("/runs?before=" + std::to_string(submitted[0]));
+  EXPECT_EQ(none.status, 200);
+  EXPECT_TRUE(none.body.is_array() && none.body.empty()) << none.raw;
 
   for (const char* bad : {"/runs?limit=0", "/runs?limit=1001", "/runs?limit=two", "/runs?before=-3",
                           "/runs?limit=5x"}) {

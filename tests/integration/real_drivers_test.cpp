@@ -142,7 +142,8 @@ struct FaultedRun {
 };
 
 /// Waits (up to 60 s) until the run in `db` is in its first capture or rate step, or `running`
-/// (the `calstand run` process) has ended; says whether it is capturing.
+/// (the `calstand run` process) has ended; says whether it is capturing (false when it ended or
+/// the time ran out).
 bool wait_until_capturing(const std::string& db,
                           const std::future<calstand::testing::Result>& running) {
   for (int i = 0; i < 600; ++i) {
@@ -179,11 +180,15 @@ FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
   });
   // The fault strikes during the first capture, whatever the machine's load.
   if (!wait_until_capturing(db, running)) {
-    const auto r = running.get();
-    ADD_FAILURE() << "the run never started capturing; calstand run exited " << r.exit_code
-                  << ":\n" << r.out;
-    out.result = r;
-    return out;
+    if (running.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      const auto r = running.get();
+      ADD_FAILURE() << "the run ended before capturing; calstand run exited " << r.exit_code
+                    << ":\n" << r.out;
+      out.result = r;
+      return out;
+    }
+    // Still going after 60 s: the fault below ends it, rather than a 60 s capture per step.
+    ADD_FAILURE() << "the run did not start capturing within 60 s";
   }
   std::this_thread::sleep_for(std::chrono::duration<double>(after_wall_s));
   const auto answer = out.station->command(fault);

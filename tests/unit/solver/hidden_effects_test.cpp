@@ -124,7 +124,7 @@ std::vector<std::string> hidden_terms() {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryCatalogueTerm, HiddenEffect, ::testing::ValuesIn(hidden_terms()),
-                         [](const auto& info) { return info.param; });
+                         [](const auto& param_info) { return param_info.param; });
 
 TEST(HiddenEffects, TwoEffectsAreFoundInTwoRounds) {
   sim::ImuTruth truth = base_unit();

@@ -137,8 +137,8 @@ std::vector<std::string> catalogue_terms() {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryTerm, ModelRegressorsPerTerm, ::testing::ValuesIn(catalogue_terms()),
-                         [](const auto& info) {
-                           std::string n = info.param;
+                         [](const auto& param_info) {
+                           std::string n = param_info.param;
                            for (char& c : n) if (c == ':') c = '_';
                            return n;
                          });
