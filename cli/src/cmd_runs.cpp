@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "core/error.hpp"
 #include "open_database.hpp"
 #include "store/database.hpp"
 #include "store/run_store.hpp"
@@ -17,6 +18,7 @@ struct RunsOptions {
   std::string db = "calstand.db";
   std::int64_t run = 0;
   bool as_json = false;
+  std::int64_t limit = -1;  ///< runs: the newest this many (-1: not given, every run)
 };
 
 nlohmann::json summary_json(const store::RunSummary& r) {
@@ -34,7 +36,11 @@ nlohmann::json summary_json(const store::RunSummary& r) {
 void list_runs(const RunsOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   store::RunStore runs(db);
-  const auto list = runs.list_runs();
+  if (opt.limit != -1 && opt.limit < 1) {
+    throw core::InputError("--limit", fmt::format("must be at least 1, got {}", opt.limit));
+  }
+  const auto list = opt.limit > 0 ? runs.list_runs(static_cast<std::size_t>(opt.limit), std::nullopt)
+                                  : runs.list_runs();
   if (opt.as_json) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& r : list) out.push_back(summary_json(r));
@@ -112,6 +118,7 @@ void register_runs(CLI::App& app) {
   CLI::App* runs = app.add_subcommand("runs", "List the runs of a database");
   runs->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
   runs->add_flag("--json", opt->as_json, "Machine-readable output");
+  runs->add_option("--limit", opt->limit, "Only the newest N runs");
   runs->callback([opt] { list_runs(*opt); });
 
   CLI::App* show = app.add_subcommand("show", "Show one run: its steps and events");

@@ -369,6 +369,18 @@ TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
   r = run("export --db " + db2 + " --run " + std::to_string(imported["run"].get<int>()) +
           " --out " + dir + "/second");
   ASSERT_EQ(r.exit_code, 0) << r.out;
+  // A second import is a new run; --limit 1 lists only the newest.
+  r = run("import " + dir + "/first --db " + db2);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("runs --json --limit 1 --db " + db2);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto newest = nlohmann::json::parse(r.out);
+  ASSERT_EQ(newest.size(), 1u) << r.out;
+  EXPECT_EQ(newest[0]["id"].get<int>(), imported["run"].get<int>() + 1);
+  EXPECT_EQ(nlohmann::json::parse(run("runs --json --db " + db2).out).size(), 2u);
+  r = run("runs --limit 0 --db " + db2);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("--limit"), std::string::npos) << r.out;
   const std::string first = read_text(dir + "/first/samples.csv");
   ASSERT_GT(first.size(), 1000u);
   EXPECT_EQ(first, read_text(dir + "/second/samples.csv"));
