@@ -373,24 +373,18 @@ void RunStore::set_run_status(std::int64_t run, const std::string& status,
   });
 }
 
-std::vector<RunSummary> RunStore::list_runs() {
-  return guarded("list runs", [&] {
-    SQLite::Statement q(db_.sql(), std::string(kSummaryQuery) + " ORDER BY r.id DESC");
-    std::vector<RunSummary> out;
-    while (q.executeStep()) out.push_back(read_summary(q));
-    return out;
-  });
-}
-
-std::vector<RunSummary> RunStore::list_runs(std::size_t limit, std::optional<std::int64_t> before_id) {
+std::vector<RunSummary> RunStore::list_runs(std::optional<std::size_t> limit,
+                                            std::optional<std::int64_t> before_id) {
   return guarded("list runs", [&] {
     // The step counts are subqueries per run: with the limit in SQL only this page pays them.
     SQLite::Statement q(db_.sql(), std::string(kSummaryQuery) +
                                        (before_id ? " WHERE r.id < :before" : "") +
-                                       " ORDER BY r.id DESC LIMIT :limit");
+                                       " ORDER BY r.id DESC" + (limit ? " LIMIT :limit" : ""));
     if (before_id) q.bind(":before", *before_id);
-    q.bind(":limit", static_cast<std::int64_t>(
-                         std::min<std::size_t>(limit, std::numeric_limits<std::int64_t>::max())));
+    if (limit) {
+      q.bind(":limit", static_cast<std::int64_t>(
+                           std::min<std::size_t>(*limit, std::numeric_limits<std::int64_t>::max())));
+    }
     std::vector<RunSummary> out;
     while (q.executeStep()) out.push_back(read_summary(q));
     return out;

@@ -73,11 +73,10 @@ class RunStore {
                       const std::optional<Stamp>& ended = std::nullopt,
                       const std::string& exit_reason = "");
 
-  /// Every run, newest first.
-  std::vector<RunSummary> list_runs();
-  /// At most `limit` runs with ids below `before_id` (all when none), newest first: one page of
-  /// a long history; the next page starts before the last id of this one.
-  std::vector<RunSummary> list_runs(std::size_t limit, std::optional<std::int64_t> before_id);
+  /// Runs newest first: at most `limit` (every one when none) with ids below `before_id` (any
+  /// when none). A page of a long history; the next page starts before the last id of this one.
+  std::vector<RunSummary> list_runs(std::optional<std::size_t> limit = std::nullopt,
+                                    std::optional<std::int64_t> before_id = std::nullopt);
   /// One run with its steps (by index) and events (in order).
   RunRecord load_run(std::int64_t run);
   /// The stored status of `run` alone (one row; the daemon asks it on every operator action).
