@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "core/error.hpp"
+#include "solver/noise_estimate.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -145,11 +146,14 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     superset = superset.with_term(*c.info, t ? t->order : 1);
   }
   const std::vector<StepSummary> all = summarize_steps(data, superset);
-  const NoiseFloor floor = measure_noise_floor(all);
+  // The noise model comes from the residuals of every catalogue term: the superset when it
+  // holds the Earth rate (the gyro rows need it), else its own pass.
+  const StepNoise noise = model.earth_rate() ? estimate_step_noise(all, superset, options.rows)
+                                             : estimate_run_noise(data, model, options.rows);
   const std::vector<StepSummary> steps = select_parameters(all, superset, model);
 
   Diagnosis d;
-  d.fit = fit_model(steps, model, floor, options);
+  d.fit = fit_model(steps, model, noise, options);
   d.groups = group_quality(d.fit, steps);
   d.signals = correlate_signals(d.fit, steps);
   const double n_rows = static_cast<double>(d.fit.dof + static_cast<int>(d.fit.parameters.size()));
@@ -159,7 +163,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
                                             : select_parameters(all, superset, c.model);
     FitResult after;
     try {
-      after = fit_model(cs, c.model, floor, options);
+      after = fit_model(cs, c.model, noise, options);
     } catch (const core::InputError&) {
       d.untestable.push_back(c.term);  // more parameters than the run has rows
       continue;

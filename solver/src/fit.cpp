@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -56,6 +58,50 @@ double implausible_sigma(const std::string& unit) {
   return std::numeric_limits<double>::infinity();  // custom terms: the user's scale
 }
 
+/// chi2 and degrees of freedom of the gyro rows (0) and the accelerometer rows (1).
+struct SensorQuality {
+  std::array<double, 2> chi2{0.0, 0.0};
+  std::array<int, 2> dof{0, 0};
+  double chi2_dof(int sensor) const {
+    return dof[static_cast<std::size_t>(sensor)] > 0
+               ? chi2[static_cast<std::size_t>(sensor)] / dof[static_cast<std::size_t>(sensor)]
+               : std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+int sensor_of(const ParameterInfo& p) { return p.sensor == core::TermSensor::kGyro ? 0 : 1; }
+
+SensorQuality sensor_quality(const Eigen::VectorXd& whitened_residual,
+                             const std::vector<bool>& gyro_row, const Model& model,
+                             const std::vector<Eigen::Index>& accepted) {
+  SensorQuality q;
+  std::array<int, 2> rows{0, 0};
+  for (Eigen::Index r = 0; r < whitened_residual.size(); ++r) {
+    const std::size_t sensor = gyro_row[static_cast<std::size_t>(r)] ? 0 : 1;
+    q.chi2[sensor] += whitened_residual[r] * whitened_residual[r];
+    ++rows[sensor];
+  }
+  std::array<int, 2> parameters{0, 0};
+  for (Eigen::Index p : accepted) {
+    ++parameters[static_cast<std::size_t>(sensor_of(model.parameters()[static_cast<std::size_t>(p)]))];
+  }
+  for (std::size_t s = 0; s < 2; ++s) q.dof[s] = rows[s] > 0 ? rows[s] - parameters[s] : 0;
+  return q;
+}
+
+/// Per accepted parameter, the factor its variance is inflated by: its sensor's chi2/dof when
+/// that exceeds 1 (a poor accelerometer fit says nothing about the gyro parameters).
+Eigen::VectorXd parameter_inflation(const SensorQuality& q, const Model& model,
+                                    const std::vector<Eigen::Index>& accepted, bool inflate) {
+  Eigen::VectorXd f = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(accepted.size()));
+  if (!inflate) return f;
+  for (std::size_t j = 0; j < accepted.size(); ++j) {
+    const double c = q.chi2_dof(sensor_of(model.parameters()[static_cast<std::size_t>(accepted[j])]));
+    if (std::isfinite(c) && c > 1.0) f[static_cast<Eigen::Index>(j)] = c;
+  }
+  return f;
+}
+
 }  // namespace
 
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) {
@@ -77,31 +123,54 @@ std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) 
 
 FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
                     const NoiseFloor& floor, const FitOptions& options) {
+  return fit_model(steps, model, StepNoise::white_only(floor, "white noise only, as asked"),
+                   options);
+}
+
+FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
+                    const StepNoise& noise, const FitOptions& options) {
   const std::size_t P = model.size();
   std::vector<int> channels;
   for (int c = 0; c < kChannels; ++c) {
     if (uses_channel(options.rows, c)) channels.push_back(c);
   }
+  const auto S = static_cast<Eigen::Index>(steps.size());
   const auto rows = static_cast<Eigen::Index>(steps.size() * channels.size());
-  // Weighted design and observation: row (step, channel) divided by its step-mean sigma.
+  // Whitened design and observation, channel by channel (rows of one channel are the steps in
+  // order): the raw step means times the inverse Cholesky factor of their covariance. With
+  // white noise alone that is each row divided by its step-mean sigma.
   Eigen::MatrixXd A(rows, static_cast<Eigen::Index>(P));
   Eigen::VectorXd y(rows);
-  Eigen::Index r = 0;
-  for (const StepSummary& s : steps) {
-    const Vector6d sigma = floor.step_sigma(s.count);
-    for (int c : channels) {
-      y[r] = (s.measured[c] - s.reference[c]) / sigma[c];
-      for (std::size_t p = 0; p < P; ++p) {
-        A(r, static_cast<Eigen::Index>(p)) = s.regressors(c, static_cast<Eigen::Index>(p)) / sigma[c];
-      }
-      ++r;
+  std::vector<Vector6d> marginal_sigma(steps.size(), Vector6d::Zero());
+  std::vector<bool> gyro_row(static_cast<std::size_t>(rows), false);
+  for (std::size_t ci = 0; ci < channels.size(); ++ci) {
+    const int c = channels[ci];
+    const Eigen::MatrixXd C = noise.covariance(c, steps);
+    const Eigen::LLT<Eigen::MatrixXd> llt(C);
+    if (llt.info() != Eigen::Success) {
+      throw core::InputError("noise model", fmt::format("the covariance of the {} step means is "
+                                                        "not positive definite",
+                                                        channel_name(c)));
     }
+    Eigen::MatrixXd Ac(S, static_cast<Eigen::Index>(P));
+    Eigen::VectorXd yc(S);
+    for (Eigen::Index i = 0; i < S; ++i) {
+      const StepSummary& s = steps[static_cast<std::size_t>(i)];
+      yc[i] = s.measured[c] - s.reference[c];
+      Ac.row(i) = s.regressors.row(c);
+      marginal_sigma[static_cast<std::size_t>(i)][c] = std::sqrt(C(i, i));
+    }
+    const auto first = static_cast<Eigen::Index>(ci) * S;
+    A.middleRows(first, S) = llt.matrixL().solve(Ac);
+    y.segment(first, S) = llt.matrixL().solve(yc);
+    for (Eigen::Index i = 0; i < S; ++i) gyro_row[static_cast<std::size_t>(first + i)] = c < kAx;
   }
 
   FitResult fit;
   fit.model = model.text();
   for (const auto& t : model.terms()) fit.terms.push_back(t.name);
-  fit.floor = floor;
+  fit.floor = noise.white;
+  fit.noise = noise;
   fit.rows = options.rows;
 
   // Identifiability: rules first, then columns in model order against the span of the ones
@@ -168,6 +237,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   Eigen::VectorXd scale, theta;
   Eigen::MatrixXd cov;
   double chi2 = 0.0;  // of the last solve
+  SensorQuality quality;
+  Eigen::VectorXd inflation;
   for (;;) {
     k = static_cast<Eigen::Index>(accepted.size());
     if (rows <= k) {
@@ -194,18 +265,18 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       theta = theta.cwiseQuotient(scale);
       cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
     }
-    // The sigmas as they will be reported (inflated by a poor fit) decide what is determined.
-    chi2 = (y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
-                       : Eigen::VectorXd::Zero(rows)))
-               .squaredNorm();
-    const double inflation = options.inflate_sigma_by_chi2
-                                 ? std::max(1.0, chi2 / static_cast<double>(rows - k))
-                                 : 1.0;
+    // The sigmas as they will be reported (inflated by a poor fit of their own sensor's rows)
+    // decide what is determined.
+    const Eigen::VectorXd e =
+        y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale))) : Eigen::VectorXd::Zero(rows));
+    chi2 = e.squaredNorm();
+    quality = sensor_quality(e, gyro_row, model, accepted);
+    inflation = parameter_inflation(quality, model, accepted, options.inflate_sigma_by_chi2);
     std::vector<Eigen::Index> kept;
     for (Eigen::Index j = 0; j < k; ++j) {
       const auto p = static_cast<std::size_t>(accepted[static_cast<std::size_t>(j)]);
       const ParameterInfo& info = model.parameters()[p];
-      const double sigma = std::sqrt(cov(j, j) * inflation);
+      const double sigma = std::sqrt(cov(j, j) * inflation[j]);
       const double bound = implausible_sigma(info.unit);
       if (sigma > bound) {
         fit.unidentifiable.push_back(
@@ -224,7 +295,15 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   fit.chi2 = chi2;
   fit.dof = static_cast<int>(rows - k);
   fit.chi2_dof = fit.dof > 0 ? fit.chi2 / fit.dof : std::numeric_limits<double>::quiet_NaN();
-  if (options.inflate_sigma_by_chi2 && fit.dof > 0 && fit.chi2_dof > 1.0) cov *= fit.chi2_dof;
+  fit.chi2_dof_gyro = quality.chi2_dof(0);
+  fit.chi2_dof_accel = quality.chi2_dof(1);
+  fit.dof_gyro = quality.dof[0];
+  fit.dof_accel = quality.dof[1];
+  // Each sensor's parameters take their own sensor's inflation; a covariance between a gyro
+  // and an accelerometer parameter the geometric mean of the two.
+  for (Eigen::Index i = 0; i < k; ++i) {
+    for (Eigen::Index j = 0; j < k; ++j) cov(i, j) *= std::sqrt(inflation[i] * inflation[j]);
+  }
   fit.covariance = cov;
   fit.values = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(P));
   for (Eigen::Index j = 0; j < k; ++j) {
@@ -241,7 +320,7 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     StepResidual sr;
     sr.index = s.index;
     sr.label = s.label;
-    sr.sigma = floor.step_sigma(s.count);
+    sr.sigma = marginal_sigma[static_cast<std::size_t>(&s - steps.data())];
     sr.residual = s.measured - s.reference - s.regressors * fit.values;
     sum_g += sr.residual.head<3>().squaredNorm();
     sum_a += sr.residual.tail<3>().squaredNorm();
@@ -252,6 +331,11 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   fit.residual_rms_gyro_dps = std::sqrt(sum_g / (3.0 * n));
   fit.residual_rms_accel_mps2 = std::sqrt(sum_a / (3.0 * n));
   fit.noise_floor = (sum_sigma2 / n).cwiseSqrt();
+  for (const StepSummary& s : steps) {
+    if (s.count > 1 && s.duration_s > 0.0) {
+      fit.sample_rate_hz = std::max(fit.sample_rate_hz, static_cast<double>(s.count - 1) / s.duration_s);
+    }
+  }
   return fit;
 }
 
@@ -261,6 +345,10 @@ nlohmann::json fit_to_json(const FitResult& fit) {
   j["chi2_dof"] = fit.chi2_dof;
   j["chi2"] = fit.chi2;
   j["dof"] = fit.dof;
+  const auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  j["by_sensor"] = {{"gyro", {{"chi2_dof", finite_or_null(fit.chi2_dof_gyro)}, {"dof", fit.dof_gyro}}},
+                    {"accel", {{"chi2_dof", finite_or_null(fit.chi2_dof_accel)}, {"dof", fit.dof_accel}}}};
+  j["noise_model"] = step_noise_to_json(fit.noise, fit.sample_rate_hz);
   j["residual_rms"] = {{"gyro", fit.residual_rms_gyro_dps}, {"accel", fit.residual_rms_accel_mps2}};
   j["noise_floor"] = {{"gyro", {fit.noise_floor[0], fit.noise_floor[1], fit.noise_floor[2]}},
                       {"accel", {fit.noise_floor[3], fit.noise_floor[4], fit.noise_floor[5]}}};

@@ -50,6 +50,8 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     s.label = step.step.label;
     s.count = static_cast<std::int64_t>(n);
     s.duration_s = step.samples.back().receive_time_s - step.samples.front().receive_time_s;
+    s.start_s = step.samples.front().receive_time_s - run_start_s;
+    s.end_s = step.samples.back().receive_time_s - run_start_s;
     s.regressors = Eigen::MatrixXd::Zero(kChannels, P);
     // Block means of measurement - reference for the batch-means variance.
     const int blocks = n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock)

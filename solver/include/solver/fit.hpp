@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "solver/model.hpp"
+#include "solver/step_noise.hpp"
 #include "solver/step_summary.hpp"
 
 namespace calstand::solver {
@@ -22,7 +23,8 @@ struct FitOptions {
   /// 1/sine^2 (1e6), i.e. it would be fitted to noise. Both are reported, neither fitted.
   double near_collinear_sine = 1e-3;
   /// Inflate the sigmas by sqrt(chi2/dof) when that exceeds 1 (the model misses something,
-  /// so the noise floor alone understates the uncertainty).
+  /// so the noise floor alone understates the uncertainty). Gyro and accelerometer parameters
+  /// are separate problems: each sensor's parameters are inflated by its own rows' chi2/dof.
   bool inflate_sigma_by_chi2 = true;
 };
 
@@ -45,7 +47,9 @@ struct StepResidual {
   std::size_t index = 0;
   std::string label;
   Vector6d residual = Vector6d::Zero();  ///< [deg/s, m/s^2]
-  Vector6d sigma = Vector6d::Zero();     ///< the noise floor of this step's mean
+  /// The noise of this step's mean alone (white part and wander; neighbouring steps' noise is
+  /// correlated with it when the noise model has a wander)
+  Vector6d sigma = Vector6d::Zero();
   Vector6d z() const { return residual.cwiseQuotient(sigma); }
 };
 
@@ -56,22 +60,36 @@ struct FitResult {
   std::vector<Unidentifiable> unidentifiable;
   Eigen::VectorXd values;         ///< every model parameter (0 for unidentifiable ones)
   Eigen::MatrixXd covariance;     ///< of `parameters`, in their order (sigma inflation applied)
-  double chi2 = 0.0;
+  double chi2 = 0.0;  ///< against the noise model's covariance (whitened residuals)
   int dof = 0;
   double chi2_dof = 0.0;
+  /// Per sensor: chi2/dof of the gyro rows and of the accelerometer rows, each against its own
+  /// parameters (NaN when the sensor's rows are not fitted or leave no degree of freedom).
+  double chi2_dof_gyro = 0.0;
+  double chi2_dof_accel = 0.0;
+  int dof_gyro = 0;
+  int dof_accel = 0;
   double residual_rms_gyro_dps = 0.0;    ///< over step-mean residuals of all steps and axes
   double residual_rms_accel_mps2 = 0.0;
   Vector6d noise_floor = Vector6d::Zero();  ///< rms of the steps' mean sigmas, per channel
-  NoiseFloor floor;
+  NoiseFloor floor;  ///< the white part, measured inside the steps
+  StepNoise noise;   ///< the whole noise model the weights came from
+  double sample_rate_hz = 0.0;  ///< of the IMU, from the steps' sample counts and durations
   std::vector<StepResidual> steps;
   SensorRows rows = SensorRows::kBoth;
 };
 
-/// Weighted linear least squares of `model` on step summaries built for it, weights from
-/// `floor`. Parameters the run cannot determine (temperature orders at or above the number of
-/// temperature plateaus, columns collinear or nearly collinear with earlier ones, columns with
-/// no excitation) are reported in `unidentifiable` and held at zero. Throws core::InputError
-/// when there are fewer rows than parameters.
+/// Generalised least squares of `model` on step summaries built for it: per channel, the step
+/// means are whitened by the Cholesky factor of their covariance under `noise` (white noise
+/// on the diagonal, a wandering bias between steps). Parameters the run cannot determine
+/// (temperature orders at or above the number of temperature plateaus, columns collinear or
+/// nearly collinear with earlier ones, columns with no excitation) are reported in
+/// `unidentifiable` and held at zero. Throws core::InputError when there are fewer rows than
+/// parameters.
+FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
+                    const StepNoise& noise, const FitOptions& options = {});
+
+/// The same with white noise only (weights from `floor`): the plain weighted least squares.
 FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
                     const NoiseFloor& floor, const FitOptions& options = {});
 

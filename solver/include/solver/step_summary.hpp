@@ -34,6 +34,8 @@ struct StepSummary {
   std::string label;
   std::int64_t count = 0;      ///< samples
   double duration_s = 0.0;     ///< first to last sample [s]
+  double start_s = 0.0;        ///< first sample, since the run's first sample [s]
+  double end_s = 0.0;          ///< last sample, since the run's first sample [s]
   Vector6d measured = Vector6d::Zero();   ///< mean measurement [deg/s, m/s^2]
   Vector6d reference = Vector6d::Zero();  ///< mean reference (w, f) of the model
   Eigen::MatrixXd regressors;             ///< kChannels x parameters, step means

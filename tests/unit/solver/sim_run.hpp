@@ -20,6 +20,9 @@ struct SimStep {
   double temperature_c = 25.0;
   double temperature_rate_cpm = 0.0;  ///< the IMU temperature ramps at this rate in the step
   double duration_s = 20.0;
+  /// Time before the step that is not recorded (a move, a settle, a soak) [s]: the IMU's noise
+  /// processes run on through it, as they do on a station.
+  double gap_before_s = 0.0;
 };
 
 inline core::Site wuhan_site() {
@@ -71,6 +74,12 @@ inline RunData simulate_run(const sim::ImuTruth& truth, const std::vector<SimSte
   double t = 0.0;
   for (std::size_t k = 0; k < steps.size(); ++k) {
     const SimStep& st = steps[k];
+    // Unrecorded time: the samples are drawn (so the bias wanders on) and dropped.
+    const auto gap = static_cast<std::size_t>(st.gap_before_s * truth.sample_rate_hz);
+    sim::TableKinematics rest;
+    rest.outer_deg = st.outer_deg;
+    rest.inner_deg = st.inner_deg;
+    for (std::size_t i = 0; i < gap; ++i, t += dt) imu.sample(t, rest, st.temperature_c);
     store::StepData step;
     step.step.index = k;
     step.step.label = "step " + std::to_string(k);
