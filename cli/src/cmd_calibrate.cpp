@@ -15,6 +15,7 @@
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/calibration_record.hpp"
+#include "solver/noise_estimate.hpp"
 #include "solver/run_noise.hpp"
 #include "store/calibrations.hpp"
 #include "store/derived_run.hpp"
@@ -70,9 +71,8 @@ void run_calibrate(const CalibrateOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
   const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
-  const auto steps = solver::summarize_steps(data, model);
-  const solver::FitResult fit =
-      solver::fit_model(steps, model, solver::measure_noise_floor(steps));
+  std::vector<solver::StepSummary> steps;
+  const solver::FitResult fit = solver::fit_run(data, model, {}, {}, &steps);
   record_history(db, opt.run, data.setup.device, "calibrate", model, fit, "both");
   const nlohmann::json record = solver::make_calibration_record(
       data.setup, model, fit, steps, noise_figures(db, opt.run, data.setup.device));

@@ -11,6 +11,7 @@
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/fit.hpp"
+#include "solver/noise_estimate.hpp"
 #include "solver/thermal_fit.hpp"
 
 namespace calstand::cli {
@@ -19,6 +20,7 @@ namespace {
 struct FitCommandOptions : RunModelOptions {
   bool as_json = false;
   int per_plateau_order = 0;  ///< > 0: thermal calibration by per-plateau fits
+  bool white_noise = false;   ///< weights from the white noise alone (no wandering bias)
 };
 
 /// The classical thermal calibration: the model fitted on each temperature plateau, then a
@@ -56,15 +58,16 @@ void run_fit(const FitCommandOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
   const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
-  const auto steps = solver::summarize_steps(data, model);
   if (opt.per_plateau_order > 0) {
-    run_per_plateau(opt, model, data, steps);
+    run_per_plateau(opt, model, data, solver::summarize_steps(data, model));
     return;
   }
   solver::FitOptions fit_options;
   fit_options.rows = parse_sensor_rows(opt.sensor);
-  const solver::FitResult fit =
-      solver::fit_model(steps, model, solver::measure_noise_floor(steps), fit_options);
+  solver::NoiseEstimateOptions noise_options;
+  noise_options.estimate_wander = !opt.white_noise;
+  std::vector<solver::StepSummary> steps;
+  const solver::FitResult fit = solver::fit_run(data, model, fit_options, noise_options, &steps);
   record_history(db, opt.run, data.setup.device, "fit", model, fit, opt.sensor);
   const auto groups = solver::group_quality(fit, steps);
   const auto worst = solver::worst_steps(fit);
@@ -88,6 +91,9 @@ void register_fit(CLI::App& app) {
       "fit", "Fit an error model to a run by weighted least squares on step means");
   add_run_model_options(cmd, *opt);
   cmd->add_flag("--json", opt->as_json, "Print the fit as JSON");
+  cmd->add_flag("--white-noise", opt->white_noise,
+                "Weigh the steps by the white noise inside them alone (no wandering bias "
+                "between steps): the plain weighted least squares");
   cmd->add_option("--per-plateau", opt->per_plateau_order,
                   "Thermal calibration the classical way: fit the model on each temperature "
                   "plateau, then a polynomial of this order in temperature per bias")

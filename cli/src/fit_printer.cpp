@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
+
 #include "core/error.hpp"
 #include "core/error_terms.hpp"
 #include "store/fit_history.hpp"
@@ -48,23 +51,48 @@ void print_fit(const solver::FitResult& fit) {
   const bool gyro = fit.rows != solver::SensorRows::kAccel;
   const bool accel = fit.rows != solver::SensorRows::kGyro;
   if (gyro) {
-    fmt::print("  gyro  step residual rms {:.3g} deg/s   noise floor {:.3g} {:.3g} {:.3g} deg/s\n",
-               fit.residual_rms_gyro_dps, fit.noise_floor[0], fit.noise_floor[1],
-               fit.noise_floor[2]);
+    fmt::print("  gyro  chi2/dof {:.3g}, step residual rms {:.3g} deg/s, noise of a step mean {:.3g} "
+               "{:.3g} {:.3g} deg/s\n",
+               fit.chi2_dof_gyro, fit.residual_rms_gyro_dps, fit.noise_floor[0],
+               fit.noise_floor[1], fit.noise_floor[2]);
   }
   if (accel) {
-    fmt::print("  accel step residual rms {:.3g} m/s^2  noise floor {:.3g} {:.3g} {:.3g} m/s^2\n",
-               fit.residual_rms_accel_mps2, fit.noise_floor[3], fit.noise_floor[4],
-               fit.noise_floor[5]);
+    fmt::print("  accel chi2/dof {:.3g}, step residual rms {:.3g} m/s^2, noise of a step mean {:.3g} "
+               "{:.3g} {:.3g} m/s^2\n",
+               fit.chi2_dof_accel, fit.residual_rms_accel_mps2, fit.noise_floor[3],
+               fit.noise_floor[4], fit.noise_floor[5]);
   }
-  fmt::print("  noise floor from {} {}\n", fit.floor.steps_used,
-             fit.floor.from_static_steps ? "static steps" : "steps (the run has no static step)");
-  if (fit.chi2_dof > 2.0) {
-    fmt::print("  the residuals are {:.1f} times the noise: the model misses an effect "
-               "(try `calstand diagnose`)\n",
-               std::sqrt(fit.chi2_dof));
-  } else {
-    fmt::print("  the residuals are at the noise floor\n");
+  print_noise_model(fit);
+  const auto verdict = [](const char* sensor, double chi2_dof) {
+    if (!std::isfinite(chi2_dof)) return;
+    if (chi2_dof > 2.0) {
+      fmt::print("  {}: the residuals are {:.1f} times the noise: the model misses an effect "
+                 "(try `calstand diagnose`)\n",
+                 sensor, std::sqrt(chi2_dof));
+    } else {
+      fmt::print("  {}: the residuals are at the noise floor\n", sensor);
+    }
+  };
+  if (gyro) verdict("gyro", fit.chi2_dof_gyro);
+  if (accel) verdict("accel", fit.chi2_dof_accel);
+}
+
+void print_noise_model(const solver::FitResult& fit) {
+  fmt::print("\nnoise model: {}\n", fit.noise.method);
+  const bool gyro = fit.rows != solver::SensorRows::kAccel;
+  const bool accel = fit.rows != solver::SensorRows::kGyro;
+  for (int c = 0; c < solver::kChannels; ++c) {
+    if ((c < solver::kAx && !gyro) || (c >= solver::kAx && !accel)) continue;
+    const auto& ch = fit.noise.channels[static_cast<std::size_t>(c)];
+    // White density in datasheet units: deg/sqrt(h) for a gyro, ug/sqrt(Hz) for an accelerometer.
+    const double density = fit.sample_rate_hz > 0.0
+                               ? std::sqrt(fit.noise.white.density[c] / fit.sample_rate_hz)
+                               : std::numeric_limits<double>::quiet_NaN();
+    const std::string white =
+        c < solver::kAx ? fmt::format("white {:.3g} deg/sqrt(h)", density * 60.0)
+                        : fmt::format("white {:.3g} ug/sqrt(Hz)", density * 1e6 / 9.80665);
+    fmt::print("  {}  {}; {}{}\n", solver::channel_name(c), white,
+               ch.determined ? "" : "NOT DETERMINED: ", ch.note);
   }
 }
 

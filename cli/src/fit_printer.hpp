@@ -37,6 +37,10 @@ void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor
 /// fit quality against the noise floor.
 void print_fit(const solver::FitResult& fit);
 
+/// The noise model the fit's weights came from: per channel its white density and wander in
+/// datasheet units, or why the wander was not determined.
+void print_noise_model(const solver::FitResult& fit);
+
 /// The groups of steps where the fit fails, worst first, and the worst single residuals.
 void print_groups(const std::vector<solver::GroupQuality>& groups,
                   const std::vector<solver::WorstStep>& worst, std::size_t max_groups = 8);

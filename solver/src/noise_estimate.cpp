@@ -221,6 +221,9 @@ std::string describe(const WanderModel& w, int channel) {
   return "";
 }
 
+// Order of the temperature polynomials in the noise superset.
+constexpr int kNoiseSupersetTemperatureOrder = 3;
+
 }  // namespace
 
 Model noise_superset(const Model& model) {
@@ -228,7 +231,13 @@ Model noise_superset(const Model& model) {
   for (const auto& info : core::error_term_catalogue()) {
     const ModelTerm* present = model.find(info.name);
     if (present && !info.polynomial_order) continue;
-    m = m.with_term(info, present ? present->order + 1 : 1);
+    // Temperature polynomials to a fixed order beyond the model's (the fit drops the orders
+    // the run's plateaus cannot determine), so that every model of the same run, and every
+    // candidate diagnose tries, is weighed with one noise model.
+    const int order = info.polynomial_order
+                          ? std::max(kNoiseSupersetTemperatureOrder, present ? present->order + 1 : 1)
+                          : 1;
+    m = m.with_term(info, order);
   }
   return m;
 }
@@ -382,14 +391,17 @@ StepNoise estimate_run_noise(const RunData& data, const Model& model, SensorRows
 }
 
 FitResult fit_run(const RunData& data, const Model& model, const FitOptions& options,
-                  const NoiseEstimateOptions& noise_options) {
+                  const NoiseEstimateOptions& noise_options,
+                  std::vector<StepSummary>* model_steps) {
   const Model superset = noise_superset(model);
   const std::vector<StepSummary> all = summarize_steps(data, superset);
   const StepNoise noise = estimate_step_noise(all, superset, options.rows, noise_options);
   const std::vector<StepSummary> steps = model.earth_rate()
                                              ? select_parameters(all, superset, model)
                                              : summarize_steps(data, model);
-  return fit_model(steps, model, noise, options);
+  FitResult fit = fit_model(steps, model, noise, options);
+  if (model_steps) *model_steps = steps;
+  return fit;
 }
 
 }  // namespace calstand::solver

@@ -50,8 +50,10 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
 StepNoise estimate_run_noise(const RunData& data, const Model& model, SensorRows rows,
                              const NoiseEstimateOptions& options = {});
 
-/// The fit `calstand fit` makes: `model` on `data` with the run's own noise model.
+/// The fit `calstand fit` makes: `model` on `data` with the run's own noise model. The step
+/// summaries of `model` go to `model_steps` when given (for grouping the residuals).
 FitResult fit_run(const RunData& data, const Model& model, const FitOptions& options = {},
-                  const NoiseEstimateOptions& noise_options = {});
+                  const NoiseEstimateOptions& noise_options = {},
+                  std::vector<StepSummary>* model_steps = nullptr);
 
 }  // namespace calstand::solver

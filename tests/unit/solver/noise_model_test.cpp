@@ -240,3 +240,55 @@ TEST(HonestNoise, MemsGaussMarkovTrueModelFitsAtTheNoiseFloor) {
 
 }  // namespace
 }  // namespace calstand::solver
+
+namespace calstand::solver {
+namespace {
+
+/// `terms` without `hidden`.
+std::string without(const std::string& terms, const std::string& hidden) {
+  std::string out;
+  std::size_t start = 0;
+  while (start <= terms.size()) {
+    const std::size_t end = std::min(terms.find(',', start), terms.size());
+    const std::string t = terms.substr(start, end - start);
+    if (t.substr(0, t.find(':')) != hidden) out += (out.empty() ? "" : ",") + t;
+    start = end + 1;
+  }
+  return out;
+}
+
+/// A catalogue effect the model lacks, on a unit with datasheet noise: diagnose must still
+/// recommend it first, and with it the fit must reach the floor with nothing more recommended.
+void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidden, std::uint64_t seed) {
+  const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
+  const std::string all = true_terms(truth);
+  const Diagnosis before = diagnose(data, Model::parse(without(all, hidden)));
+  ASSERT_FALSE(before.candidates.empty()) << what;
+  EXPECT_EQ(before.recommended, hidden) << what << ": " << before.advice;
+  EXPECT_EQ(before.candidates.front().term, hidden) << what;
+  const Diagnosis after = diagnose(data, Model::parse(all));
+  EXPECT_LE(after.fit.chi2_dof, 1.3) << what;
+  EXPECT_EQ(after.recommended, "") << what << ": " << after.advice;
+  std::printf("%s: chi2/dof without %s %.2f, with it %.3f\n", what, hidden.c_str(),
+              before.fit.chi2_dof, after.fit.chi2_dof);
+}
+
+TEST(HonestNoise, AHiddenEffectIsStillFoundOnRealNoise) {
+  for (std::uint64_t seed : {1, 2}) {
+    // LN200-class accelerometers whose bias follows temperature by 10-20 ug/degC.
+    sim::ImuTruth ln200 = from_sheet("ln200", seed, 100.0);
+    ln200.accel_temp_bias = {Eigen::Vector3d(10e-6, -15e-6, 20e-6) * 9.80665};
+    expect_found("LN200 + accel_temp_bias", ln200, "accel_temp_bias", 200 + seed);
+    // The ADIS16488-class sheet's own g-sensitivity (0.009 deg/s/g) left out of the model.
+    expect_found("ADIS16488 without gyro_g_sensitivity", from_sheet("adis16488", seed, 100.0),
+                 "gyro_g_sensitivity", 300 + seed);
+    // The MEMS part's gyro bias following temperature by about 1 deg/h per degC (a tenth of
+    // the ADIS16488-class sheet's coefficient).
+    sim::ImuTruth mems = mems_gauss_markov_unit(seed);
+    mems.gyro_temp_bias = {Eigen::Vector3d(3e-4, -3e-4, 2e-4)};
+    expect_found("MEMS GM + gyro_temp_bias", mems, "gyro_temp_bias", 400 + seed);
+  }
+}
+
+}  // namespace
+}  // namespace calstand::solver
