@@ -1,5 +1,5 @@
 // The whole thermal-calibration campaign (library defaults: 7 plateaus, 24 orientations and a
-// rate ladder at each, about 11.5 h of lab time) on the simulated station, through the engine
+// rate ladder at each, about 12 h of lab time) on the simulated station, through the engine
 // and the capture writer into a WAL database on disk. Target (issue 3): 1000x real time.
 //
 //   build/bench/calstand_bench --benchmark_filter=Campaign

@@ -27,7 +27,7 @@ class FitCli : public ::testing::Test {
     station_ = dir_ + "station.json";
     write_text(station_, calstand::testing::known_imu_station("fit-test", 3));
     db_ = dir_ + "fit.db";
-    // Run 1: six positions; run 2: rates about both table axes; run 3: six positions again.
+    // Run 1: six positions; run 2: rates about body x, y and z; run 3: six positions again.
     for (const std::string args :
          {"six-position --set capture_s=20", "rate-ladder --set rates=[30,90] --set revolutions=2",
           "six-position --set capture_s=20"}) {
@@ -60,19 +60,26 @@ TEST_F(FitCli, SixPositionRecoversTheAccelerometerWithinThreeSigma) {
 }
 
 TEST_F(FitCli, RateLadderRecoversTheGyroAndReportsWhatItCannotSee) {
-  const auto j = fit_json("--run 2 --sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate");
+  const auto j = fit_json(
+      "--run 2 --sensor gyro --model "
+      "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,gyro_temp_bias");
   std::set<std::string> fitted;
   for (const auto& p : j["parameters"]) {
     const std::string name = p["name"];
     fitted.insert(name);
     EXPECT_NEAR(p["value"].get<double>(), truth(name), 3.0 * p["sigma"].get<double>()) << name;
   }
-  EXPECT_TRUE(fitted.count("gyro_scale.z"));
-  EXPECT_TRUE(fitted.count("gyro_misalignment.xy"));
-  // The ladder turns about the outer (North) and inner (Up) axes only: body x never turns.
+  // The ladder turns about body x, y and z: every scale factor and misalignment.
+  for (const char* name : {"gyro_scale.x", "gyro_scale.y", "gyro_scale.z", "gyro_misalignment.xy",
+                           "gyro_misalignment.yx", "gyro_misalignment.zx"}) {
+    EXPECT_TRUE(fitted.count(name)) << name << "\n" << j["unidentifiable"].dump(2);
+  }
+  // ... all at one temperature: a temperature coefficient is not seen.
   std::set<std::string> missing;
   for (const auto& u : j["unidentifiable"]) missing.insert(u["name"].get<std::string>());
-  EXPECT_TRUE(missing.count("gyro_scale.x")) << j["unidentifiable"].dump(2);
+  EXPECT_EQ(missing,
+            (std::set<std::string>{"gyro_temp_bias.x1", "gyro_temp_bias.y1", "gyro_temp_bias.z1"}))
+      << j["unidentifiable"].dump(2);
   EXPECT_LT(j["chi2_dof"].get<double>(), 3.0);
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
 
 #include "core/table_geometry.hpp"
@@ -155,16 +156,52 @@ TEST(Library, MultiPositionHasTwentyFourDistinctMostlyTiltedOrientations) {
   EXPECT_GE(distinct_gravity, 18u);
 }
 
-TEST(Library, RateLadderTurnsEachRateBothWaysOnEachAxisForWholeRevolutions) {
+// The body axis (a letter) and signed body rate of each rate step, from the table angles the
+// moves before it left (TableGeometry): the outer axis turns about a body axis that depends on
+// the inner angle, so the inner angle must be known at each outer rate step.
+struct BodyRotation {
+  char axis;
+  double rate_dps;
+  double duration_s;
+};
+
+std::vector<BodyRotation> body_rotations(const std::vector<Step>& steps) {
+  const core::TableGeometry g = default_station().geometry(0);
+  std::optional<double> outer, inner;  // unknown after a rate step on that axis
+  std::vector<BodyRotation> out;
+  for (const auto& s : steps) {
+    if (s.kind == StepKind::kMove) {
+      outer = s.outer_deg;
+      inner = s.inner_deg;
+    }
+    if (s.kind != StepKind::kRate) continue;
+    const bool on_outer = s.axis == "outer";
+    EXPECT_TRUE(!on_outer || inner.has_value()) << s.label << ": inner angle unknown";
+    const double o = outer.value_or(0.0), i = inner.value_or(0.0);
+    const Eigen::Vector3d level =
+        g.table_rate_level_dps(o, on_outer ? s.rate_dps : 0.0, on_outer ? 0.0 : s.rate_dps);
+    const Eigen::Vector3d body = g.body_to_level(o, i).transpose() * level;
+    Eigen::Index k = 0;
+    body.cwiseAbs().maxCoeff(&k);
+    EXPECT_NEAR(std::abs(body[k]), std::abs(s.rate_dps), 1e-9)
+        << s.label << ": about " << body.transpose();
+    out.push_back({static_cast<char>('x' + k), body[k], s.duration_s});
+    (on_outer ? outer : inner).reset();
+  }
+  return out;
+}
+
+TEST(Library, RateLadderTurnsEachRateBothWaysAboutEachBodyAxisForWholeRevolutions) {
   const auto steps = expand(load_procedure("rate-ladder"));
-  std::map<std::pair<std::string, double>, double> recorded_s;  // (axis, rate) -> time
   for (const auto& s : steps) {
     if (s.kind != StepKind::kRate) continue;
-    ASSERT_TRUE(s.revolutions.has_value());
-    EXPECT_NEAR(s.duration_s * std::abs(s.rate_dps), 360.0 * *s.revolutions, 1e-9);
-    recorded_s[{s.axis, s.rate_dps}] = s.duration_s;
+    ASSERT_TRUE(s.revolutions.has_value()) << s.label;
+    EXPECT_NEAR(s.duration_s * std::abs(s.rate_dps), 360.0 * *s.revolutions, 1e-9) << s.label;
   }
-  for (const std::string axis : {"outer", "inner"}) {
+  std::map<std::pair<char, double>, double> recorded_s;  // (body axis, body rate) -> time
+  const auto rotations = body_rotations(steps);
+  for (const auto& r : rotations) recorded_s[{r.axis, r.rate_dps}] += r.duration_s;
+  for (const char axis : {'x', 'y', 'z'}) {
     for (const double rate : {10.0, 30.0, 100.0, 300.0}) {
       ASSERT_EQ(recorded_s.count({axis, rate}), 1u) << axis << " " << rate;
       ASSERT_EQ(recorded_s.count({axis, -rate}), 1u) << axis << " " << -rate;
@@ -172,17 +209,29 @@ TEST(Library, RateLadderTurnsEachRateBothWaysOnEachAxisForWholeRevolutions) {
       EXPECT_DOUBLE_EQ(cw_s, ccw_s);
     }
   }
-  EXPECT_EQ(recorded_s.size(), 16u);
+  EXPECT_EQ(rotations.size(), 24u);  // each (axis, rate) once
+}
+
+TEST(Library, RateLadderInAnyAxisOrderStillTurnsAboutEachBodyAxis) {
+  const auto steps = expand(load_procedure("rate-ladder"),
+                            parse_overrides({R"(axes=["inner","outer"])", "rates=[30]"}));
+  std::set<std::pair<char, double>> seen;
+  for (const auto& r : body_rotations(steps)) seen.insert({r.axis, r.rate_dps});
+  EXPECT_EQ(seen, (std::set<std::pair<char, double>>{
+                      {'x', 30}, {'x', -30}, {'y', 30}, {'y', -30}, {'z', 30}, {'z', -30}}));
 }
 
 TEST(Library, RateLadderAboveTheStationLimitIsReportedPerRate) {
   const Plan plan = make_plan(load_procedure("rate-ladder"), default_station(),
                               parse_overrides({"rates=[100,600]"}));
-  // 600 deg/s exceeds the outer axis (400) but not the inner one (1000); both signs.
-  ASSERT_EQ(plan.violations.size(), 2u) << test::lines(plan.violations);
-  EXPECT_EQ(plan.violations[0].path, "steps[1].steps[0].steps[0].rate_dps");
+  // 600 deg/s exceeds the outer axis (400) but not the inner one (1000); both signs, in the
+  // ladder with body z up and in the one about body x.
+  ASSERT_EQ(plan.violations.size(), 4u) << test::lines(plan.violations);
+  EXPECT_EQ(plan.violations[0].path, "steps[0].steps[1].steps[0].rate_dps");
   EXPECT_EQ(plan.violations[0].message, "${rate} = 600 exceeds the outer axis limit 400");
   EXPECT_EQ(plan.violations[1].message, "-${rate} = -600 exceeds the outer axis limit 400");
+  EXPECT_EQ(plan.violations[2].path, "steps[2].steps[0].rate_dps");
+  EXPECT_EQ(plan.violations[3].path, "steps[2].steps[1].rate_dps");
 }
 
 TEST(Library, ThermalCalibrationSoaksEachOverriddenPlateau) {
@@ -196,31 +245,51 @@ TEST(Library, ThermalCalibrationSoaksEachOverriddenPlateau) {
   EXPECT_EQ(soaks, (std::vector<double>{-40, 25, 85, 25}));  // plateaus, then back to final_c
   EXPECT_DOUBLE_EQ(*plan.envelope.min_temperature_c, -40.0);
   EXPECT_DOUBLE_EQ(*plan.envelope.max_temperature_c, 85.0);
-  // Per plateau: 24 orientations and 2 axes x 4 rates x 2 directions.
-  EXPECT_EQ(plan.envelope.captures, 3u * (24u + 16u));
+  // Per plateau: 24 orientations and 3 body axes x 4 rates x 2 directions.
+  EXPECT_EQ(plan.envelope.captures, 3u * (24u + 24u));
   EXPECT_GT(plan.total_s, 3 * 1800.0);
 }
 
-TEST(Library, ThermalRampRecordsWhileTheChamberRamps) {
+TEST(Library, ThermalCalibrationLadderTurnsAboutEachBodyAxisOnEachPlateau) {
+  const auto steps = expand(load_procedure("thermal-calibration"),
+                            parse_overrides({"temperatures=[-10,60]", "rates=[30,100]"}));
+  std::map<std::pair<char, double>, int> turns;  // (body axis, body rate) -> plateaus
+  for (const auto& r : body_rotations(steps)) ++turns[{r.axis, r.rate_dps}];
+  ASSERT_EQ(turns.size(), 3u * 2u * 2u);
+  for (const auto& [key, plateaus] : turns)
+    EXPECT_EQ(plateaus, 2) << key.first << " " << key.second;
+}
+
+TEST(Library, ThermalRampRecordsEachRampInSegmentsWhileTheChamberRamps) {
   const Procedure p = load_procedure("thermal-ramp");
   const Plan plan = make_plan(p, default_station());
-  std::size_t ramp_captures = 0, soaks_at_ramp_end = 0;
-  for (std::size_t i = 1; i + 1 < plan.steps.size(); ++i) {
-    const Step& before = plan.steps[i - 1];
-    if (plan.steps[i].kind == StepKind::kCapture && before.kind == StepKind::kSetTemperature &&
-        !before.wait_for_soak) {
-      ++ramp_captures;
-      // The default capture covers the whole ramp: 60 * (85 - -40) / 0.5 s.
-      EXPECT_DOUBLE_EQ(plan.steps[i].duration_s, 60.0 * 125.0 / 0.5);
-      // ... so a soak at the ramp's end right after it needs only its stable time.
-      const Step& after = plan.steps[i + 1];
-      if (after.target_c == before.target_c) {
-        EXPECT_DOUBLE_EQ(plan.step_duration_s[i + 1], after.soak.stable_s);
-        ++soaks_at_ramp_end;
-      }
+  ASSERT_TRUE(plan.ok()) << test::lines(plan.violations);
+  // Runs of captures after a set_temperature that does not soak: the ramps.
+  std::vector<double> ramp_s;
+  std::vector<std::size_t> segments;
+  std::size_t soaks_at_ramp_end = 0;
+  for (std::size_t i = 1; i < plan.steps.size(); ++i) {
+    const Step& start = plan.steps[i - 1];
+    if (plan.steps[i].kind != StepKind::kCapture || start.kind != StepKind::kSetTemperature ||
+        start.wait_for_soak)
+      continue;
+    std::size_t j = i;
+    double recorded = 0.0;
+    for (; j < plan.steps.size() && plan.steps[j].kind == StepKind::kCapture; ++j) {
+      recorded += plan.steps[j].duration_s;
+    }
+    ramp_s.push_back(recorded);
+    segments.push_back(j - i);
+    // The default segments cover the whole ramp, so a soak at its end needs only its stable time.
+    if (j < plan.steps.size() && plan.steps[j].kind == StepKind::kSetTemperature &&
+        plan.steps[j].target_c == start.target_c) {
+      EXPECT_DOUBLE_EQ(plan.step_duration_s[j], plan.steps[j].soak.stable_s);
+      ++soaks_at_ramp_end;
     }
   }
-  EXPECT_EQ(ramp_captures, 2u);
+  // Each ramp: 60 * (85 - -40) / 0.5 s in 10 segments, each a point of the bias curve.
+  EXPECT_EQ(ramp_s, (std::vector<double>{60.0 * 125.0 / 0.5, 60.0 * 125.0 / 0.5}));
+  EXPECT_EQ(segments, (std::vector<std::size_t>{10, 10}));
   EXPECT_EQ(soaks_at_ramp_end, 1u);  // the top; after the ramp down the chamber goes to final_c
 }
 
