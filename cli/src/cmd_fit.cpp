@@ -30,8 +30,12 @@ void run_per_plateau(const FitCommandOptions& opt, const solver::Model& model,
   solver::ThermalFitOptions options;
   options.temperature_ref_c = data.setup.temperature_ref_c;
   options.fit.rows = parse_sensor_rows(opt.sensor);
+  solver::NoiseEstimateOptions noise_options;
+  noise_options.estimate_wander = !opt.white_noise;
+  // Each plateau's fit is weighed with the run's own noise model, like the whole-run fit.
   const solver::ThermalFitResult r = solver::fit_per_plateau(
-      steps, model, opt.per_plateau_order, solver::measure_noise_floor(steps), options);
+      steps, model, opt.per_plateau_order,
+      solver::estimate_run_noise(data, model, options.fit.rows, noise_options), options);
   if (opt.as_json) {
     fmt::print("{}\n", solver::thermal_fit_to_json(r).dump(2));
     return;

@@ -63,18 +63,18 @@ void print_fit(const solver::FitResult& fit) {
                fit.noise_floor[4], fit.noise_floor[5]);
   }
   print_noise_model(fit);
-  const auto verdict = [](const char* sensor, double chi2_dof) {
+  const auto verdict = [](const char* sensor, double chi2_dof, int dof) {
     if (!std::isfinite(chi2_dof)) return;
-    if (chi2_dof > 2.0) {
-      fmt::print("  {}: the residuals are {:.1f} times the noise: the model misses an effect "
-                 "(try `calstand diagnose`)\n",
-                 sensor, std::sqrt(chi2_dof));
+    if (solver::above_noise(chi2_dof, dof)) {
+      fmt::print("  {}: the residuals are {:.2g} times the noise, more than chance gives over {} "
+                 "degrees of freedom: the model misses an effect (try `calstand diagnose`)\n",
+                 sensor, std::sqrt(chi2_dof), dof);
     } else {
       fmt::print("  {}: the residuals are at the noise floor\n", sensor);
     }
   };
-  if (gyro) verdict("gyro", fit.chi2_dof_gyro);
-  if (accel) verdict("accel", fit.chi2_dof_accel);
+  if (gyro) verdict("gyro", fit.chi2_dof_gyro, fit.dof_gyro);
+  if (accel) verdict("accel", fit.chi2_dof_accel, fit.dof_accel);
 }
 
 void print_noise_model(const solver::FitResult& fit) {

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <array>
 #include <cmath>
 
@@ -13,6 +14,9 @@
 
 namespace calstand::solver {
 namespace {
+
+// A whitened regressor column smaller than this share of the largest is zero to rounding.
+constexpr double kZeroColumnShare = 1e-12;
 
 bool uses_channel(SensorRows rows, int channel) {
   if (rows == SensorRows::kGyro) return channel < kAx;
@@ -179,6 +183,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   temperature_rules(model, temperature_plateaus(steps).size(), excluded, fit.unidentifiable);
   std::vector<Eigen::Index> accepted;
   Eigen::MatrixXd basis(rows, 0);
+  double largest_column = 0.0;
+  for (Eigen::Index c = 0; c < A.cols(); ++c) largest_column = std::max(largest_column, A.col(c).norm());
   for (std::size_t p = 0; p < P; ++p) {
     const auto col = static_cast<Eigen::Index>(p);
     const std::string& name = model.parameters()[p].name;
@@ -190,7 +196,9 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       continue;
     }
     const double norm = A.col(col).norm();
-    if (!(norm > 0.0)) {
+    // Zero up to rounding counts as zero: a force component at 90 degrees is 6e-16 g, not 0,
+    // and normalising it would let rounding noise take a real parameter's place.
+    if (!(norm > kZeroColumnShare * largest_column)) {
       fit.unidentifiable.push_back(
           {name, "the run does not excite it (its regressor is zero in every step)", {}});
       continue;
@@ -337,6 +345,12 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     }
   }
   return fit;
+}
+
+bool above_noise(double chi2_dof, int dof) {
+  if (!(dof > 0) || !std::isfinite(chi2_dof)) return false;
+  const boost::math::chi_squared_distribution<double> dist(dof);
+  return chi2_dof * dof > boost::math::quantile(boost::math::complement(dist, 1e-3));
 }
 
 nlohmann::json fit_to_json(const FitResult& fit) {

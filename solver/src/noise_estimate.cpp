@@ -7,7 +7,6 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 #include "core/error.hpp"
@@ -361,10 +360,6 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     }
     const Trial excess = best_amplitude(independent, p, typical_count);
     const double excess_score = excess.log_likelihood - penalty_per_parameter;
-    if (std::getenv("CALSTAND_NOISE_DEBUG")) {
-      fmt::print(stderr, "{} white {:.1f} best {} {:.1f} excess {:.1f}\n", channel_name(c), white_ll,
-                 to_string(best.kind), best_score, excess_score);
-    }
     ch.source = fmt::format("restricted likelihood of {} step means ({} parameters act on {})",
                             steps.size(), p.parameters, channel_name(c));
     if (best.kind != WanderKind::kNone && excess_score - best_score > kNotWanderMargin) {

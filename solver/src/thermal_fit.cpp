@@ -78,14 +78,14 @@ void check_model(const Model& model) {
 
 /// fit_model() on one plateau, its errors naming the plateau.
 PlateauFit fit_plateau(const std::vector<StepSummary>& all, const std::vector<std::size_t>& members,
-                       double temperature_c, const Model& model, const NoiseFloor& floor,
+                       double temperature_c, const Model& model, const StepNoise& noise,
                        const FitOptions& options) {
   std::vector<StepSummary> steps;
   steps.reserve(members.size());
   for (std::size_t i : members) steps.push_back(all[i]);
   FitResult fit;
   try {
-    fit = fit_model(steps, model, floor, options);
+    fit = fit_model(steps, model, noise, options);
   } catch (const core::InputError& e) {
     throw core::InputError(kWhere, fmt::format("the plateau at {:.1f} degC has too few steps ({}) "
                                                "for the model: {}",
@@ -104,7 +104,7 @@ PlateauFit fit_plateau(const std::vector<StepSummary>& all, const std::vector<st
 }  // namespace
 
 ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Model& model,
-                                 int order, const NoiseFloor& floor,
+                                 int order, const StepNoise& noise,
                                  const ThermalFitOptions& options) {
   if (order < 1) {
     throw core::InputError(kWhere, fmt::format("order {} must be >= 1 (a thermal calibration "
@@ -133,7 +133,7 @@ ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Mo
   }
   for (std::size_t g = 0; g < groups.size(); ++g) {
     result.plateaus.push_back(
-        fit_plateau(steps, groups[g], temperatures[g], model, floor, options.fit));
+        fit_plateau(steps, groups[g], temperatures[g], model, noise, options.fit));
   }
 
   ThermalOptions thermal;

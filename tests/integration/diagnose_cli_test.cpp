@@ -65,17 +65,19 @@ TEST(DiagnoseCli, TheLoopFindsTheDemoImusEffectsOnImportedData) {
     EXPECT_LE(chi2, previous * 1.0001) << h.dump();
     previous = chi2;
   }
-  EXPECT_GT(history.front()["chi2_dof"].get<double>(), 5.0);
+  // The classical model is well above the noise floor (chi2/dof 2-4 against the demo IMU's
+  // honest noise, with its wandering accelerometer bias, over some 450 degrees of freedom).
+  EXPECT_GT(history.front()["chi2_dof"].get<double>(), 2.0);
 
   // The classical thermal calibration (per-plateau fits, then a line in temperature) finds the
-  // demo IMU's accelerometer temperature drift (sim/stations/demo.json: x1 = 3e-5 m/s^2/degC).
+  // demo IMU's accelerometer temperature drift (sim/stations/demo.json: x1 = 1e-4 m/s^2/degC).
   const auto thermal = nlohmann::json::parse(
       run("fit --db " + db + " --run 1 --per-plateau 1 --json").out);
   bool found = false;
   for (const auto& c : thermal["coefficients"]) {
     if (c["name"] == "accel_temp_bias.x1") {
       found = true;
-      EXPECT_NEAR(c["value"].get<double>(), 3e-5, 4.0 * c["sigma"].get<double>());
+      EXPECT_NEAR(c["value"].get<double>(), 1e-4, 4.0 * c["sigma"].get<double>());
     }
   }
   EXPECT_TRUE(found) << thermal.dump(2);

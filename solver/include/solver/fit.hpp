@@ -99,6 +99,11 @@ inline constexpr double kPlateauGapC = 2.0;
 /// Temperature plateaus of a run: step mean temperatures clustered with gaps over kPlateauGapC.
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps);
 
+/// True when a chi-square of `chi2_dof` per degree of freedom over `dof` degrees is above what
+/// the noise alone gives one time in a thousand: the model misses something (or the noise model
+/// understates the noise). chi2/dof 1.3 over 1000 degrees is; 1.3 over 20 is not.
+bool above_noise(double chi2_dof, int dof);
+
 /// The fit as the `calstand fit --json` document.
 nlohmann::json fit_to_json(const FitResult& fit);
 

@@ -73,7 +73,7 @@ struct ThermalFitResult {
 
 /// Fits `model` on each temperature plateau of `steps` (plateaus as temperature_plateaus()
 /// forms them: step mean temperatures split at gaps over 2 degC) with fit_model() and the
-/// shared noise floor `floor`, then fits each parameter identified on every plateau against
+/// shared noise model `noise` (white, or with a wandering bias), then fits each parameter identified on every plateau against
 /// dT = T - options.temperature_ref_c: biases by a polynomial of `order`, scale factors
 /// linearly, everything else by its weighted mean (see ThermalFitResult).
 ///
@@ -84,8 +84,15 @@ struct ThermalFitResult {
 /// when a plateau has too few steps for `model` (message names the plateau's temperature and
 /// step count); or when a polynomial fit fails.
 ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Model& model,
-                                 int order, const NoiseFloor& floor,
+                                 int order, const StepNoise& noise,
                                  const ThermalFitOptions& options = {});
+
+/// The same with white noise alone.
+inline ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Model& model,
+                                 int order, const NoiseFloor& floor,
+                                 const ThermalFitOptions& options = {}) {
+  return fit_per_plateau(steps, model, order, StepNoise::white_only(floor, "white noise only, as asked"), options);
+}
 
 /// The result as a JSON document: {"model", "order", "temperature_ref_c", "plateaus": [{
 /// "temperature_c", "steps", "chi2_dof", "dof", "parameters": [{name, value, sigma, unit}],
