@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
+#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <limits>
 
@@ -20,7 +21,10 @@ namespace {
 constexpr double kLog10RatioLo = -3.0;
 constexpr double kLog10RatioHi = 4.0;
 constexpr int kRatioGrid = 15;
-constexpr int kGoldenIterations = 30;
+// Brent's method: bits of precision in log r (a ratio known to 0.1 % changes no weight) and
+// the most evaluations it may take.
+constexpr int kBrentBits = 12;
+constexpr int kBrentIterations = 40;
 // Gauss-Markov correlation times tried per decade: the likelihood is flat in log tau at this
 // resolution (a factor 1.8), far finer than a run of tens of steps can tell.
 constexpr double kGaussMarkovTausPerDecade = 4.0;
@@ -125,27 +129,13 @@ Trial best_amplitude(const Kernel& kernel, const ChannelProblem& p, double typic
   };
   const double step = (kLog10RatioHi - kLog10RatioLo) / (kRatioGrid - 1);
   for (int i = 0; i < kRatioGrid; ++i) evaluate(kLog10RatioLo + step * i);
-  // Golden section between the best grid point's neighbours (the likelihood is unimodal in
-  // log r there).
-  double lo = std::max(kLog10RatioLo, best_r - step), hi = std::min(kLog10RatioHi, best_r + step);
-  const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-  double f1 = evaluate(x1), f2 = evaluate(x2);
-  for (int it = 0; it < kGoldenIterations; ++it) {
-    if (f1 > f2) {
-      hi = x2;
-      x2 = x1;
-      f2 = f1;
-      x1 = hi - g * (hi - lo);
-      f1 = evaluate(x1);
-    } else {
-      lo = x1;
-      x1 = x2;
-      f1 = f2;
-      x2 = lo + g * (hi - lo);
-      f2 = evaluate(x2);
-    }
-  }
+  // Brent's method between the best grid point's neighbours (the likelihood is unimodal in
+  // log r there); `evaluate` keeps the best point seen, grid included.
+  const double lo = std::max(kLog10RatioLo, best_r - step);
+  const double hi = std::min(kLog10RatioHi, best_r + step);
+  boost::uintmax_t iterations = kBrentIterations;
+  boost::math::tools::brent_find_minima([&](double r) { return -evaluate(r); }, lo, hi,
+                                        kBrentBits, iterations);
   Trial t;
   t.log_likelihood = best_value;
   t.amplitude = rho_of(best_r) * p.white;

@@ -292,3 +292,57 @@ TEST(HonestNoise, AHiddenEffectIsStillFoundOnRealNoise) {
 
 }  // namespace
 }  // namespace calstand::solver
+
+namespace calstand::solver {
+namespace {
+
+TEST(StepNoiseEstimate, AWhiteNoiseUnitHasNoWander) {
+  for (std::uint64_t seed : {11, 12}) {
+    sim::ImuTruth truth = testing::white_noise_truth(2e-3, 5e-4, 100.0);
+    sim::NormalSource n(seed);
+    testing::draw_classical_errors(truth, n);
+    const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
+    const StepNoise noise = estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
+    int wanders = 0;
+    for (const auto& ch : noise.channels) {
+      EXPECT_TRUE(ch.determined) << ch.note;
+      wanders += ch.wander.kind == WanderKind::kNone ? 0 : 1;
+    }
+    // BIC's penalty lets a spurious wander through now and then, not on most channels.
+    EXPECT_LE(wanders, 1) << "seed " << seed;
+  }
+}
+
+TEST(StepNoiseEstimate, TooFewStepsSaySoAndKeepTheWhiteNoise) {
+  sim::ImuTruth truth = from_sheet("ln200", 3, 100.0);
+  const RunData data = testing::simulate_run(truth, testing::six_positions(25.0, 30.0), 5);
+  const StepNoise noise = estimate_run_noise(data, Model::parse("accel_bias,accel_scale"), SensorRows::kAccel);
+  for (int c = kAx; c < kChannels; ++c) {
+    const auto& ch = noise.channels[static_cast<std::size_t>(c)];
+    EXPECT_FALSE(ch.determined);
+    EXPECT_EQ(ch.wander.kind, WanderKind::kNone);
+    EXPECT_FALSE(ch.note.empty());
+  }
+  EXPECT_FALSE(noise.correlated());
+}
+
+TEST(StepNoiseEstimate, AnExcessNeighbouringStepsDoNotShareIsNotCalledNoise) {
+  // White noise, plus on ax an offset drawn anew for every step (like a mount that shifts each
+  // time the table moves): the step means scatter far beyond the white noise, but no two
+  // steps share it. That is an effect, and the weights must not absorb it as a wander.
+  sim::ImuTruth truth = testing::white_noise_truth(2e-3, 5e-4, 100.0);
+  RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), 21);
+  sim::NormalSource n(22);
+  for (auto& step : data.steps) {
+    const double offset = 3e-4 * n.next();
+    for (auto& s : step.samples) s.accel_mps2.x() += offset;
+  }
+  const StepNoise noise = estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
+  const auto& ax = noise.channels[kAx];
+  EXPECT_FALSE(ax.determined) << ax.note;
+  EXPECT_EQ(ax.wander.kind, WanderKind::kNone);
+  EXPECT_NE(ax.note.find("neighbouring steps do not share"), std::string::npos) << ax.note;
+}
+
+}  // namespace
+}  // namespace calstand::solver
