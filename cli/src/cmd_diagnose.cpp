@@ -22,6 +22,29 @@ struct DiagnoseOptions : RunModelOptions {
   bool suggest = false;
 };
 
+// The best few custom terms, each ready to paste, with its figures and effect in words.
+constexpr std::size_t kSuggestionsShown = 3;
+
+void print_suggestions(const solver::Diagnosis& d) {
+  if (d.suggestions.empty()) {
+    // Searched only as a check on a wander where the catalogue explains: no news to print.
+    if (!d.explained) fmt::print("\ncustom terms: {}\n", d.custom_summary);
+    return;
+  }
+  fmt::print("\ncustom terms built from the signals ({} forms tried; best first):\n",
+             d.custom_forms_tried);
+  for (std::size_t i = 0; i < d.suggestions.size() && i < kSuggestionsShown; ++i) {
+    const solver::Suggestion& s = d.suggestions[i];
+    fmt::print("  --custom '{}'\n", s.custom);
+    fmt::print(
+        "      delta BIC {:.1f}, chi2/dof after {:.3g}; held out ({}): chi2/dof {:.3g} -> "
+        "{:.3g}\n",
+        s.delta_bic, s.chi2_dof_after, s.held_out, s.held_out_chi2_dof_before,
+        s.held_out_chi2_dof_after);
+    fmt::print("      {}\n", s.explanation);
+  }
+}
+
 void run_diagnose(const DiagnoseOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
@@ -59,6 +82,7 @@ void run_diagnose(const DiagnoseOptions& opt) {
     fmt::print("  {:<24} {:<3} r = {:+.2f}\n", d.signals[i].signal, d.signals[i].channel,
                d.signals[i].correlation);
   }
+  if (d.custom_searched) print_suggestions(d);
   fmt::print("\n{}: {}\n", d.explained ? "explained" : "NOT explained", d.advice);
 }
 

@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 #include <muParser.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <stdexcept>
@@ -12,6 +13,8 @@
 
 namespace calstand::solver {
 namespace {
+
+constexpr char kAxisNames[3] = {'x', 'y', 'z'};
 
 std::string expand_axis(std::string expr, char axis) {
   const std::string key = "{axis}";
@@ -39,8 +42,12 @@ void bind_signals(mu::Parser& p, std::array<double, kSignalCount>& vars, const s
 }  // namespace
 
 std::string CustomTermSpec::text() const {
-  return fmt::format("{}={}:{}", name, sensor == core::TermSensor::kGyro ? "gyro" : "accel",
-                     expression);
+  std::string selected;
+  for (int i = 0; i < 3; ++i) {
+    if (axes[static_cast<std::size_t>(i)]) selected += kAxisNames[i];
+  }
+  return fmt::format("{}={}{}:{}", name, sensor == core::TermSensor::kGyro ? "gyro" : "accel",
+                     selected == "xyz" ? "" : "." + selected, expression);
 }
 
 CustomTermSpec parse_custom_term(std::string_view text, const std::string& where) {
@@ -51,7 +58,7 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
   }
   CustomTermSpec spec;
   spec.name = std::string(text.substr(0, eq));
-  const std::string_view sensor = text.substr(eq + 1, colon - eq - 1);
+  std::string_view sensor = text.substr(eq + 1, colon - eq - 1);
   spec.expression = std::string(text.substr(colon + 1));
   if (!is_identifier(spec.name)) {
     throw core::InputError(where, fmt::format("term name \"{}\" must be letters, digits and _",
@@ -61,6 +68,23 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
     throw core::InputError(where, fmt::format("\"{}\" is a catalogue term: choose another name "
                                               "for a custom term",
                                               spec.name));
+  }
+  if (const auto dot = sensor.find('.'); dot != std::string_view::npos) {
+    const std::string_view axes = sensor.substr(dot + 1);
+    sensor = sensor.substr(0, dot);
+    spec.axes = {false, false, false};
+    for (char a : axes) {
+      const auto* it = std::find(std::begin(kAxisNames), std::end(kAxisNames), a);
+      if (it == std::end(kAxisNames) || spec.axes[static_cast<std::size_t>(it - kAxisNames)]) {
+        throw core::InputError(where, fmt::format("axes \"{}\" must be some of x, y and z, each "
+                                                  "once (e.g. gyro.z, accel.xy)",
+                                                  axes));
+      }
+      spec.axes[static_cast<std::size_t>(it - kAxisNames)] = true;
+    }
+    if (axes.empty()) {
+      throw core::InputError(where, "no axes after the sensor's \".\" (e.g. gyro.z)");
+    }
   }
   if (sensor == "gyro") {
     spec.sensor = core::TermSensor::kGyro;
@@ -72,7 +96,9 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
   if (spec.expression.empty()) throw core::InputError(where, "the expression is empty");
   // Compile each axis now so that a typo is reported before any data is read.
   std::array<double, kSignalCount> vars{};
-  for (char axis : {'x', 'y', 'z'}) {
+  for (int i = 0; i < 3; ++i) {
+    if (!spec.axes[static_cast<std::size_t>(i)]) continue;
+    const char axis = kAxisNames[i];
     mu::Parser p;
     const std::string expr = expand_axis(spec.expression, axis);
     try {
@@ -92,10 +118,13 @@ struct CustomTermEvaluator::Parsers {
 };
 
 CustomTermEvaluator::CustomTermEvaluator(const CustomTermSpec& spec)
-    : parsers_(std::make_unique<Parsers>()) {
-  const char axes[3] = {'x', 'y', 'z'};
+    : axes_(spec.axes), parsers_(std::make_unique<Parsers>()) {
   try {
-    for (int i = 0; i < 3; ++i) bind_signals(parsers_->axis[i], vars_, expand_axis(spec.expression, axes[i]));
+    for (int i = 0; i < 3; ++i) {
+      if (axes_[static_cast<std::size_t>(i)]) {
+        bind_signals(parsers_->axis[i], vars_, expand_axis(spec.expression, kAxisNames[i]));
+      }
+    }
   } catch (const mu::Parser::exception_type& e) {
     throw core::InputError("custom term " + spec.text(), e.GetMsg());
   }
@@ -106,7 +135,11 @@ CustomTermEvaluator::~CustomTermEvaluator() = default;
 Eigen::Vector3d CustomTermEvaluator::operator()(const Signals& s) {
   vars_ = signal_values(s);
   try {
-    return {parsers_->axis[0].Eval(), parsers_->axis[1].Eval(), parsers_->axis[2].Eval()};
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i) {
+      if (axes_[static_cast<std::size_t>(i)]) e[i] = parsers_->axis[i].Eval();
+    }
+    return e;
   } catch (const mu::Parser::exception_type& e) {
     // muParser's errors are not std::exceptions; give the caller one it can report.
     throw std::runtime_error("custom term expression \"" + e.GetExpr() + "\": " + e.GetMsg());

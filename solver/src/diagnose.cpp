@@ -1,13 +1,13 @@
 #include "solver/diagnose.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
+#include <limits>
 #include <map>
-
-#include <fmt/ranges.h>
 
 #include "core/error.hpp"
 #include "solver/noise_estimate.hpp"
@@ -82,6 +82,7 @@ std::string what_it_fixes(const FitResult& before, const std::vector<GroupQualit
     named.push_back(step_gains[i].second);
   }
   if (words.empty() && named.empty()) return "it fixes no step noticeably";
+  if (words.empty()) return fmt::format("fixes most at {}", fmt::join(named, ", "));
   return fmt::format("fixes most where {}{}", fmt::join(words, " and "),
                      named.empty() ? "" : fmt::format(" (e.g. {})", fmt::join(named, ", ")));
 }
@@ -133,21 +134,46 @@ std::vector<SignalCorrelation> correlate_signals(const FitResult& fit,
   return out;
 }
 
+/// The fitted channels whose noise model has a wandering bias weighing at least as much as the
+/// white noise in a typical step mean. The noise model removes only catalogue effects before it
+/// looks for a wander, so an effect the catalogue lacks, shared by neighbouring steps, can pose
+/// as one; there the model "fits the noise floor" without explaining anything.
+std::vector<std::string> wander_outweighing_white(const FitResult& fit,
+                                                  const std::vector<StepSummary>& steps) {
+  std::vector<std::string> out;
+  for (int c : fit_channels(fit.rows)) {
+    const ChannelStepNoise& ch = fit.noise.channels[static_cast<std::size_t>(c)];
+    if (!ch.determined || ch.wander.kind == WanderKind::kNone) continue;
+    double wander = 0.0, white = 0.0;
+    for (const StepSummary& s : steps) {
+      wander += ch.wander.interval_mean_covariance(s.start_s, s.end_s, s.start_s, s.end_s);
+      white += fit.noise.white.density[c] / static_cast<double>(s.count);
+    }
+    if (wander >= white) out.emplace_back(channel_name(c));
+  }
+  return out;
+}
+
 }  // namespace
 
-Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options) {
+Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options,
+                   const DiagnoseOptions& diagnose_options) {
   std::vector<CandidateModel> candidates = candidate_models(model, options.rows);
-  // One pass over the samples for the model and every candidate that keeps its reference; the
-  // Earth rate changes the reference, so that candidate gets its own pass.
+  // One pass over the samples for the model and every candidate that keeps its reference: the
+  // noise model's superset (every catalogue term, see noise_superset()) when the model has the
+  // Earth rate, so that the same pass serves the noise model; the Earth rate changes the
+  // reference, so without it the noise model and that candidate get their own passes.
   Model superset = model;
-  for (const auto& c : candidates) {
-    if (c.info->name == "earth_rate") continue;
-    const ModelTerm* t = c.model.find(c.info->name);
-    superset = superset.with_term(*c.info, t ? t->order : 1);
+  if (model.earth_rate()) {
+    superset = noise_superset(model);
+  } else {
+    for (const auto& c : candidates) {
+      if (c.info->name == "earth_rate") continue;
+      const ModelTerm* t = c.model.find(c.info->name);
+      superset = superset.with_term(*c.info, t ? t->order : 1);
+    }
   }
   const std::vector<StepSummary> all = summarize_steps(data, superset);
-  // The noise model comes from the residuals of every catalogue term: the superset when it
-  // holds the Earth rate (the gyro rows need it), else its own pass.
   const StepNoise noise = model.earth_rate() ? estimate_step_noise(all, superset, options.rows)
                                              : estimate_run_noise(data, model, options.rows);
   const std::vector<StepSummary> steps = select_parameters(all, superset, model);
@@ -205,7 +231,57 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
   if (strong && (!model_fits || d.candidates.front().chi2_dof_after < d.fit.chi2_dof)) {
     d.recommended = d.candidates.front().term;
   }
-  if (model_fits && strong) {
+  const std::vector<std::string> wandering = wander_outweighing_white(d.fit, steps);
+  const bool search = diagnose_options.custom_search == CustomSearch::kAlways ||
+                      (diagnose_options.custom_search == CustomSearch::kWhenUnexplained &&
+                       (!d.explained || !wandering.empty()));
+  if (search) {
+    SuggestInput in;
+    in.data = &data;
+    in.model = &model;
+    in.steps = &steps;
+    in.fit = &d.fit;
+    in.catalogue = &superset;
+    in.catalogue_steps = &all;
+    in.best_catalogue_delta_bic = d.candidates.empty() ? std::numeric_limits<double>::infinity()
+                                                       : d.candidates.front().delta_bic;
+    SuggestionSearch found = suggest_custom_terms(in, options, diagnose_options.suggest);
+    d.custom_searched = found.ran;
+    d.custom_forms_tried = found.forms_tried;
+    d.custom_summary = found.summary;
+    d.suggestions = std::move(found.suggestions);
+    for (Suggestion& s : d.suggestions) {
+      s.explanation = fmt::format("{}; {}", s.effect, what_it_fixes(d.fit, d.groups, s.fit, steps));
+    }
+  }
+  // A suggestion beat every catalogue term and held out of sample: the catalogue does not
+  // explain the residual, even where it reached the noise floor with a wander (which the custom
+  // term then explains better: not noise, an effect). A catalogue term it beats by very strong
+  // evidence is not worth adding first.
+  const bool noise_posed = !d.suggestions.empty() && d.explained;
+  if (!d.suggestions.empty()) {
+    d.explained = false;
+    if (!d.recommended.empty() &&
+        d.suggestions.front().delta_bic < d.candidates.front().delta_bic + kStrongDeltaBic) {
+      d.recommended.clear();
+    }
+  }
+  if (noise_posed) {
+    const Suggestion& top = d.suggestions.front();
+    d.advice = fmt::format(
+        "the model reaches chi2/dof {:.2f} only with the wandering bias the noise model gives {}; "
+        "a custom term built from the signals explains that residual better than any catalogue "
+        "term{}: --custom '{}' (chi2/dof {:.2f} with its own noise model, BIC {:+.0f}; held out, "
+        "chi2/dof {:.2f} to {:.2f} with {}).{}",
+        d.fit.chi2_dof, fmt::join(wandering, ", "),
+        d.candidates.empty()
+            ? std::string()
+            : fmt::format(" (the best, {}, BIC {:+.0f})", d.candidates.front().term,
+                          d.candidates.front().delta_bic),
+        top.custom, top.chi2_dof_after, top.delta_bic, top.held_out_chi2_dof_before,
+        top.held_out_chi2_dof_after, top.held_out,
+        d.recommended.empty() ? "" : fmt::format(" {} does nearly as well.", d.recommended));
+  } else if (model_fits && strong) {
     d.advice = fmt::format("the model is near the noise floor (chi2/dof {:.2f}), but adding {} is "
                            "strongly supported (BIC {:+.0f}, chi2/dof to {:.2f})",
                            d.fit.chi2_dof, d.candidates.front().term, d.candidates.front().delta_bic,
@@ -234,7 +310,19 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
                                                d.candidates.front().chi2_dof_after);
     d.advice = fmt::format("no catalogue term explains the residual: {}. The residual follows {}.",
                            best, follows.empty() ? "no signal" : follows);
-    if (!d.signals.empty()) {
+    if (!d.suggestions.empty()) {
+      const Suggestion& top = d.suggestions.front();
+      const bool all_of_it = top.chi2_dof_after <= kExplainedChi2Dof;
+      d.advice += fmt::format(
+          " A custom term built from the signals {}: --custom '{}' (chi2/dof {:.2f} to {:.2f}, "
+          "BIC {:+.0f}; held out, chi2/dof {:.2f} to {:.2f} with {}).{}",
+          all_of_it ? "explains it" : "explains part of it", top.custom, d.fit.chi2_dof,
+          top.chi2_dof_after, top.delta_bic, top.held_out_chi2_dof_before,
+          top.held_out_chi2_dof_after, top.held_out,
+          all_of_it ? "" : " Add it and diagnose again: more than one effect is missing.");
+    } else if (d.custom_searched) {
+      d.advice += " Nothing simple explains it: " + d.custom_summary + ".";
+    } else if (!d.signals.empty()) {
       const auto& top = d.signals.front();
       const char* sensor = top.channel[0] == 'g' ? "gyro" : "accel";
       d.advice += fmt::format(" Try a custom term built on it, e.g. --custom k1={}:{}", sensor, top.signal);
@@ -262,6 +350,22 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
   for (const auto& s : d.signals) {
     j["signals"].push_back({{"signal", s.signal}, {"channel", s.channel}, {"correlation", s.correlation}});
   }
+  j["suggestions"] = nlohmann::json::array();
+  for (const auto& s : d.suggestions) {
+    j["suggestions"].push_back({{"custom", s.custom},
+                                {"chi2_dof_after", s.chi2_dof_after},
+                                {"delta_bic", s.delta_bic},
+                                {"p_value", s.p_value},
+                                {"added_parameters", s.added_parameters},
+                                {"held_out",
+                                 {{"method", s.held_out},
+                                  {"chi2_dof_before", s.held_out_chi2_dof_before},
+                                  {"chi2_dof_after", s.held_out_chi2_dof_after}}},
+                                {"explanation", s.explanation}});
+  }
+  j["custom_search"] = {{"ran", d.custom_searched},
+                        {"forms_tried", d.custom_forms_tried},
+                        {"summary", d.custom_summary}};
   j["explained"] = d.explained;
   j["advice"] = d.advice;
   j["recommended"] = d.recommended;

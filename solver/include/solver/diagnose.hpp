@@ -6,6 +6,7 @@
 
 #include "solver/fit.hpp"
 #include "solver/groups.hpp"
+#include "solver/suggest.hpp"
 
 namespace calstand::solver {
 
@@ -37,6 +38,27 @@ struct Diagnosis {
   /// The term to add: the best candidate when the model is above the noise floor and that
   /// candidate explains (all or most of) the excess; empty otherwise.
   std::string recommended;
+  /// Custom terms built from the signals that explain the residual, best first (see
+  /// suggest.hpp); `explained` stays false with them: the catalogue does not have the effect.
+  std::vector<Suggestion> suggestions;
+  bool custom_searched = false;  ///< the search for custom terms ran
+  int custom_forms_tried = 0;
+  std::string custom_summary;  ///< one sentence: what was tried and what held
+};
+
+/// When diagnose searches custom terms built from the signals.
+enum class CustomSearch {
+  /// When no catalogue term explains the residual (`explained` false): a catalogue term, with
+  /// its physical meaning and contract units, is always preferred, and when one explains (most
+  /// of) the excess the user adds it and diagnoses again before anything custom is worth trying.
+  kWhenUnexplained,
+  kAlways,  ///< whatever the catalogue does (the guards still apply)
+  kNever,
+};
+
+struct DiagnoseOptions {
+  CustomSearch custom_search = CustomSearch::kWhenUnexplained;
+  SuggestOptions suggest;
 };
 
 /// A fit with chi2/dof at or below this is at the noise floor (the residuals are explained).
@@ -45,8 +67,10 @@ inline constexpr double kExplainedChi2Dof = 1.5;
 /// Fits `model`, then each catalogue term it lacks (and the next order of each temperature
 /// polynomial it has) added in turn, ranked by the change in BIC; correlates the residuals with
 /// every signal of error-model.md, their squares and absolute values. One pass over the samples
-/// serves every candidate.
-Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options = {});
+/// serves every candidate. Then, as `diagnose_options` asks, searches custom terms
+/// (suggest_custom_terms()).
+Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options = {},
+                   const DiagnoseOptions& diagnose_options = {});
 
 /// The `calstand diagnose --json` document.
 nlohmann::json diagnosis_to_json(const Diagnosis& d);

@@ -10,6 +10,7 @@
 #include "sim/noise.hpp"
 #include "sim_run.hpp"
 #include "solver/diagnose.hpp"
+#include "solver/noise_estimate.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -167,6 +168,16 @@ TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
   const Diagnosis fixed = diagnose(data, Model::parse(kBase, {"grad=gyro:temperature_rate"}));
   EXPECT_LT(fixed.fit.chi2_dof, 1.3);
   EXPECT_TRUE(fixed.explained);
+  // The diagnosis found that term itself, on the two axes that have it, and its figure is the
+  // one `calstand fit --custom` gives.
+  ASSERT_FALSE(d.suggestions.empty()) << d.advice;
+  const Suggestion& top = d.suggestions.front();
+  EXPECT_EQ(top.custom.substr(top.custom.find('=') + 1), "gyro.xy:temperature_rate") << top.custom;
+  EXPECT_NE(d.advice.find("--custom '" + top.custom + "'"), std::string::npos) << d.advice;
+  const FitResult with =
+      fit_run(data, Model::parse(kBase).with_custom(parse_custom_term(top.custom, "test")));
+  EXPECT_NEAR(with.chi2_dof, top.chi2_dof_after, 1e-6 * top.chi2_dof_after);
+  EXPECT_LT(with.chi2_dof, 1.3);
 }
 
 }  // namespace

@@ -1,0 +1,93 @@
+#pragma once
+// Custom terms for a residual the catalogue does not explain: built from the signals of
+// error-model.md, tried, and kept only when they help.
+//
+// The forms. For each sensor, every signal s, its square, its absolute value and the product of
+// every pair of signals on one parameter per axis (`gyro:force_z^2`); the same with each axis on
+// its own axis's signal (`gyro:force_{axis}^2`, `gyro:rate_{axis}*force_{axis}`,
+// `gyro:temperature*force_{axis}`); and a warm-up transient `exp(-elapsed/tau)` with tau searched
+// on a log grid, then refined. Each form acts on the subset of the sensor's axes that earns its
+// parameters (`gyro.z:force_z^2` when only gz follows force_z^2).
+//
+// Screening. Hundreds of forms through muParser over every sample would take seconds, so the
+// step means of every building block are computed natively in one pass over the samples, and
+// each form is judged by the chi-square it would remove from the model's fit, with the fit's own
+// whitening (the noise model of the diagnosis): its whitened step-mean column projected out of
+// the model's columns, against the whitened residual. A form whose column lies in the span of
+// the catalogue terms is that catalogue effect in disguise and is left out.
+//
+// The guards. The best few are refitted exactly (fit_model with the diagnosis's noise model) and
+// must lower BIC, as diagnose ranks catalogue terms (chi2 after - before + k ln n, k counting a
+// searched time constant), by "very strong" evidence (10) more than the best catalogue
+// candidate does (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
+// plateaus as a temperature term does), and by more than very strong evidence plus the
+// look-elsewhere cost of the search (2 ln of the forms tried). Then they must hold on data they
+// were not fitted on: leave one temperature plateau out when the run has three or more, else
+// five folds of interleaved steps; the held-out chi-square must fall by more than the
+// parameters the term adds. The survivors' figures are those of fit_run with the term, the
+// path `calstand fit --custom` takes (its noise model re-estimated with the term).
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "solver/fit.hpp"
+#include "solver/model.hpp"
+#include "solver/step_summary.hpp"
+
+namespace calstand::solver {
+
+/// A custom term that explains (part of) the residual.
+struct Suggestion {
+  std::string custom;  ///< NAME=SENSOR[.AXES]:EXPRESSION, as `calstand fit --custom` takes it
+  /// chi2/dof of fit_run with the term: what `calstand fit --custom` reports.
+  double chi2_dof_after = 0.0;
+  /// BIC after - before (chi2 + k ln n), both with the diagnosis's noise model, as the catalogue
+  /// candidates are ranked; negative is better.
+  double delta_bic = 0.0;
+  double p_value = 1.0;  ///< F-test of the added parameters, with the diagnosis's noise model
+  int added_parameters = 0;
+  std::string held_out;                   ///< how: "3 temperature plateaus", "5 folds of steps"
+  double held_out_chi2_dof_before = 0.0;  ///< of the model, predicting each held-out part
+  double held_out_chi2_dof_after = 0.0;   ///< ... with the term
+  std::string effect;                     ///< in words, with the fitted coefficients
+  std::string explanation;  ///< the effect and which steps it fixes (filled by diagnose)
+  FitResult fit;            ///< fit_run with the term
+};
+
+/// The outcome of the search.
+struct SuggestionSearch {
+  bool ran = false;
+  int forms_tried = 0;                  ///< candidate forms screened (sensor x expression)
+  std::vector<Suggestion> suggestions;  ///< best (most negative delta_bic) first
+  std::string summary;                  ///< one sentence: what was tried and what held
+};
+
+struct SuggestOptions {
+  /// Confirmed through fit_run and reported: each costs a pass over the samples with the noise
+  /// superset, as much as the diagnosis itself, so the best and the runner-up.
+  std::size_t max_suggestions = 2;
+  std::size_t max_checked = 8;  ///< refitted exactly and cross-validated
+};
+
+/// What the search needs from the diagnosis: the model's step summaries and fit (whose noise
+/// model weights everything), and the catalogue's span.
+struct SuggestInput {
+  const RunData* data = nullptr;
+  const Model* model = nullptr;
+  const std::vector<StepSummary>* steps = nullptr;  ///< summaries for `model`
+  const FitResult* fit = nullptr;                   ///< of `model` on `steps`
+  /// `model` with every catalogue term that could be added (same earth_rate as `model`), and
+  /// summaries for it: a form inside its span is a catalogue effect.
+  const Model* catalogue = nullptr;
+  const std::vector<StepSummary>* catalogue_steps = nullptr;
+  /// delta_bic of the best catalogue candidate (+infinity when there is none).
+  double best_catalogue_delta_bic = 0.0;
+};
+
+/// Searches the custom terms that explain the residual of `in.fit`. Nothing is suggested when no
+/// form passes the guards (see above). `options.rows` limits the sensors tried.
+SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& options = {},
+                                      const SuggestOptions& suggest = {});
+
+}  // namespace calstand::solver

@@ -1,0 +1,874 @@
+#include "solver/suggest.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <algorithm>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+
+#include "core/error.hpp"
+#include "solver/custom_term.hpp"
+#include "solver/groups.hpp"
+#include "solver/noise_estimate.hpp"
+#include "solver/signals.hpp"
+
+namespace calstand::solver {
+namespace {
+
+// "Very strong" evidence on the Kass-Raftery scale of BIC differences, as diagnose asks of a
+// catalogue term before recommending it.
+constexpr double kStrongDeltaBic = -10.0;
+// A form whose whitened column lies within this sine of the catalogue's span on a channel (all
+// but 1e-4 of its variance there) is that catalogue effect, which the user should add by name.
+constexpr double kCatalogueSine = 1e-2;
+// Transient time constants per decade on the grid: the chi-square is smooth in log tau at this
+// resolution (a factor 1.5), and golden section refines the best point.
+constexpr double kTausPerDecade = 6.0;
+constexpr int kGoldenIterations = 24;
+// Folds of interleaved steps when the run has fewer than three temperature plateaus.
+constexpr std::size_t kStepFolds = 5;
+// Significant digits of a searched time constant in the term's text.
+constexpr int kTauDigits = 3;
+
+// --- Building blocks: the step means of every signal, product of two, and absolute value -----
+
+constexpr std::size_t kS = kSignalCount;
+constexpr std::size_t kProducts = kS * (kS + 1) / 2;  // squares included
+constexpr std::size_t kBlocks = kS + kProducts + kS;
+// First signal index of the per-axis signals (rate_x, force_x, table_rate_x); the three scalar
+// signals (temperature, temperature_rate, elapsed) come before them.
+constexpr std::array<std::size_t, 3> kAxisFamilies{3, 6, 9};
+constexpr std::size_t kScalars = 3;
+constexpr int kTransient = -1;  // block index of the exp(-elapsed/tau) column
+
+std::size_t linear_block(std::size_t k) { return k; }
+std::size_t product_block(std::size_t j, std::size_t k) {
+  if (j > k) std::swap(j, k);
+  return kS + j * (2 * kS - j + 1) / 2 + (k - j);  // rows j' < j hold kS - j' products each
+}
+std::size_t abs_block(std::size_t k) { return kS + kProducts + k; }
+bool is_product(std::size_t b) { return b >= kS && b < kS + kProducts; }
+/// The signals (j <= k) of product block `b`.
+std::pair<std::size_t, std::size_t> product_signals(std::size_t b) {
+  std::size_t j = 0;
+  while (product_block(j, kS - 1) < b) ++j;
+  return {j, j + (b - product_block(j, j))};
+}
+
+std::string signal_text(std::size_t k) { return std::string(signal_names()[k]); }
+/// "force_{axis}" for the family whose x signal is `first`.
+std::string family_text(std::size_t first) {
+  const std::string x = signal_text(first);
+  return x.substr(0, x.size() - 1) + "{axis}";
+}
+
+std::string block_text(std::size_t b) {
+  if (b < kS) return signal_text(b);
+  if (!is_product(b)) return "abs(" + signal_text(b - kS - kProducts) + ")";
+  const auto [j, k] = product_signals(b);
+  return j == k ? signal_text(j) + "^2" : signal_text(j) + "*" + signal_text(k);
+}
+
+/// Step means (rows: steps of `data` in order) of every building block, in one pass over the
+/// samples with the signals exactly as the model's custom terms see them.
+Eigen::MatrixXd block_means(const RunData& data, bool earth_rate) {
+  const SignalBuilder build(data.setup, earth_rate);
+  const double run_start_s = data.steps.front().samples.front().receive_time_s;
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(data.steps.size()),
+                      static_cast<Eigen::Index>(kBlocks));
+  for (std::size_t i = 0; i < data.steps.size(); ++i) {
+    const store::StepData& step = data.steps[i];
+    const std::vector<double> rates = step_temperature_rates(step.samples);
+    std::array<double, kBlocks> sum{};
+    for (std::size_t n = 0; n < step.samples.size(); ++n) {
+      const core::ImuSample& sample = step.samples[n];
+      const auto v = signal_values(
+          build(sample, step.table[n], rates[n], sample.receive_time_s - run_start_s));
+      std::size_t p = kS;
+      for (std::size_t j = 0; j < kS; ++j) {
+        sum[j] += v[j];
+        sum[kS + kProducts + j] += std::abs(v[j]);
+        for (std::size_t k = j; k < kS; ++k) sum[p++] += v[j] * v[k];
+      }
+    }
+    const double inv_n = 1.0 / static_cast<double>(step.samples.size());
+    for (std::size_t b = 0; b < kBlocks; ++b) {
+      out(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(b)) = sum[b] * inv_n;
+    }
+  }
+  return out;
+}
+
+bool is_rate(std::size_t i) { return i >= kAxisFamilies[0] && i < kAxisFamilies[1]; }
+
+// A block whose step means all stay below this share of its signals' size is zero but for
+// rounding (force_x*force_y when the table only ever tips the IMU about body axes): a fit would
+// scale the rounding up by 1e12 to match whatever it happens to correlate with.
+constexpr double kRoundingShare = 1e-9;
+
+/// Per block: true when it adds nothing: its step means are zero but for rounding, it follows
+/// the Earth rate alone, or it is the abs() of a signal that never changes sign (elapsed), i.e.
+/// the signal itself.
+std::vector<bool> useless_blocks(const Eigen::MatrixXd& blocks) {
+  std::array<double, kS> size{};
+  for (std::size_t k = 0; k < kS; ++k) {
+    size[k] = std::sqrt(blocks.col(static_cast<Eigen::Index>(product_block(k, k))).maxCoeff());
+  }
+  std::vector<bool> out(kBlocks, false);
+  for (std::size_t b = 0; b < kBlocks; ++b) {
+    double scale = 0.0;
+    if (b < kS) {
+      scale = size[b];
+    } else if (is_product(b)) {
+      const auto [j, k] = product_signals(b);
+      scale = size[j] * size[k];
+    } else {
+      scale = size[b - kS - kProducts];
+    }
+    out[b] =
+        !(blocks.col(static_cast<Eigen::Index>(b)).cwiseAbs().maxCoeff() > kRoundingShare * scale);
+  }
+  // A rate block whose table-rate twin vanishes varies only with the Earth rate (a static run):
+  // its coefficient would be absurd, though its column may equal a physical one (rate_z^2
+  // follows force_z^2 when the table tips about North).
+  const auto table_twin = [](std::size_t i) {
+    return is_rate(i) ? i + kAxisFamilies[2] - kAxisFamilies[0] : i;
+  };
+  for (std::size_t j = 0; j < kS; ++j) {
+    if (is_rate(j) && out[linear_block(table_twin(j))]) {
+      out[linear_block(j)] = out[abs_block(j)] = true;
+    }
+    for (std::size_t k = j; k < kS; ++k) {
+      if ((is_rate(j) || is_rate(k)) && out[product_block(table_twin(j), table_twin(k))]) {
+        out[product_block(j, k)] = true;
+      }
+    }
+  }
+  for (std::size_t k = 0; k < kS; ++k) {
+    const auto a = blocks.col(static_cast<Eigen::Index>(abs_block(k)));
+    const auto v = blocks.col(static_cast<Eigen::Index>(linear_block(k)));
+    const double tolerance = kRoundingShare * size[k];
+    if ((a - v).cwiseAbs().maxCoeff() <= tolerance || (a + v).cwiseAbs().maxCoeff() <= tolerance) {
+      out[abs_block(k)] = true;
+    }
+  }
+  return out;
+}
+
+/// Step means of exp(-elapsed/tau) over each step's samples, evenly spaced from start_s to
+/// end_s (a geometric series: exact for a steady sample rate, without visiting the samples).
+Eigen::VectorXd transient_column(const std::vector<StepSummary>& steps, double tau_s) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(steps.size()));
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const StepSummary& s = steps[i];
+    const double n = static_cast<double>(std::max<std::int64_t>(s.count, 1));
+    const double h = n > 1.0 ? (s.end_s - s.start_s) / (n - 1.0) : 0.0;
+    const double series = h > 0.0 ? std::expm1(-n * h / tau_s) / (n * std::expm1(-h / tau_s)) : 1.0;
+    v[static_cast<Eigen::Index>(i)] = std::exp(-s.start_s / tau_s) * series;
+  }
+  return v;
+}
+
+// --- The model's whitened problem and the screening of one column ---------------------------
+
+/// The model's fit as the screening sees it, per fitted channel: the whitening (Cholesky factor
+/// of the step means' covariance under the diagnosis's noise model), that channel's rows of an
+/// orthonormal basis of the model's whitened columns (all channels stacked, so that parameters
+/// acting on several channels couple them), the whitened residual, and an orthonormal basis of
+/// the catalogue's whitened columns on the channel.
+struct Whitened {
+  Eigen::Index steps = 0;
+  std::array<int, kChannels> position{-1, -1, -1, -1, -1, -1};
+  std::vector<Eigen::MatrixXd> lower;  ///< Cholesky factor per fitted channel
+  std::vector<Eigen::MatrixXd> basis;  ///< S x k block of the stacked basis
+  std::vector<Eigen::VectorXd> residual;
+  std::vector<Eigen::MatrixXd> catalogue;
+  double log_rows = 0.0;
+  double near_collinear_sine = 1e-3;
+};
+
+Whitened whiten(const SuggestInput& in, const FitOptions& options) {
+  const std::vector<StepSummary>& steps = *in.steps;
+  const FitResult& fit = *in.fit;
+  Whitened w;
+  w.steps = static_cast<Eigen::Index>(steps.size());
+  w.near_collinear_sine = options.near_collinear_sine;
+  w.log_rows = std::log(static_cast<double>(fit.dof + static_cast<int>(fit.parameters.size())));
+  std::vector<Eigen::Index> columns;
+  for (const FittedParameter& p : fit.parameters) {
+    const auto& all = in.model->parameters();
+    const auto it = std::find_if(all.begin(), all.end(),
+                                 [&](const ParameterInfo& q) { return q.name == p.name; });
+    if (it != all.end()) columns.push_back(it - all.begin());
+  }
+  // The catalogue's span is that of the parameters the run determines: a term it barely excites
+  // (gyro_quadratic on a static run, where the rate is the Earth's) explains nothing, though its
+  // column may equal a custom one (rate_z^2 there follows force_z^2).
+  std::set<std::string> determined;
+  bool catalogue_fitted = true;
+  try {
+    for (const FittedParameter& p :
+         fit_model(*in.catalogue_steps, *in.catalogue, fit.noise, options).parameters) {
+      determined.insert(p.name);
+    }
+  } catch (const core::InputError&) {
+    catalogue_fitted = false;  // more catalogue parameters than rows: take every column
+  }
+  const std::vector<int> channels = fit_channels(options.rows);
+  const Eigen::Index S = w.steps;
+  Eigen::MatrixXd A(S * static_cast<Eigen::Index>(channels.size()),
+                    static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t ci = 0; ci < channels.size(); ++ci) {
+    const int c = channels[ci];
+    w.position[static_cast<std::size_t>(c)] = static_cast<int>(ci);
+    const Eigen::LLT<Eigen::MatrixXd> llt(fit.noise.covariance(c, steps));
+    w.lower.push_back(Eigen::MatrixXd(llt.matrixL()));
+    const auto L = w.lower.back().triangularView<Eigen::Lower>();
+    Eigen::MatrixXd X(S, static_cast<Eigen::Index>(columns.size()));
+    Eigen::VectorXd e(S);
+    for (Eigen::Index i = 0; i < S; ++i) {
+      const StepSummary& s = steps[static_cast<std::size_t>(i)];
+      for (std::size_t k = 0; k < columns.size(); ++k) {
+        X(i, static_cast<Eigen::Index>(k)) = s.regressors(c, columns[k]);
+      }
+      e[i] = fit.steps[static_cast<std::size_t>(i)].residual[c];
+    }
+    A.middleRows(static_cast<Eigen::Index>(ci) * S, S) = L.solve(X);
+    w.residual.push_back(L.solve(e));
+    // The catalogue's columns on this channel, normalised, reduced to an orthonormal basis of
+    // their span (temperature orders beyond the plateaus make some of them dependent).
+    const std::vector<StepSummary>& cs = *in.catalogue_steps;
+    std::vector<Eigen::Index> acting;
+    for (Eigen::Index p = 0; p < static_cast<Eigen::Index>(in.catalogue->size()); ++p) {
+      const std::string& name = in.catalogue->parameters()[static_cast<std::size_t>(p)].name;
+      if (catalogue_fitted && !determined.count(name)) continue;
+      bool nonzero = false;
+      for (const StepSummary& s : cs) nonzero = nonzero || s.regressors(c, p) != 0.0;
+      if (nonzero) acting.push_back(p);
+    }
+    Eigen::MatrixXd Xc(S, static_cast<Eigen::Index>(acting.size()));
+    for (Eigen::Index i = 0; i < S; ++i) {
+      for (std::size_t k = 0; k < acting.size(); ++k) {
+        Xc(i, static_cast<Eigen::Index>(k)) =
+            cs[static_cast<std::size_t>(i)].regressors(c, acting[k]);
+      }
+    }
+    Xc = L.solve(Xc);
+    for (Eigen::Index k = 0; k < Xc.cols(); ++k) Xc.col(k) /= Xc.col(k).norm();
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Xc.rows(), Xc.cols());
+    qr.setThreshold(1e-9);
+    qr.compute(Xc);
+    const Eigen::MatrixXd Q = qr.householderQ();
+    w.catalogue.push_back(Q.leftCols(qr.rank()));
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), A.cols());
+  for (std::size_t ci = 0; ci < channels.size(); ++ci) {
+    w.basis.push_back(Q.middleRows(static_cast<Eigen::Index>(ci) * S, S));
+  }
+  return w;
+}
+
+/// One column (a form's step means on one channel) as the screening needs it.
+struct ColumnStats {
+  bool usable = false;      ///< not collinear with the model, not a catalogue effect
+  double projection = 0.0;  ///< whitened residual . whitened column
+  double perp = 0.0;        ///< squared norm of the column outside the model's span
+  Eigen::VectorXd inside;   ///< its coordinates in the model's basis
+};
+
+ColumnStats column_stats(const Whitened& w, int ci, const Eigen::VectorXd& step_means) {
+  ColumnStats st;
+  const auto uci = static_cast<std::size_t>(ci);
+  const Eigen::VectorXd col = w.lower[uci].triangularView<Eigen::Lower>().solve(step_means);
+  const double norm2 = col.squaredNorm();
+  if (!(norm2 > 0.0) || !std::isfinite(norm2)) return st;
+  st.inside = w.basis[uci].transpose() * col;
+  st.perp = norm2 - st.inside.squaredNorm();
+  const double sine2 = w.near_collinear_sine * w.near_collinear_sine;
+  if (st.perp <= sine2 * norm2) return st;  // the fit would call it undetermined
+  const double outside_catalogue = norm2 - (w.catalogue[uci].transpose() * col).squaredNorm();
+  if (outside_catalogue <= kCatalogueSine * kCatalogueSine * norm2) return st;
+  st.projection = w.residual[uci].dot(col);
+  st.usable = true;
+  return st;
+}
+
+/// The axes a form should act on and the BIC change it would bring there.
+struct Screen {
+  std::array<bool, 3> axes{false, false, false};
+  double delta_bic = std::numeric_limits<double>::infinity();
+};
+
+/// Chi-square removed by the columns of the axes in `mask` together (b' M^-1 b with M the Gram
+/// matrix of their parts outside the model's span), for each subset; the best BIC.
+Screen best_axes(const Whitened& w, const std::array<const ColumnStats*, 3>& cols) {
+  Screen best;
+  for (unsigned mask = 1; mask < 8; ++mask) {
+    std::vector<int> axes;
+    for (int a = 0; a < 3; ++a) {
+      if (mask & (1u << a)) axes.push_back(a);
+    }
+    bool ok = true;
+    for (int a : axes) {
+      ok = ok && cols[static_cast<std::size_t>(a)] && cols[static_cast<std::size_t>(a)]->usable;
+    }
+    if (!ok) continue;
+    const auto m = static_cast<Eigen::Index>(axes.size());
+    Eigen::MatrixXd M(m, m);
+    Eigen::VectorXd b(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const ColumnStats& ci = *cols[static_cast<std::size_t>(axes[static_cast<std::size_t>(i)])];
+      b[i] = ci.projection;
+      for (Eigen::Index j = 0; j < m; ++j) {
+        const ColumnStats& cj = *cols[static_cast<std::size_t>(axes[static_cast<std::size_t>(j)])];
+        M(i, j) = i == j ? ci.perp : -ci.inside.dot(cj.inside);
+      }
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(M);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) continue;
+    const double removed = b.dot(ldlt.solve(b));
+    const double delta = -removed + static_cast<double>(m) * w.log_rows;
+    if (std::isfinite(delta) && delta < best.delta_bic) {
+      best.delta_bic = delta;
+      for (int a = 0; a < 3; ++a) best.axes[static_cast<std::size_t>(a)] = (mask & (1u << a)) != 0;
+    }
+  }
+  return best;
+}
+
+// --- Forms ---------------------------------------------------------------------------------
+
+struct Form {
+  core::TermSensor sensor = core::TermSensor::kGyro;
+  std::string expression;  ///< muParser, `{axis}` for a per-axis form
+  std::array<int, 3> block{kTransient, kTransient, kTransient};  ///< building block per axis
+  double tau_s = 0.0;                                            ///< the transient's time constant
+};
+
+/// rate_* is table_rate_* plus the Earth rate, so their product is in effect the Earth rate
+/// times a table rate: a regressor that follows no physics and fits whatever it happens to
+/// correlate with (its coefficients come out absurd).
+bool earth_rate_product(std::size_t j, std::size_t k) {
+  const auto table_rate = [](std::size_t i) { return i >= kAxisFamilies[2]; };
+  return (is_rate(j) && table_rate(k)) || (table_rate(j) && is_rate(k));
+}
+
+bool per_axis(const Form& f) { return f.expression.find("{axis}") != std::string::npos; }
+
+std::vector<Form> forms_of(core::TermSensor sensor) {
+  std::vector<Form> out;
+  const auto fixed = [&](std::size_t b) {
+    const int bi = static_cast<int>(b);
+    out.push_back({sensor, block_text(b), {bi, bi, bi}, 0.0});
+  };
+  for (std::size_t k = 0; k < kS; ++k) fixed(linear_block(k));
+  for (std::size_t j = 0; j < kS; ++j) {
+    for (std::size_t k = j; k < kS; ++k) {
+      if (!earth_rate_product(j, k)) fixed(product_block(j, k));
+    }
+  }
+  for (std::size_t k = 0; k < kS; ++k) fixed(abs_block(k));
+  const auto axis_form = [&](std::string text, const auto& block_of) {
+    Form f{sensor, std::move(text), {}, 0.0};
+    for (std::size_t a = 0; a < 3; ++a) f.block[a] = static_cast<int>(block_of(a));
+    out.push_back(std::move(f));
+  };
+  for (std::size_t fi = 0; fi < kAxisFamilies.size(); ++fi) {
+    const std::size_t F = kAxisFamilies[fi];
+    const std::string name = family_text(F);
+    axis_form(name, [&](std::size_t a) { return linear_block(F + a); });
+    axis_form(name + "^2", [&](std::size_t a) { return product_block(F + a, F + a); });
+    axis_form("abs(" + name + ")", [&](std::size_t a) { return abs_block(F + a); });
+    for (std::size_t gi = fi + 1; gi < kAxisFamilies.size(); ++gi) {
+      const std::size_t G = kAxisFamilies[gi];
+      if (earth_rate_product(F, G)) continue;
+      axis_form(name + "*" + family_text(G),
+                [&](std::size_t a) { return product_block(F + a, G + a); });
+    }
+    for (std::size_t s = 0; s < kScalars; ++s) {
+      axis_form(signal_text(s) + "*" + name,
+                [&](std::size_t a) { return product_block(s, F + a); });
+    }
+  }
+  return out;
+}
+
+/// A form on the axes chosen for it, with its screening figure.
+struct Screened {
+  Form form;
+  std::array<bool, 3> axes{};
+  double screen_delta_bic = 0.0;
+  std::string expression;  ///< as written in the term: `{axis}` resolved when one axis remains
+  std::string key;         ///< sensor, axes and building block per axis: equal keys, equal terms
+};
+
+/// "gyro", "accel.xz": the SENSOR[.AXES] part of a term's text.
+std::string sensor_text(core::TermSensor sensor, const std::array<bool, 3>& axes) {
+  CustomTermSpec spec;
+  spec.name = "k";
+  spec.sensor = sensor;
+  spec.axes = axes;
+  const std::string text = spec.text();  // k=SENSOR[.AXES]:
+  return text.substr(2, text.size() - 3);
+}
+
+std::string format_tau(double tau_s) {
+  const double scale = std::pow(10.0, std::floor(std::log10(tau_s)) - (kTauDigits - 1));
+  return fmt::format("{:g}", std::round(tau_s / scale) * scale);
+}
+
+Screened make_screened(const Form& f, const Screen& s) {
+  Screened out{f, s.axes, s.delta_bic, f.expression, ""};
+  int count = 0, only = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (s.axes[static_cast<std::size_t>(a)]) {
+      ++count;
+      only = a;
+    }
+  }
+  if (count == 1 && per_axis(f)) {
+    std::string e = f.expression;
+    for (auto pos = e.find("{axis}"); pos != std::string::npos; pos = e.find("{axis}")) {
+      e.replace(pos, 6, std::string(1, "xyz"[only]));
+    }
+    out.expression = e;
+  }
+  out.key = f.sensor == core::TermSensor::kGyro ? "g" : "a";
+  for (int a = 0; a < 3; ++a) {
+    if (!s.axes[static_cast<std::size_t>(a)]) continue;
+    out.key += fmt::format(":{}{}", "xyz"[a], f.block[static_cast<std::size_t>(a)]);
+  }
+  if (f.tau_s > 0.0) out.key += ":tau" + format_tau(f.tau_s);
+  return out;
+}
+
+/// The transient form of `sensor` with the best time constant: a log grid from a step's length
+/// to beyond the run, then golden section between the best point's neighbours.
+std::pair<Form, Screen> best_transient(const Whitened& w, const std::vector<StepSummary>& steps,
+                                       core::TermSensor sensor) {
+  std::vector<double> durations;
+  double span = 0.0;
+  for (const StepSummary& s : steps) {
+    durations.push_back(std::max(s.duration_s, 1.0));
+    span = std::max(span, s.end_s);
+  }
+  std::nth_element(durations.begin(),
+                   durations.begin() + static_cast<std::ptrdiff_t>(durations.size() / 2),
+                   durations.end());
+  const double lo = std::log10(std::max(1.0, durations[durations.size() / 2]));
+  const double hi = std::log10(std::max(10.0 * std::pow(10.0, lo), 3.0 * span));
+  const int base = sensor == core::TermSensor::kGyro ? kGx : kAx;
+  const auto evaluate = [&](double log_tau) {
+    const Eigen::VectorXd column = transient_column(steps, std::pow(10.0, log_tau));
+    std::array<ColumnStats, 3> stats;
+    std::array<const ColumnStats*, 3> ptr{nullptr, nullptr, nullptr};
+    for (int a = 0; a < 3; ++a) {
+      const int ci = w.position[static_cast<std::size_t>(base + a)];
+      if (ci < 0) continue;
+      stats[static_cast<std::size_t>(a)] = column_stats(w, ci, column);
+      ptr[static_cast<std::size_t>(a)] = &stats[static_cast<std::size_t>(a)];
+    }
+    return best_axes(w, ptr);
+  };
+  const int count = std::max(2, static_cast<int>(std::ceil(kTausPerDecade * (hi - lo))) + 1);
+  const double step = (hi - lo) / (count - 1);
+  double best_x = lo;
+  Screen best;
+  for (int i = 0; i < count; ++i) {
+    const Screen s = evaluate(lo + step * i);
+    if (s.delta_bic < best.delta_bic) {
+      best = s;
+      best_x = lo + step * i;
+    }
+  }
+  if (std::isfinite(best.delta_bic)) {
+    double a = std::max(lo, best_x - step), b = std::min(hi, best_x + step);
+    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
+    double x1 = b - g * (b - a), x2 = a + g * (b - a);
+    Screen s1 = evaluate(x1), s2 = evaluate(x2);
+    for (int it = 0; it < kGoldenIterations; ++it) {
+      if (s1.delta_bic < s2.delta_bic) {
+        b = x2;
+        x2 = x1;
+        s2 = s1;
+        x1 = b - g * (b - a);
+        s1 = evaluate(x1);
+      } else {
+        a = x1;
+        x1 = x2;
+        s1 = s2;
+        x2 = a + g * (b - a);
+        s2 = evaluate(x2);
+      }
+    }
+    for (const auto& [x, s] : {std::pair{x1, s1}, std::pair{x2, s2}}) {
+      if (s.delta_bic < best.delta_bic) {
+        best = s;
+        best_x = x;
+      }
+    }
+  }
+  Form f;
+  f.sensor = sensor;
+  // The time constant as the term will write it, so that the term is the one screened.
+  f.tau_s = std::stod(format_tau(std::pow(10.0, best_x)));
+  f.expression = "exp(-elapsed/" + format_tau(f.tau_s) + ")";
+  return {f, best};
+}
+
+// --- Exact refits and the held-out check -----------------------------------------------------
+
+/// Step means of a form per axis (columns x, y, z).
+Eigen::MatrixXd form_columns(const Form& f, const Eigen::MatrixXd& blocks,
+                             const std::vector<StepSummary>& steps) {
+  Eigen::MatrixXd V(static_cast<Eigen::Index>(steps.size()), 3);
+  for (Eigen::Index a = 0; a < 3; ++a) {
+    const int b = f.block[static_cast<std::size_t>(a)];
+    V.col(a) = b == kTransient ? transient_column(steps, f.tau_s) : Eigen::VectorXd(blocks.col(b));
+  }
+  return V;
+}
+
+/// `steps` with the custom term's regressors appended (the order Model::with_custom gives).
+std::vector<StepSummary> with_columns(const std::vector<StepSummary>& steps,
+                                      core::TermSensor sensor, const std::array<bool, 3>& axes,
+                                      const Eigen::MatrixXd& V) {
+  const int base = sensor == core::TermSensor::kGyro ? kGx : kAx;
+  std::vector<StepSummary> out = steps;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    Eigen::MatrixXd& R = out[i].regressors;
+    Eigen::Index p = R.cols();
+    const auto added = static_cast<Eigen::Index>(std::count(axes.begin(), axes.end(), true));
+    R.conservativeResize(Eigen::NoChange, p + added);
+    R.rightCols(added).setZero();
+    for (int a = 0; a < 3; ++a) {
+      if (axes[static_cast<std::size_t>(a)]) R(base + a, p++) = V(static_cast<Eigen::Index>(i), a);
+    }
+  }
+  return out;
+}
+
+/// Parts of the run to hold out in turn: each temperature plateau when there are three or more
+/// (a term that is physics extrapolates to a temperature it was not fitted at), else steps
+/// interleaved into five folds.
+struct Folds {
+  std::vector<std::vector<std::size_t>> parts;
+  std::string how;
+};
+
+Folds make_folds(const std::vector<StepSummary>& steps, bool by_plateau) {
+  Folds f;
+  const std::vector<double> plateaus = temperature_plateaus(steps);
+  if (by_plateau && plateaus.size() >= 3) {
+    f.parts.resize(plateaus.size());
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+      const double temperature_c = steps[i].signals[0];
+      std::size_t nearest = 0;
+      for (std::size_t p = 1; p < plateaus.size(); ++p) {
+        if (std::abs(temperature_c - plateaus[p]) < std::abs(temperature_c - plateaus[nearest])) {
+          nearest = p;
+        }
+      }
+      f.parts[nearest].push_back(i);
+    }
+    f.how = fmt::format("{} temperature plateaus held out in turn", plateaus.size());
+    return f;
+  }
+  const std::size_t k = std::min(kStepFolds, steps.size());
+  f.parts.resize(k);
+  for (std::size_t i = 0; i < steps.size(); ++i) f.parts[i % k].push_back(i);
+  f.how = fmt::format("{} folds of interleaved steps held out in turn", k);
+  return f;
+}
+
+/// Chi-square of each held-out part predicted by `model` fitted to the rest, summed, with the
+/// rows it covers; +infinity when some part leaves too little to fit.
+std::pair<double, int> held_out_chi2(const std::vector<StepSummary>& steps, const Model& model,
+                                     const StepNoise& noise, const FitOptions& options,
+                                     const Folds& folds) {
+  double chi2 = 0.0;
+  int rows = 0;
+  for (const auto& part : folds.parts) {
+    std::vector<bool> held(steps.size(), false);
+    for (std::size_t i : part) held[i] = true;
+    std::vector<StepSummary> train, test;
+    for (std::size_t i = 0; i < steps.size(); ++i) (held[i] ? test : train).push_back(steps[i]);
+    FitResult fit;
+    try {
+      fit = fit_model(train, model, noise, options);
+    } catch (const core::InputError&) {
+      return {std::numeric_limits<double>::infinity(), 0};
+    }
+    for (int c : fit_channels(options.rows)) {
+      Eigen::VectorXd e(static_cast<Eigen::Index>(test.size()));
+      for (std::size_t i = 0; i < test.size(); ++i) {
+        const StepSummary& s = test[i];
+        e[static_cast<Eigen::Index>(i)] =
+            s.measured[c] - s.reference[c] - s.regressors.row(c).dot(fit.values);
+      }
+      const Eigen::LLT<Eigen::MatrixXd> llt(noise.covariance(c, test));
+      chi2 += e.dot(llt.solve(e));
+      rows += static_cast<int>(test.size());
+    }
+  }
+  return {chi2, rows};
+}
+
+// --- Words ---------------------------------------------------------------------------------
+
+/// A term name from its expression: force_z^2 -> force_z_sq, exp(-elapsed/900) -> exp_elapsed_900.
+std::string name_of(const std::string& expression, const std::set<std::string>& taken) {
+  std::string name;
+  for (std::size_t i = 0; i < expression.size(); ++i) {
+    const char c = expression[i];
+    if (expression.compare(i, 6, "{axis}") == 0) {
+      name += "axis";
+      i += 5;
+    } else if (expression.compare(i, 2, "^2") == 0) {
+      name += "_sq";
+      ++i;
+    } else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_') {
+      name += c;
+    } else if (c == '.') {
+      name += 'p';
+    } else if (!name.empty() && name.back() != '_') {
+      name += '_';
+    }
+  }
+  while (!name.empty() && name.back() == '_') name.pop_back();
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) name = "k_" + name;
+  std::string unique = name;
+  for (int n = 2; taken.count(unique) || core::find_error_term(unique); ++n) {
+    unique = fmt::format("{}_{}", name, n);
+  }
+  return unique;
+}
+
+std::string effect_words(const CustomTermSpec& spec, const FitResult& fit, double tau_s) {
+  const bool gyro = spec.sensor == core::TermSensor::kGyro;
+  std::vector<std::string> channels, values;
+  for (int a = 0; a < 3; ++a) {
+    if (!spec.axes[static_cast<std::size_t>(a)]) continue;
+    const std::string channel = fmt::format("{}{}", gyro ? 'g' : 'a', "xyz"[a]);
+    channels.push_back(channel);
+    const std::string parameter = spec.name + "." + "xyz"[a];
+    for (const FittedParameter& p : fit.parameters) {
+      if (p.name == parameter) {
+        values.push_back(fmt::format("{} {:.3g} +- {:.2g}", channel, p.value, p.sigma));
+      }
+    }
+  }
+  const std::string unit = gyro ? "deg/s" : "m/s^2";
+  const std::string what =
+      tau_s > 0.0
+          ? fmt::format("a warm-up transient of the {} bias decaying with a {} s time constant",
+                        gyro ? "gyro" : "accelerometer", format_tau(tau_s))
+      : spec.expression.find("{axis}") != std::string::npos
+          ? fmt::format("each {} axis following its own axis's signal",
+                        gyro ? "gyro" : "accelerometer")
+          : fmt::format("{} following {}", fmt::join(channels, ", "), spec.expression);
+  return fmt::format("{}: {} += c * {}, c = {} [{} per unit of the expression]", what,
+                     fmt::join(channels, ", "), spec.expression, fmt::join(values, ", "), unit);
+}
+
+}  // namespace
+
+SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& options,
+                                      const SuggestOptions& suggest) {
+  SuggestionSearch out;
+  out.ran = true;
+  const std::vector<StepSummary>& steps = *in.steps;
+  const FitResult& base = *in.fit;
+  const Whitened w = whiten(in, options);
+  const Eigen::MatrixXd blocks = block_means(*in.data, in.model->earth_rate());
+
+  // Screen every form on every sensor fitted; keep the best of each distinct term.
+  std::vector<core::TermSensor> sensors;
+  if (options.rows != SensorRows::kAccel) sensors.push_back(core::TermSensor::kGyro);
+  if (options.rows != SensorRows::kGyro) sensors.push_back(core::TermSensor::kAccel);
+  const std::vector<bool> useless = useless_blocks(blocks);
+  std::vector<Screened> screened;
+  for (core::TermSensor sensor : sensors) {
+    const int base_row = sensor == core::TermSensor::kGyro ? kGx : kAx;
+    // Column statistics of every building block on each of the sensor's channels, once.
+    std::array<std::vector<ColumnStats>, 3> stats;
+    for (int a = 0; a < 3; ++a) {
+      const int ci = w.position[static_cast<std::size_t>(base_row + a)];
+      if (ci < 0) continue;
+      for (std::size_t b = 0; b < kBlocks; ++b) {
+        stats[static_cast<std::size_t>(a)].push_back(
+            useless[b] ? ColumnStats{}
+                       : column_stats(w, ci, blocks.col(static_cast<Eigen::Index>(b))));
+      }
+    }
+    for (const Form& f : forms_of(sensor)) {
+      ++out.forms_tried;
+      std::array<const ColumnStats*, 3> cols{nullptr, nullptr, nullptr};
+      for (std::size_t a = 0; a < 3; ++a) {
+        if (!stats[a].empty()) cols[a] = &stats[a][static_cast<std::size_t>(f.block[a])];
+      }
+      const Screen s = best_axes(w, cols);
+      if (std::isfinite(s.delta_bic)) screened.push_back(make_screened(f, s));
+    }
+    ++out.forms_tried;
+    const auto [transient, s] = best_transient(w, steps, sensor);
+    // The time constant is a parameter too.
+    if (std::isfinite(s.delta_bic)) {
+      screened.push_back(make_screened(transient, Screen{s.axes, s.delta_bic + w.log_rows}));
+    }
+  }
+  std::stable_sort(screened.begin(), screened.end(), [](const Screened& a, const Screened& b) {
+    return a.screen_delta_bic < b.screen_delta_bic;
+  });
+
+  // Hundreds of forms were tried: the best of them lowers BIC by about 2 ln(forms) on noise
+  // alone, so that much is asked on top of very strong evidence. And a catalogue term, with
+  // its physics and units, is preferred unless the custom term is very strongly better: in a
+  // thermal campaign `elapsed` follows the temperature plateaus and nearly ties with a
+  // temperature term.
+  const double bar =
+      std::min(in.best_catalogue_delta_bic + kStrongDeltaBic,
+               kStrongDeltaBic - 2.0 * std::log(static_cast<double>(out.forms_tried)));
+  Folds folds = make_folds(steps, true);
+  std::optional<std::pair<double, int>> held_base;  // the model's own, once a form needs it
+  std::set<std::string> keys, names;
+  for (const auto& c : in.model->customs()) names.insert(c.name);
+  std::string best_rejected;
+  std::size_t checked = 0;
+  struct Passed {
+    Suggestion s;
+    double tau_s;
+    CustomTermSpec spec;
+  };
+  std::vector<Passed> passed;
+  for (const Screened& c : screened) {
+    if (checked >= suggest.max_checked || passed.size() >= suggest.max_suggestions) break;
+    if (!keys.insert(c.key).second) continue;
+    if (c.screen_delta_bic >= bar) {  // sorted: none further can pass
+      if (best_rejected.empty()) {
+        best_rejected = fmt::format(
+            "the best, {}:{}, would change BIC by {:+.0f} (below {:.0f} "
+            "is asked)",
+            sensor_text(c.form.sensor, c.axes), c.expression, c.screen_delta_bic, bar);
+      }
+      break;
+    }
+    ++checked;
+    const std::string name = name_of(c.expression, names);
+    CustomTermSpec spec;
+    spec.name = name;
+    spec.sensor = c.form.sensor;
+    spec.expression = c.expression;
+    spec.axes = c.axes;
+    const std::string text = spec.text();
+    Model with;
+    try {
+      with = in.model->with_custom(parse_custom_term(text, "suggested custom term " + text));
+    } catch (const core::InputError&) {
+      continue;  // cannot happen for the forms built here; never suggest what fit would refuse
+    }
+    const std::vector<StepSummary> aug =
+        with_columns(steps, spec.sensor, spec.axes, form_columns(c.form, blocks, steps));
+    FitResult exact;
+    try {
+      exact = fit_model(aug, with, base.noise, options);
+    } catch (const core::InputError&) {
+      continue;
+    }
+    Suggestion s;
+    s.custom = text;
+    s.added_parameters =
+        static_cast<int>(exact.parameters.size()) - static_cast<int>(base.parameters.size());
+    if (s.added_parameters <= 0) continue;
+    const int linear = s.added_parameters;
+    if (c.form.tau_s > 0.0) ++s.added_parameters;
+    s.delta_bic = exact.chi2 - base.chi2 + s.added_parameters * w.log_rows;
+    if (exact.dof > 0 && exact.chi2 > 0.0) {
+      const double F = ((base.chi2 - exact.chi2) / linear) / (exact.chi2 / exact.dof);
+      const boost::math::fisher_f_distribution<double> dist(linear, exact.dof);
+      s.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
+    }
+    if (!(s.delta_bic < bar)) {
+      if (best_rejected.empty()) {
+        best_rejected = fmt::format("the best, {}, changes BIC by {:+.0f} (below {:.0f} is asked)",
+                                    text, s.delta_bic, bar);
+      }
+      continue;
+    }
+    if (!held_base) {
+      held_base = held_out_chi2(steps, *in.model, base.noise, options, folds);
+      // Without one of its plateaus the run may not determine the model (a temperature term
+      // needs two): hold out steps instead.
+      if (!std::isfinite(held_base->first)) {
+        folds = make_folds(steps, false);
+        held_base = held_out_chi2(steps, *in.model, base.noise, options, folds);
+      }
+    }
+    const auto [held_before, held_rows] = *held_base;
+    if (!std::isfinite(held_before)) {
+      best_rejected =
+          "the run is too small to fit the model with a part of it held out, so no "
+          "custom term can be checked";
+      break;
+    }
+    const auto [held_after, rows_after] = held_out_chi2(aug, with, base.noise, options, folds);
+    s.held_out = folds.how;
+    s.held_out_chi2_dof_before =
+        held_rows > 0 ? held_before / held_rows : std::numeric_limits<double>::quiet_NaN();
+    s.held_out_chi2_dof_after =
+        rows_after > 0 ? held_after / rows_after : std::numeric_limits<double>::quiet_NaN();
+    // A column fitted to noise raises the held-out chi-square by about its parameters; a real
+    // effect lowers it by about what it removes in the fit.
+    if (!(held_after < held_before - linear)) {
+      if (best_rejected.empty()) {
+        best_rejected = fmt::format(
+            "the best, {}, does not hold on held-out data (chi2/dof {:.3g} "
+            "-> {:.3g}, {})",
+            text, s.held_out_chi2_dof_before, s.held_out_chi2_dof_after, folds.how);
+      }
+      continue;
+    }
+    names.insert(name);
+    passed.push_back({std::move(s), c.form.tau_s, spec});
+  }
+  // The figures reported are those of the path `calstand fit --custom` takes.
+  for (Passed& p : passed) {
+    const Model with =
+        in.model->with_custom(parse_custom_term(p.s.custom, "--custom " + p.s.custom));
+    try {
+      p.s.fit = fit_run(*in.data, with, options);
+    } catch (const core::InputError&) {
+      continue;
+    }
+    p.s.chi2_dof_after = p.s.fit.chi2_dof;
+    if (!(p.s.chi2_dof_after < base.chi2_dof)) continue;  // no better on its own noise model
+    p.s.effect = effect_words(p.spec, p.s.fit, p.tau_s);
+    out.suggestions.push_back(std::move(p.s));
+  }
+  std::stable_sort(
+      out.suggestions.begin(), out.suggestions.end(),
+      [](const Suggestion& a, const Suggestion& b) { return a.delta_bic < b.delta_bic; });
+  if (!out.suggestions.empty()) {
+    out.summary = fmt::format(
+        "{} custom forms built from the signals tried; {} pass the guards (BIC below {:.0f}, and "
+        "better predictions of held-out data with {})",
+        out.forms_tried, out.suggestions.size(), bar, folds.how);
+  } else {
+    out.summary = fmt::format(
+        "none of the {} custom forms built from the signals (each signal, its square and abs(), "
+        "products of two, each axis on its own axis's signal, exp(-elapsed/tau)) both earns its "
+        "parameters and holds on held-out data{}",
+        out.forms_tried, best_rejected.empty() ? std::string() : "; " + best_rejected);
+  }
+  return out;
+}
+
+}  // namespace calstand::solver
