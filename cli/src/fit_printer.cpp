@@ -25,8 +25,8 @@ void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor
                   "Comma-separated terms of error-model.md (gyro_temp_bias:2 for order 2)")
       ->capture_default_str();
   cmd->add_option("--custom", opt.customs,
-                  "A custom term NAME=SENSOR:EXPR (muParser; signals as in error-model.md), "
-                  "repeatable");
+                  "A custom term NAME=SENSOR:EXPR (muParser; signals as in error-model.md), or "
+                  "NAME=SENSOR.AXES:EXPR on some axes only (k=gyro.z:force_z^2); repeatable");
   cmd->add_option("--device", opt.device, "IMU (default: the run's only IMU)");
   if (with_sensor) {
     cmd->add_option("--sensor", opt.sensor, "Rows to fit: both, gyro or accel")
