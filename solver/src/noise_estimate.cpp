@@ -35,6 +35,11 @@ constexpr double kGaussMarkovTausPerDecade = 4.0;
 constexpr double kNotWanderMargin = 5.0;
 // Penalised log likelihood within which flicker is preferred to another wander (see there).
 constexpr double kCautiousFlickerMargin = 3.0;
+// A column below this share of the largest acting on a channel is rounding, not a regressor.
+constexpr double kRoundingShare = 1e-12;
+// Columns of a channel's design within this (QR pivot relative to the largest) of the span of
+// the others are dropped, so that X^T C^-1 X stays well conditioned for its log-determinant.
+constexpr double kRankThreshold = 1e-6;
 
 /// A wander process of unit amplitude (its variance parameter 1: sigma^2, B^2 or K^2) and the
 /// eigen-decomposition of its step-mean covariance scaled by the step counts,
@@ -152,11 +157,23 @@ ChannelProblem channel_problem(const std::vector<StepSummary>& steps, const Mode
     const auto it = std::find_if(all.begin(), all.end(),
                                  [&](const ParameterInfo& q) { return q.name == fp.name; });
     if (it == all.end()) continue;
-    const Eigen::Index col = it - all.begin();
-    bool acts = false;
-    for (const StepSummary& s : steps) acts = acts || s.regressors(channel, col) != 0.0;
-    if (acts) columns.push_back(col);
+    columns.push_back(it - all.begin());
   }
+  // Columns that act on this channel: beyond rounding of the largest (a force component at 90
+  // degrees is 6e-16 g, and normalised it would take a parameter and a degree of freedom).
+  std::vector<double> norms;
+  double largest = 0.0;
+  for (Eigen::Index col : columns) {
+    double sum = 0.0;
+    for (const StepSummary& s : steps) sum += s.regressors(channel, col) * s.regressors(channel, col);
+    norms.push_back(std::sqrt(sum));
+    largest = std::max(largest, norms.back());
+  }
+  std::vector<Eigen::Index> acting;
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    if (norms[k] > kRoundingShare * largest) acting.push_back(columns[k]);
+  }
+  columns = std::move(acting);
   const auto S = static_cast<Eigen::Index>(steps.size());
   Eigen::MatrixXd X(S, static_cast<Eigen::Index>(columns.size()));
   ChannelProblem p;
@@ -176,7 +193,7 @@ ChannelProblem channel_problem(const std::vector<StepSummary>& steps, const Mode
   }
   // Full rank: parameters acting on several channels (tilt) may be collinear on one alone.
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X.rows(), X.cols());
-  qr.setThreshold(1e-9);
+  qr.setThreshold(kRankThreshold);
   qr.compute(X);
   const auto rank = static_cast<Eigen::Index>(qr.rank());
   p.Xs.resize(S, rank);
@@ -247,10 +264,17 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     fitted = false;  // more catalogue parameters than step means: no room to see a wander
   }
   StepNoise noise = StepNoise::white_only(white, "");
-  noise.method = fmt::format(
-      "white noise from the scatter inside {} {}; wandering bias per channel by restricted "
-      "likelihood of the {} step means' residuals after every catalogue term",
-      white.steps_used, white.from_static_steps ? "static steps" : "steps", steps.size());
+  if (!fitted) {
+    noise.method = fmt::format(
+        "white noise from the scatter inside {} {} only: the run's {} step means are too few "
+        "for every catalogue term, so a wandering bias cannot be told from a missing effect",
+        white.steps_used, white.from_static_steps ? "static steps" : "steps", steps.size());
+  } else {
+    noise.method = fmt::format(
+        "white noise from the scatter inside {} {}; wandering bias per channel by restricted "
+        "likelihood of the {} step means' residuals after every catalogue term",
+        white.steps_used, white.from_static_steps ? "static steps" : "steps", steps.size());
+  }
 
   std::vector<double> durations, counts;
   double span = 0.0;

@@ -37,7 +37,12 @@ RunData load_run_data(store::Database& db, std::int64_t run, const std::string& 
 
 std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model) {
   const SignalBuilder build(data.setup, model.earth_rate());
-  const double run_start_s = data.steps.front().samples.front().receive_time_s;
+  // The run's first sample, wherever it is (imported steps need not be in time order): every
+  // step's start and end are then non-negative, as the noise model's random walk needs.
+  double run_start_s = data.steps.front().samples.front().receive_time_s;
+  for (const store::StepData& step : data.steps) {
+    for (const core::ImuSample& sample : step.samples) run_start_s = std::min(run_start_s, sample.receive_time_s);
+  }
   const auto P = static_cast<Eigen::Index>(model.size());
   Eigen::MatrixXd g(kChannels, P);
   std::vector<StepSummary> out;
