@@ -63,7 +63,8 @@ Kernel make_kernel(const WanderModel& unit, const std::vector<StepSummary>& step
       const StepSummary& b = steps[static_cast<std::size_t>(j)];
       const double k = unit.interval_mean_covariance(a.start_s, a.end_s, b.start_s, b.end_s);
       if (i == j) diag += k;
-      G(i, j) = G(j, i) = k * std::sqrt(static_cast<double>(a.count) * static_cast<double>(b.count));
+      G(i, j) = G(j, i) =
+          k * std::sqrt(static_cast<double>(a.count) * static_cast<double>(b.count));
     }
   }
   Kernel out;
@@ -139,8 +140,8 @@ Trial best_amplitude(const Kernel& kernel, const ChannelProblem& p, double typic
   const double lo = std::max(kLog10RatioLo, best_r - step);
   const double hi = std::min(kLog10RatioHi, best_r + step);
   boost::uintmax_t iterations = kBrentIterations;
-  boost::math::tools::brent_find_minima([&](double r) { return -evaluate(r); }, lo, hi,
-                                        kBrentBits, iterations);
+  boost::math::tools::brent_find_minima([&](double r) { return -evaluate(r); }, lo, hi, kBrentBits,
+                                        iterations);
   Trial t;
   t.log_likelihood = best_value;
   t.amplitude = rho_of(best_r) * p.white;
@@ -165,7 +166,8 @@ ChannelProblem channel_problem(const std::vector<StepSummary>& steps, const Mode
   double largest = 0.0;
   for (Eigen::Index col : columns) {
     double sum = 0.0;
-    for (const StepSummary& s : steps) sum += s.regressors(channel, col) * s.regressors(channel, col);
+    for (const StepSummary& s : steps)
+      sum += s.regressors(channel, col) * s.regressors(channel, col);
     norms.push_back(std::sqrt(sum));
     largest = std::max(largest, norms.back());
   }
@@ -222,7 +224,8 @@ std::string describe(const WanderModel& w, int channel) {
     case WanderKind::kRandomWalk:
       return fmt::format("{} random walk {:.3g} {}/sqrt(h)", gyro ? "rate" : "acceleration",
                          w.random_walk_k * to_sheet * 60.0, unit);
-    case WanderKind::kNone: return "no wandering bias";
+    case WanderKind::kNone:
+      return "no wandering bias";
   }
   return "";
 }
@@ -240,9 +243,9 @@ Model noise_superset(const Model& model) {
     // Temperature polynomials to a fixed order beyond the model's (the fit drops the orders
     // the run's plateaus cannot determine), so that every model of the same run, and every
     // candidate diagnose tries, is weighed with one noise model.
-    const int order = info.polynomial_order
-                          ? std::max(kNoiseSupersetTemperatureOrder, present ? present->order + 1 : 1)
-                          : 1;
+    const int order = info.polynomial_order ? std::max(kNoiseSupersetTemperatureOrder,
+                                                       present ? present->order + 1 : 1)
+                                            : 1;
     m = m.with_term(info, order);
   }
   return m;
@@ -252,7 +255,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
                               SensorRows rows, const NoiseEstimateOptions& options) {
   const NoiseFloor white = measure_noise_floor(steps);
   if (!options.estimate_wander) {
-    return StepNoise::white_only(white, "white noise inside the steps only (wander not estimated, as asked)");
+    return StepNoise::white_only(
+        white, "white noise inside the steps only (wander not estimated, as asked)");
   }
   FitOptions fo;
   fo.rows = rows;
@@ -290,7 +294,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
   const double tau_hi = std::max(10.0 * tau_lo, 3.0 * span);
 
   std::vector<Kernel> kernels;
-  const int gm_count = std::max(2, static_cast<int>(std::ceil(kGaussMarkovTausPerDecade * std::log10(tau_hi / tau_lo))) + 1);
+  const int gm_count = std::max(
+      2, static_cast<int>(std::ceil(kGaussMarkovTausPerDecade * std::log10(tau_hi / tau_lo))) + 1);
   for (int i = 0; i < gm_count; ++i) {
     WanderModel gm;
     gm.kind = WanderKind::kGaussMarkov;
@@ -313,7 +318,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
   {
     const auto S = static_cast<Eigen::Index>(steps.size());
     independent.lambda.resize(S);
-    for (Eigen::Index i = 0; i < S; ++i) independent.lambda[i] = counts[static_cast<std::size_t>(i)];
+    for (Eigen::Index i = 0; i < S; ++i)
+      independent.lambda[i] = counts[static_cast<std::size_t>(i)];
     independent.U = Eigen::MatrixXd::Identity(S, S);
   }
 
@@ -325,17 +331,19 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       continue;
     }
     if (!fitted) {
-      ch.note = "the run has fewer step means than the catalogue has parameters: the wander "
-                "cannot be told from a missing effect; weights from the white noise alone";
+      ch.note =
+          "the run has fewer step means than the catalogue has parameters: the wander "
+          "cannot be told from a missing effect; weights from the white noise alone";
       continue;
     }
     const ChannelProblem p = channel_problem(steps, superset, fit, c, white.density[c]);
     const int dof = static_cast<int>(steps.size()) - p.parameters;
     if (dof < options.min_dof) {
-      ch.note = fmt::format("{} step means leave {} degrees of freedom beyond the {} parameters "
-                            "acting on {} (at least {} needed to see a wandering bias); weights "
-                            "from the white noise alone",
-                            steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
+      ch.note = fmt::format(
+          "{} step means leave {} degrees of freedom beyond the {} parameters "
+          "acting on {} (at least {} needed to see a wandering bias); weights "
+          "from the white noise alone",
+          steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
       continue;
     }
     const double white_ll = restricted_log_likelihood(
@@ -405,9 +413,8 @@ FitResult fit_run(const RunData& data, const Model& model, const FitOptions& opt
   const Model superset = noise_superset(model);
   const std::vector<StepSummary> all = summarize_steps(data, superset);
   const StepNoise noise = estimate_step_noise(all, superset, options.rows, noise_options);
-  const std::vector<StepSummary> steps = model.earth_rate()
-                                             ? select_parameters(all, superset, model)
-                                             : summarize_steps(data, model);
+  const std::vector<StepSummary> steps =
+      model.earth_rate() ? select_parameters(all, superset, model) : summarize_steps(data, model);
   FitResult fit = fit_model(steps, model, noise, options);
   if (model_steps) *model_steps = steps;
   return fit;

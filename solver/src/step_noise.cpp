@@ -48,18 +48,24 @@ double random_walk_covariance(double a0, double a1, double b0, double b1) {
 
 std::string_view to_string(WanderKind kind) {
   switch (kind) {
-    case WanderKind::kNone: return "none";
-    case WanderKind::kGaussMarkov: return "gauss_markov";
-    case WanderKind::kFlicker: return "flicker";
-    case WanderKind::kRandomWalk: return "random_walk";
+    case WanderKind::kNone:
+      return "none";
+    case WanderKind::kGaussMarkov:
+      return "gauss_markov";
+    case WanderKind::kFlicker:
+      return "flicker";
+    case WanderKind::kRandomWalk:
+      return "random_walk";
   }
   return "none";
 }
 
 double WanderModel::interval_mean_covariance(double a0, double a1, double b0, double b1) const {
   switch (kind) {
-    case WanderKind::kNone: return 0.0;
-    case WanderKind::kGaussMarkov: return gm_covariance(sigma * sigma, tau_s, a0, a1, b0, b1);
+    case WanderKind::kNone:
+      return 0.0;
+    case WanderKind::kGaussMarkov:
+      return gm_covariance(sigma * sigma, tau_s, a0, a1, b0, b1);
     case WanderKind::kRandomWalk:
       return random_walk_k * random_walk_k * random_walk_covariance(a0, a1, b0, b1);
     case WanderKind::kFlicker: {
@@ -67,7 +73,8 @@ double WanderModel::interval_mean_covariance(double a0, double a1, double b0, do
       // two-sided spectra 2 v tau / (1 + (2 pi f tau)^2) sum to v / (2 f ln r) inside the
       // band, which is IEEE 952's B^2 / (2 pi f) for v = B^2 ln r / pi.
       const double decades = std::log10(tau_max_s / tau_min_s);
-      const int count = std::max(2, static_cast<int>(std::ceil(kFlickerComponentsPerDecade * decades)) + 1);
+      const int count =
+          std::max(2, static_cast<int>(std::ceil(kFlickerComponentsPerDecade * decades)) + 1);
       const double log_ratio = std::log(tau_max_s / tau_min_s) / (count - 1);
       const double v = flicker_b * flicker_b * log_ratio / std::numbers::pi;
       double sum = 0.0;
@@ -138,12 +145,16 @@ nlohmann::json step_noise_to_json(const StepNoise& noise, double sample_rate_hz)
         break;
       case WanderKind::kFlicker:
         w["b"] = ch.wander.flicker_b;
-        w["allan_floor"] = ch.wander.flicker_b * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
+        w["allan_floor"] =
+            ch.wander.flicker_b * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
         w["tau_min_s"] = ch.wander.tau_min_s;
         w["tau_max_s"] = ch.wander.tau_max_s;
         break;
-      case WanderKind::kRandomWalk: w["k"] = ch.wander.random_walk_k; break;
-      case WanderKind::kNone: break;
+      case WanderKind::kRandomWalk:
+        w["k"] = ch.wander.random_walk_k;
+        break;
+      case WanderKind::kNone:
+        break;
     }
     e["wander"] = w;
     e["determined"] = ch.determined;

@@ -46,8 +46,11 @@ TEST(WanderModel, GaussMarkovIntervalCovarianceMatchesTheIntegral) {
   gm.sigma = 2.0;
   gm.tau_s = 50.0;
   const auto r = [&](double s, double t) { return 4.0 * std::exp(-std::abs(s - t) / 50.0); };
-  for (const auto& [a0, a1, b0, b1] : std::vector<std::array<double, 4>>{
-           {0, 30, 0, 30}, {0, 30, 40, 100}, {200, 201, 10, 90}, {0, 500, 0, 500}, {0, 1e-3, 0, 1e-3}}) {
+  for (const auto& [a0, a1, b0, b1] : std::vector<std::array<double, 4>>{{0, 30, 0, 30},
+                                                                         {0, 30, 40, 100},
+                                                                         {200, 201, 10, 90},
+                                                                         {0, 500, 0, 500},
+                                                                         {0, 1e-3, 0, 1e-3}}) {
     EXPECT_NEAR(gm.interval_mean_covariance(a0, a1, b0, b1),
                 numeric_interval_covariance(r, a0, a1, b0, b1), 2e-4)
         << a0 << " " << a1 << " " << b0 << " " << b1;
@@ -59,8 +62,8 @@ TEST(WanderModel, RandomWalkIntervalCovarianceMatchesTheIntegral) {
   rw.kind = WanderKind::kRandomWalk;
   rw.random_walk_k = 0.5;
   const auto r = [](double s, double t) { return 0.25 * std::min(s, t); };
-  for (const auto& [a0, a1, b0, b1] : std::vector<std::array<double, 4>>{
-           {10, 40, 10, 40}, {10, 40, 50, 60}, {300, 400, 0, 100}}) {
+  for (const auto& [a0, a1, b0, b1] :
+       std::vector<std::array<double, 4>>{{10, 40, 10, 40}, {10, 40, 50, 60}, {300, 400, 0, 100}}) {
     EXPECT_NEAR(rw.interval_mean_covariance(a0, a1, b0, b1),
                 numeric_interval_covariance(r, a0, a1, b0, b1), 1e-3 * (1.0 + a1));
   }
@@ -108,7 +111,8 @@ TEST(WanderModel, EachProcessHasItsAllanVariance) {
 /// A thermal calibration as a station records it: per plateau a soak (unrecorded), six static
 /// positions and turns about every body axis at three rates in both directions (two whole
 /// revolutions each), with the moves between steps unrecorded.
-std::vector<SimStep> station_campaign(const std::vector<double>& temperatures, double static_s = 30.0) {
+std::vector<SimStep> station_campaign(const std::vector<double>& temperatures,
+                                      double static_s = 30.0) {
   std::vector<SimStep> steps;
   for (double temp : temperatures) {
     bool first = true;
@@ -162,7 +166,8 @@ sim::ImuTruth from_sheet(const char* name, std::uint64_t seed, double rate_hz) {
 /// A MEMS part whose Gauss-Markov bias moves a 30 s step mean more than its white noise does
 /// (gyro 3x, accelerometer 4x), with LN200-class calibratable errors.
 sim::ImuTruth mems_gauss_markov_unit(std::uint64_t seed) {
-  sim::ImuTruth t = testing::white_noise_truth(5e-3, 1e-3, 100.0);  // 0.3 deg/sqrt(h), 100 ug/sqrt(Hz)
+  sim::ImuTruth t =
+      testing::white_noise_truth(5e-3, 1e-3, 100.0);           // 0.3 deg/sqrt(h), 100 ug/sqrt(Hz)
   t.gyro_noise.gauss_markov_sigma.setConstant(10.0 / 3600.0);  // 10 deg/h
   t.accel_noise.gauss_markov_sigma.setConstant(700e-6 * 9.80665);  // 700 ug
   t.gyro_noise.gauss_markov_tau_s = 300.0;
@@ -186,11 +191,13 @@ Honesty fit_true_model(const sim::ImuTruth& truth, std::uint64_t seed) {
   h.chi2_dof = d.fit.chi2_dof;
   h.chi2_dof_gyro = d.fit.chi2_dof_gyro;
   h.chi2_dof_accel = d.fit.chi2_dof_accel;
-  for (const auto& p : d.fit.parameters) h.z.push_back((p.value - truth.parameter(p.name)) / p.sigma);
+  for (const auto& p : d.fit.parameters)
+    h.z.push_back((p.value - truth.parameter(p.name)) / p.sigma);
   h.recommended = d.recommended;
   std::printf("chi2/dof %.3f (gyro %.3f accel %.3f) recommended '%s' noise:\n", h.chi2_dof,
               h.chi2_dof_gyro, h.chi2_dof_accel, h.recommended.c_str());
-  for (const auto& ch : d.fit.noise.channels) std::printf("   %s | %s\n", ch.note.c_str(), ch.source.c_str());
+  for (const auto& ch : d.fit.noise.channels)
+    std::printf("   %s | %s\n", ch.note.c_str(), ch.source.c_str());
   for (std::size_t i = 0; i < 3 && i < d.candidates.size(); ++i) {
     std::printf("   candidate %s dBIC %.1f p %.2g chi2/dof %.3f\n", d.candidates[i].term.c_str(),
                 d.candidates[i].delta_bic, d.candidates[i].p_value, d.candidates[i].chi2_dof_after);
@@ -198,7 +205,8 @@ Honesty fit_true_model(const sim::ImuTruth& truth, std::uint64_t seed) {
   return h;
 }
 
-void expect_honest(const char* what, const std::function<sim::ImuTruth(std::uint64_t)>& make, int seeds) {
+void expect_honest(const char* what, const std::function<sim::ImuTruth(std::uint64_t)>& make,
+                   int seeds) {
   std::vector<double> all_z;
   int recommended = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
@@ -227,11 +235,13 @@ void expect_honest(const char* what, const std::function<sim::ImuTruth(std::uint
 }
 
 TEST(HonestNoise, Ln200ClassTrueModelFitsAtTheNoiseFloor) {
-  expect_honest("LN200", [](std::uint64_t s) { return from_sheet("ln200", s, 100.0); }, 4);
+  expect_honest(
+      "LN200", [](std::uint64_t s) { return from_sheet("ln200", s, 100.0); }, 4);
 }
 
 TEST(HonestNoise, Adis16488ClassTrueModelFitsAtTheNoiseFloor) {
-  expect_honest("ADIS16488", [](std::uint64_t s) { return from_sheet("adis16488", s, 100.0); }, 4);
+  expect_honest(
+      "ADIS16488", [](std::uint64_t s) { return from_sheet("adis16488", s, 100.0); }, 4);
 }
 
 TEST(HonestNoise, MemsGaussMarkovTrueModelFitsAtTheNoiseFloor) {
@@ -259,7 +269,8 @@ std::string without(const std::string& terms, const std::string& hidden) {
 
 /// A catalogue effect the model lacks, on a unit with datasheet noise: diagnose must still
 /// recommend it first, and with it the fit must reach the floor with nothing more recommended.
-void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidden, std::uint64_t seed) {
+void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidden,
+                  std::uint64_t seed) {
   const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
   const std::string all = true_terms(truth);
   const Diagnosis before = diagnose(data, Model::parse(without(all, hidden)));
@@ -302,7 +313,8 @@ TEST(StepNoiseEstimate, AWhiteNoiseUnitHasNoWander) {
     sim::NormalSource n(seed);
     testing::draw_classical_errors(truth, n);
     const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
-    const StepNoise noise = estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
+    const StepNoise noise =
+        estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
     int wanders = 0;
     for (const auto& ch : noise.channels) {
       EXPECT_TRUE(ch.determined) << ch.note;
@@ -316,7 +328,8 @@ TEST(StepNoiseEstimate, AWhiteNoiseUnitHasNoWander) {
 TEST(StepNoiseEstimate, TooFewStepsSaySoAndKeepTheWhiteNoise) {
   sim::ImuTruth truth = from_sheet("ln200", 3, 100.0);
   const RunData data = testing::simulate_run(truth, testing::six_positions(25.0, 30.0), 5);
-  const StepNoise noise = estimate_run_noise(data, Model::parse("accel_bias,accel_scale"), SensorRows::kAccel);
+  const StepNoise noise =
+      estimate_run_noise(data, Model::parse("accel_bias,accel_scale"), SensorRows::kAccel);
   for (int c = kAx; c < kChannels; ++c) {
     const auto& ch = noise.channels[static_cast<std::size_t>(c)];
     EXPECT_FALSE(ch.determined);
@@ -337,7 +350,8 @@ TEST(StepNoiseEstimate, AnExcessNeighbouringStepsDoNotShareIsNotCalledNoise) {
     const double offset = 3e-4 * n.next();
     for (auto& s : step.samples) s.accel_mps2.x() += offset;
   }
-  const StepNoise noise = estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
+  const StepNoise noise =
+      estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
   const auto& ax = noise.channels[kAx];
   EXPECT_FALSE(ax.determined) << ax.note;
   EXPECT_EQ(ax.wander.kind, WanderKind::kNone);
