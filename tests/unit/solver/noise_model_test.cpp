@@ -25,6 +25,7 @@ namespace calstand::solver {
 namespace {
 
 using testing::SimStep;
+using testing::true_terms;
 
 // --- The covariance of interval means -------------------------------------------------------
 
@@ -131,38 +132,6 @@ std::vector<SimStep> station_campaign(const std::vector<double>& temperatures,
   return steps;
 }
 
-/// The catalogue terms (and temperature orders) the truth has, with the Earth rate: the model
-/// that should fit it to the noise.
-std::string true_terms(const sim::ImuTruth& truth) {
-  std::set<std::string> terms{"gyro_bias", "accel_bias", "earth_rate"};
-  std::map<std::string, int> orders;
-  for (const auto& [name, value] : truth.nonzero_parameters()) {
-    const std::string term = name.substr(0, name.find('.'));
-    if (term.find("temp_bias") != std::string::npos) {
-      orders[term] = std::max(orders[term], name.back() - '0');
-    } else {
-      terms.insert(term);
-    }
-  }
-  std::string out;
-  for (const auto& t : terms) out += (out.empty() ? "" : ",") + t;
-  for (const auto& [t, k] : orders) out += fmt::format(",{}:{}", t, k);
-  return out;
-}
-
-sim::ImuTruth from_sheet(const char* name, std::uint64_t seed, double rate_hz) {
-  sim::ImuTruth t = sim::truth_from_spec(*sim::builtin_spec(name), name, seed);
-  // The turn-on bias is a constant within a run: fold it out so the truth's bias is the one
-  // fitted. A lower sample rate than the product's keeps the test quick; the noise densities
-  // are per sqrt(Hz) and the wander does not depend on it.
-  t.gyro_noise.turn_on_bias.setZero();
-  t.accel_noise.turn_on_bias.setZero();
-  t.sample_rate_hz = rate_hz;
-  if (t.gyro_bandwidth_hz >= rate_hz / 2.0) t.gyro_bandwidth_hz = 0.0;
-  if (t.accel_bandwidth_hz >= rate_hz / 2.0) t.accel_bandwidth_hz = 0.0;
-  return t;
-}
-
 /// A MEMS part whose Gauss-Markov bias moves a 30 s step mean more than its white noise does
 /// (gyro 3x, accelerometer 4x), with LN200-class calibratable errors.
 sim::ImuTruth mems_gauss_markov_unit(std::uint64_t seed) {
@@ -236,12 +205,13 @@ void expect_honest(const char* what, const std::function<sim::ImuTruth(std::uint
 
 TEST(HonestNoise, Ln200ClassTrueModelFitsAtTheNoiseFloor) {
   expect_honest(
-      "LN200", [](std::uint64_t s) { return from_sheet("ln200", s, 100.0); }, 4);
+      "LN200", [](std::uint64_t s) { return testing::datasheet_unit("ln200", s, 100.0); }, 4);
 }
 
 TEST(HonestNoise, Adis16488ClassTrueModelFitsAtTheNoiseFloor) {
   expect_honest(
-      "ADIS16488", [](std::uint64_t s) { return from_sheet("adis16488", s, 100.0); }, 4);
+      "ADIS16488", [](std::uint64_t s) { return testing::datasheet_unit("adis16488", s, 100.0); },
+      4);
 }
 
 TEST(HonestNoise, MemsGaussMarkovTrueModelFitsAtTheNoiseFloor) {
@@ -287,12 +257,13 @@ void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidd
 TEST(HonestNoise, AHiddenEffectIsStillFoundOnRealNoise) {
   for (std::uint64_t seed : {1, 2}) {
     // LN200-class accelerometers whose bias follows temperature by 10-20 ug/degC.
-    sim::ImuTruth ln200 = from_sheet("ln200", seed, 100.0);
+    sim::ImuTruth ln200 = testing::datasheet_unit("ln200", seed, 100.0);
     ln200.accel_temp_bias = {Eigen::Vector3d(10e-6, -15e-6, 20e-6) * 9.80665};
     expect_found("LN200 + accel_temp_bias", ln200, "accel_temp_bias", 200 + seed);
     // The ADIS16488-class sheet's own g-sensitivity (0.009 deg/s/g) left out of the model.
-    expect_found("ADIS16488 without gyro_g_sensitivity", from_sheet("adis16488", seed, 100.0),
-                 "gyro_g_sensitivity", 300 + seed);
+    expect_found("ADIS16488 without gyro_g_sensitivity",
+                 testing::datasheet_unit("adis16488", seed, 100.0), "gyro_g_sensitivity",
+                 300 + seed);
     // The MEMS part's gyro bias following temperature by about 1 deg/h per degC (a tenth of
     // the ADIS16488-class sheet's coefficient).
     sim::ImuTruth mems = mems_gauss_markov_unit(seed);
@@ -326,7 +297,7 @@ TEST(StepNoiseEstimate, AWhiteNoiseUnitHasNoWander) {
 }
 
 TEST(StepNoiseEstimate, TooFewStepsSaySoAndKeepTheWhiteNoise) {
-  sim::ImuTruth truth = from_sheet("ln200", 3, 100.0);
+  sim::ImuTruth truth = testing::datasheet_unit("ln200", 3, 100.0);
   const RunData data = testing::simulate_run(truth, testing::six_positions(25.0, 30.0), 5);
   const StepNoise noise =
       estimate_run_noise(data, Model::parse("accel_bias,accel_scale"), SensorRows::kAccel);

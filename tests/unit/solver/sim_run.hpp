@@ -3,11 +3,17 @@
 // for a while (a position, or constant rates with the angles advancing) at a temperature, so the
 // fit can be checked against the simulator's truth without a database.
 
+#include <fmt/format.h>
+
 #include <cstdint>
+#include <map>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "sim/imu_sim.hpp"
 #include "sim/noise.hpp"
+#include "sim/spec_sheet.hpp"
 #include "solver/step_summary.hpp"
 
 namespace calstand::solver::testing {
@@ -57,6 +63,39 @@ inline void draw_classical_errors(sim::ImuTruth& t, sim::NormalSource& normal) {
       t.accel_misalignment(i, j) = 1e-3 * normal.next();
     }
   }
+}
+
+/// A unit drawn from a built-in spec sheet ("ln200", "adis16488": every error term and wander
+/// the sheet has) at `rate_hz` to keep a test quick (noise densities are per sqrt(Hz), the
+/// wander does not depend on the rate), with the turn-on bias folded out so that the fitted bias
+/// is the truth's (it is a constant within a run).
+inline sim::ImuTruth datasheet_unit(const char* sheet, std::uint64_t seed, double rate_hz = 100.0) {
+  sim::ImuTruth t = sim::truth_from_spec(*sim::builtin_spec(sheet), sheet, seed);
+  t.gyro_noise.turn_on_bias.setZero();
+  t.accel_noise.turn_on_bias.setZero();
+  t.sample_rate_hz = rate_hz;
+  if (t.gyro_bandwidth_hz >= rate_hz / 2.0) t.gyro_bandwidth_hz = 0.0;
+  if (t.accel_bandwidth_hz >= rate_hz / 2.0) t.accel_bandwidth_hz = 0.0;
+  return t;
+}
+
+/// The catalogue terms (and temperature orders) the truth has, with the Earth rate and both
+/// biases: the model that should fit it to the noise.
+inline std::string true_terms(const sim::ImuTruth& truth) {
+  std::set<std::string> terms{"gyro_bias", "accel_bias", "earth_rate"};
+  std::map<std::string, int> orders;
+  for (const auto& [name, value] : truth.nonzero_parameters()) {
+    const std::string term = name.substr(0, name.find('.'));
+    if (term.find("temp_bias") != std::string::npos) {
+      orders[term] = std::max(orders[term], name.back() - '0');
+    } else {
+      terms.insert(term);
+    }
+  }
+  std::string out;
+  for (const auto& t : terms) out += (out.empty() ? "" : ",") + t;
+  for (const auto& [t, k] : orders) out += fmt::format(",{}:{}", t, k);
+  return out;
 }
 
 inline RunData simulate_run(const sim::ImuTruth& truth, const std::vector<SimStep>& steps,

@@ -27,6 +27,7 @@ namespace calstand::solver {
 namespace {
 
 using testing::SimStep;
+using testing::true_terms;
 
 constexpr const char* kBase =
     "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
@@ -59,38 +60,6 @@ sim::ImuTruth white_unit(std::uint64_t seed) {
   sim::NormalSource n(seed);
   testing::draw_classical_errors(t, n);
   return t;
-}
-
-/// An LN200-class unit drawn from its datasheet (every error term the sheet has, wandering
-/// biases included), at a lower sample rate to keep the test quick; the turn-on bias folded out
-/// so that the fitted bias is the truth's.
-sim::ImuTruth ln200_unit(std::uint64_t seed) {
-  sim::ImuTruth t = sim::truth_from_spec(*sim::builtin_spec("ln200"), "ln200", seed);
-  t.gyro_noise.turn_on_bias.setZero();
-  t.accel_noise.turn_on_bias.setZero();
-  t.sample_rate_hz = 100.0;
-  if (t.gyro_bandwidth_hz >= 50.0) t.gyro_bandwidth_hz = 0.0;
-  if (t.accel_bandwidth_hz >= 50.0) t.accel_bandwidth_hz = 0.0;
-  return t;
-}
-
-/// The catalogue terms the truth has (with the Earth rate and both biases): the model that
-/// fits it but for the effect a test adds.
-std::string true_terms(const sim::ImuTruth& truth) {
-  std::set<std::string> terms{"gyro_bias", "accel_bias", "earth_rate"};
-  std::map<std::string, int> orders;
-  for (const auto& [name, value] : truth.nonzero_parameters()) {
-    const std::string term = name.substr(0, name.find('.'));
-    if (term.find("temp_bias") != std::string::npos) {
-      orders[term] = std::max(orders[term], name.back() - '0');
-    } else {
-      terms.insert(term);
-    }
-  }
-  std::string out;
-  for (const auto& t : terms) out += (out.empty() ? "" : ",") + t;
-  for (const auto& [t, k] : orders) out += fmt::format(",{}:{}", t, k);
-  return out;
 }
 
 /// Adds `effect(signals)` (gyro x y z, accel x y z) to every sample, with the signals as a
@@ -182,7 +151,7 @@ TEST(Suggest, OneChannelFollowingAForceSquaredGetsAOneAxisTerm) {
 }
 
 TEST(Suggest, OneChannelFollowingAForceSquaredUnderDatasheetNoise) {
-  const sim::ImuTruth truth = ln200_unit(2);
+  const sim::ImuTruth truth = testing::datasheet_unit("ln200", 2);
   RunData data = testing::simulate_run(truth, station_campaign(), 12);
   add_effect(data, gz_on_force_z_squared);
   expect_suggestion(data, Model::parse(true_terms(truth)), "gyro.z:force_z^2");
@@ -213,7 +182,7 @@ TEST(Suggest, EachAxisFollowingItsOwnForceSquaredGetsTheAxisForm) {
 }
 
 TEST(Suggest, EachAxisFollowingItsOwnForceSquaredUnderDatasheetNoise) {
-  const sim::ImuTruth truth = ln200_unit(5);
+  const sim::ImuTruth truth = testing::datasheet_unit("ln200", 5);
   RunData data = testing::simulate_run(truth, station_campaign(), 15);
   add_effect(data, gyro_on_own_force_squared);
   expect_suggestion(data, Model::parse(true_terms(truth)), "gyro:force_{axis}^2");
@@ -256,7 +225,7 @@ TEST(Suggest, AWarmUpTransientGetsExpOfElapsedWithItsTimeConstant) {
 }
 
 TEST(Suggest, AWarmUpTransientUnderDatasheetNoise) {
-  const sim::ImuTruth truth = ln200_unit(2);
+  const sim::ImuTruth truth = testing::datasheet_unit("ln200", 2);
   RunData data = testing::simulate_run(truth, station_campaign(0.0, 600.0), 17);
   add_effect(data, accel_warm_up);
   expect_transient(data, Model::parse(true_terms(truth)));
@@ -283,7 +252,7 @@ TEST(Suggest, NothingIsSuggestedWhenTheModelFits) {
 
 TEST(Suggest, NothingIsSuggestedUnderDatasheetNoiseWithTheTrueModel) {
   for (std::uint64_t seed : {3, 4}) {
-    const sim::ImuTruth truth = ln200_unit(seed);
+    const sim::ImuTruth truth = testing::datasheet_unit("ln200", seed);
     const RunData data = testing::simulate_run(truth, station_campaign(), 20 + seed);
     const Diagnosis forced = diagnose(data, Model::parse(true_terms(truth)), {}, search_forced());
     print(forced);
