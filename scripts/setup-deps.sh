@@ -11,6 +11,7 @@ packages=(
   libsqlite3-dev libsqlitecpp-dev libssl-dev sqlite3
   libmuparser-dev libfftw3-dev libboost-math-dev
   libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev
+  json-schema-test-suite
   gnuplot-nox chromium
   systemd
 )
