@@ -16,8 +16,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <string>
 
 #include "core/error.hpp"
+#include "core/version.hpp"
 #include "daemon/api/api_server.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
@@ -131,7 +133,7 @@ int main(int argc, char** argv) {
   app.add_option("--recovery", opt.recovery, "Interrupted run on start: auto (resume) or hold")
       ->capture_default_str();
   app.add_option("--log-level", opt.log_level, "trace, debug, info, warn, error")->capture_default_str();
-  app.set_version_flag("--version", "calstandd 0.1.0");
+  app.set_version_flag("--version", std::string("calstandd ") + calstand::core::kVersion);
   try {
     app.parse(argc, argv);
     return run_daemon(opt, stop_signals);

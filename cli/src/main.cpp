@@ -2,14 +2,16 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "calstand 0.1.0");
+  app.set_version_flag("--version", std::string("calstand ") + calstand::core::kVersion);
   calstand::cli::register_allan(app);
   calstand::cli::register_calibrate(app);
   calstand::cli::register_client(app);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/version.hpp"
 #include "solver/fit.hpp"
 #include "solver/run_setup.hpp"
 #include "store/step_data.hpp"
@@ -12,7 +13,7 @@
 namespace calstand::solver {
 
 inline constexpr const char* kCalibrationFormat = "calstand-calibration/1";
-inline constexpr const char* kSoftwareVersion = "calstand 0.1.0";
+inline constexpr const char* kSoftwareVersion = "calstand " CALSTAND_VERSION;
 
 /// Builds a calibration record (schemas/calibration.schema.json) from a fit of `model` on the
 /// run of `setup`; `noise` (per-channel noise figures, or null) is stored as given. The valid
