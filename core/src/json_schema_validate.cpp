@@ -34,6 +34,37 @@ using Findings = std::vector<Finding>;
 // Generous for any real file, small enough for the stack; also stops a $ref loop in a schema.
 constexpr int kMaxDepth = 400;
 
+/// Whether `text` is one bracketed step, `[2]` or `["key"]`, and nothing after it.
+bool is_bracket(const std::string& text) {
+  if (text.size() < 3 || text.front() != '[' || text.back() != ']') return false;
+  if (text[1] != '"') {
+    return std::all_of(text.begin() + 1, text.end() - 1,
+                       [](char c) { return c >= '0' && c <= '9'; });
+  }
+  // A quoted key: the closing quote is the last one before "]" (quotes inside are escaped).
+  for (std::size_t i = 2; i + 1 < text.size(); ++i) {
+    if (text[i] == '\\') {
+      ++i;
+    } else if (text[i] == '"') {
+      return i + 2 == text.size();
+    }
+  }
+  return false;
+}
+
+/// Whether `child` is `parent` or one of its direct members (`parent.key`, `parent[2]`,
+/// `parent["odd key"]`), as member_path() and index_path() write them.
+bool is_member_or_self(const std::string& parent, const std::string& child) {
+  if (child == parent) return true;
+  if (child.size() <= parent.size() || child.compare(0, parent.size(), parent) != 0) return false;
+  const std::string rest = child.substr(parent.size());
+  if (parent.empty() || rest.front() == '.') {
+    const std::string key = parent.empty() ? rest : rest.substr(1);
+    return is_identifier(key) || (parent.empty() && is_bracket(key));
+  }
+  return rest.front() == '[' && is_bracket(rest);
+}
+
 std::string form_name(const Node& branch, std::size_t index) {
   const Node* b = &branch;
   // A branch that is only a $ref is best named by its target; bounded in case refs loop.
@@ -280,9 +311,12 @@ class Validator {
       }
       return nullptr;
     };
-    const auto const_miss = [](const Findings& fs) -> const Finding* {
+    // A union's discriminator is the value itself or one of its members ("transport": "tcp");
+    // a fixed value deeper down (a field's "kind" must be "holding") is a problem of the form,
+    // not a sign that the value meant another form.
+    const auto const_miss = [&](const Findings& fs) -> const Finding* {
       for (const auto& f : fs) {
-        if (f.kind == Kind::kConst) return &f;
+        if (f.kind == Kind::kConst && is_member_or_self(path, f.path)) return &f;
       }
       return nullptr;
     };

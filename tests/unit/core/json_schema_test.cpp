@@ -336,6 +336,19 @@ TEST(JsonSchemaCombinators, OneOfNamesFormsByDefinitionAndDiscriminator) {
                    R"([0].kind: "fast" is not one of "rate", "position")"}));
 }
 
+TEST(JsonSchemaCombinators, AFixedValueDeepInAFormIsThatFormsProblemNotItsDiscriminator) {
+  // A chamber map: a built-in name, or an object whose written fields must be holding registers.
+  const json s = json::parse(R"({"oneOf": [
+    {"title": "built-in", "type": "string", "enum": ["watlow-f4"]},
+    {"title": "map", "type": "object", "properties": {
+      "setpoint": {"type": "object", "properties": {"kind": {"const": "holding"}}}}}
+  ]})");
+  EXPECT_EQ(check(s, json::parse(R"({"setpoint": {"kind": "input"}})")),
+            (Lines{R"(matches none of the 2 allowed forms; closest is form 2 ("map"), whose )"
+                   "problems follow",
+                   R"(setpoint.kind: "input" is not the required value "holding")"}));
+}
+
 TEST(JsonSchemaCombinators, OneOfRejectsMatchingSeveralForms) {
   const json s =
       json::parse(R"({"oneOf": [{"type": "integer"}, {"minimum": 0, "title": "non-negative"}]})");
