@@ -33,6 +33,10 @@ class ByteTransport {
 
 enum class Parity { kNone, kEven, kOdd };
 
+/// The parity named "none", "even" or "odd" (as station files write it). Throws
+/// core::InputError naming `where` for any other name.
+Parity parity_from_name(const std::string& name, const std::string& where = "parity");
+
 /// Settings of a serial line: 8 data bits, 1 stop bit, no flow control (what IMUs use).
 struct SerialOptions {
   std::string path;        ///< device node, e.g. /dev/ttyUSB0

@@ -40,6 +40,13 @@ std::optional<speed_t> baud_code(int rate_bps) {
 
 }  // namespace
 
+Parity parity_from_name(const std::string& name, const std::string& where) {
+  if (name == "none") return Parity::kNone;
+  if (name == "even") return Parity::kEven;
+  if (name == "odd") return Parity::kOdd;
+  throw core::InputError(where, "\"" + name + "\" is not none, even or odd");
+}
+
 void SerialOptions::validate() const {
   if (path.empty()) throw core::InputError("serial.path", "must name a device, e.g. /dev/ttyUSB0");
   if (!baud_code(baud_rate)) {

@@ -6,58 +6,23 @@
 #include <span>
 
 #include "core/error.hpp"
+#include "core/schemas.hpp"
 
 namespace calstand::drivers {
-namespace {
-
 using nlohmann::json;
 
-Parity parse_parity(const json& c, const std::string& where) {
-  const std::string p = c.value("parity", "none");
-  if (p == "none") return Parity::kNone;
-  if (p == "even") return Parity::kEven;
-  if (p == "odd") return Parity::kOdd;
-  throw core::InputError(where + ".parity", fmt::format("\"{}\" is not none, even or odd", p));
-}
-
-template <typename T>
-T field(const json& c, const char* key, T fallback, const std::string& where) {
-  if (!c.contains(key)) return fallback;
-  try {
-    return c.at(key).get<T>();
-  } catch (const json::exception&) {
-    throw core::InputError(where + "." + key, fmt::format("has the wrong type ({})", c.at(key).dump()));
-  }
-}
-
-}  // namespace
-
 SerialImuConnection SerialImuConnection::from_json(const json& c, const std::string& where) {
-  if (!c.is_object()) throw core::InputError(where, "must be an object");
+  // The schema checks every field (path and rate required, a supported baud rate, the frame
+  // format, the sequence modulus range); what is left is reading them, with the defaults.
+  core::validate_part_or_throw(
+      core::schema_definition("station.schema.json", "serial_imu_connection"), c, "", where);
   SerialImuConnection out;
-  out.serial.path = field<std::string>(c, "path", "", where);
-  out.serial.baud_rate = field<int>(c, "baud", 115200, where);
-  out.serial.parity = parse_parity(c, where);
-  out.format = field<std::string>(c, "format", "calstand", where);
-  out.sample_rate_hz = field<double>(c, "sample_rate_hz", 0.0, where);
-  out.sequence_modulus = field<std::uint64_t>(c, "sequence_modulus", out.sequence_modulus, where);
-  if (out.serial.path.empty()) {
-    throw core::InputError(where + ".path", "is required: the serial device, e.g. /dev/ttyUSB0");
-  }
-  try {
-    out.serial.validate();
-  } catch (const core::InputError& e) {
-    // validate() names "serial.<field>"; say which IMU's connection it is.
-    throw core::InputError(where, e.what());
-  }
-  if (!(out.sample_rate_hz > 0.0 && out.sample_rate_hz <= 100000.0)) {
-    throw core::InputError(where + ".sample_rate_hz",
-                           "is required: the IMU's output rate in Hz (0 < rate <= 100000)");
-  }
-  if (out.sequence_modulus < 2 || out.sequence_modulus > (std::uint64_t{1} << 32)) {
-    throw core::InputError(where + ".sequence_modulus", "must be in [2, 2^32]");
-  }
-  make_frame_decoder(out.format, out.sequence_modulus, where + ".format");  // checks the name
+  out.serial.path = c.at("path").get<std::string>();
+  out.serial.baud_rate = c.value("baud", 115200);
+  out.serial.parity = parity_from_name(c.value("parity", "none"), where + ".parity");
+  out.format = c.value("format", "calstand");
+  out.sample_rate_hz = c.at("sample_rate_hz").get<double>();
+  out.sequence_modulus = c.value("sequence_modulus", out.sequence_modulus);
   return out;
 }
 

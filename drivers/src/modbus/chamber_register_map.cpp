@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/schemas.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -17,73 +18,40 @@ std::string join(const std::string& where, std::string_view field) {
   return where.empty() ? std::string(field) : where + "." + std::string(field);
 }
 
-// Every object in a map is checked for unknown keys: a misspelt "adress" must not silently
-// leave the default address in place on a live chamber.
-void reject_unknown_keys(const json& j, const std::string& where,
-                         std::initializer_list<std::string_view> known) {
-  for (const auto& [key, value] : j.items()) {
-    bool found = false;
-    for (auto k : known) found = found || key == k;
-    if (!found) {
-      std::string list;
-      for (auto k : known) list += (list.empty() ? "" : ", ") + std::string(k);
-      throw core::InputError(join(where, key), "unknown field (expected one of " + list + ")");
-    }
-  }
+RegisterKind kind_from_name(const std::string& name) {
+  return name == "input" ? RegisterKind::kInput : RegisterKind::kHolding;
 }
 
-std::uint16_t register_value(const json& j, const std::string& where) {
-  if (!j.is_number_integer() || j.get<std::int64_t>() < 0 || j.get<std::int64_t>() > 65535) {
-    throw core::InputError(where, "must be an integer in [0, 65535], got " + j.dump());
-  }
-  return static_cast<std::uint16_t>(j.get<std::int64_t>());
+RegisterEncoding encoding_from_name(const std::string& name) {
+  if (name == "uint16") return RegisterEncoding::kUint16;
+  if (name == "float32") return RegisterEncoding::kFloat32;
+  return RegisterEncoding::kInt16;
 }
 
-RegisterKind kind_from_json(const json& j, const std::string& where) {
-  if (j == "holding") return RegisterKind::kHolding;
-  if (j == "input") return RegisterKind::kInput;
-  throw core::InputError(where, "must be \"holding\" or \"input\", got " + j.dump());
-}
-
-RegisterEncoding encoding_from_json(const json& j, const std::string& where) {
-  if (j == "int16") return RegisterEncoding::kInt16;
-  if (j == "uint16") return RegisterEncoding::kUint16;
-  if (j == "float32") return RegisterEncoding::kFloat32;
-  throw core::InputError(where, "must be \"int16\", \"uint16\" or \"float32\", got " + j.dump());
-}
-
+// Reads a field the schema has checked (address, kind, encoding, scale in range).
 RegisterField field_from_json(const json& j, const std::string& where) {
-  if (!j.is_object()) throw core::InputError(where, "must be an object");
-  reject_unknown_keys(j, where, {"address", "kind", "encoding", "scale"});
-  if (!j.contains("address")) throw core::InputError(join(where, "address"), "is required");
   RegisterField f;
-  f.address = register_value(j.at("address"), join(where, "address"));
-  if (j.contains("kind")) f.kind = kind_from_json(j.at("kind"), join(where, "kind"));
-  if (!j.contains("encoding")) throw core::InputError(join(where, "encoding"), "is required");
-  f.encoding = encoding_from_json(j.at("encoding"), join(where, "encoding"));
+  f.address = j.at("address").get<std::uint16_t>();
+  f.kind = kind_from_name(j.value("kind", "holding"));
+  f.encoding = encoding_from_name(j.at("encoding").get<std::string>());
   if (j.contains("scale")) {
-    const auto& s = j.at("scale");
-    if (!s.is_number()) throw core::InputError(join(where, "scale"), "must be a number");
+    // Cross-field, so not in the schema: a float32 is already in engineering units.
     if (f.encoding == RegisterEncoding::kFloat32) {
       throw core::InputError(join(where, "scale"),
                              "applies to int16/uint16 only (float32 is in "
                              "engineering units)");
     }
-    f.scale = s.get<double>();
+    f.scale = j.at("scale").get<double>();
   }
   return f;
 }
 
 ModeField mode_from_json(const json& j, const std::string& where) {
-  if (!j.is_object()) throw core::InputError(where, "must be an object");
-  reject_unknown_keys(j, where, {"address", "control", "standby"});
-  for (auto key : {"address", "control", "standby"}) {
-    if (!j.contains(key)) throw core::InputError(join(where, key), "is required");
-  }
   ModeField m;
-  m.address = register_value(j.at("address"), join(where, "address"));
-  m.control = register_value(j.at("control"), join(where, "control"));
-  m.standby = register_value(j.at("standby"), join(where, "standby"));
+  m.address = j.at("address").get<std::uint16_t>();
+  m.control = j.at("control").get<std::uint16_t>();
+  m.standby = j.at("standby").get<std::uint16_t>();
+  // Cross-field, so not in the schema.
   if (m.control == m.standby) {
     throw core::InputError(join(where, "standby"), "must differ from control");
   }
@@ -243,53 +211,25 @@ WordOrder word_order_from_json(const json& j, const std::string& where) {
 
 ChamberRegisterMap register_map_from_json(const json& j, const std::string& where,
                                           WordOrder word_order) {
+  // The schema checks the shape (a built-in name or a map object, every field's type and range,
+  // no unknown keys: a misspelt "adress" must not leave a default on a live chamber); the
+  // cross-field rules a schema cannot state are in field_from_json, mode_from_json, validate().
+  core::validate_part_or_throw(core::schema_definition("station.schema.json", "chamber_map"), j, "",
+                               where);
   if (j.is_string()) {
-    const auto name = j.get<std::string>();
-    if (name == "watlow-f4") return watlow_f4_map();
-    if (name == "watlow-f4t") return watlow_f4t_map(word_order);
-    throw core::InputError(where,
-                           "unknown built-in map \"" + name +
-                               "\" (built-ins: watlow-f4, watlow-f4t; or give a map object)");
+    return j == "watlow-f4" ? watlow_f4_map() : watlow_f4t_map(word_order);
   }
-  if (!j.is_object()) {
-    throw core::InputError(where, "must be a built-in map name or a map object, got " + j.dump());
-  }
-  reject_unknown_keys(
-      j, where, {"name", "process_value", "setpoint", "mode", "ramp_rate", "sensor_fault_raw"});
   ChamberRegisterMap m;
-  m.name = "generic";
-  if (j.contains("name")) {
-    if (!j.at("name").is_string()) throw core::InputError(join(where, "name"), "must be a string");
-    m.name = j.at("name").get<std::string>();
-  }
-  for (auto key : {"process_value", "setpoint"}) {
-    if (!j.contains(key)) throw core::InputError(join(where, key), "is required");
-  }
+  m.name = j.value("name", "generic");
   m.process_value = field_from_json(j.at("process_value"), join(where, "process_value"));
   m.setpoint = field_from_json(j.at("setpoint"), join(where, "setpoint"));
   if (j.contains("mode")) m.mode = mode_from_json(j.at("mode"), join(where, "mode"));
   if (j.contains("ramp_rate")) {
     m.ramp_rate = field_from_json(j.at("ramp_rate"), join(where, "ramp_rate"));
   }
-  if (j.contains("sensor_fault_raw")) {
-    const auto& list = j.at("sensor_fault_raw");
-    const auto list_where = join(where, "sensor_fault_raw");
-    if (!list.is_array()) throw core::InputError(list_where, "must be an array of register values");
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      // Signed controllers document their sentinels as negative numbers (-32768): accept both.
-      // An unsigned number is compared as one: beyond INT64_MAX, get<int64_t>() would wrap it
-      // to a negative that passes the range check (2^64 - 1 read as -1, i.e. 0xFFFF).
-      const auto& v = list[i];
-      const bool in_range = v.is_number_unsigned()
-                                ? v.get<std::uint64_t>() <= 65535
-                                : v.is_number_integer() && v.get<std::int64_t>() >= -32768 &&
-                                      v.get<std::int64_t>() <= 65535;
-      if (!in_range) {
-        throw core::InputError(fmt::format("{}[{}]", list_where, i),
-                               "must be an integer in [-32768, 65535], got " + v.dump());
-      }
-      m.sensor_fault_raw.push_back(static_cast<std::uint16_t>(v.get<std::int64_t>() & 0xFFFF));
-    }
+  // Signed controllers document their sentinels as negative numbers (-32768): both are words.
+  for (const auto& v : j.value("sensor_fault_raw", json::array())) {
+    m.sensor_fault_raw.push_back(static_cast<std::uint16_t>(v.get<std::int64_t>() & 0xFFFF));
   }
   m.set_word_order(word_order);
   m.validate(where);

@@ -176,3 +176,88 @@ TEST(StationConfig, FaultPolicyDefaultsAndRoundTrips) {
 
 }  // namespace
 }  // namespace calstand::core
+
+namespace calstand::core {
+namespace {
+
+/// minimal_station() on real backends (acutrol over TCP, an F4T over Modbus TCP, a serial IMU).
+json real_station() {
+  json doc = minimal_station();
+  doc["table"]["backend"] = "acutrol";
+  doc["table"]["connection"] = {{"transport", "tcp"}, {"host", "10.0.0.5"}, {"port", 5025}};
+  doc["chamber"]["backend"] = "modbus";
+  doc["chamber"]["connection"] = {
+      {"transport", "tcp"}, {"host", "10.0.0.6"}, {"map", "watlow-f4t"}};
+  doc["imus"][0] = {{"name", "dut"},
+                    {"backend", "serial"},
+                    {"connection", {{"path", "/dev/ttyUSB0"}, {"sample_rate_hz", 400}}}};
+  return doc;
+}
+
+/// The schema error's lines ("s.json: PATH: MESSAGE"), or "" when the station loads.
+std::string station_error(const json& doc) {
+  try {
+    StationConfig::from_json(doc, "s.json");
+  } catch (const SchemaError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StationConfig, ConnectionsAreCheckedByTheSchemaNamingFileAndPath) {
+  EXPECT_EQ(station_error(real_station()), "");
+
+  json doc = real_station();
+  doc["table"]["connection"]["port"] = 70000;
+  EXPECT_NE(station_error(doc).find("s.json: table.connection.port: 70000 is greater than the "
+                                    "maximum 65535"),
+            std::string::npos)
+      << station_error(doc);
+
+  doc = real_station();
+  doc["table"]["connection"]["transport"] = "udp";
+  EXPECT_NE(station_error(doc).find("table.connection.transport: \"udp\" is not one of \"tcp\", "
+                                    "\"serial\""),
+            std::string::npos)
+      << station_error(doc);
+
+  doc = real_station();
+  doc["chamber"]["connection"]["baud"] = 9600;  // a field of transport rtu
+  EXPECT_NE(station_error(doc).find("chamber.connection: unknown property \"baud\""),
+            std::string::npos)
+      << station_error(doc);
+
+  doc = real_station();
+  doc["chamber"]["connection"]["map"] = {{"process_value", {{"address", 1}, {"encoding", "int16"}}},
+                                         {"setpoint", {{"address", 70000}, {"encoding", "int16"}}}};
+  EXPECT_NE(station_error(doc).find("chamber.connection.map.setpoint.address: 70000 is greater "
+                                    "than the maximum 65535"),
+            std::string::npos)
+      << station_error(doc);
+
+  doc = real_station();
+  doc["imus"][0]["connection"]["baud"] = 12345;
+  EXPECT_NE(station_error(doc).find("imus[0].connection.baud: 12345 is not one of"),
+            std::string::npos)
+      << station_error(doc);
+
+  doc = real_station();
+  doc["imus"][0]["backend"] = "socketcan";
+  doc["imus"][0]["connection"] = {
+      {"interface", "can0"}, {"sample_rate_hz", 200}, {"map", json::object()}};
+  EXPECT_NE(station_error(doc).find("imus[0].connection.map: missing required property "
+                                    "\"signals\""),
+            std::string::npos)
+      << station_error(doc);
+
+  // A simulated device runs in process: a connection there is a mistake, not ignored.
+  doc = minimal_station();
+  doc["chamber"]["connection"] = {{"transport", "tcp"}};
+  EXPECT_NE(station_error(doc).find("s.json: chamber.connection: matches a form that is not "
+                                    "allowed"),
+            std::string::npos)
+      << station_error(doc);
+}
+
+}  // namespace
+}  // namespace calstand::core

@@ -9,6 +9,7 @@
 #include "acutrol_test_support.hpp"
 #include "core/error.hpp"
 #include "drivers/acutrol_server.hpp"
+#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -44,7 +45,7 @@ std::string where_of(const nlohmann::json& connection) {
   try {
     AcutrolTable table(table_config(connection), clock);
   } catch (const core::InputError& e) {
-    return e.where();
+    return test::error_field(e);
   }
   return "";
 }

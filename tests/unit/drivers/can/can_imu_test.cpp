@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "drivers/socketcan_port.hpp"
 #include "drivers/socketpair_can.hpp"
+#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -90,7 +91,8 @@ TEST(CanImuConnectionTest, InlineMapErrorsNameTheFullPath) {
     CanImuConnection::from_json(c, kWhere);
     FAIL() << "accepted a 72-bit field";
   } catch (const core::InputError& e) {
-    EXPECT_EQ(e.where(), "imus[0].connection.map.signals.gyro_x.length_bits") << e.what();
+    EXPECT_EQ(test::error_field(e), "imus[0].connection.map.signals.gyro_x.length_bits")
+        << e.what();
   }
 }
 
@@ -115,7 +117,7 @@ TEST_P(CanImuConnectionErrorTest, NamesTheField) {
     CanImuConnection::from_json(c, kWhere);
     FAIL() << "accepted " << b.name;
   } catch (const core::InputError& e) {
-    EXPECT_EQ(e.where(), kWhere + b.where) << e.what();
+    EXPECT_EQ(test::error_field(e), kWhere + b.where) << e.what();
   }
 }
 
@@ -125,7 +127,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadConnection{"no interface", "interface", nullptr, ".interface"},
         BadConnection{"empty interface", "interface", "", ".interface"},
         BadConnection{"no map", "map_file", nullptr, ".map"},
-        BadConnection{"map and map_file", "map", json::object(), ".map"},
+        // A valid map beside the file, so that it is the pair that is refused.
+        BadConnection{"map and map_file", "map", can_test::float_map_json(), ".map"},
         BadConnection{"missing map file", "map_file", "/nonexistent/map.json", ".map_file"},
         BadConnection{"no rate", "sample_rate_hz", nullptr, ".sample_rate_hz"},
         BadConnection{"negative rate", "sample_rate_hz", -200, ".sample_rate_hz"},

@@ -9,6 +9,7 @@
 #include "can_test_support.hpp"
 #include "core/error.hpp"
 #include "drivers/can_sample_assembler.hpp"
+#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -63,7 +64,7 @@ TEST_P(CanSignalMapErrorTest, NamesTheFieldAndWhy) {
     CanSignalMap::from_json(doc, kMapWhere);
     FAIL() << "accepted a map with " << c.name;
   } catch (const core::InputError& e) {
-    EXPECT_EQ(e.where(), kMapWhere + c.where) << e.what();
+    EXPECT_EQ(test::error_field(e), kMapWhere + c.where) << e.what();
     EXPECT_NE(std::string(e.what()).find(c.why), std::string::npos) << e.what();
   }
 }
@@ -74,30 +75,33 @@ INSTANTIATE_TEST_SUITE_P(
         BadMap{"length beyond 64 bits", "/signals/gyro_x/length_bits", 64,
                ".signals.gyro_x.length_bits", "beyond the 64 bits"},
         BadMap{"length of 65 bits", "/signals/gyro_x/length_bits", 65,
-               ".signals.gyro_x.length_bits", "out of range 1..64"},
+               ".signals.gyro_x.length_bits", "65 is not one of 32, 64"},
         BadMap{"start byte beyond 7", "/signals/gyro_x/start_byte", 8, ".signals.gyro_x.start_byte",
-               "out of range 0..7"},
+               "8 is greater than the maximum 7"},
         BadMap{"overlapping fields", "/signals/temperature/start_byte", 3, ".signals.temperature",
                "overlaps gyro_x in frame 0x201"},
         BadMap{"a value over the sequence", "/signals/gyro_y/start_byte", 0, ".signals.gyro_y",
                "overlaps sequence"},
         BadMap{"unknown byte order", "/signals/gyro_x/byte_order", "middle",
-               ".signals.gyro_x.byte_order", "unknown byte order \"middle\""},
+               ".signals.gyro_x.byte_order", "\"middle\" is not one of \"little\", \"big\""},
         BadMap{"unknown map byte order", "/byte_order", "motorola", ".byte_order",
-               "unknown byte order"},
-        BadMap{"missing signal", "/signals/gyro_z", nullptr, ".signals", "missing gyro_z"},
-        BadMap{"missing sequence", "/signals/sequence", nullptr, ".signals", "missing sequence"},
+               "\"motorola\" is not one of"},
+        BadMap{"missing signal", "/signals/gyro_z", nullptr, ".signals.gyro_z",
+               "missing required property \"gyro_z\""},
+        BadMap{"missing sequence", "/signals/sequence", nullptr, ".signals.sequence",
+               "missing required property \"sequence\""},
         BadMap{"unknown signal", "/signals/gyro_w", json::object(), ".signals.gyro_w",
-               "unknown signal"},
+               "unknown property \"gyro_w\""},
         BadMap{"typo in a key", "/signals/gyro_x/lenght_bits", 8, ".signals.gyro_x.lenght_bits",
-               "unknown key"},
+               "unknown property \"lenght_bits\" (did you mean \"length_bits\"?)"},
         BadMap{"missing length", "/signals/gyro_x/length_bits", nullptr,
-               ".signals.gyro_x.length_bits", "missing"},
-        BadMap{"missing type", "/signals/gyro_x/type", nullptr, ".signals.gyro_x.type", "missing"},
+               ".signals.gyro_x.length_bits", "missing required property"},
+        BadMap{"missing type", "/signals/gyro_x/type", nullptr, ".signals.gyro_x.type",
+               "missing required property"},
         BadMap{"unknown type", "/signals/gyro_x/type", "int", ".signals.gyro_x.type",
-               "unknown type \"int\""},
+               "\"int\" is not one of \"unsigned\", \"signed\", \"float\""},
         BadMap{"16-bit float", "/signals/gyro_x/length_bits", 16, ".signals.gyro_x.length_bits",
-               "a float is 32 or 64 bits"},
+               "16 is not one of 32, 64"},
         BadMap{"no start", "/signals/gyro_x/start_byte", nullptr, ".signals.gyro_x.start_byte",
                "give start_byte or start_bit"},
         BadMap{"two starts", "/signals/gyro_x/start_bit", 8, ".signals.gyro_x.start_byte",
@@ -105,25 +109,27 @@ INSTANTIATE_TEST_SUITE_P(
         BadMap{"11-bit id too big", "/signals/gyro_x/id", "0x800", ".signals.gyro_x.id",
                "beyond the 11-bit ids"},
         BadMap{"id not a number", "/signals/gyro_x/id", "0x10G", ".signals.gyro_x.id",
-               "is not a CAN id"},
-        BadMap{"missing id", "/signals/gyro_x/id", nullptr, ".signals.gyro_x.id", "missing"},
+               "does not match the pattern"},
+        BadMap{"missing id", "/signals/gyro_x/id", nullptr, ".signals.gyro_x.id",
+               "missing required property"},
         BadMap{"negative length", "/signals/gyro_x/length_bits", -8, ".signals.gyro_x.length_bits",
-               "whole number"},
-        BadMap{"zero scale", "/signals/gyro_x/scale", 0, ".signals.gyro_x.scale", "must not be 0"},
+               "-8 is less than the minimum 1"},
+        BadMap{"zero scale", "/signals/gyro_x/scale", 0, ".signals.gyro_x.scale",
+               "not allowed (\"0, which would erase the signal\")"},
         BadMap{"scale not a number", "/signals/gyro_x/scale", "1e-5", ".signals.gyro_x.scale",
-               "finite number"},
+               "expected a number, got a string"},
         BadMap{"unit mismatch", "/signals/gyro_x/unit", "rad/s", ".signals.gyro_x.unit",
-               "fold a conversion into scale"},
+               "\"rad/s\" is not the required value \"deg/s\""},
         BadMap{"sequence over 32 bits", "/signals/sequence/length_bits", 40,
-               ".signals.sequence.length_bits", "at most 32 bits"},
+               ".signals.sequence.length_bits", "40 is greater than the maximum 32"},
         BadMap{"signed sequence", "/signals/sequence/type", "signed", ".signals.sequence.type",
-               "\"unsigned\""},
+               "\"signed\" is not the required value \"unsigned\""},
         BadMap{"sequence with an id", "/signals/sequence/id", "0x201", ".signals.sequence.id",
-               "unknown key"},
+               "unknown property \"id\""},
         BadMap{"reassembly depth 0", "/reassembly_depth", 0, ".reassembly_depth",
-               "out of range 1..16"},
+               "0 is less than the minimum 1"},
         BadMap{"signals not an object", "/signals", json::array(), ".signals",
-               "must be an object"}),
+               "expected an object, got an array"}),
     [](const ::testing::TestParamInfo<BadMap>& param) {
       std::string n = param.param.name;
       for (char& ch : n) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
@@ -150,7 +156,9 @@ TEST(CanSignalMapTest, FileErrorsNameTheFileAndTheField) {
     CanSignalMap::load(broken, "imus[1].connection.map_file");
     FAIL() << "accepted a 72-bit field";
   } catch (const core::InputError& e) {
-    EXPECT_EQ(e.where(), "imus[1].connection.map_file " + broken + ": signals.accel_y.length_bits");
+    // The station field that names the file, the file, then the path within it.
+    EXPECT_EQ(e.where(), "imus[1].connection.map_file " + broken);
+    EXPECT_EQ(test::error_field(e), "signals.accel_y.length_bits");
   }
   std::ofstream(broken) << "{ not json";
   EXPECT_THROW(CanSignalMap::load(broken, "m"), core::InputError);

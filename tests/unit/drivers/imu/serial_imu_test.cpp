@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "drivers/pseudo_terminal.hpp"
+#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -151,7 +152,7 @@ TEST(SerialImuConnection, EveryMistakeNamesItsField) {
     try {
       SerialImuConnection::from_json(c, "imus[1].connection");
     } catch (const core::InputError& e) {
-      return e.what();
+      return test::error_field(e) + ": " + e.what();
     }
     return "";
   };

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -118,8 +119,9 @@ std::string error_where(const json& doc) {
   try {
     register_map_from_json(doc, "chamber.connection.map", WordOrder::kHighFirst);
   } catch (const core::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find(e.where()), std::string::npos);
-    return e.where();
+    EXPECT_NE(std::string(e.what()).find("chamber.connection.map"), std::string::npos)
+        << e.what();
+    return test::error_field(e);
   }
   return "";
 }
