@@ -134,7 +134,8 @@ namespace calstand::core {
 
 struct JsonSchema::Impl {
   std::string name;
-  std::deque<schema_detail::Node> nodes;  // a deque, so nodes keep their addresses while more are added
+  std::deque<schema_detail::Node>
+      nodes;  // a deque, so nodes keep their addresses while more are added
   const schema_detail::Node* root = nullptr;
 };
 

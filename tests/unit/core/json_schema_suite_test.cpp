@@ -148,8 +148,9 @@ TEST(JsonSchemaSuite, Draft07CasesOfTheSupportedKeywordsPass) {
         }
         ++failed;
         ADD_FAILURE() << where << ": expected " << (valid ? "invalid" : "valid") << ", got "
-                      << (valid ? "valid" : "invalid: " + violations.front().path + ": " +
-                                                violations.front().message);
+                      << (valid ? "valid"
+                                : "invalid: " + violations.front().path + ": " +
+                                      violations.front().message);
       }
     }
   }
