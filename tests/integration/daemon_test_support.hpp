@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/api/sse_parser.hpp"
+#include "wire/sse_decoder.hpp"
 
 namespace calstand::testing {
 
@@ -103,7 +103,7 @@ class EventStreamReader {
   };
 
   explicit EventStreamReader(int port)
-      : client_("127.0.0.1", port), parser_([this](const daemon::api::SseMessage& m) {
+      : client_("127.0.0.1", port), parser_([this](const wire::SseEvent& m) {
           std::lock_guard lock(mutex_);
           messages_.push_back({m.type, nlohmann::json::parse(m.data, nullptr, false)});
           return true;
@@ -132,7 +132,7 @@ class EventStreamReader {
 
  private:
   httplib::Client client_;
-  daemon::api::SseParser parser_;
+  wire::SseDecoder parser_;
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::vector<Message> messages_;

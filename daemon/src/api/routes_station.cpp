@@ -12,6 +12,7 @@
 #include "store/database.hpp"
 #include "store/run_queue.hpp"
 
+#include "wire/sse_encoder.hpp"
 namespace calstand::daemon::api {
 namespace {
 
@@ -68,8 +69,8 @@ class StreamSlot {
 // One message; `id` empty for the greeting, which is a snapshot, not one of the hub's messages
 // (a reader that reconnects names the last real message it saw).
 std::string sse_message(const std::string& id, const std::string& type, const nlohmann::json& data) {
-  return fmt::format("{}event: {}\ndata: {}\n\n", id.empty() ? "" : "id: " + id + "\n", type,
-                     data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  return wire::encode_sse_event(
+      {type, data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), id});
 }
 
 }  // namespace
@@ -136,7 +137,7 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
             }
             const auto events = hub->wait_after(*last_seq, kKeepAlive);
             if (events.empty()) {
-              static constexpr std::string_view kPing = ": keep-alive\n\n";
+              static const std::string kPing = wire::encode_sse_comment("keep-alive");
               return sink.write(kPing.data(), kPing.size());
             }
             std::string chunk;
