@@ -9,4 +9,6 @@ bash "$root/scripts/build.sh" -DCALSTAND_BUILD_BENCHMARKS=OFF \
 cd "${CALSTAND_BUILD_DIR:-$root/build}"
 # setup-deps installed python3-pymodbus: the cross-tests against it must run, not skip.
 export CALSTAND_REQUIRE_PYMODBUS=1
+# Likewise nodejs and node-eventsource: calstandd's event stream is read by that standard client.
+export CALSTAND_REQUIRE_SSE_CLIENT=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600

@@ -12,6 +12,7 @@ packages=(
   libmuparser-dev libfftw3-dev libboost-math-dev
   libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev
   gnuplot-nox chromium
+  nodejs node-eventsource
   systemd
 )
 
