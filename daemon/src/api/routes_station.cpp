@@ -5,14 +5,15 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "core/state_json.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "http_util.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
 #include "store/run_queue.hpp"
-
 #include "wire/sse_encoder.hpp"
+
 namespace calstand::daemon::api {
 namespace {
 
@@ -40,8 +41,8 @@ nlohmann::json station_json(const RouteContext& ctx) {
                       {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
                       {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
                       {"queue", queue},
-                      {"telemetry", {{"table", live.table ? service::to_json(*live.table) : nlohmann::json()},
-                                     {"chamber", live.chamber ? service::to_json(*live.chamber) : nlohmann::json()}}}};
+                      {"telemetry", {{"table", live.table ? core::to_json(*live.table) : nlohmann::json()},
+                                     {"chamber", live.chamber ? core::to_json(*live.chamber) : nlohmann::json()}}}};
   if (live.run) {
     j["progress"] = {{"state", std::string(to_string(live.progress.state))},
                      {"step", live.progress.step},

@@ -7,6 +7,7 @@
 #include <chrono>
 
 #include "core/error.hpp"
+#include "core/state_json.hpp"
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
 #include "daemon/run_state.hpp"
@@ -123,8 +124,8 @@ void RunService::watch_idle() {
   });
   if (!reading.table && !reading.chamber) return;
   nlohmann::json data = {{"run", nullptr}};
-  if (reading.table) data["table"] = to_json(*reading.table);
-  if (reading.chamber) data["chamber"] = to_json(*reading.chamber);
+  if (reading.table) data["table"] = core::to_json(*reading.table);
+  if (reading.chamber) data["chamber"] = core::to_json(*reading.chamber);
   hub_.publish("telemetry", std::move(data));
 }
 
