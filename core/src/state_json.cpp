@@ -15,7 +15,8 @@ nlohmann::json to_json(const AxisState& axis) {
 }
 
 nlohmann::json to_json(const TableState& table) {
-  return {{"time_s", table.time_s}, {"outer", to_json(table.outer)}, {"inner", to_json(table.inner)}};
+  return {
+      {"time_s", table.time_s}, {"outer", to_json(table.outer)}, {"inner", to_json(table.inner)}};
 }
 
 nlohmann::json to_json(const ChamberState& chamber) {

@@ -86,7 +86,8 @@ void RunEngine::apply(const EngineCommand& c) {
       pause_immediate_ = c.immediate;
       pause_requested_ = true;
       record_event(EventKind::kOperator, c.who,
-                   c.immediate ? "pause requested (at once)" : "pause requested (at step boundary)");
+                   c.immediate ? "pause requested (at once)"
+                               : "pause requested (at step boundary)");
       break;
     case Kind::kResume:
       resume_requested_ = true;

@@ -53,7 +53,8 @@ TEST(DaemonSseClient, AStandardEventSourceReadsTheStreamAndResumesWithLastEventI
   ASSERT_GT(daemon.port(), 0) << read_file(dir + "/calstandd.log");
   // calstand's own decoder reads the same stream all along, to compare with.
   EventStreamReader ours(daemon.port());
-  ASSERT_TRUE(wait_until([&] { return ours.saw([](const auto& m) { return m.type == "station"; }); }));
+  ASSERT_TRUE(
+      wait_until([&] { return ours.saw([](const auto& m) { return m.type == "station"; }); }));
 
   // Debian installs node modules in /usr/share/nodejs, which a node not built by Debian does
   // not search by itself.
@@ -81,8 +82,8 @@ TEST(DaemonSseClient, AStandardEventSourceReadsTheStreamAndResumesWithLastEventI
       run = j["run"].get<std::int64_t>();
       continue;
     }
-    events.push_back({j["phase"].get<int>(), j["type"].get<std::string>(), j["id"].get<std::string>(),
-                      j["data"].get<std::string>()});
+    events.push_back({j["phase"].get<int>(), j["type"].get<std::string>(),
+                      j["id"].get<std::string>(), j["data"].get<std::string>()});
   }
   ASSERT_GT(run, 0) << out << err;
   ASSERT_FALSE(events.empty());
@@ -119,8 +120,10 @@ TEST(DaemonSseClient, AStandardEventSourceReadsTheStreamAndResumesWithLastEventI
 
   // The same types, ids and data as calstand's decoder read from its own connection.
   ASSERT_TRUE(wait_until([&] {
-    return ours.saw([&](const auto& m) { return m.type == "run" && m.data.value("run", 0) == run &&
-                                                m.data.value("state", "") == "completed"; });
+    return ours.saw([&](const auto& m) {
+      return m.type == "run" && m.data.value("run", 0) == run &&
+             m.data.value("state", "") == "completed";
+    });
   }));
   std::map<std::string, EventStreamReader::Message> by_id;
   for (const auto& m : ours.messages()) {
@@ -142,7 +145,8 @@ TEST(DaemonSseClient, AStandardEventSourceReadsTheStreamAndResumesWithLastEventI
   for (const auto& e : events) {
     if (e.type != "step") continue;
     const auto data = nlohmann::json::parse(e.data);
-    if (data["run"] == run && data["status"] == "completed") ++completions[data["step"].get<std::int64_t>()];
+    if (data["run"] == run && data["status"] == "completed")
+      ++completions[data["step"].get<std::int64_t>()];
   }
   ASSERT_FALSE(steps.body.empty());
   for (const auto& s : steps.body) {

@@ -10,7 +10,8 @@ namespace {
 constexpr std::string_view kByteOrderMark = "\xEF\xBB\xBF";
 
 bool all_ascii_digits(std::string_view text) {
-  return !text.empty() && std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  return !text.empty() &&
+         std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
 }  // namespace
@@ -83,7 +84,8 @@ void SseDecoder::take_line() {
     std::uint64_t ms = 0;
     const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), ms);
     // Digits only; a number too large for 64 bits is ignored like any other bad value.
-    if (all_ascii_digits(value) && ec == std::errc() && end == value.data() + value.size()) retry_ms_ = ms;
+    if (all_ascii_digits(value) && ec == std::errc() && end == value.data() + value.size())
+      retry_ms_ = ms;
   }
 }
 

@@ -275,7 +275,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
   RunState final_state = RunState::kFailed;
   std::string reason;
   try {
-    const CampaignResult result = wired->run(stored->plan, stored->start, journal, on_progress, commands_);
+    const CampaignResult result =
+        wired->run(stored->plan, stored->start, journal, on_progress, commands_);
     final_state = result.state;
     reason = result.exit_reason;
   } catch (const std::exception& e) {

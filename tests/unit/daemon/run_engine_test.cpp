@@ -560,7 +560,8 @@ TEST(RunEngine, AnAbortWinsOverACheckpointInEitherOrder) {
     };
     RunEngine engine(f.station, f.journal, plan_of({capture(60.0)}), opt);
     e = &engine;
-    EXPECT_EQ(engine.run(), RunState::kAborted) << (interrupt_first ? "interrupt first" : "abort first");
+    EXPECT_EQ(engine.run(), RunState::kAborted)
+        << (interrupt_first ? "interrupt first" : "abort first");
     EXPECT_EQ(engine.exit_reason(), "aborted by alice: wrong unit");
     // An interrupt after the abort is dropped without a word; one before it was recorded.
     EXPECT_EQ(f.journal.has_event(EventKind::kOperator, "interrupt requested"), interrupt_first);
@@ -592,7 +593,8 @@ TEST(RunEngine, RequestsQueuedBeforeTheRunAreTakenAtTheFirstBoundary) {
   RunEngine engine(f.station, f.journal, plan_of({capture(5.0), capture(5.0)}), {}, commands);
   EXPECT_EQ(engine.run(), RunState::kAborted);
   EXPECT_EQ(engine.exit_reason(), "aborted by carol: changed my mind");
-  EXPECT_TRUE(f.journal.has_event(EventKind::kOperator, "carol: skip of step 0 requested: not needed"));
+  EXPECT_TRUE(
+      f.journal.has_event(EventKind::kOperator, "carol: skip of step 0 requested: not needed"));
   EXPECT_TRUE(f.journal.completed.empty());
   EXPECT_TRUE(commands->take_all().empty());  // the engine took both
 }

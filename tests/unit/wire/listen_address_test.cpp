@@ -12,7 +12,8 @@ using calstand::wire::parse_listen_address;
 TEST(ListenAddress, HostAndPort) {
   EXPECT_EQ(parse_listen_address("127.0.0.1:8765"), std::make_pair(std::string("127.0.0.1"), 8765));
   EXPECT_EQ(parse_listen_address("[::1]:0"), std::make_pair(std::string("::1"), 0));
-  EXPECT_EQ(parse_listen_address("localhost:65535"), std::make_pair(std::string("localhost"), 65535));
+  EXPECT_EQ(parse_listen_address("localhost:65535"),
+            std::make_pair(std::string("localhost"), 65535));
 }
 
 TEST(ListenAddress, RefusesWhatIsNotHostColonPort) {

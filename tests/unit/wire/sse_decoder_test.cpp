@@ -103,7 +103,10 @@ TEST(SseDecoder, LinesEndAtLfCrOrCrLf) {
       stream.append(line).append(eol);
     }
     const auto events = decode(stream);
-    ASSERT_EQ(events.size(), 1u) << "line ending " << (eol == "\n" ? "LF" : eol == "\r" ? "CR" : "CRLF");
+    ASSERT_EQ(events.size(), 1u) << "line ending "
+                                 << (eol == "\n"   ? "LF"
+                                     : eol == "\r" ? "CR"
+                                                   : "CRLF");
     EXPECT_EQ(events[0].type, "run");
     EXPECT_EQ(events[0].data, "a\nb");
     EXPECT_EQ(events[0].id, "3");
@@ -135,7 +138,8 @@ TEST(SseDecoder, ThePiecesTheStreamArrivesInDoNotMatter) {
   const auto same = [&](const std::vector<SseEvent>& got) {
     if (got.size() != whole.size()) return false;
     for (std::size_t i = 0; i < got.size(); ++i) {
-      if (got[i].type != whole[i].type || got[i].data != whole[i].data || got[i].id != whole[i].id) {
+      if (got[i].type != whole[i].type || got[i].data != whole[i].data ||
+          got[i].id != whole[i].id) {
         return false;
       }
     }
@@ -171,12 +175,13 @@ TEST(SseDecoder, ALfAfterACrInTheNextPieceEndsNoSecondLine) {
 }
 
 TEST(SseDecoder, OnlyABomAtTheStartOfTheStreamIsDropped) {
-  const auto events = decode("\xEF\xBB\xBF" "data: a\n\n\xEF\xBB\xBF" "data: b\n\n");
+  const std::string bom = "\xEF\xBB\xBF";
+  const auto events = decode(bom + "data: a\n\n" + bom + "data: b\n\n");
   ASSERT_EQ(events.size(), 1u);  // the second BOM begins a field named BOM "data", unknown
   EXPECT_EQ(events[0].data, "a");
-  EXPECT_EQ(decode("\xEF\xBB\xBF" "\xEF\xBB\xBF" "data: a\n\n").size(), 0u);
-  // Bytes that only begin like a BOM are kept.
-  const auto almost = decode("\xEF" "data: x\n\ndata: y\n\n", 1);
+  EXPECT_EQ(decode(bom + bom + "data: a\n\n").size(), 0u);
+  // Bytes that only begin like a BOM are kept: the first line's field is not "data".
+  const auto almost = decode(bom.substr(0, 1) + "data: x\n\ndata: y\n\n", 1);
   ASSERT_EQ(almost.size(), 1u);
   EXPECT_EQ(almost[0].data, "y");
 }

@@ -33,7 +33,8 @@ TEST(SseEncoder, WritesIdTypeAndDataThenABlankLine) {
 }
 
 TEST(SseEncoder, DataWithLineBreaksBecomesSeveralDataLines) {
-  EXPECT_EQ(encode_sse_event({"m", "a\nb\r\nc\rd", ""}), "event: m\ndata: a\ndata: b\ndata: c\ndata: d\n\n");
+  EXPECT_EQ(encode_sse_event({"m", "a\nb\r\nc\rd", ""}),
+            "event: m\ndata: a\ndata: b\ndata: c\ndata: d\n\n");
   EXPECT_EQ(encode_sse_event({"m", "a\n", ""}), "event: m\ndata: a\ndata: \n\n");
   EXPECT_EQ(encode_sse_event({"m", "", ""}), "event: m\ndata: \n\n");
 }
