@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "daemon/api/api_server.hpp"
-#include "daemon/api/sse_parser.hpp"
+#include "wire/sse_decoder.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 #include "drivers/protocol_simulator.hpp"
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
   httplib::Client sse("127.0.0.1", port);
   sse.set_read_timeout(10, 0);
   std::thread reader([&] {
-    daemon::api::SseParser parser([&](const daemon::api::SseMessage& m) {
+    wire::SseDecoder parser([&](const wire::SseEvent& m) {
       ++sse_by_type[m.type];
       if (m.type == "station") sse_greeted = true;
       if (m.type == "run" && m.data.find("\"completed\"") != std::string::npos) sse_saw_end = true;

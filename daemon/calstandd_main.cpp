@@ -26,6 +26,7 @@
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/database_lock.hpp"
+#include "wire/listen_address.hpp"
 
 namespace {
 
@@ -82,7 +83,7 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   service_options.db_path = opt.db;
   service_options.recovery = svc::parse_recovery_policy(opt.recovery, "--recovery");
   api::ApiOptions api_options;
-  std::tie(api_options.host, api_options.port) = api::parse_listen_address(opt.listen);
+  std::tie(api_options.host, api_options.port) = calstand::wire::parse_listen_address(opt.listen);
   api_options.token = read_token(opt);
   api_options.validate();  // before anything is opened: refuses an open port without a token
   // This daemon alone drives the database's station (released by the kernel if it dies).

@@ -11,4 +11,6 @@ cd "${CALSTAND_BUILD_DIR:-$root/build}"
 export CALSTAND_REQUIRE_PYMODBUS=1
 # ... and json-schema-test-suite: the schema validator must run against it, not skip.
 export CALSTAND_REQUIRE_SCHEMA_SUITE=1
+# Likewise nodejs and node-eventsource: calstandd's event stream is read by that standard client.
+export CALSTAND_REQUIRE_SSE_CLIENT=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600

@@ -13,6 +13,7 @@ packages=(
   libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev
   json-schema-test-suite
   gnuplot-nox chromium
+  nodejs node-eventsource
   systemd
 )
 

@@ -17,6 +17,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/state_json.hpp"
 #include "drivers/station.hpp"
 #include "sim/sim_world.hpp"
 
@@ -74,25 +75,6 @@ void check(const drivers::Result& r, const std::string& what) {
   throw std::runtime_error(named ? r.message : what + ": " + r.message);
 }
 
-json axis_json(const core::AxisState& a) {
-  json j = {{"angle_deg", a.angle_deg}, {"rate_dps", a.rate_dps},
-            {"mode", std::string(core::to_string(a.mode))}, {"in_position", a.in_position},
-            {"fault", a.fault}};
-  if (a.fault) j["fault_text"] = a.fault_text;
-  return j;
-}
-
-json table_json(const core::TableState& s) {
-  return {{"time_s", s.time_s}, {"outer", axis_json(s.outer)}, {"inner", axis_json(s.inner)}};
-}
-
-json chamber_json(const core::ChamberState& s) {
-  json j = {{"time_s", s.time_s}, {"air_c", s.air_temperature_c}, {"setpoint_c", s.setpoint_c},
-            {"mode", std::string(core::to_string(s.mode))}, {"fault", s.fault}};
-  if (s.fault) j["fault_text"] = s.fault_text;
-  return j;
-}
-
 json device_json(drivers::Device& d) {
   json events = json::array();
   for (const auto& e : d.take_events()) {
@@ -125,7 +107,7 @@ void chamber_get(const DeviceOptions& opt) {
   auto station = open_station(opt);
   configure(station->chamber());
   settle_first_reading();
-  json out = chamber_json(station->chamber().read_state());
+  json out = core::to_json(station->chamber().read_state());
   out["device"] = device_json(station->chamber());
   print(out);
 }
@@ -153,7 +135,7 @@ void chamber_set(const DeviceOptions& opt) {
                                            s.air_temperature_c, s.setpoint_c));
     }
   }
-  print(chamber_json(chamber.read_state()));
+  print(core::to_json(chamber.read_state()));
 }
 
 void chamber_standby(const DeviceOptions& opt) {
@@ -161,13 +143,13 @@ void chamber_standby(const DeviceOptions& opt) {
   bring_up(station->chamber());
   check(station->chamber().standby(), "chamber");
   settle_first_reading();
-  print(chamber_json(station->chamber().read_state()));
+  print(core::to_json(station->chamber().read_state()));
 }
 
 void table_get(const DeviceOptions& opt) {
   auto station = open_station(opt);
   configure(station->table());
-  json out = table_json(station->table().read_state());
+  json out = core::to_json(station->table().read_state());
   out["device"] = device_json(station->table());
   print(out);
 }
@@ -201,7 +183,7 @@ void table_move(const DeviceOptions& opt) {
   wait_table(*station, opt.timeout_s,
              [](const core::TableState& s) { return s.outer.in_position && s.inner.in_position; },
              "move");
-  print(table_json(station->table().read_state()));
+  print(core::to_json(station->table().read_state()));
 }
 
 void table_rate(const DeviceOptions& opt) {
@@ -216,7 +198,7 @@ void table_rate(const DeviceOptions& opt) {
              },
              "rate");
   // The axis keeps turning after the command returns: that is what was asked for.
-  print(table_json(station->table().read_state()));
+  print(core::to_json(station->table().read_state()));
 }
 
 void table_stop(const DeviceOptions& opt) {
@@ -224,7 +206,7 @@ void table_stop(const DeviceOptions& opt) {
   auto& table = station->table();
   table.configure();  // stop is allowed in every state; try even if the link is troubled
   check(table.stop(), "table");
-  print(table_json(table.read_state()));
+  print(core::to_json(table.read_state()));
 }
 
 void imu_stream(const DeviceOptions& opt) {

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "open_database.hpp"
 #include "store/database.hpp"
+#include "store/run_json.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::cli {
@@ -21,18 +22,6 @@ struct RunsOptions {
   std::int64_t limit = -1;  ///< runs: the newest this many (-1: not given, every run)
 };
 
-nlohmann::json summary_json(const store::RunSummary& r) {
-  return {{"id", r.id},
-          {"procedure", r.procedure_name},
-          {"status", r.status},
-          {"steps_done", r.steps_done},
-          {"steps_total", r.steps_total},
-          {"created", r.created_utc},
-          {"start", r.started_utc},
-          {"end", r.ended_utc},
-          {"exit_reason", r.exit_reason}};
-}
-
 void list_runs(const RunsOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   store::RunStore runs(db);
@@ -43,7 +32,7 @@ void list_runs(const RunsOptions& opt) {
                                                  : std::nullopt);
   if (opt.as_json) {
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& r : list) out.push_back(summary_json(r));
+    for (const auto& r : list) out.push_back(store::to_json(r));
     fmt::print("{}\n", out.dump(2));
     return;
   }
@@ -62,26 +51,10 @@ void show_run(const RunsOptions& opt) {
   const store::RunRecord r = runs.load_run(opt.run);
   if (opt.as_json) {
     nlohmann::json steps = nlohmann::json::array();
-    for (const auto& s : r.steps) {
-      steps.push_back({{"index", s.index},
-                       {"kind", s.kind},
-                       {"label", s.label},
-                       {"status", std::string(store::to_string(s.status))},
-                       {"attempts", s.attempts},
-                       {"commanded", s.commanded},
-                       {"start_s", s.started_clock_s ? nlohmann::json(*s.started_clock_s) : nlohmann::json()},
-                       {"end_s", s.ended_clock_s ? nlohmann::json(*s.ended_clock_s) : nlohmann::json()},
-                       {"reason", s.reason}});
-    }
+    for (const auto& s : r.steps) steps.push_back(store::to_json(s));
     nlohmann::json events = nlohmann::json::array();
-    for (const auto& e : r.events) {
-      events.push_back({{"time_s", e.time_s},
-                        {"wall", e.wall_utc},
-                        {"kind", std::string(store::to_string(e.kind))},
-                        {"source", e.source},
-                        {"message", e.message}});
-    }
-    nlohmann::json out = summary_json(r.summary);
+    for (const auto& e : r.events) events.push_back(store::to_json(e));
+    nlohmann::json out = store::to_json(r.summary);
     out["parameters"] = r.parameters;
     out["procedure_sha256"] = r.procedure_sha256;
     out["steps"] = steps;

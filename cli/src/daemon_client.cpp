@@ -11,8 +11,8 @@
 #include <thread>
 
 #include "core/error.hpp"
-#include "daemon/api/api_server.hpp"
-#include "daemon/api/sse_parser.hpp"
+#include "wire/listen_address.hpp"
+#include "wire/sse_decoder.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -59,7 +59,7 @@ void add_daemon_options(CLI::App& cmd, DaemonAddress& address) {
 }
 
 DaemonClient::DaemonClient(const DaemonAddress& address) {
-  std::tie(host_, port_) = daemon::api::parse_listen_address(address.daemon);
+  std::tie(host_, port_) = wire::parse_listen_address(address.daemon, "--daemon");
   token_ = read_token(address.token_file);
   operator_ = address.operator_name;
   if (operator_.empty()) {
@@ -95,7 +95,7 @@ void DaemonClient::stream_events(
     if (!last_id.empty()) headers.emplace("Last-Event-ID", last_id);
     bool stopped = false;
     bool received = false;  // anything: the daemon was up, the reconnection window starts again
-    daemon::api::SseParser parser([&](const daemon::api::SseMessage& m) {
+    wire::SseDecoder parser([&](const wire::SseEvent& m) {
       if (!m.id.empty()) last_id = m.id;
       if (on_message(m.type, nlohmann::json::parse(m.data, nullptr, false))) return true;
       stopped = true;

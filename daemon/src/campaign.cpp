@@ -1,9 +1,8 @@
 #include "daemon/campaign.hpp"
 
-#include "daemon/store_journal.hpp"
-#include "drivers/station.hpp"
-#include "store/capture_writer.hpp"
-#include "store/database.hpp"
+#include <utility>
+
+#include "daemon/station_run.hpp"
 
 namespace calstand::daemon {
 
@@ -32,23 +31,8 @@ CampaignResult run_campaign(const core::StationConfig& station_config,
                             const procedures::Plan& plan, const std::string& db_path,
                             std::int64_t run_id, const CampaignStart& start,
                             std::function<void(RunEngine&, const Progress&)> on_tick) {
-  store::Database db(db_path);
-  store::RunStore runs(db);
-  store::CaptureWriter writer(db_path);
-  auto station = drivers::make_station(station_config, start.start_time_s);
-  StoreJournal journal(runs, writer, run_id, 0.1, station->clock().is_virtual());
-  EngineOptions options = EngineOptions::from_policy(station_config.policy);
-  RunEngine* engine_ptr = nullptr;
-  options.on_progress = [&](const Progress& p) {
-    if (on_tick && engine_ptr) on_tick(*engine_ptr, p);
-  };
-  RunEngine engine(*station, journal, plan, options);
-  engine_ptr = &engine;
-  CampaignResult result;
-  result.state = engine.run(start.first_step, start.first_attempt, start.skipped_steps);
-  result.exit_reason = engine.exit_reason();
-  result.station_time_s = station->clock().now_s();
-  return result;
+  StationRun wired(station_config, db_path, run_id, start.start_time_s);
+  return wired.run(plan, start, wired.store_journal(), std::move(on_tick));
 }
 
 }  // namespace calstand::daemon

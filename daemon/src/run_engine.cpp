@@ -32,11 +32,12 @@ EngineOptions EngineOptions::from_policy(const core::FaultPolicy& policy) {
 }
 
 RunEngine::RunEngine(drivers::Station& station, RunJournal& journal, procedures::Plan plan,
-                     EngineOptions options)
+                     EngineOptions options, std::shared_ptr<EngineCommandQueue> commands)
     : station_(station),
       journal_(journal),
       plan_(std::move(plan)),
       options_(std::move(options)),
+      commands_(commands ? std::move(commands) : std::make_shared<EngineCommandQueue>()),
       imu_health_(station.imu_count()) {
   progress_.steps = plan_.steps.size();
 }
@@ -46,69 +47,82 @@ Progress RunEngine::progress() const {
   return progress_;
 }
 
-std::string RunEngine::abort_reason() const {
-  std::lock_guard lock(mutex_);
-  return abort_reason_;
-}
-
 std::string RunEngine::exit_reason() const {
   std::lock_guard lock(mutex_);
   return exit_reason_;
 }
 
 void RunEngine::pause(bool immediate, const std::string& who) {
-  pause_immediate_ = immediate;
-  pause_requested_ = true;
-  record_event(EventKind::kOperator, who,
-               immediate ? "pause requested (at once)" : "pause requested (at step boundary)");
+  commands_->push({EngineCommand::Kind::kPause, immediate, std::nullopt, "", who});
 }
 
 void RunEngine::resume(const std::string& who) {
-  resume_requested_ = true;
-  record_event(EventKind::kOperator, who, "resume requested");
+  commands_->push({EngineCommand::Kind::kResume, false, std::nullopt, "", who});
 }
 
 void RunEngine::abort(const std::string& why, const std::string& who) {
-  {
-    std::lock_guard lock(mutex_);
-    abort_reason_ = fmt::format("aborted by {}: {}", who, why);
-    interrupt_requested_ = false;  // an operator's abort ends the run, checkpoint or not
-  }
-  abort_requested_ = true;
-  record_event(EventKind::kOperator, who, "abort requested: " + why);
+  commands_->push({EngineCommand::Kind::kAbort, false, std::nullopt, why, who});
 }
 
 void RunEngine::interrupt(const std::string& why, const std::string& who) {
-  {
-    std::lock_guard lock(mutex_);
-    if (abort_requested_) return;  // already ending: an operator's abort stays an abort
-    abort_reason_ = fmt::format("interrupted by {}: {}", who, why);
-    interrupt_requested_ = true;
-  }
-  abort_requested_ = true;
-  record_event(EventKind::kOperator, who, "interrupt requested (checkpoint): " + why);
+  commands_->push({EngineCommand::Kind::kInterrupt, false, std::nullopt, why, who});
 }
 
 void RunEngine::skip(const std::string& why, const std::string& who,
                      std::optional<std::size_t> step) {
-  {
-    std::lock_guard lock(mutex_);
-    skip_reason_ = fmt::format("skipped by {}: {}", who, why);
-    skip_step_ = step;
+  commands_->push({EngineCommand::Kind::kSkip, false, step, why, who});
+}
+
+void RunEngine::take_commands() {
+  for (const auto& command : commands_->take_all()) apply(command);
+}
+
+// Each request is recorded as it is applied, on the engine thread (the journal is the engine
+// thread's), and leaves the flags the control loop checks at its next tick or step boundary.
+void RunEngine::apply(const EngineCommand& c) {
+  using Kind = EngineCommand::Kind;
+  switch (c.kind) {
+    case Kind::kPause:
+      pause_immediate_ = c.immediate;
+      pause_requested_ = true;
+      record_event(EventKind::kOperator, c.who,
+                   c.immediate ? "pause requested (at once)"
+                               : "pause requested (at step boundary)");
+      break;
+    case Kind::kResume:
+      resume_requested_ = true;
+      record_event(EventKind::kOperator, c.who, "resume requested");
+      break;
+    case Kind::kAbort:
+      abort_reason_ = fmt::format("aborted by {}: {}", c.who, c.why);
+      interrupt_requested_ = false;  // an operator's abort ends the run, checkpoint or not
+      abort_requested_ = true;
+      record_event(EventKind::kOperator, c.who, "abort requested: " + c.why);
+      break;
+    case Kind::kInterrupt:
+      if (abort_requested_) return;  // already ending: an operator's abort stays an abort
+      abort_reason_ = fmt::format("interrupted by {}: {}", c.who, c.why);
+      interrupt_requested_ = true;
+      abort_requested_ = true;
+      record_event(EventKind::kOperator, c.who, "interrupt requested (checkpoint): " + c.why);
+      break;
+    case Kind::kSkip:
+      skip_reason_ = fmt::format("skipped by {}: {}", c.who, c.why);
+      skip_step_ = c.step;
+      skip_requested_ = true;
+      record_event(EventKind::kOperator, c.who,
+                   c.step ? fmt::format("skip of step {} requested: {}", *c.step, c.why)
+                          : "skip requested: " + c.why);
+      break;
   }
-  skip_requested_ = true;
-  record_event(EventKind::kOperator, who,
-               step ? fmt::format("skip of step {} requested: {}", *step, why)
-                    : "skip requested: " + why);
 }
 
 bool RunEngine::skip_wanted() {
   if (!skip_requested_ || reestablishing_) return false;
-  std::optional<std::size_t> meant;
+  const std::optional<std::size_t> meant = skip_step_;
   std::size_t current = 0;
   {
     std::lock_guard lock(mutex_);
-    meant = skip_step_;
     current = progress_.step;
   }
   if (meant && *meant != current) {
@@ -124,11 +138,7 @@ bool RunEngine::skip_wanted() {
 
 void RunEngine::skip_step(std::size_t index) {
   skip_requested_ = false;
-  std::string why;
-  {
-    std::lock_guard lock(mutex_);
-    why = skip_reason_;
-  }
+  const std::string why = skip_reason_;
   const Step& step = plan_.steps[index];
   if (step.kind == StepKind::kRate && step.rest_after) {
     // The next step expects the table at rest, as after a completed rate step.
@@ -202,7 +212,7 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt, const std::ve
   } catch (const Aborted& a) {
     // A checkpoint ends the run resumable; a fault during it (an interlock) still aborts it.
     // A run the operator had paused stays in the operator's hands after the restart: held.
-    const bool checkpoint = interrupt_requested_ && a.why == abort_reason();
+    const bool checkpoint = interrupt_requested_ && a.why == abort_reason_;
     const bool paused = state_ == RunState::kPaused;
     finish(!checkpoint ? RunState::kAborted : paused ? RunState::kHeld : RunState::kInterrupted, a.why);
   } catch (const StepFailed& f) {
@@ -249,6 +259,7 @@ void RunEngine::finish(RunState final_state, const std::string& reason) {
 }
 
 void RunEngine::handle_pause_at_boundary() {
+  take_commands();
   if (!pause_requested_) return;
   pause_requested_ = false;
   // Still paused after skipping a step while paused: nothing to record again.
@@ -258,11 +269,10 @@ void RunEngine::handle_pause_at_boundary() {
     journal_.run_state(RunState::kPaused, station_.clock().now_s(), "paused");
   }
   set_phase("paused");
-  while (!resume_requested_) {
-    if (abort_requested_) {
-      std::lock_guard lock(mutex_);
-      throw Aborted{abort_reason_};
-    }
+  for (;;) {
+    take_commands();
+    if (resume_requested_) break;
+    if (abort_requested_) throw Aborted{abort_reason_};
     if (skip_wanted()) {
       // Skips the step that would run next; the run stays paused before the one after it.
       pause_requested_ = true;
@@ -272,7 +282,7 @@ void RunEngine::handle_pause_at_boundary() {
     // otherwise run as fast as the CPU allows, so it also sleeps a little real time.
     station_.wait_until(station_.clock().now_s() + options_.tick_s);
     poll_imus();
-    set_phase("paused");  // lets the progress callback see (and pass on) a resume request
+    set_phase("paused");  // the progress callback sees the pause (and may ask to resume)
     if (station_.clock().is_virtual()) {
       std::this_thread::sleep_for(std::chrono::duration<double>(options_.paused_real_sleep_s));
     }
@@ -480,10 +490,8 @@ void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_
 }
 
 void RunEngine::tick() {
-  if (abort_requested_) {
-    std::lock_guard lock(mutex_);
-    throw Aborted{abort_reason_};
-  }
+  take_commands();
+  if (abort_requested_) throw Aborted{abort_reason_};
   if (pause_requested_ && pause_immediate_ && !reestablishing_) throw Interrupted{};
   if (skip_wanted()) throw Skipped{};
   const double now = station_.clock().now_s();

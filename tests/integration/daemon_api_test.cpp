@@ -547,7 +547,7 @@ TEST(DaemonApi, EventStreamReplaysWhatAReconnectingReaderMissed) {
   c.set_read_timeout(10, 0);
   bool saw_station = false, saw_gap = false, saw_completed = false;
   std::vector<std::uint64_t> seqs;
-  calstand::daemon::api::SseParser parser([&](const calstand::daemon::api::SseMessage& m) {
+  calstand::wire::SseDecoder parser([&](const calstand::wire::SseEvent& m) {
     saw_station = saw_station || m.type == "station";
     saw_gap = saw_gap || m.type == "gap";
     if (!m.id.empty()) seqs.push_back(std::stoull(m.id.substr(m.id.find('-') + 1)));
@@ -639,7 +639,7 @@ TEST(DaemonApi, EventStreamSaysHowManyMessagesAReaderLost) {
     c.set_read_timeout(10, 0);
     const std::int64_t run = api.submit("six-position", kShort);
     ASSERT_GT(run, 0);
-    calstand::daemon::api::SseParser parser([&](const calstand::daemon::api::SseMessage& m) {
+    calstand::wire::SseDecoder parser([&](const calstand::wire::SseEvent& m) {
       first_id = m.id;
       return m.id.empty();
     });
@@ -651,7 +651,7 @@ TEST(DaemonApi, EventStreamSaysHowManyMessagesAReaderLost) {
   c.set_read_timeout(10, 0);
   nlohmann::json gap;
   std::vector<std::uint64_t> seqs;
-  calstand::daemon::api::SseParser parser([&](const calstand::daemon::api::SseMessage& m) {
+  calstand::wire::SseDecoder parser([&](const calstand::wire::SseEvent& m) {
     if (m.type == "gap") gap = nlohmann::json::parse(m.data);
     if (!m.id.empty()) seqs.push_back(std::stoull(m.id.substr(m.id.find('-') + 1)));
     return seqs.size() < 16;

@@ -47,6 +47,30 @@ TEST_F(DaemonClientCli, SubmitWatchAndStatus) {
   EXPECT_NE(station.out.find("idle"), std::string::npos) << station.out;
 }
 
+// A run has one JSON shape: `calstand runs --json` and `calstand show --json` on the daemon's
+// database give what GET /runs, /runs/{id}/steps and /runs/{id}/events give.
+TEST_F(DaemonClientCli, RunsAndShowJsonHaveTheShapesOfTheApi) {
+  ASSERT_EQ(calstand("submit six-position --set capture_s=5").exit_code, 0);
+  ASSERT_EQ(calstand("watch 1").exit_code, 0);
+  calstand::testing::ApiClient api(daemon_->port());
+  const std::string db = dir_ + "/station.db";
+
+  const auto runs = calstand::testing::run("runs --json --db " + db);
+  ASSERT_EQ(runs.exit_code, 0) << runs.out;
+  const auto listed = api.get("/runs");
+  ASSERT_EQ(listed.status, 200);
+  EXPECT_EQ(nlohmann::json::parse(runs.out), listed.body);
+  ASSERT_EQ(listed.body.size(), 1u);
+  EXPECT_FALSE(listed.body[0]["created_utc"].get<std::string>().empty());
+
+  const auto shown = calstand::testing::run("show --run 1 --json --db " + db);
+  ASSERT_EQ(shown.exit_code, 0) << shown.out;
+  const auto one = nlohmann::json::parse(shown.out);
+  for (const auto& [key, value] : listed.body[0].items()) EXPECT_EQ(one[key], value) << key;
+  EXPECT_EQ(one["steps"], api.get("/runs/1/steps").body);
+  EXPECT_EQ(one["events"], api.get("/runs/1/events").body);
+}
+
 TEST_F(DaemonClientCli, RefusalsAreErrorsWithTheDaemonsReason) {
   const auto invalid = calstand("submit six-position --set capture_s=-5");
   EXPECT_EQ(invalid.exit_code, 2) << invalid.out;

@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/api/sse_parser.hpp"
+#include "wire/sse_decoder.hpp"
 
 namespace calstand::testing {
 
@@ -100,12 +100,13 @@ class EventStreamReader {
   struct Message {
     std::string type;
     nlohmann::json data;
+    std::string id;  ///< the stream's last event id at this message
   };
 
   explicit EventStreamReader(int port)
-      : client_("127.0.0.1", port), parser_([this](const daemon::api::SseMessage& m) {
+      : client_("127.0.0.1", port), parser_([this](const wire::SseEvent& m) {
           std::lock_guard lock(mutex_);
-          messages_.push_back({m.type, nlohmann::json::parse(m.data, nullptr, false)});
+          messages_.push_back({m.type, nlohmann::json::parse(m.data, nullptr, false), m.id});
           return true;
         }) {
     client_.set_read_timeout(5, 0);
@@ -132,7 +133,7 @@ class EventStreamReader {
 
  private:
   httplib::Client client_;
-  daemon::api::SseParser parser_;
+  wire::SseDecoder parser_;
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::vector<Message> messages_;

@@ -38,9 +38,10 @@ struct CampaignStart {
 };
 
 /// Runs run `run_id` (already recorded in the database at `db_path`) on the station of
-/// `station`: the station's devices, a capture writer and the engine with the station's fault
-/// policy. `on_tick` is called from the engine thread on every progress update, with the engine
-/// (for operator requests such as pause or abort). Blocks until the run ends.
+/// `station`, wired by StationRun as calstandd wires its runs: the station's devices, a capture
+/// writer and the engine with the station's fault policy. `on_tick` is called from the engine
+/// thread on every progress update, with the engine (for operator requests such as pause or
+/// abort, which it queues). Blocks until the run ends.
 CampaignResult run_campaign(const core::StationConfig& station, const procedures::Plan& plan,
                             const std::string& db_path, std::int64_t run_id,
                             const CampaignStart& start = {},

@@ -4,11 +4,13 @@
 #include <cstddef>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "daemon/engine_command.hpp"
 #include "daemon/run_journal.hpp"
 #include "daemon/run_state.hpp"
 #include "drivers/station.hpp"
@@ -71,11 +73,16 @@ struct EngineOptions {
 /// Safety: any abort, failure or completion leaves the station safe (table at rest, chamber
 /// in standby); device calls never throw (drivers return Result), journal (storage) errors
 /// propagate after the station has been made safe.
-/// pause()/resume()/abort() may be called from any thread; run() runs on the caller's thread.
+/// Requests (pause(), resume(), abort(), interrupt(), skip(), or EngineCommand pushed to the
+/// engine's command queue) may come from any thread: they wait in the queue, and the engine's
+/// thread takes them in order at its next tick (or while paused), records each as an operator
+/// event and acts on it. run() runs on the caller's thread.
 class RunEngine {
  public:
+  /// `commands`: the queue requests arrive through (e.g. the daemon's, which outlives one
+  /// engine); the engine makes its own when null.
   RunEngine(drivers::Station& station, RunJournal& journal, procedures::Plan plan,
-            EngineOptions options = {});
+            EngineOptions options = {}, std::shared_ptr<EngineCommandQueue> commands = nullptr);
 
   /// Runs from step `first_step` (0 for a new run; the first unfinished step when resuming
   /// after a crash, in which case the temperature and table state that step needs are
@@ -107,6 +114,9 @@ class RunEngine {
   void skip(const std::string& why, const std::string& who = "operator",
             std::optional<std::size_t> step = std::nullopt);
 
+  /// The queue this engine takes its requests from.
+  EngineCommandQueue& commands() { return *commands_; }
+
   RunState state() const { return state_.load(); }
   Progress progress() const;
   /// Why the run ended aborted or failed (empty otherwise).
@@ -133,6 +143,9 @@ class RunEngine {
   void wait_for_streams();
   void reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped);
   void tick();
+  /// Takes the requests waiting in the queue and applies them in order (engine thread).
+  void take_commands();
+  void apply(const EngineCommand& command);
   void poll_imus();
   void check_interlocks();
   void record_device_events();
@@ -146,26 +159,27 @@ class RunEngine {
   void finish(RunState final_state, const std::string& reason);
   void set_phase(const char* phase);
   void record_event(EventKind kind, const std::string& source, const std::string& message);
-  std::string abort_reason() const;
 
   drivers::Station& station_;
   RunJournal& journal_;
   procedures::Plan plan_;
   EngineOptions options_;
 
+  std::shared_ptr<EngineCommandQueue> commands_;
   std::atomic<RunState> state_{RunState::kIdle};
-  std::atomic<bool> pause_requested_{false};
-  std::atomic<bool> pause_immediate_{false};
-  std::atomic<bool> resume_requested_{false};
-  std::atomic<bool> abort_requested_{false};
-  std::atomic<bool> interrupt_requested_{false};  // the abort is a checkpoint (see interrupt())
-  std::atomic<bool> skip_requested_{false};
-  std::optional<std::size_t> skip_step_;  // the step a skip request means (guarded by mutex_)
-  bool reestablishing_ = false;  // resuming after a crash: pause and skip wait for the first step
-  mutable std::mutex mutex_;  // guards progress_, abort_reason_, skip_reason_, exit_reason_
-  Progress progress_;
+  // The requests applied so far (take_commands()); engine thread only.
+  bool pause_requested_ = false;
+  bool pause_immediate_ = false;
+  bool resume_requested_ = false;
+  bool abort_requested_ = false;
+  bool interrupt_requested_ = false;  // the abort is a checkpoint (see interrupt())
+  bool skip_requested_ = false;
+  std::optional<std::size_t> skip_step_;  // the step a skip request means
   std::string abort_reason_;
   std::string skip_reason_;
+  bool reestablishing_ = false;  // resuming after a crash: pause and skip wait for the first step
+  mutable std::mutex mutex_;  // guards progress_ and exit_reason_ (read by other threads)
+  Progress progress_;
   std::string exit_reason_;
 
   // Capture in progress (nullopt between captures).

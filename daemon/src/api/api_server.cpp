@@ -5,7 +5,6 @@
 
 #include <sys/socket.h>
 
-#include <charconv>
 #include <thread>
 
 #include "core/error.hpp"
@@ -137,26 +136,6 @@ void ApiServer::stop() {
   impl_->ctx.hub.close();  // ends live streams, whose threads the server joins
   impl_->server.stop();
   if (impl_->listener.joinable()) impl_->listener.join();
-}
-
-}  // namespace calstand::daemon::api
-
-namespace calstand::daemon::api {
-
-std::pair<std::string, int> parse_listen_address(const std::string& text) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {
-    throw core::InputError("--listen", fmt::format("'{}' is not HOST:PORT", text));
-  }
-  std::string host = text.substr(0, colon);
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
-  const std::string port_text = text.substr(colon + 1);
-  int port = 0;
-  const auto [ptr, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), port);
-  if (ec != std::errc() || ptr != port_text.data() + port_text.size() || port < 0 || port > 65535) {
-    throw core::InputError("--listen", fmt::format("'{}' is not a port (0..65535)", port_text));
-  }
-  return {host, port};
 }
 
 }  // namespace calstand::daemon::api

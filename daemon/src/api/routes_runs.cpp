@@ -13,6 +13,7 @@
 #include "http_util.hpp"
 #include "routes.hpp"
 #include "store/database.hpp"
+#include "store/run_json.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::daemon::api {
@@ -55,47 +56,9 @@ std::string reason_field(const nlohmann::json& body) {
   return body["reason"].get<std::string>().substr(0, 500);
 }
 
-nlohmann::json summary_json(const store::RunSummary& s) {
-  return {{"id", s.id},
-          {"procedure", s.procedure_name},
-          {"status", s.status},
-          {"steps_done", s.steps_done},
-          {"steps_total", s.steps_total},
-          {"created_utc", s.created_utc},
-          {"started_utc", s.started_utc},
-          {"ended_utc", s.ended_utc},
-          {"exit_reason", s.exit_reason}};
-}
-
-nlohmann::json optional_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); }
-
-nlohmann::json step_json(const store::StepRecord& s) {
-  return {{"index", s.index},
-          {"kind", s.kind},
-          {"label", s.label},
-          {"status", std::string(to_string(s.status))},
-          {"reason", s.reason},
-          {"attempts", s.attempts},
-          {"good_attempt", s.good_attempt ? nlohmann::json(*s.good_attempt) : nlohmann::json()},
-          {"started_clock_s", optional_json(s.started_clock_s)},
-          {"ended_clock_s", optional_json(s.ended_clock_s)},
-          {"origin", s.origin},
-          {"commanded", s.commanded}};
-}
-
-nlohmann::json event_json(const store::EventRecord& e) {
-  return {{"id", e.id},
-          {"time_s", e.time_s},
-          {"wall_utc", e.wall_utc},
-          {"kind", std::string(to_string(e.kind))},
-          {"source", e.source},
-          {"message", e.message},
-          {"detail", e.detail}};
-}
-
 // GET /runs/{id}: the stored summary, with the live position while the run is on the station.
 nlohmann::json run_status_json(const store::RunRecord& record, const service::LiveSnapshot& live) {
-  nlohmann::json j = summary_json(record.summary);
+  nlohmann::json j = store::to_json(record.summary);
   j["parameters"] = record.parameters;
   const auto total = record.summary.steps_total;
   j["progress"] = total == 0 ? 0.0 : static_cast<double>(record.summary.steps_done) / static_cast<double>(total);
@@ -143,7 +106,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
       res.set_header("Link", fmt::format("</runs?limit={}&before={}>; rel=\"next\"", limit, page.back().id));
     }
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& s : page) out.push_back(summary_json(s));
+    for (const auto& s : page) out.push_back(store::to_json(s));
     send_json(res, 200, out);
   }));
 
@@ -155,14 +118,14 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Get(R"(/runs/(\d+)/steps)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
     const store::RunRecord record = run_of(ctx, req);
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& s : record.steps) out.push_back(step_json(s));
+    for (const auto& s : record.steps) out.push_back(store::to_json(s));
     send_json(res, 200, out);
   }));
 
   server.Get(R"(/runs/(\d+)/events)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
     const store::RunRecord record = run_of(ctx, req);
     nlohmann::json out = nlohmann::json::array();
-    for (const auto& e : record.events) out.push_back(event_json(e));
+    for (const auto& e : record.events) out.push_back(store::to_json(e));
     send_json(res, 200, out);
   }));
 

@@ -5,12 +5,14 @@
 #include <memory>
 
 #include "core/error.hpp"
+#include "core/state_json.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "http_util.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
 #include "store/run_queue.hpp"
+#include "wire/sse_encoder.hpp"
 
 namespace calstand::daemon::api {
 namespace {
@@ -39,8 +41,8 @@ nlohmann::json station_json(const RouteContext& ctx) {
                       {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
                       {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
                       {"queue", queue},
-                      {"telemetry", {{"table", live.table ? service::to_json(*live.table) : nlohmann::json()},
-                                     {"chamber", live.chamber ? service::to_json(*live.chamber) : nlohmann::json()}}}};
+                      {"telemetry", {{"table", live.table ? core::to_json(*live.table) : nlohmann::json()},
+                                     {"chamber", live.chamber ? core::to_json(*live.chamber) : nlohmann::json()}}}};
   if (live.run) {
     j["progress"] = {{"state", std::string(to_string(live.progress.state))},
                      {"step", live.progress.step},
@@ -68,8 +70,8 @@ class StreamSlot {
 // One message; `id` empty for the greeting, which is a snapshot, not one of the hub's messages
 // (a reader that reconnects names the last real message it saw).
 std::string sse_message(const std::string& id, const std::string& type, const nlohmann::json& data) {
-  return fmt::format("{}event: {}\ndata: {}\n\n", id.empty() ? "" : "id: " + id + "\n", type,
-                     data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  return wire::encode_sse_event(
+      {type, data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), id});
 }
 
 }  // namespace
@@ -136,7 +138,7 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
             }
             const auto events = hub->wait_after(*last_seq, kKeepAlive);
             if (events.empty()) {
-              static constexpr std::string_view kPing = ": keep-alive\n\n";
+              static const std::string kPing = wire::encode_sse_comment("keep-alive");
               return sink.write(kPing.data(), kPing.size());
             }
             std::string chunk;

@@ -2,34 +2,9 @@
 
 #include <string>
 
+#include "core/state_json.hpp"
+
 namespace calstand::daemon::service {
-namespace {
-
-nlohmann::json axis_json(const core::AxisState& a) {
-  nlohmann::json j = {{"angle_deg", a.angle_deg},
-                      {"rate_dps", a.rate_dps},
-                      {"mode", std::string(to_string(a.mode))},
-                      {"in_position", a.in_position},
-                      {"fault", a.fault}};
-  if (a.fault) j["fault_text"] = a.fault_text;
-  return j;
-}
-
-}  // namespace
-
-nlohmann::json to_json(const core::TableState& table) {
-  return {{"time_s", table.time_s}, {"outer", axis_json(table.outer)}, {"inner", axis_json(table.inner)}};
-}
-
-nlohmann::json to_json(const core::ChamberState& chamber) {
-  nlohmann::json j = {{"time_s", chamber.time_s},
-                      {"air_c", chamber.air_temperature_c},
-                      {"setpoint_c", chamber.setpoint_c},
-                      {"mode", std::string(to_string(chamber.mode))},
-                      {"fault", chamber.fault}};
-  if (chamber.fault) j["fault_text"] = chamber.fault_text;
-  return j;
-}
 
 ObservedJournal::ObservedJournal(RunJournal& inner, EventHub& hub, LiveStatus& live,
                                  std::int64_t run_id, std::chrono::milliseconds telemetry_period)

@@ -7,12 +7,13 @@
 #include <chrono>
 
 #include "core/error.hpp"
+#include "core/state_json.hpp"
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
 #include "daemon/run_state.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "daemon/service/station_watch.hpp"
-#include "daemon/store_journal.hpp"
+#include "daemon/station_run.hpp"
 #include "daemon/stored_run.hpp"
 #include "drivers/station.hpp"
 #include "procedures/plan.hpp"
@@ -68,7 +69,8 @@ void RunService::stop(const std::string& why) {
     if (!stopping_) {
       stopping_ = true;
       if (current_) {
-        commands_.push_back({Command::Kind::kAbort, false, std::nullopt, "checkpoint: daemon stopping (" + why + ")", "daemon", true});
+        commands_->push({EngineCommand::Kind::kInterrupt, false, std::nullopt,
+                         "checkpoint: daemon stopping (" + why + ")", "daemon"});
       }
     }
     ++generation_;
@@ -123,8 +125,8 @@ void RunService::watch_idle() {
   });
   if (!reading.table && !reading.chamber) return;
   nlohmann::json data = {{"run", nullptr}};
-  if (reading.table) data["table"] = to_json(*reading.table);
-  if (reading.chamber) data["chamber"] = to_json(*reading.chamber);
+  if (reading.table) data["table"] = core::to_json(*reading.table);
+  if (reading.chamber) data["chamber"] = core::to_json(*reading.chamber);
   hub_.publish("telemetry", std::move(data));
 }
 
@@ -207,7 +209,7 @@ void RunService::execute(std::int64_t run, bool resuming) {
     // was being picked from the queue does not start.
     if (has_ended(status_of(run))) return;
     current_ = run;
-    commands_.clear();
+    commands_->clear();
   }
   // However execute() ends (a storage error included), the station is free afterwards.
   struct ClearCurrent {
@@ -220,18 +222,21 @@ void RunService::execute(std::int64_t run, bool resuming) {
       });
       std::lock_guard lock(s.mutex_);
       s.current_.reset();
-      s.commands_.clear();
+      s.commands_->clear();
     }
   } clear_current{*this};
 
   idle_watch_.release();  // the run opens the devices for itself
-  store::Database db(options_.db_path);
-  store::RunStore runs(db);
   std::optional<StoredRun> stored;
-  std::unique_ptr<drivers::Station> station;
+  std::unique_ptr<StationRun> wired;
   try {
-    stored = prepare_stored_run(runs, run);
-    station = drivers::make_station(stored->station, stored->start.start_time_s);
+    {
+      store::Database db(options_.db_path);
+      store::RunStore runs(db);
+      stored = prepare_stored_run(runs, run);
+    }
+    wired = std::make_unique<StationRun>(stored->station, options_.db_path, run,
+                                         stored->start.start_time_s);
   } catch (const store::StoreError&) {
     throw;  // the database's trouble, not the run's: it stays as it is and is tried again
   } catch (const std::exception& e) {
@@ -251,65 +256,39 @@ void RunService::execute(std::int64_t run, bool resuming) {
     s.progress.steps = stored->plan.steps.size();
   });
 
-  store::CaptureWriter writer(options_.db_path);
-  StoreJournal store_journal(runs, writer, run, 0.1, station->clock().is_virtual());
-  ObservedJournal journal(store_journal, hub_, live_, run);
-  EngineOptions engine_options = EngineOptions::from_policy(stored->station.policy);
-  RunEngine* engine = nullptr;
+  drivers::Station& station = wired->station();
+  store::RunStore& runs = wired->runs();
+  ObservedJournal journal(wired->store_journal(), hub_, live_, run);
   auto next_device_read = std::chrono::steady_clock::now();
-  engine_options.on_progress = [&](const Progress& p) {
-    std::vector<Command> todo;
-    {
-      // Never waits: an API thread may hold the lock while it writes to the database (the
-      // abort of a queued run), and the control loop must not stall behind SQLite. Commands
-      // not taken now are taken at the next tick.
-      std::unique_lock lock(mutex_, std::try_to_lock);
-      if (lock.owns_lock()) todo.swap(commands_);
-    }
-    for (const auto& c : todo) {
-      if (!engine) break;
-      switch (c.kind) {
-        case Command::Kind::kPause: engine->pause(c.immediate, c.who); break;
-        case Command::Kind::kResume: engine->resume(c.who); break;
-        case Command::Kind::kSkip: engine->skip(c.why, c.who, c.step); break;
-        case Command::Kind::kAbort:
-          if (c.checkpoint) {
-            engine->interrupt(c.why, c.who);
-          } else {
-            engine->abort(c.why, c.who);
-          }
-          break;
-      }
-    }
+  const auto on_progress = [&](RunEngine&, const Progress& p) {
     // Live telemetry about twice a second of wall time, paused or not (this runs every tick).
-    if (journal.telemetry_due()) journal.publish_telemetry(station->table().read_state(), station->chamber().read_state());
+    if (journal.telemetry_due()) journal.publish_telemetry(station.table().read_state(), station.chamber().read_state());
     const auto now = std::chrono::steady_clock::now();
     const bool read_devices_now = now >= next_device_read;
     if (read_devices_now) next_device_read = now + kDeviceReadPeriod;
     live_.update([&](LiveSnapshot& s) {
       s.progress = p;
-      if (read_devices_now) s.devices = read_devices(*station);
+      if (read_devices_now) s.devices = read_devices(station);
     });
   };
-  RunEngine run_engine(*station, journal, stored->plan, engine_options);
-  engine = &run_engine;
 
   RunState final_state = RunState::kFailed;
   std::string reason;
   try {
-    final_state = run_engine.run(stored->start.first_step, stored->start.first_attempt, stored->start.skipped_steps);
-    reason = run_engine.exit_reason();
+    const CampaignResult result =
+        wired->run(stored->plan, stored->start, journal, on_progress, commands_);
+    final_state = result.state;
+    reason = result.exit_reason;
   } catch (const std::exception& e) {
     // Storage failure: the engine made the station safe before this propagated.
     reason = std::string("internal error: ") + e.what();
     spdlog::error("run {}: {}", run, reason);
     try {
-      runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(station->clock().now_s()), reason);
+      runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(station.clock().now_s()), reason);
     } catch (const std::exception& e2) {
       spdlog::error("run {}: recording the failure: {}", run, e2.what());
     }
   }
-  writer.flush();
 
   if (final_state == RunState::kInterrupted || final_state == RunState::kHeld) {
     // The engine recorded the run as interrupted (or held) in the same write that ended it: a
@@ -323,7 +302,7 @@ void RunService::execute(std::int64_t run, bool resuming) {
     record_event(run, "daemon", message, false);
     spdlog::warn("run {}: {} ({})", run, message, reason);
   } else {
-    store::dequeue_run(db, run);
+    store::dequeue_run(wired->database(), run);
     spdlog::info("run {}: {}{}", run, to_string(final_state), reason.empty() ? "" : " (" + reason + ")");
   }
 }
@@ -376,12 +355,12 @@ std::string RunService::status_of(std::int64_t run) {
   return store::RunStore(db).run_status(run);  // InputError when there is none
 }
 
-void RunService::command_current(std::int64_t run, Command command) {
+void RunService::command_current(std::int64_t run, EngineCommand command) {
   std::lock_guard lock(mutex_);
   if (current_ != run) {
     throw ActionRefused(fmt::format("run {} is not on the station", run));
   }
-  commands_.push_back(std::move(command));
+  commands_->push(std::move(command));
 }
 
 void RunService::pause(std::int64_t run, bool immediate, const std::string& who) {
@@ -395,7 +374,7 @@ void RunService::pause(std::int64_t run, bool immediate, const std::string& who)
     }
   }
   if (p.state == RunState::kPaused) throw ActionRefused(fmt::format("run {} is already paused", run));
-  command_current(run, {Command::Kind::kPause, immediate, std::nullopt, "", who});
+  command_current(run, {EngineCommand::Kind::kPause, immediate, std::nullopt, "", who});
 }
 
 void RunService::resume(std::int64_t run, const std::string& who) {
@@ -418,7 +397,7 @@ void RunService::resume(std::int64_t run, const std::string& who) {
   if (live.run != run || live.progress.state != RunState::kPaused) {
     throw ActionRefused(fmt::format("run {} is {}; only a paused or held run can be resumed", run, status));
   }
-  command_current(run, {Command::Kind::kResume, false, std::nullopt, "", who});
+  command_current(run, {EngineCommand::Kind::kResume, false, std::nullopt, "", who});
 }
 
 void RunService::abort(std::int64_t run, const std::string& why, const std::string& who) {
@@ -430,7 +409,7 @@ void RunService::abort(std::int64_t run, const std::string& why, const std::stri
   {
     std::lock_guard lock(mutex_);
     if (current_ == run) {
-      commands_.push_back({Command::Kind::kAbort, false, std::nullopt, why, who});
+      commands_->push({EngineCommand::Kind::kAbort, false, std::nullopt, why, who});
       return;
     }
     if (held_ == run) {
@@ -470,7 +449,7 @@ void RunService::skip(std::int64_t run, std::optional<std::size_t> step, const s
   if (step && *step >= live.progress.steps) {
     throw ActionRefused(fmt::format("run {} has no step {}", run, *step));
   }
-  command_current(run, {Command::Kind::kSkip, false, step, why, who});
+  command_current(run, {EngineCommand::Kind::kSkip, false, step, why, who});
 }
 
 }  // namespace calstand::daemon::service

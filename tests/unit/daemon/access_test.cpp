@@ -54,13 +54,4 @@ TEST(Access, ApiOptionsRefuseAnOpenPortWithoutAToken) {
   EXPECT_THROW(o.validate(), calstand::core::InputError);
 }
 
-TEST(Access, ListenAddressesParse) {
-  EXPECT_EQ(parse_listen_address("127.0.0.1:8765"), std::make_pair(std::string("127.0.0.1"), 8765));
-  EXPECT_EQ(parse_listen_address("[::1]:0"), std::make_pair(std::string("::1"), 0));
-  EXPECT_THROW(parse_listen_address("127.0.0.1"), calstand::core::InputError);
-  EXPECT_THROW(parse_listen_address("127.0.0.1:http"), calstand::core::InputError);
-  EXPECT_THROW(parse_listen_address(":80"), calstand::core::InputError);
-  EXPECT_THROW(parse_listen_address("h:99999"), calstand::core::InputError);
-}
-
 }  // namespace

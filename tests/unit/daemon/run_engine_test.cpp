@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
+#include <memory>
 #include <set>
+#include <thread>
 
 #include "drivers/sim_station.hpp"
 #include "procedures/plan.hpp"
@@ -508,6 +511,92 @@ TEST(RunEngine, ResumeDoesNotReestablishASkippedTemperature) {
                    plan_of({temperature(35.0), move(90.0, 0.0), temperature(80.0), capture(2.0)}), opt);
   EXPECT_EQ(engine.run(3, 1, {2}), RunState::kCompleted);
   EXPECT_NEAR(setpoint_at_capture, 35.0, 1e-9);
+}
+
+
+// Requests wait in the engine's queue and are applied in the order they came: a pause and an
+// abort arriving together are both recorded, pause first, and the abort ends the run (an
+// abort is checked before a pause at every tick, so the run is never seen paused).
+TEST(RunEngine, PauseThenAbortArrivingTogetherEndAborted) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  bool asked = false;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing" && !asked) {
+      asked = true;
+      e->pause(true, "bob");
+      e->abort("smoke", "alice");
+    }
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(60.0), capture(1.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  EXPECT_EQ(engine.exit_reason(), "aborted by alice: smoke");
+  std::vector<std::string> operator_events;
+  for (const auto& [kind, message] : f.journal.events) {
+    if (kind == EventKind::kOperator) operator_events.push_back(message);
+  }
+  EXPECT_EQ(operator_events, (std::vector<std::string>{"bob: pause requested (at once)",
+                                                       "alice: abort requested: smoke"}));
+  EXPECT_EQ(std::count(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused), 0);
+  EXPECT_EQ(f.journal.completed.size(), 1u);
+}
+
+// A checkpoint (interrupt) and an operator's abort together: whichever came first, the run
+// ends aborted, as an operator's abort is never turned into a resumable checkpoint.
+TEST(RunEngine, AnAbortWinsOverACheckpointInEitherOrder) {
+  for (const bool interrupt_first : {true, false}) {
+    Fixture f;
+    RunEngine* e = nullptr;
+    bool asked = false;
+    EngineOptions opt;
+    opt.on_progress = [&](const Progress& p) {
+      if (p.phase != "capturing" || asked) return;
+      asked = true;
+      if (interrupt_first) e->interrupt("daemon stopping");
+      e->abort("wrong unit", "alice");
+      if (!interrupt_first) e->interrupt("daemon stopping");
+    };
+    RunEngine engine(f.station, f.journal, plan_of({capture(60.0)}), opt);
+    e = &engine;
+    EXPECT_EQ(engine.run(), RunState::kAborted)
+        << (interrupt_first ? "interrupt first" : "abort first");
+    EXPECT_EQ(engine.exit_reason(), "aborted by alice: wrong unit");
+    // An interrupt after the abort is dropped without a word; one before it was recorded.
+    EXPECT_EQ(f.journal.has_event(EventKind::kOperator, "interrupt requested"), interrupt_first);
+  }
+}
+
+TEST(RunEngine, ACheckpointAloneEndsTheRunInterrupted) {
+  Fixture f;
+  RunEngine* e = nullptr;
+  EngineOptions opt;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing") e->interrupt("daemon stopping");
+  };
+  RunEngine engine(f.station, f.journal, plan_of({capture(1.0), capture(60.0)}), opt);
+  e = &engine;
+  EXPECT_EQ(engine.run(), RunState::kInterrupted);
+  EXPECT_EQ(f.journal.completed.size(), 1u);  // the cut capture stays unfinished
+}
+
+// Requests pushed to a shared queue from another thread before the run starts are taken by
+// the engine at its first step boundary, in order.
+TEST(RunEngine, RequestsQueuedBeforeTheRunAreTakenAtTheFirstBoundary) {
+  Fixture f;
+  auto commands = std::make_shared<EngineCommandQueue>();
+  std::thread([&] {
+    commands->push({EngineCommand::Kind::kSkip, false, 0, "not needed", "carol"});
+    commands->push({EngineCommand::Kind::kAbort, false, std::nullopt, "changed my mind", "carol"});
+  }).join();
+  RunEngine engine(f.station, f.journal, plan_of({capture(5.0), capture(5.0)}), {}, commands);
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  EXPECT_EQ(engine.exit_reason(), "aborted by carol: changed my mind");
+  EXPECT_TRUE(
+      f.journal.has_event(EventKind::kOperator, "carol: skip of step 0 requested: not needed"));
+  EXPECT_TRUE(f.journal.completed.empty());
+  EXPECT_TRUE(commands->take_all().empty());  // the engine took both
 }
 
 }  // namespace

@@ -3,7 +3,6 @@
 #include <cstddef>
 #include <memory>
 #include <string>
-#include <utility>
 
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
@@ -46,13 +45,5 @@ class ApiServer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-}  // namespace calstand::daemon::api
-
-namespace calstand::daemon::api {
-
-/// "HOST:PORT" ("127.0.0.1:8765", "[::1]:8765", "0.0.0.0:0") as host and port; throws
-/// core::InputError naming `--listen` when it is not of that form.
-std::pair<std::string, int> parse_listen_address(const std::string& text);
 
 }  // namespace calstand::daemon::api

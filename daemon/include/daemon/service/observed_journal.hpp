@@ -51,8 +51,4 @@ class ObservedJournal final : public RunJournal {
   std::chrono::steady_clock::time_point next_telemetry_{};
 };
 
-/// JSON of the table and chamber states as the API shows them (units in the keys).
-nlohmann::json to_json(const core::TableState& table);
-nlohmann::json to_json(const core::ChamberState& chamber);
-
 }  // namespace calstand::daemon::service

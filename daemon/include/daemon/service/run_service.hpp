@@ -2,6 +2,7 @@
 
 #include <condition_variable>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "core/station_config.hpp"
+#include "daemon/engine_command.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/live_status.hpp"
 #include "daemon/service/station_watch.hpp"
@@ -85,15 +87,6 @@ class RunService {
   const ServiceOptions& options() const { return options_; }
 
  private:
-  struct Command {
-    enum class Kind { kPause, kResume, kAbort, kSkip } kind;
-    bool immediate = false;
-    std::optional<std::size_t> step;  ///< kSkip: the step meant
-    std::string why;
-    std::string who;
-    bool checkpoint = false;  ///< an abort for a daemon stop: the run is set back to interrupted
-  };
-
   void run_thread();
   /// Between runs: reads the table and the chamber into the live status and the stream.
   void watch_idle();
@@ -106,7 +99,7 @@ class RunService {
   void record_event(std::int64_t run, const std::string& who, const std::string& message,
                     bool operator_action = true);
   /// Queues `command` for the run on the station; refuses unless `run` is that run.
-  void command_current(std::int64_t run, Command command);
+  void command_current(std::int64_t run, EngineCommand command);
   std::string status_of(std::int64_t run);
 
   ServiceOptions options_;
@@ -121,7 +114,9 @@ class RunService {
   std::optional<std::int64_t> current_;  // the run on the station
   std::optional<std::int64_t> held_;     // the interrupted run waiting for an operator
   bool resume_held_ = false;
-  std::vector<Command> commands_;        // for the current run, applied on the engine thread
+  // Requests for the run on the station, taken by its engine on the engine thread; pushed under
+  // mutex_ (so only while `current_` is the run meant), taken without it.
+  std::shared_ptr<EngineCommandQueue> commands_ = std::make_shared<EngineCommandQueue>();
   std::thread thread_;
 };
 

@@ -1,0 +1,53 @@
+#include "daemon/station_run.hpp"
+
+#include <utility>
+
+namespace calstand::daemon {
+namespace {
+
+// Table and chamber telemetry rows are kept at most every 0.1 s of station time (the journal
+// decimates what the engine hands it); both run paths record at the same rate.
+constexpr double kTelemetryPeriodS = 0.1;
+
+}  // namespace
+
+StationRun::StationRun(const core::StationConfig& station, const std::string& db_path,
+                       std::int64_t run_id, double start_time_s)
+    : config_(station),
+      db_(db_path),
+      runs_(db_),
+      writer_(db_path),
+      station_(drivers::make_station(config_, start_time_s)),
+      // A simulated station delivers samples as fast as the CPU allows: the journal waits for
+      // the writer rather than counting an overflow no real device would cause.
+      journal_(runs_, writer_, run_id, kTelemetryPeriodS, station_->clock().is_virtual()) {}
+
+CampaignResult StationRun::run(const procedures::Plan& plan, const CampaignStart& start,
+                               RunJournal& journal,
+                               std::function<void(RunEngine&, const Progress&)> on_progress,
+                               std::shared_ptr<EngineCommandQueue> commands) {
+  EngineOptions options = EngineOptions::from_policy(config_.policy);
+  RunEngine* engine_ptr = nullptr;
+  options.on_progress = [&](const Progress& p) {
+    if (on_progress && engine_ptr) on_progress(*engine_ptr, p);
+  };
+  RunEngine engine(*station_, journal, plan, options, std::move(commands));
+  engine_ptr = &engine;
+  CampaignResult result;
+  try {
+    result.state = engine.run(start.first_step, start.first_attempt, start.skipped_steps);
+  } catch (...) {
+    try {
+      writer_.flush();  // what was captured before the failure is kept
+    } catch (...) {
+      // The first failure is the one to report.
+    }
+    throw;
+  }
+  writer_.flush();
+  result.exit_reason = engine.exit_reason();
+  result.station_time_s = station_->clock().now_s();
+  return result;
+}
+
+}  // namespace calstand::daemon
