@@ -9,4 +9,6 @@ bash "$root/scripts/build.sh" -DCALSTAND_BUILD_BENCHMARKS=OFF \
 cd "${CALSTAND_BUILD_DIR:-$root/build}"
 # setup-deps installed python3-pymodbus: the cross-tests against it must run, not skip.
 export CALSTAND_REQUIRE_PYMODBUS=1
+# ... and chromium, chromium-driver and python3-selenium: the console's browser test must run too.
+export CALSTAND_REQUIRE_BROWSER=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600
