@@ -55,12 +55,12 @@ export function liveSeries(container, { title, labels, yLabel, keep = 1200, heig
 }
 
 /** Points (no lines) of y against x, one series per group: `points` = [{x, y, group}]. Groups
- *  keep their colour in `groupOrder`. */
+ *  keep their colour in `groupOrder`; `xAxisLabel` names what x is this time. */
 export function groupedPoints(container, { title, xLabel, yLabel, height = 260 }) {
   let plot = null;
   let unfollow = () => {};
   return {
-    set(points, groupOrder) {
+    set(points, groupOrder, xAxisLabel = xLabel) {
       const sorted = [...points].filter((p) => Number.isFinite(p.x) && Number.isFinite(p.y)).sort((a, b) => a.x - b.x);
       const groups = groupOrder || [...new Set(sorted.map((p) => p.group))];
       const xs = sorted.map((p) => p.x);
@@ -72,8 +72,8 @@ export function groupedPoints(container, { title, xLabel, yLabel, height = 260 }
       plot = new uPlot({
         title, width: widthOf(container), height,
         scales: { x: { time: false } },
-        axes: [{ label: xLabel }, { label: yLabel }],
-        series: [{ label: xLabel }, ...groups.map((g, i) => ({
+        axes: [{ label: xAxisLabel }, { label: yLabel }],
+        series: [{ label: xAxisLabel }, ...groups.map((g, i) => ({
           label: String(g), stroke: PALETTE[i % PALETTE.length], fill: PALETTE[i % PALETTE.length],
           paths: () => null, points: { show: true, size: 7 },
         }))],

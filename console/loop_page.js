@@ -164,8 +164,7 @@ export function showLoop(ctx, runId) {
     const signal = signalSelect.value;
     if (!signal) return;
     stepSignalValues(fit, signal).then((values) => {
-      signalChart.set(residualPoints(fit, family, (s) => values.get(s.step)), groupOrder);
-      signalChart.setXLabel?.(signal);
+      signalChart.set(residualPoints(fit, family, (s) => values.get(s.step)), groupOrder, signal);
       document.getElementById('signal-note').textContent = values.size ? '' : ' (no values of this signal for the fitted steps)';
     }).catch((e) => { document.getElementById('signal-note').textContent = ` (${e.message})`; });
   }
@@ -268,21 +267,19 @@ export function showLoop(ctx, runId) {
   }).catch((e) => {
     replaceChildren(termsBox, el('p', { class: 'state-failed' }, `The catalogue is unavailable: ${e.message}`));
   });
+  // The run's header, then its calibration records into it (the header must exist first).
   get(`/runs/${runId}`).then((run) => {
+    const records = el('span', { id: 'calibrations' }, 'calibration records: …');
     replaceChildren(links, `${run.procedure} · ${run.status} · `, el('a', { href: `#/runs/${runId}` }, 'steps and events'), ' · ',
-      el('a', { href: `/runs/${runId}/report`, target: '_blank', id: 'report-link' }, 'HTML report'), ' · ',
-      el('span', { id: 'calibrations' }, 'calibration records: …'));
-  }).catch((e) => ctx.showMessage(e.message));
-  get(`/runs/${runId}/steps`).then((steps) => { state.runSteps = steps; }).catch(() => {});
-  get(`/runs/${runId}/calibrations`).then((records) => {
-    const list = Array.isArray(records) ? records : records.calibrations || [];
-    const box = document.getElementById('calibrations');
-    if (box) {
-      replaceChildren(box, 'calibration records: ', list.length
+      el('a', { href: `/runs/${runId}/report`, target: '_blank', id: 'report-link' }, 'HTML report'), ' · ', records);
+    return get(`/runs/${runId}/calibrations`).then((answer) => {
+      const list = Array.isArray(answer) ? answer : answer.calibrations || [];
+      replaceChildren(records, 'calibration records: ', list.length
         ? list.map((r, i) => [i ? ', ' : '', el('a', { href: `/calibrations/${r.id}`, target: '_blank' }, `#${r.id} ${r.imu || ''}`)])
         : 'none');
-    }
-  }).catch(() => {});
+    }).catch(() => replaceChildren(records, 'calibration records: unavailable'));
+  }).catch((e) => ctx.showMessage(e.message));
+  get(`/runs/${runId}/steps`).then((steps) => { state.runSteps = steps; }).catch(() => {});
   showHistory();
   return () => [residualChart, signalChart, historyChart].forEach((c) => c.destroy());
 }
