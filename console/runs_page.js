@@ -156,50 +156,66 @@ function showRunList(ctx) {
   return () => { clearTimeout(timer); unsubscribe.forEach((u) => u()); };
 }
 
-function actionButtons(ctx, run, refresh) {
-  const act = (action, body = {}) => async () => {
+// The operator actions, built once per page (a refresh must not eat a reason being typed or
+// a click in flight); `current()` is the run as last read.
+function actionButtons(ctx, id, current, refresh) {
+  const act = (action, body) => async () => {
     ctx.clearMessage();
     try {
-      await post(`/runs/${run.id}/${action}`, body);
-      ctx.showMessage(`${action} requested for run ${run.id}`, 'info');
+      await post(`/runs/${id}/${action}`, body());
+      ctx.showMessage(`${action} requested for run ${id}`, 'info');
       refresh();
     } catch (e) {
       ctx.showMessage(e.message);
     }
   };
-  const step = run.current_step ? run.current_step.index : undefined;
   const reason = el('input', { id: 'action-reason', placeholder: 'reason (recorded)' });
-  const withReason = (action, extra = {}) => () => act(action, { ...extra, reason: reason.value || undefined })();
-  return el('p', { id: 'actions' },
-    el('button', { id: 'pause', onclick: act('pause') }, 'Pause at step end'), ' ',
-    el('button', { id: 'pause-now', onclick: act('pause', { immediate: true }) }, 'Pause now'), ' ',
-    el('button', { id: 'resume', onclick: act('resume') }, 'Resume'), ' ',
-    el('button', { id: 'skip', onclick: withReason('skip', step === undefined ? {} : { step }) }, `Skip step ${step ?? ''}`), ' ',
-    el('button', { id: 'abort', onclick: withReason('abort') }, 'Abort'), ' ', reason);
+  const why = () => reason.value.trim() || undefined;
+  const skip = el('button', { id: 'skip', onclick: act('skip', () => {
+    const step = current()?.current_step?.index;
+    return step === undefined ? { reason: why() } : { step, reason: why() };
+  }) }, 'Skip step');
+  const box = el('p', { id: 'actions' },
+    el('button', { id: 'pause', onclick: act('pause', () => ({})) }, 'Pause at step end'), ' ',
+    el('button', { id: 'pause-now', onclick: act('pause', () => ({ immediate: true })) }, 'Pause now'), ' ',
+    el('button', { id: 'resume', onclick: act('resume', () => ({})) }, 'Resume'), ' ',
+    skip, ' ', el('button', { id: 'abort', onclick: act('abort', () => ({ reason: why() })) }, 'Abort'), ' ', reason);
+  return {
+    box,
+    update(run) {
+      skip.textContent = run.current_step ? `Skip step ${run.current_step.index}` : 'Skip step';
+    },
+  };
 }
 
 function showRun(ctx, id) {
   const head = el('section', { class: 'panel', id: 'run-head' }, 'Loading…');
+  const headBody = el('div', {});
+  let lastRun = null;
+  let refresh = null;
+  const actions = actionButtons(ctx, id, () => lastRun, () => refresh());
+  const runLinks = el('p', {}, el('a', { href: `#/loop/${id}` }, 'Fit and diagnose this run'), ' · ',
+    el('a', { href: `/runs/${id}/report`, target: '_blank' }, 'report'), ' · ',
+    el('a', { href: `/runs/${id}/export` }, 'export (tar)'));
+  replaceChildren(head, headBody, actions.box, runLinks);
   const stepsBox = el('section', { class: 'panel' }, el('h3', {}, 'Steps'), el('div', { id: 'run-steps' }));
   const eventsBox = el('section', { class: 'panel' }, el('h3', {}, 'Events'), el('div', { id: 'run-events' }));
   ctx.root.append(el('h2', {}, `Run ${id}`), head, el('div', { class: 'grid' }, stepsBox, eventsBox));
   let timer = null;
-  async function refresh() {
+  refresh = async () => {
     try {
       const [run, steps, events] = await Promise.all([get(`/runs/${id}`), get(`/runs/${id}/steps`), get(`/runs/${id}/events`)]);
+      lastRun = run;
+      actions.update(run);
       const live = run.live;
-      replaceChildren(head,
+      replaceChildren(headBody,
         el('p', {}, el('b', {}, run.procedure), ' · ', el('span', { id: 'run-status', class: `state-${run.status}` }, run.status),
           ` · ${run.steps_done} / ${run.steps_total} steps`,
           live ? ` · ${live.phase} · station time ${duration(live.station_time_s)}` : '',
           ' · ETA ', el('span', { id: 'run-eta' }, duration(run.eta_s)),
           run.exit_reason ? ` · ${run.exit_reason}` : ''),
         el('div', { class: 'progress' }, el('div', { style: `width: ${(100 * run.progress).toFixed(1)}%` })),
-        run.current_step ? el('p', {}, `Current step ${run.current_step.index}: ${run.current_step.label}`) : null,
-        actionButtons(ctx, run, refresh),
-        el('p', {}, el('a', { href: `#/loop/${id}` }, 'Fit and diagnose this run'), ' · ',
-          el('a', { href: `/runs/${id}/report`, target: '_blank' }, 'report'), ' · ',
-          el('a', { href: `/runs/${id}/export` }, 'export (tar)')));
+        run.current_step ? el('p', {}, `Current step ${run.current_step.index}: ${run.current_step.label}`) : null);
       replaceChildren(stepsBox.querySelector('#run-steps'), table(['#', 'kind', 'label', 'status', 'attempts', 'reason'],
         steps.map((s) => [String(s.index), s.kind, s.label, stateCell(s.status), String(s.attempts), s.reason || ''])));
       replaceChildren(eventsBox.querySelector('#run-events'), table(['time [s]', 'kind', 'source', 'message'],
@@ -207,7 +223,7 @@ function showRun(ctx, id) {
     } catch (e) {
       ctx.showMessage(`Cannot read run ${id}: ${e.message}`);
     }
-  }
+  };
   const mine = (m) => m.run === id;
   const later = (m) => { if (mine(m) && !timer) timer = setTimeout(() => { timer = null; refresh(); }, REFRESH_COALESCE_MS); };
   refresh();

@@ -207,7 +207,11 @@ class ConsoleTest:
 
     def recommended_term_lowers_chi2(self):
         from selenium.webdriver.common.by import By
-        status, answer = self.daemon.request("POST", "/runs", {"procedure": "thermal-calibration"})
+        # The demo campaign's thermal calibration (scripts/demo-campaign.sh): the demo IMU's
+        # temperature drift is what the classical model lacks.
+        status, answer = self.daemon.request("POST", "/runs", {"procedure": "thermal-calibration", "parameters": {
+            "temperatures": [-10, 25, 60], "soak_s": 600, "capture_s": 20, "outer_angles": [0, 90, 180, 270],
+            "inner_angles": [0, 90], "rates": [30, 100, 300]}})
         assert status == 201, answer
         run = answer["id"]
         assert self.daemon.wait_run(run) == "completed"

@@ -116,7 +116,7 @@ void ObservedJournal::publish_telemetry(const core::TableState& table, const cor
       const Eigen::Vector3d a = w.accel_sum_mps2 / n;
       const double span_s = w.last_receive_s - w.first_receive_s;
       j["time_s"] = w.last_receive_s;
-      j["rate_hz"] = w.count > 1 && span_s > 0 ? (n - 1.0) / span_s : nlohmann::json();
+      j["rate_hz"] = w.count > 1 && span_s > 0 ? nlohmann::json((n - 1.0) / span_s) : nlohmann::json();
       j["gyro_dps"] = {g.x(), g.y(), g.z()};
       j["accel_mps2"] = {a.x(), a.y(), a.z()};
       j["temperature_c"] = w.temperature_sum_c / n;
