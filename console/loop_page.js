@@ -246,6 +246,12 @@ export function showLoop(ctx, runId) {
 
   const runFit = () => withBusy('fitting…', async () => {
     showFit(await post(`/runs/${runId}/fits`, requestBody()));
+    // A diagnosis of another model no longer describes this fit: say so rather than hide it.
+    const stale = state.diagnosis && JSON.stringify(state.diagnosis.model) !== JSON.stringify(state.fit.model);
+    diagnosisBox.classList.toggle('stale', Boolean(stale));
+    const note = diagnosisBox.querySelector('#stale-note');
+    if (stale && !note) diagnosisBox.querySelector('h3').after(el('p', { id: 'stale-note', class: 'muted' }, 'This diagnosis is of the previous model: diagnose again.'));
+    if (!stale && note) note.remove();
     await showHistory();
   });
   const runDiagnose = () => withBusy('diagnosing…', async () => showDiagnosis(await post(`/runs/${runId}/diagnose`, requestBody())));

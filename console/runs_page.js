@@ -175,15 +175,21 @@ function actionButtons(ctx, id, current, refresh) {
     const step = current()?.current_step?.index;
     return step === undefined ? { reason: why() } : { step, reason: why() };
   }) }, 'Skip step');
-  const box = el('p', { id: 'actions' },
-    el('button', { id: 'pause', onclick: act('pause', () => ({})) }, 'Pause at step end'), ' ',
-    el('button', { id: 'pause-now', onclick: act('pause', () => ({ immediate: true })) }, 'Pause now'), ' ',
-    el('button', { id: 'resume', onclick: act('resume', () => ({})) }, 'Resume'), ' ',
-    skip, ' ', el('button', { id: 'abort', onclick: act('abort', () => ({ reason: why() })) }, 'Abort'), ' ', reason);
+  const pause = el('button', { id: 'pause', onclick: act('pause', () => ({})) }, 'Pause at step end');
+  const pauseNow = el('button', { id: 'pause-now', onclick: act('pause', () => ({ immediate: true })) }, 'Pause now');
+  const resume = el('button', { id: 'resume', onclick: act('resume', () => ({})) }, 'Resume');
+  const abort = el('button', { id: 'abort', onclick: act('abort', () => ({ reason: why() })) }, 'Abort');
+  const box = el('p', { id: 'actions' }, pause, ' ', pauseNow, ' ', resume, ' ', skip, ' ', abort, ' ', reason);
   return {
     box,
+    // Only what applies to the run as it is (the daemon refuses the rest with 409 anyway).
     update(run) {
+      const s = run.status;
       skip.textContent = run.current_step ? `Skip step ${run.current_step.index}` : 'Skip step';
+      pause.disabled = pauseNow.disabled = s !== 'running';
+      resume.disabled = !(s === 'paused' || s === 'held');
+      skip.disabled = !(s === 'running' || s === 'paused');
+      abort.disabled = !['queued', 'running', 'paused', 'held', 'interrupted'].includes(s);
     },
   };
 }

@@ -245,13 +245,13 @@ class ConsoleTest:
 
     def action_without_token_refused(self):
         status, answer = self.daemon.request("POST", "/runs", {"procedure": "six-position",
-                                                                "parameters": {"capture_s": 3000}})
+                                                                "parameters": {"capture_s": 30000}})
         assert status == 201, answer
         run = answer["id"]
         self.open(f"#/runs/{run}")
         self.set_token("")
-        abort = self.wait("the abort button", lambda: self.find("#abort"))
-        abort.click()
+        self.wait("the abort button enabled", lambda: self.find("#abort").is_enabled())
+        self.find("#abort").click()
         message = self.wait("the refusal message", lambda: self.find("#message").is_displayed() and self.text("#message"))
         assert "401" in message and "token" in message.lower(), message
         _, doc = self.daemon.request("GET", f"/runs/{run}")
