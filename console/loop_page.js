@@ -11,6 +11,8 @@ const CLASSICAL_MODEL = ['gyro_bias', 'gyro_scale', 'gyro_misalignment', 'earth_
   'accel_scale', 'accel_misalignment'];
 const CHANNELS = ['gx', 'gy', 'gz', 'ax', 'ay', 'az'];
 const FINISHED = new Set(['completed', 'aborted', 'failed']);
+// Candidates shown at once; the rest (ranked below, usually without evidence) folded away.
+const TOP_CANDIDATES = 5;
 
 // "gyro_temp_bias:2" -> {name: "gyro_temp_bias", order: 2}; no suffix -> order null.
 function splitTerm(term) {
@@ -202,7 +204,9 @@ export function showLoop(ctx, runId) {
     replaceChildren(diagnosisBox, el('h3', {}, 'Diagnosis'),
       el('p', { id: 'advice' }, d.advice || ''),
       el('p', {}, d.explained === false ? el('span', { class: 'state-failed' }, 'No catalogue term explains the residual.') : null),
-      candidates.length ? table(['candidate', 'ΔBIC', 'p', 'chi2/dof after', 'effect', ''], candidates, { id: 'candidates' }) : el('p', {}, 'No candidate term left to test.'),
+      candidates.length ? table(['candidate', 'ΔBIC', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(0, TOP_CANDIDATES), { id: 'candidates' }) : el('p', {}, 'No candidate term left to test.'),
+      candidates.length > TOP_CANDIDATES ? el('details', {}, el('summary', {}, `${candidates.length - TOP_CANDIDATES} more candidates, ranked lower`),
+        table(['candidate', 'ΔBIC', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(TOP_CANDIDATES), { id: 'more-candidates' })) : null,
       suggestions.length ? [el('h3', {}, 'Custom terms tried'), table(['custom term', 'ΔBIC', 'chi2/dof after', 'held out', 'why', ''], suggestions, { id: 'suggestions' })] : null,
       (d.signals || []).length ? [el('h3', {}, 'Signals the residual follows'),
         table(['signal', 'channel', 'correlation'], d.signals.slice(0, 8).map((s) => [s.signal, s.channel, num(s.correlation, 3)]))] : null);
