@@ -10,6 +10,22 @@ import { el, num, replaceChildren, table } from './dom.js';
 const CLASSICAL_MODEL = ['gyro_bias', 'gyro_scale', 'gyro_misalignment', 'earth_rate', 'accel_bias',
   'accel_scale', 'accel_misalignment'];
 const CHANNELS = ['gx', 'gy', 'gz', 'ax', 'ay', 'az'];
+// What a step's residual can be drawn against when the fit's steps do not carry their signals:
+// the time in the run, and series the daemon downsamples (GET /runs/{id}/series).
+const STEP_SIGNALS = [
+  { name: 'temp_c', label: 'IMU temperature [degC]' },
+  { name: 'elapsed', label: 'time in the run [s]' },
+  { name: 'table_outer_rate_dps', label: 'outer axis rate [deg/s]' },
+  { name: 'table_inner_rate_dps', label: 'inner axis rate [deg/s]' },
+  { name: 'table_outer_deg', label: 'outer axis angle [deg]' },
+  { name: 'table_inner_deg', label: 'inner axis angle [deg]' },
+];
+// A diagnosis signal (error-model.md names) as the closest of STEP_SIGNALS.
+function stepSignalFor(signal) {
+  if (signal.includes('temperature')) return 'temp_c';
+  if (signal.includes('elapsed')) return 'elapsed';
+  return null;
+}
 const FINISHED = new Set(['completed', 'aborted', 'failed']);
 // Candidates shown at once; the rest (ranked below, usually without evidence) folded away.
 const TOP_CANDIDATES = 5;
@@ -80,7 +96,7 @@ export function showLoop(ctx, runId) {
   const historyChart = logCurve(historyBox, { title: '', xLabel: 'fit', yLabel: 'chi2/dof', label: 'chi2/dof' });
   const channelSelect = el('select', { id: 'residual-channel' }, CHANNELS.map((c) => el('option', { value: c }, c)));
   const familySelect = el('select', { id: 'group-family' });
-  const signalSelect = el('select', { id: 'signal' });
+  const signalSelect = el('select', { id: 'signal' }, STEP_SIGNALS.map((c) => el('option', { value: c.name }, c.label)));
   replaceChildren(residualControls, el('label', {}, 'Channel ', channelSelect), ' ', el('label', {}, 'coloured by ', familySelect));
   replaceChildren(signalControls, el('label', {}, 'Signal ', signalSelect),
     el('span', { class: 'muted', id: 'signal-note' }));
@@ -135,19 +151,26 @@ export function showLoop(ctx, runId) {
     return fit.steps.map((s) => ({ x: valueOf(s), y: (s.z || s.residual)[channel], group: groupOf.get(s.step) || 'other' }));
   }
 
-  // Each step's value of `signal`: from the fit when its steps carry their signals, else the mean
-  // of the run's downsampled series over the step's time span.
+  // Each step's value of `signal`, by step index: from the fit when its steps carry their
+  // signals; the time in the run from the steps themselves; else the mean of the run's
+  // downsampled series (GET /runs/{id}/series, seconds since the run's first sample) over the
+  // step's span (steps' clock times shifted to the first step that has samples).
   async function stepSignalValues(fit, signal) {
     if (fit.steps.length && fit.steps[0].signals && signal in fit.steps[0].signals) {
       return new Map(fit.steps.map((s) => [s.step, s.signals[signal]]));
     }
-    const series = await get(`/runs/${runId}/series?signal=${encodeURIComponent(signal)}&max_points=4000`);
+    const fitted = new Set(fit.steps.map((s) => s.step));
+    const spans = state.runSteps.filter((s) => fitted.has(s.index) && s.started_clock_s !== null && s.ended_clock_s !== null);
+    if (!spans.length) return new Map();
+    const t0 = Math.min(...spans.map((s) => s.started_clock_s));
+    if (signal === 'elapsed') return new Map(spans.map((s) => [s.index, (s.started_clock_s + s.ended_clock_s) / 2 - t0]));
+    const series = await get(`/runs/${runId}/series?signal=${encodeURIComponent(signal)}&max_points=8000`);
     const values = new Map();
-    for (const step of state.runSteps) {
-      if (step.started_clock_s === null || step.ended_clock_s === null) continue;
+    for (const step of spans) {
+      const from = step.started_clock_s - t0, to = step.ended_clock_s - t0;
       let sum = 0, n = 0;
       series.t_s.forEach((t, i) => {
-        if (t >= step.started_clock_s && t <= step.ended_clock_s && Number.isFinite(series.mean[i])) {
+        if (t >= from && t <= to && Number.isFinite(series.mean[i])) {
           sum += series.mean[i];
           n += 1;
         }
@@ -160,6 +183,14 @@ export function showLoop(ctx, runId) {
   function showResiduals() {
     const fit = state.fit;
     if (!fit) return;
+    // The signal choices: the fit's own per-step signals when it has them, else STEP_SIGNALS.
+    const own = fit.steps.length && fit.steps[0].signals ? Object.keys(fit.steps[0].signals) : [];
+    const choices = own.length ? own.map((n) => ({ name: n, label: n })) : STEP_SIGNALS;
+    if (signalSelect.options.length !== choices.length) {
+      const previous = signalSelect.value;
+      replaceChildren(signalSelect, choices.map((c) => el('option', { value: c.name }, c.label)));
+      if (choices.some((c) => c.name === previous)) signalSelect.value = previous;
+    }
     const family = familySelect.value;
     const groupOrder = [...new Set((fit.groups || []).filter((g) => groupFamily(g.group) === family).map((g) => g.group)), 'other'];
     residualChart.set(residualPoints(fit, family, (s) => s.step), groupOrder);
@@ -210,10 +241,12 @@ export function showLoop(ctx, runId) {
       suggestions.length ? [el('h3', {}, 'Custom terms tried'), table(['custom term', 'ΔBIC', 'chi2/dof after', 'held out', 'why', ''], suggestions, { id: 'suggestions' })] : null,
       (d.signals || []).length ? [el('h3', {}, 'Signals the residual follows'),
         table(['signal', 'channel', 'correlation'], d.signals.slice(0, 8).map((s) => [s.signal, s.channel, num(s.correlation, 3)]))] : null);
+    // Draw the residual against the signal it follows most, when the page can show that one.
     const top = (d.signals || [])[0];
     if (top) {
       const base = top.signal.replace(/^(abs|sq)\(|\)$|\^2$/g, '');
-      if ([...signalSelect.options].some((o) => o.value === base)) signalSelect.value = base;
+      const choice = [...signalSelect.options].some((o) => o.value === base) ? base : stepSignalFor(base);
+      if (choice) signalSelect.value = choice;
     }
     showResiduals();
   }
@@ -273,7 +306,6 @@ export function showLoop(ctx, runId) {
   get('/catalogue').then((catalogue) => {
     state.catalogue = catalogue;
     showCatalogue();
-    replaceChildren(signalSelect, (catalogue.signals || []).map((s) => el('option', { value: s.name, title: s.meaning }, `${s.name} [${s.unit}]`)));
   }).catch((e) => {
     replaceChildren(termsBox, el('p', { class: 'state-failed' }, `The catalogue is unavailable: ${e.message}`));
   });
