@@ -60,8 +60,8 @@ void send_console_file(const httplib::Request& req, httplib::Response& res, std:
 
 void register_console_routes(httplib::Server& server, const RouteContext&) {
   server.Get("/", guarded([](const httplib::Request& req, httplib::Response& res) {
-    send_console_file(req, res, "index.html");
-  }));
+               send_console_file(req, res, "index.html");
+             }));
   server.Get(R"(/console/([A-Za-z0-9_.-]+))",
              guarded([](const httplib::Request& req, httplib::Response& res) {
                send_console_file(req, res, req.matches[1].str());

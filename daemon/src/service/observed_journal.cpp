@@ -116,7 +116,8 @@ void ObservedJournal::publish_telemetry(const core::TableState& table, const cor
       const Eigen::Vector3d a = w.accel_sum_mps2 / n;
       const double span_s = w.last_receive_s - w.first_receive_s;
       j["time_s"] = w.last_receive_s;
-      j["rate_hz"] = w.count > 1 && span_s > 0 ? nlohmann::json((n - 1.0) / span_s) : nlohmann::json();
+      j["rate_hz"] =
+          w.count > 1 && span_s > 0 ? nlohmann::json((n - 1.0) / span_s) : nlohmann::json();
       j["gyro_dps"] = {g.x(), g.y(), g.z()};
       j["accel_mps2"] = {a.x(), a.y(), a.z()};
       j["temperature_c"] = w.temperature_sum_c / n;
@@ -124,7 +125,9 @@ void ObservedJournal::publish_telemetry(const core::TableState& table, const cor
     imus.push_back(std::move(j));
     w = ImuWindow{};  // an IMU that stops streaming shows 0 samples, not its last means
   }
-  hub_.publish("telemetry", {{"run", run_id_}, {"table", to_json(table)}, {"chamber", to_json(chamber)},
+  hub_.publish("telemetry", {{"run", run_id_},
+                             {"table", to_json(table)},
+                             {"chamber", to_json(chamber)},
                              {"imus", std::move(imus)}});
 }
 
