@@ -162,6 +162,36 @@ class ConsoleTest:
                 print(f"     no screenshot: {e}")
 
     # Checks --------------------------------------------------------------------------------
+    def static_files_served(self):
+        """The console's files from the binary, with their types and revalidation."""
+        def fetch(path, headers=None):
+            req = urllib.request.Request(self.daemon.url + path, headers=headers or {})
+            try:
+                with urllib.request.urlopen(req, timeout=10) as r:
+                    return r.status, r.headers, r.read()
+            except urllib.error.HTTPError as e:
+                return e.code, e.headers, e.read()
+        status, headers, body = fetch("/")
+        assert status == 200 and headers["Content-Type"] == "text/html; charset=utf-8", (status, headers)
+        assert b"/console/app.js" in body and b"http" not in body.replace(b"http-equiv", b""), \
+            "the page must load nothing from elsewhere"
+        assert "default-src 'self'" in headers["Content-Security-Policy"]
+        for path, kind in (("/console/app.js", "text/javascript"), ("/console/console.css", "text/css"),
+                           ("/console/uPlot.iife.min.js", "text/javascript"), ("/console/uPlot.min.css", "text/css")):
+            status, headers, body = fetch(path)
+            assert status == 200 and headers["Content-Type"].startswith(kind), (path, status, headers["Content-Type"])
+            assert headers["Cache-Control"] == "no-cache" and headers["ETag"], (path, dict(headers))
+            again, _, rest = fetch(path, {"If-None-Match": headers["ETag"]})
+            assert again == 304 and not rest, (path, again)
+        # Byte for byte the npm file (the embedder's raw strings must not cut or alter it).
+        status, _, body = fetch("/console/uPlot.iife.min.js")
+        npm_file = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "console",
+                                "node_modules", "uplot", "dist", "uPlot.iife.min.js")
+        with open(npm_file, "rb") as f:
+            assert body == f.read(), f"served uPlot ({len(body)} bytes) differs from {npm_file}"
+        status, _, _ = fetch("/console/package.json")
+        assert status == 404, f"/console/package.json answered {status}"
+
     def station_shows_live_telemetry(self):
         self.open("#/station")
         # Telemetry comes from the stream every second between runs: two messages show it is live.
@@ -207,6 +237,8 @@ class ConsoleTest:
 
     def recommended_term_lowers_chi2(self):
         from selenium.webdriver.common.by import By
+        status, _ = self.daemon.request("GET", "/catalogue")
+        assert status == 200, f"GET /catalogue answers {status}: this calstandd has no analysis routes"
         # The demo campaign's thermal calibration (scripts/demo-campaign.sh): the demo IMU's
         # temperature drift is what the classical model lacks.
         status, answer = self.daemon.request("POST", "/runs", {"procedure": "thermal-calibration", "parameters": {
@@ -282,6 +314,7 @@ def main():
         try:
             driver = make_driver()
             test = ConsoleTest(driver, daemon, args.out)
+            test.check("static files served", test.static_files_served)
             test.check("station shows live telemetry", test.station_shows_live_telemetry)
             test.check("submitted run completes", test.submitted_run_completes)
             test.check("recommended term lowers chi2", test.recommended_term_lowers_chi2)
