@@ -282,7 +282,16 @@ export function showLoop(ctx, runId) {
   }
 
   const runFit = () => withBusy('fitting…', async () => {
-    showFit(await post(`/runs/${runId}/fits`, requestBody()));
+    const body = requestBody();
+    showFit(await post(`/runs/${runId}/fits`, body));
+    // The report of the model just fitted (GET /runs/{id}/report takes it as ?model=&custom=).
+    const report = document.getElementById('report-link');
+    if (report) {
+      const query = new URLSearchParams({ model: body.model.join(','), sensor: body.sensor });
+      body.custom.forEach((c) => query.append('custom', c));
+      report.href = `/runs/${runId}/report?${query}`;
+      report.textContent = 'HTML report of this model';
+    }
     // A diagnosis of another model no longer describes this fit: say so rather than hide it.
     const stale = state.diagnosis && JSON.stringify(state.diagnosis.model) !== JSON.stringify(state.fit.model);
     diagnosisBox.classList.toggle('stale', Boolean(stale));
