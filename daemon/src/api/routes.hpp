@@ -34,5 +34,7 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx);
 void register_procedure_routes(httplib::Server& server, const RouteContext& ctx);
 /// The web console: / and /console/FILE (files embedded at build time).
 void register_console_routes(httplib::Server& server, const RouteContext& ctx);
+/// /catalogue, /runs/{id}/fits|diagnose|history|report|calibrations|series (routes_analysis.cpp).
+void register_analysis_routes(httplib::Server& server, const RouteContext& ctx);
 
 }  // namespace calstand::daemon::api
