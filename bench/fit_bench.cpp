@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include "../tests/unit/solver/sim_run.hpp"
+#include "analysis/run_model.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/fit.hpp"
 
@@ -12,8 +13,8 @@ namespace {
 using namespace calstand;
 using solver::testing::SimStep;
 
-constexpr const char* kBase =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
+// The base model of both benchmarks is the default model of `calstand fit`.
+constexpr const char* kBase = analysis::kDefaultModel;
 
 const solver::RunData& campaign_100k() {
   static const solver::RunData data = [] {

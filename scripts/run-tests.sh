@@ -13,4 +13,6 @@ export CALSTAND_REQUIRE_PYMODBUS=1
 export CALSTAND_REQUIRE_SCHEMA_SUITE=1
 # Likewise nodejs and node-eventsource: calstandd's event stream is read by that standard client.
 export CALSTAND_REQUIRE_SSE_CLIENT=1
+# ... and chromium, chromium-driver and python3-selenium: the console's browser test must run too.
+export CALSTAND_REQUIRE_BROWSER=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600

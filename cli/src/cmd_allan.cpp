@@ -17,6 +17,7 @@
 #include <system_error>
 #include <vector>
 
+#include "analysis/noise_json.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "open_database.hpp"
@@ -108,39 +109,6 @@ std::vector<double> read_csv_column(const std::string& path, const std::string& 
   return values;
 }
 
-Json term_json(const solver::NoiseTerm& t, const std::string& unit) {
-  return {{"value", t.value}, {"sigma", t.sigma}, {"resolved", t.resolved}, {"unit", unit}};
-}
-
-// The fitted terms in the data's unit u (what the fit works in).
-Json terms_json(const solver::NoiseTerms& t, const std::string& u) {
-  Json j;
-  j["quantization"] = term_json(t.quantization, u + "*s");
-  j["random_walk"] = term_json(t.random_walk, u + "/sqrt(Hz)");
-  j["bias_instability"] = term_json(t.bias_instability, u);
-  j["rate_random_walk"] = term_json(t.rate_random_walk, u + "/sqrt(s)");
-  j["rate_ramp"] = term_json(t.rate_ramp, u + "/s");
-  j["min_deviation"] = t.min_deviation;
-  j["min_tau_s"] = t.min_tau_s;
-  j["bias_instability_from_min"] = t.bias_instability_from_min;
-  j["chi2_dof"] = t.chi2_dof;
-  j["unit"] = u;
-  return j;
-}
-
-Json figures_json(const std::vector<solver::DatasheetFigure>& figures) {
-  Json a = Json::array();
-  for (const auto& f : figures) {
-    a.push_back({{"name", f.name},
-                 {"label", f.label},
-                 {"value", f.value},
-                 {"sigma", std::isfinite(f.sigma) ? Json(f.sigma) : Json()},
-                 {"unit", f.unit},
-                 {"resolved", f.resolved}});
-  }
-  return a;
-}
-
 std::string term_line(const char* label, const solver::NoiseTerm& t, const std::string& unit) {
   if (!t.resolved) return fmt::format("  {:<26} not resolved\n", label);
   return fmt::format("  {:<26} {:.4g} +- {:.2g} {}\n", label, t.value, t.sigma, unit);
@@ -208,37 +176,9 @@ void run_allan(const AllanArgs& a) {
   }
   const std::string key(solver::to_string(options.kind));
   if (a.json) {
-    Json out;
-    out["source"] = source;
-    out["kind"] = key;
-    out["unit"] = unit;
-    out["sample_rate_hz"] = rate_hz;
-    out["samples"] = r.samples;
-    out["confidence"] = r.confidence;
-    Json tau = Json::array(), dev = Json::array(), lo = Json::array(), hi = Json::array(),
-         edf = Json::array(), alpha = Json::array();
-    for (const auto& p : r.points) {
-      tau.push_back(p.tau_s);
-      dev.push_back(p.deviation);
-      lo.push_back(p.lo);
-      hi.push_back(p.hi);
-      edf.push_back(p.edf);
-      alpha.push_back(p.alpha);
-    }
-    out["tau"] = tau;
-    out[key] = dev;
-    out[key + "_lo"] = lo;
-    out[key + "_hi"] = hi;
-    out["edf"] = edf;
-    out["alpha"] = alpha;
-    if (terms) {
-      Json noise = terms_json(*terms, unit);
-      if (channel) noise["datasheet"] = figures_json(solver::datasheet_figures(*terms, solver::is_gyro(*channel)));
-      out["noise"] = noise;
-    } else {
-      out["noise"] = nullptr;
-    }
-    std::cout << out.dump(2) << "\n";
+    std::optional<bool> gyro;
+    if (channel) gyro = solver::is_gyro(*channel);
+    std::cout << analysis::allan_json(r, source, key, unit, rate_hz, terms, gyro).dump(2) << "\n";
     return;
   }
   std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals [{}]\n", key,
@@ -313,24 +253,7 @@ void run_noise(const NoiseArgs& a) {
     }
   }
   if (a.json) {
-    Json out;
-    out["run"] = r.run;
-    out["device"] = r.device;
-    out["step"] = r.step;
-    out["step_label"] = r.step_label;
-    out["samples"] = r.samples;
-    out["sample_rate_hz"] = r.sample_rate_hz;
-    out["duration_s"] = r.duration_s;
-    out["gaps"] = r.gaps;
-    Json chans = Json::array();
-    for (const auto& c : r.channels) {
-      const std::string unit(solver::channel_unit(c.channel));
-      chans.push_back({{"channel", std::string(solver::to_string(c.channel))},
-                       {"unit", unit},
-                       {"figures", figures_json(c.figures)},
-                       {"terms", terms_json(c.terms, unit)}});
-    }
-    out["channels"] = chans;
+    Json out = analysis::run_noise_json(r);
     if (!a.kalibr.empty()) out["kalibr"] = a.kalibr;
     std::cout << out.dump(2) << "\n";
     return;

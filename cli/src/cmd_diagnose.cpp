@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "analysis/fit_history.hpp"
+#include "analysis/fit_request.hpp"
 #include "commands.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
@@ -46,23 +48,24 @@ void print_suggestions(const solver::Diagnosis& d) {
 }
 
 void run_diagnose(const DiagnoseOptions& opt) {
-  const solver::Model model = solver::Model::parse(opt.model, opt.customs);
+  analysis::FitRequest request;
+  request.model = solver::Model::parse(opt.model, opt.customs);
+  request.device = opt.device;
+  request.sensor = opt.sensor;
+  request.history_command = opt.suggest ? "" : "diagnose";
   store::Database db = open_existing_database(opt.db);
-  const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
-  solver::FitOptions options;
-  options.rows = parse_sensor_rows(opt.sensor);
-  const solver::Diagnosis d = solver::diagnose(data, model, options);
-  if (!opt.suggest) record_history(db, opt.run, data.setup.device, "diagnose", model, d.fit, opt.sensor);
+  const analysis::DiagnoseOutcome outcome = analysis::diagnose_request(db, opt.run, request);
+  const solver::Diagnosis& d = outcome.diagnosis;
   if (opt.as_json) {
-    fmt::print("{}\n", solver::diagnosis_to_json(d).dump(2));
+    fmt::print("{}\n", analysis::to_json(outcome).dump(2));
     return;
   }
   if (opt.suggest) {
     if (!d.recommended.empty()) fmt::print("{}\n", d.recommended);
     return;
   }
-  fmt::print("run {} ({}), device {}: model {}\n", opt.run, data.setup.procedure_name,
-             data.setup.device, d.fit.model);
+  fmt::print("run {} ({}), device {}: model {}\n", opt.run, outcome.procedure, outcome.device,
+             d.fit.model);
   fmt::print("chi2/dof {:.3g}; step residual rms gyro {:.3g} deg/s, accel {:.3g} m/s^2\n",
              d.fit.chi2_dof, d.fit.residual_rms_gyro_dps, d.fit.residual_rms_accel_mps2);
   print_groups(d.groups, solver::worst_steps(d.fit), 5);
@@ -100,20 +103,7 @@ void run_history(const HistoryOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   const auto fits = store::fit_history(db, opt.run);
   if (opt.as_json) {
-    nlohmann::json out = nlohmann::json::array();
-    for (const auto& f : fits) {
-      out.push_back({{"id", f.id},
-                     {"command", f.command},
-                     {"model", f.model},
-                     {"custom_terms", f.custom_terms},
-                     {"sensors", f.sensors},
-                     {"parameters", f.parameters},
-                     {"chi2_dof", f.chi2_dof ? nlohmann::json(*f.chi2_dof) : nlohmann::json()},
-                     {"rms_gyro_dps", f.rms_gyro_dps ? nlohmann::json(*f.rms_gyro_dps) : nlohmann::json()},
-                     {"rms_accel_mps2", f.rms_accel_mps2 ? nlohmann::json(*f.rms_accel_mps2) : nlohmann::json()},
-                     {"time", f.created_utc}});
-    }
-    fmt::print("{}\n", out.dump(2));
+    fmt::print("{}\n", analysis::history_to_json(fits).dump(2));
     return;
   }
   if (fits.empty()) {

@@ -1,17 +1,13 @@
 // `calstand fit`: fit an error model to a recorded (or imported) run and show how well it fits.
 #include <fmt/format.h>
 
-#include <cmath>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "analysis/fit_request.hpp"
 #include "commands.hpp"
-#include "core/error.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
-#include "solver/fit.hpp"
-#include "solver/noise_estimate.hpp"
 #include "solver/thermal_fit.hpp"
 
 namespace calstand::cli {
@@ -23,25 +19,26 @@ struct FitCommandOptions : RunModelOptions {
   bool white_noise = false;   ///< weights from the white noise alone (no wandering bias)
 };
 
+analysis::FitRequest fit_request_of(const FitCommandOptions& opt, const char* command) {
+  analysis::FitRequest request;
+  request.model = solver::Model::parse(opt.model, opt.customs);
+  request.device = opt.device;
+  request.sensor = opt.sensor;
+  request.white_noise = opt.white_noise;
+  request.history_command = command;
+  return request;
+}
+
 /// The classical thermal calibration: the model fitted on each temperature plateau, then a
 /// polynomial of `order` in dT per bias (linear per scale factor).
-void run_per_plateau(const FitCommandOptions& opt, const solver::Model& model,
-                     const solver::RunData& data, const std::vector<solver::StepSummary>& steps) {
-  solver::ThermalFitOptions options;
-  options.temperature_ref_c = data.setup.temperature_ref_c;
-  options.fit.rows = parse_sensor_rows(opt.sensor);
-  solver::NoiseEstimateOptions noise_options;
-  noise_options.estimate_wander = !opt.white_noise;
-  // Each plateau's fit is weighed with the run's own noise model, like the whole-run fit.
-  const solver::ThermalFitResult r = solver::fit_per_plateau(
-      steps, model, opt.per_plateau_order,
-      solver::estimate_run_noise(data, model, options.fit.rows, noise_options), options);
+void print_per_plateau(const FitCommandOptions& opt, const analysis::PlateauFitOutcome& outcome) {
+  const solver::ThermalFitResult& r = outcome.result;
   if (opt.as_json) {
     fmt::print("{}\n", solver::thermal_fit_to_json(r).dump(2));
     return;
   }
-  fmt::print("run {} ({}), device {}: per-plateau fits of {}\n", opt.run,
-             data.setup.procedure_name, data.setup.device, r.model);
+  fmt::print("run {} ({}), device {}: per-plateau fits of {}\n", opt.run, outcome.procedure,
+             outcome.device, r.model);
   for (const auto& p : r.plateaus) {
     fmt::print("  plateau {:>7.2f} degC: {:>3} steps, chi2/dof {:.3g}\n", p.temperature_c,
                p.steps, p.chi2_dof);
@@ -59,32 +56,22 @@ void run_per_plateau(const FitCommandOptions& opt, const solver::Model& model,
 }
 
 void run_fit(const FitCommandOptions& opt) {
-  const solver::Model model = solver::Model::parse(opt.model, opt.customs);
+  const bool per_plateau = opt.per_plateau_order > 0;
+  const analysis::FitRequest request = fit_request_of(opt, per_plateau ? "" : "fit");
   store::Database db = open_existing_database(opt.db);
-  const solver::RunData data = solver::load_run_data(db, opt.run, opt.device);
-  if (opt.per_plateau_order > 0) {
-    run_per_plateau(opt, model, data, solver::summarize_steps(data, model));
+  if (per_plateau) {
+    print_per_plateau(opt, analysis::plateau_fit_request(db, opt.run, request, opt.per_plateau_order));
     return;
   }
-  solver::FitOptions fit_options;
-  fit_options.rows = parse_sensor_rows(opt.sensor);
-  solver::NoiseEstimateOptions noise_options;
-  noise_options.estimate_wander = !opt.white_noise;
-  std::vector<solver::StepSummary> steps;
-  const solver::FitResult fit = solver::fit_run(data, model, fit_options, noise_options, &steps);
-  record_history(db, opt.run, data.setup.device, "fit", model, fit, opt.sensor);
-  const auto groups = solver::group_quality(fit, steps);
-  const auto worst = solver::worst_steps(fit);
+  const analysis::FitOutcome outcome = analysis::fit_request(db, opt.run, request);
   if (opt.as_json) {
-    nlohmann::json j = solver::fit_to_json(fit);
-    solver::add_groups_json(j, groups, worst);
-    fmt::print("{}\n", j.dump(2));
+    fmt::print("{}\n", analysis::to_json(outcome).dump(2));
     return;
   }
-  fmt::print("run {} ({}), device {}, {} steps\n", opt.run, data.setup.procedure_name,
-             data.setup.device, steps.size());
-  print_fit(fit);
-  print_groups(groups, worst);
+  fmt::print("run {} ({}), device {}, {} steps\n", opt.run, outcome.procedure, outcome.device,
+             outcome.steps.size());
+  print_fit(outcome.fit);
+  print_groups(outcome.groups, outcome.worst);
 }
 
 }  // namespace

@@ -8,27 +8,27 @@
 #include <string>
 #include <vector>
 
+#include "analysis/gnuplot_svg.hpp"
+#include "analysis/report_data.hpp"
+#include "analysis/report_html.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "fit_printer.hpp"
-#include "gnuplot_svg.hpp"
 #include "open_database.hpp"
-#include "report_data.hpp"
-#include "report_html.hpp"
 
 namespace calstand::cli {
 namespace {
 
 struct ReportOptions {
-  ReportRequest request;
+  analysis::ReportRequest request;
   std::string out;
 };
 
 void run_report(const ReportOptions& opt) {
-  find_gnuplot();  // before the work: a missing plotter is the first thing to say
+  analysis::find_gnuplot();  // before the work: a missing plotter is the first thing to say
   store::Database db = open_existing_database(opt.request.db);
-  const ReportData data = gather_report(db, opt.request);
-  const std::string page = render_report_html(data);
+  const analysis::ReportData data = analysis::gather_report(db, opt.request);
+  const std::string page = analysis::render_report_html(data);
   std::ofstream out(opt.out, std::ios::binary);
   if (!out || !(out << page) || !out.flush()) {
     throw core::InputError("--out " + opt.out, "cannot write the report");
@@ -43,7 +43,6 @@ void run_report(const ReportOptions& opt) {
 
 void register_report(CLI::App& app) {
   auto opt = std::make_shared<ReportOptions>();
-  opt->request.model = kDefaultModel;
   auto* cmd = app.add_subcommand(
       "report",
       "One self-contained HTML page of a run's fit: history, residuals, signals, "

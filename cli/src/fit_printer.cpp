@@ -7,16 +7,8 @@
 
 #include "core/error.hpp"
 #include "core/error_terms.hpp"
-#include "store/fit_history.hpp"
 
 namespace calstand::cli {
-
-solver::SensorRows parse_sensor_rows(const std::string& sensor) {
-  if (sensor == "gyro") return solver::SensorRows::kGyro;
-  if (sensor == "accel") return solver::SensorRows::kAccel;
-  if (sensor == "both") return solver::SensorRows::kBoth;
-  throw core::InputError("--sensor", "must be both, gyro or accel");
-}
 
 void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor) {
   cmd->add_option("--db", opt.db, "Database file")->required();
@@ -112,23 +104,6 @@ void print_groups(const std::vector<solver::GroupQuality>& groups,
                  i + 1 < std::min<std::size_t>(worst.size(), 5) ? ";" : "\n");
     }
   }
-}
-
-void record_history(store::Database& db, std::int64_t run, const std::string& device,
-                    const std::string& command, const solver::Model& model,
-                    const solver::FitResult& fit, const std::string& sensors) {
-  store::FitRecord r;
-  r.run = run;
-  r.device = device;
-  r.command = command;
-  r.model = fit.model;
-  for (const auto& c : model.customs()) r.custom_terms.push_back(c.text());
-  r.sensors = sensors;
-  r.parameters = static_cast<int>(fit.parameters.size());
-  r.chi2_dof = fit.chi2_dof;
-  if (fit.rows != solver::SensorRows::kAccel) r.rms_gyro_dps = fit.residual_rms_gyro_dps;
-  if (fit.rows != solver::SensorRows::kGyro) r.rms_accel_mps2 = fit.residual_rms_accel_mps2;
-  store::record_fit(db, r);
 }
 
 std::string catalogue_help() {

@@ -6,24 +6,17 @@
 #include <string>
 #include <vector>
 
+#include "analysis/run_model.hpp"
 #include "solver/fit.hpp"
 #include "solver/groups.hpp"
-#include "store/database.hpp"
 
 namespace calstand::cli {
-
-/// The model `fit` and `calibrate` use when none is given: the classical bias, scale factor and
-/// misalignment of both triads, with the Earth rate in the reference.
-inline constexpr const char* kDefaultModel =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
-
-solver::SensorRows parse_sensor_rows(const std::string& sensor);
 
 /// What every command that fits a model to a run takes.
 struct RunModelOptions {
   std::string db;
   std::int64_t run = 0;
-  std::string model = kDefaultModel;
+  std::string model = analysis::kDefaultModel;
   std::vector<std::string> customs;
   std::string device;
   std::string sensor = "both";
@@ -44,11 +37,6 @@ void print_noise_model(const solver::FitResult& fit);
 /// The groups of steps where the fit fails, worst first, and the worst single residuals.
 void print_groups(const std::vector<solver::GroupQuality>& groups,
                   const std::vector<solver::WorstStep>& worst, std::size_t max_groups = 8);
-
-/// Appends the fit to the run's history (calstand history).
-void record_history(store::Database& db, std::int64_t run, const std::string& device,
-                    const std::string& command, const solver::Model& model,
-                    const solver::FitResult& fit, const std::string& sensors);
 
 /// The catalogue of terms for --help.
 std::string catalogue_help();

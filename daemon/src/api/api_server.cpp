@@ -109,6 +109,9 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   });
   register_run_routes(server, impl_->ctx);
   register_station_routes(server, impl_->ctx);
+  register_procedure_routes(server, impl_->ctx);
+  register_console_routes(server, impl_->ctx);
+  register_analysis_routes(server, impl_->ctx);
 }
 
 ApiServer::~ApiServer() { stop(); }

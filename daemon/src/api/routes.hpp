@@ -30,5 +30,11 @@ struct RouteContext {
 void register_run_routes(httplib::Server& server, const RouteContext& ctx);
 /// /station, /calibrations/{id}, /events (server-sent events).
 void register_station_routes(httplib::Server& server, const RouteContext& ctx);
+/// /procedures (the library with its parameters) and /plan (a plan preview, nothing queued).
+void register_procedure_routes(httplib::Server& server, const RouteContext& ctx);
+/// The web console: / and /console/FILE (files embedded at build time).
+void register_console_routes(httplib::Server& server, const RouteContext& ctx);
+/// /catalogue, /runs/{id}/fits|diagnose|history|report|calibrations|series (routes_analysis.cpp).
+void register_analysis_routes(httplib::Server& server, const RouteContext& ctx);
 
 }  // namespace calstand::daemon::api

@@ -25,6 +25,15 @@ void ObservedJournal::step_started(std::size_t step, int attempt, double t_s) {
 
 bool ObservedJournal::add_samples(std::size_t step, int attempt, const std::string& device,
                                   const std::vector<core::ImuSample>& samples) {
+  ImuWindow& w = imu_windows_[device];
+  for (const auto& sample : samples) {
+    if (w.count == 0) w.first_receive_s = sample.receive_time_s;
+    w.last_receive_s = sample.receive_time_s;
+    w.gyro_sum_dps += sample.gyro_dps;
+    w.accel_sum_mps2 += sample.accel_mps2;
+    w.temperature_sum_c += sample.temperature_c;
+    ++w.count;
+  }
   return inner_.add_samples(step, attempt, device, samples);
 }
 
@@ -73,7 +82,28 @@ void ObservedJournal::publish_telemetry(const core::TableState& table, const cor
     s.table = table;
     s.chamber = chamber;
   });
-  hub_.publish("telemetry", {{"run", run_id_}, {"table", to_json(table)}, {"chamber", to_json(chamber)}});
+  nlohmann::json imus = nlohmann::json::array();
+  for (auto& [device, w] : imu_windows_) {
+    nlohmann::json j = {{"device", device}, {"samples", w.count}};
+    if (w.count > 0) {
+      const double n = static_cast<double>(w.count);
+      const Eigen::Vector3d g = w.gyro_sum_dps / n;
+      const Eigen::Vector3d a = w.accel_sum_mps2 / n;
+      const double span_s = w.last_receive_s - w.first_receive_s;
+      j["time_s"] = w.last_receive_s;
+      j["rate_hz"] =
+          w.count > 1 && span_s > 0 ? nlohmann::json((n - 1.0) / span_s) : nlohmann::json();
+      j["gyro_dps"] = {g.x(), g.y(), g.z()};
+      j["accel_mps2"] = {a.x(), a.y(), a.z()};
+      j["temperature_c"] = w.temperature_sum_c / n;
+    }
+    imus.push_back(std::move(j));
+    w = ImuWindow{};  // an IMU that stops streaming shows 0 samples, not its last means
+  }
+  hub_.publish("telemetry", {{"run", run_id_},
+                             {"table", to_json(table)},
+                             {"chamber", to_json(chamber)},
+                             {"imus", std::move(imus)}});
 }
 
 void ObservedJournal::run_state(RunState state, double t_s, const std::string& reason) {

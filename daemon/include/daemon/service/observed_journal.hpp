@@ -1,7 +1,10 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <chrono>
 #include <cstdint>
+#include <map>
+#include <string>
 
 #include "daemon/run_journal.hpp"
 #include "daemon/service/event_hub.hpp"
@@ -36,10 +39,22 @@ class ObservedJournal final : public RunJournal {
 
   /// True when the next telemetry message is due (wall time).
   bool telemetry_due() const { return std::chrono::steady_clock::now() >= next_telemetry_; }
-  /// Publishes the station's state now as the live telemetry (and the latest in /station).
+  /// Publishes the station's state now as the live telemetry (and the latest in /station),
+  /// with each IMU's samples since the last telemetry summed up (`imus`: count, station-time
+  /// rate, channel means), so that a live plot needs no raw samples.
   void publish_telemetry(const core::TableState& table, const core::ChamberState& chamber);
 
  private:
+  // One IMU's samples since the last telemetry message.
+  struct ImuWindow {
+    std::size_t count = 0;
+    double first_receive_s = 0.0;
+    double last_receive_s = 0.0;
+    Eigen::Vector3d gyro_sum_dps = Eigen::Vector3d::Zero();
+    Eigen::Vector3d accel_sum_mps2 = Eigen::Vector3d::Zero();
+    double temperature_sum_c = 0.0;
+  };
+
   void publish_step(std::size_t step, int attempt, double t_s, const char* status,
                     const std::string& why = "");
 
@@ -49,6 +64,7 @@ class ObservedJournal final : public RunJournal {
   std::int64_t run_id_;
   std::chrono::milliseconds telemetry_period_;
   std::chrono::steady_clock::time_point next_telemetry_{};
+  std::map<std::string, ImuWindow> imu_windows_;  // by device name
 };
 
 }  // namespace calstand::daemon::service

@@ -1,14 +1,15 @@
-#include "report_html.hpp"
+#include "analysis/report_html.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "report_plots.hpp"
-#include "report_tables.hpp"
+#include "analysis/gnuplot_svg.hpp"
+#include "analysis/report_plots.hpp"
+#include "analysis/report_tables.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 namespace {
 
 constexpr const char* kStyle = R"(
@@ -175,4 +176,9 @@ std::string render_report_html(const ReportData& r) {
   return page + "</main>\n</body>\n</html>\n";
 }
 
-}  // namespace calstand::cli
+std::string run_report_html(store::Database& db, const ReportRequest& request) {
+  find_gnuplot();  // before the work: a missing plotter is the first thing to say
+  return render_report_html(gather_report(db, request));
+}
+
+}  // namespace calstand::analysis

@@ -1,4 +1,4 @@
-#include "gnuplot_svg.hpp"
+#include "analysis/gnuplot_svg.hpp"
 
 #include <fmt/format.h>
 #include <stdlib.h>
@@ -14,9 +14,9 @@
 #include <sstream>
 
 #include "core/error.hpp"
-#include "markup_escape.hpp"
+#include "analysis/markup_escape.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 namespace {
 
 // A private temporary directory, removed with everything in it.
@@ -144,4 +144,4 @@ std::string gp_number(double value) {
   return std::isfinite(value) ? fmt::format("{}", value) : std::string("NaN");
 }
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

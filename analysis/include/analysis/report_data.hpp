@@ -6,19 +6,20 @@
 #include <string>
 #include <vector>
 
+#include "analysis/run_model.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/run_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
 #include "store/fit_history.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 /// The request, as the command line gives it.
 struct ReportRequest {
-  std::string db;
+  std::string db;  ///< the database's name as the page shows it (a file name)
   std::int64_t run = 0;
-  std::string model;
+  std::string model = kDefaultModel;  ///< comma-separated terms (Model::parse)
   std::vector<std::string> customs;
   std::string device;  ///< "" = the run's only IMU
   std::string sensor = "both";
@@ -32,9 +33,6 @@ struct StepGrouping {
   /// Position of `of_step[i]` in `values`.
   std::size_t value_index(std::size_t step) const;
 };
-
-/// A long static record makes a run "static": its Allan deviation is worth showing [s].
-inline constexpr double kStaticRecordMinS = 600.0;
 
 struct ReportData {
   ReportRequest request;
@@ -51,8 +49,9 @@ struct ReportData {
 };
 
 /// Fits and diagnoses the model, records the fit in the run's history (command "report"),
-/// reads the history and, for a static run, analyses the noise of its longest static step.
-/// Throws core::InputError for a bad request (as `calstand diagnose`).
+/// reads the history and, for a static run (a static step of kMinNoiseRecordS or more, or the
+/// static-allan procedure), analyses the noise of its longest static step. Throws RunNotFound,
+/// NothingToFit or core::InputError for a bad request (as `calstand diagnose`).
 ReportData gather_report(store::Database& db, const ReportRequest& request);
 
 /// Short labels of the fits of a history: the first fit's model, then what each fit added
@@ -69,4 +68,4 @@ StepGrouping choose_grouping(const solver::Diagnosis& d,
 std::optional<std::vector<double>> signal_series(const std::vector<solver::StepSummary>& steps,
                                                  const std::string& signal);
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

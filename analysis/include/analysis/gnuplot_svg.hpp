@@ -5,7 +5,7 @@
 #include <string_view>
 #include <vector>
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 /// The gnuplot binary on PATH. Throws core::InputError naming gnuplot when there is none.
 std::string find_gnuplot();
@@ -33,4 +33,4 @@ std::string data_block(std::string_view name, const std::vector<std::string>& ro
 /// A number for a data block: shortest round-trip form, or "NaN" (gnuplot skips it).
 std::string gp_number(double value);
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "report_data.hpp"
+#include "analysis/report_data.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 /// chi2/dof of every fit of the run on a log axis, labelled by what each fit added, with the
 /// noise floor (chi2/dof = 1) marked.
@@ -29,4 +29,4 @@ std::string candidate_plot(const ReportData& r);
 /// fitted IEEE 952 model and its terms. Requires r.noise.
 std::string allan_plot(const ReportData& r, bool gyro);
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

@@ -4,10 +4,10 @@
 #include <string>
 #include <string_view>
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 /// `text` with & < > " replaced by their entities: safe in element content and in attribute
 /// values of HTML and XML alike.
 std::string html_escape(std::string_view text);
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

@@ -1,6 +1,6 @@
-#include "markup_escape.hpp"
+#include "analysis/markup_escape.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 std::string html_escape(std::string_view text) {
   std::string out;
@@ -26,4 +26,4 @@ std::string html_escape(std::string_view text) {
   return out;
 }
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

@@ -3,9 +3,9 @@
 
 #include <string>
 
-#include "report_data.hpp"
+#include "analysis/report_data.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 
 /// Every fit of the run: time, command, parameters, chi2/dof, residual rms, model.
 std::string history_table(const ReportData& r);
@@ -29,4 +29,4 @@ std::string candidates_table(const ReportData& r);
 /// channel.
 std::string noise_figures_table(const ReportData& r, bool gyro);
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

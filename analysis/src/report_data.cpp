@@ -1,4 +1,4 @@
-#include "report_data.hpp"
+#include "analysis/report_data.hpp"
 
 #include <fmt/format.h>
 
@@ -8,11 +8,12 @@
 #include <utility>
 
 #include "core/error.hpp"
-#include "fit_printer.hpp"
+#include "analysis/fit_history.hpp"
+#include "analysis/noise_json.hpp"
 #include "solver/groups.hpp"
 #include "solver/signals.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 namespace {
 
 using ConditionField = std::string solver::StepConditions::*;
@@ -56,11 +57,11 @@ void analyse_noise(store::Database& db, ReportData& r) {
   for (const auto& s : r.steps) {
     if (s.is_static) r.longest_static_s = std::max(r.longest_static_s, s.duration_s);
   }
-  if (r.longest_static_s < kStaticRecordMinS && r.procedure != "static-allan") {
+  if (!long_enough_for_noise(r.longest_static_s) && r.procedure != "static-allan") {
     r.noise_note = fmt::format(
         "not a static run: its longest static step lasts {:.0f} s; the Allan deviation is shown "
         "for runs with a static record of {:.0f} s or more (e.g. the static-allan procedure)",
-        r.longest_static_s, kStaticRecordMinS);
+        r.longest_static_s, kMinNoiseRecordS);
     return;
   }
   solver::RunNoiseOptions options;
@@ -150,7 +151,7 @@ ReportData gather_report(store::Database& db, const ReportRequest& request) {
   ReportData r;
   r.request = request;
   const solver::Model model = solver::Model::parse(request.model, request.customs);
-  const solver::RunData data = solver::load_run_data(db, request.run, request.device);
+  const solver::RunData data = load_fit_data(db, request.run, request.device);
   r.procedure = data.setup.procedure_name;
   r.device = data.setup.device;
   solver::FitOptions options;
@@ -167,4 +168,4 @@ ReportData gather_report(store::Database& db, const ReportRequest& request) {
   return r;
 }
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

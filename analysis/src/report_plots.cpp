@@ -1,4 +1,4 @@
-#include "report_plots.hpp"
+#include "analysis/report_plots.hpp"
 
 #include <fmt/format.h>
 
@@ -7,11 +7,11 @@
 #include <cmath>
 #include <limits>
 
-#include "gnuplot_svg.hpp"
+#include "analysis/gnuplot_svg.hpp"
 #include "solver/groups.hpp"
 #include "solver/noise_fit.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 namespace {
 
 // Colour-blind-safe enough, and distinct on white (Tableau 10).
@@ -296,4 +296,4 @@ std::string allan_plot(const ReportData& r, bool gyro) {
                      fmt::format("Allan deviation of the {}", gyro ? "gyros" : "accelerometers"));
 }
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

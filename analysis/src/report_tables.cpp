@@ -1,4 +1,4 @@
-#include "report_tables.hpp"
+#include "analysis/report_tables.hpp"
 
 #include <fmt/format.h>
 
@@ -6,10 +6,10 @@
 #include <cmath>
 #include <optional>
 
-#include "report_html.hpp"
+#include "analysis/report_html.hpp"
 #include "solver/groups.hpp"
 
-namespace calstand::cli {
+namespace calstand::analysis {
 namespace {
 
 std::string optional_number(const std::optional<double>& v) {
@@ -193,4 +193,4 @@ std::string noise_figures_table(const ReportData& r, bool gyro) {
   return out + "</tbody></table>\n";
 }
 
-}  // namespace calstand::cli
+}  // namespace calstand::analysis

@@ -1,0 +1,139 @@
+#include "analysis/noise_json.hpp"
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// How much shorter than kMinNoiseRecordS a record may span (see long_enough_for_noise()).
+constexpr double kRecordSlack = 0.01;
+
+Json noise_term_json(const solver::NoiseTerm& t, const std::string& unit) {
+  return {{"value", t.value}, {"sigma", t.sigma}, {"resolved", t.resolved}, {"unit", unit}};
+}
+
+}  // namespace
+
+bool long_enough_for_noise(double duration_s) {
+  return duration_s >= kMinNoiseRecordS * (1.0 - kRecordSlack);
+}
+
+Json noise_terms_json(const solver::NoiseTerms& t, const std::string& u) {
+  Json j;
+  j["quantization"] = noise_term_json(t.quantization, u + "*s");
+  j["random_walk"] = noise_term_json(t.random_walk, u + "/sqrt(Hz)");
+  j["bias_instability"] = noise_term_json(t.bias_instability, u);
+  j["rate_random_walk"] = noise_term_json(t.rate_random_walk, u + "/sqrt(s)");
+  j["rate_ramp"] = noise_term_json(t.rate_ramp, u + "/s");
+  j["min_deviation"] = t.min_deviation;
+  j["min_tau_s"] = t.min_tau_s;
+  j["bias_instability_from_min"] = t.bias_instability_from_min;
+  j["chi2_dof"] = t.chi2_dof;
+  j["unit"] = u;
+  return j;
+}
+
+Json datasheet_figures_json(const std::vector<solver::DatasheetFigure>& figures) {
+  Json a = Json::array();
+  for (const auto& f : figures) {
+    a.push_back({{"name", f.name},
+                 {"label", f.label},
+                 {"value", f.value},
+                 {"sigma", std::isfinite(f.sigma) ? Json(f.sigma) : Json()},
+                 {"unit", f.unit},
+                 {"resolved", f.resolved}});
+  }
+  return a;
+}
+
+Json run_noise_json(const solver::RunNoise& r) {
+  Json out;
+  out["run"] = r.run;
+  out["device"] = r.device;
+  out["step"] = r.step;
+  out["step_label"] = r.step_label;
+  out["samples"] = r.samples;
+  out["sample_rate_hz"] = r.sample_rate_hz;
+  out["duration_s"] = r.duration_s;
+  out["gaps"] = r.gaps;
+  Json chans = Json::array();
+  for (const auto& c : r.channels) {
+    const std::string unit(solver::channel_unit(c.channel));
+    chans.push_back({{"channel", std::string(solver::to_string(c.channel))},
+                     {"unit", unit},
+                     {"figures", datasheet_figures_json(c.figures)},
+                     {"terms", noise_terms_json(c.terms, unit)}});
+  }
+  out["channels"] = chans;
+  return out;
+}
+
+Json allan_json(const solver::AllanResult& r, const std::string& source, const std::string& key,
+                const std::string& unit, double rate_hz,
+                const std::optional<solver::NoiseTerms>& terms, std::optional<bool> gyro) {
+  Json out;
+  out["source"] = source;
+  out["kind"] = key;
+  out["unit"] = unit;
+  out["sample_rate_hz"] = rate_hz;
+  out["samples"] = r.samples;
+  out["confidence"] = r.confidence;
+  Json tau = Json::array(), dev = Json::array(), lo = Json::array(), hi = Json::array(),
+       edf = Json::array(), alpha = Json::array();
+  for (const auto& p : r.points) {
+    tau.push_back(p.tau_s);
+    dev.push_back(p.deviation);
+    lo.push_back(p.lo);
+    hi.push_back(p.hi);
+    edf.push_back(p.edf);
+    alpha.push_back(p.alpha);
+  }
+  out["tau"] = tau;
+  out[key] = dev;
+  out[key + "_lo"] = lo;
+  out[key + "_hi"] = hi;
+  out["edf"] = edf;
+  out["alpha"] = alpha;
+  if (terms) {
+    Json noise = noise_terms_json(*terms, unit);
+    if (gyro) noise["datasheet"] = datasheet_figures_json(solver::datasheet_figures(*terms, *gyro));
+    out["noise"] = noise;
+  } else {
+    out["noise"] = nullptr;
+  }
+  return out;
+}
+
+nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
+                                         const std::string& device) {
+  solver::RunNoiseOptions options;
+  options.device = device;
+  solver::RunNoise noise;
+  try {
+    noise = solver::analyse_run_noise(db, run, options);
+  } catch (const core::InputError&) {
+    return nullptr;  // no static capture
+  }
+  if (!long_enough_for_noise(noise.duration_s)) return nullptr;
+  nlohmann::json j = {
+      {"step", noise.step}, {"duration_s", noise.duration_s}, {"channels", nlohmann::json::object()}};
+  for (const auto& c : noise.channels) {
+    nlohmann::json figures = nlohmann::json::array();
+    for (const auto& f : c.figures) {
+      figures.push_back(
+          {{"name", f.name},
+           {"value", f.value},
+           {"sigma", std::isfinite(f.sigma) ? nlohmann::json(f.sigma) : nlohmann::json()},
+           {"unit", f.unit},
+           {"resolved", f.resolved}});
+    }
+    j["channels"][std::string(solver::to_string(c.channel))] = figures;
+  }
+  return j;
+}
+
+}  // namespace calstand::analysis

@@ -1,0 +1,55 @@
+// The console's entry point: the token field, the message banner, the live stream indicator,
+// and the router that shows one page per location hash (#/station, #/runs, #/runs/ID,
+// #/loop/ID).
+import { setToken, token } from './api.js';
+import { connect, onStreamState } from './live.js';
+import { showLoop } from './loop_page.js';
+import { showRuns } from './runs_page.js';
+import { showStation } from './station_page.js';
+
+const messageBox = document.getElementById('message');
+
+/** Shows `text` in the banner (kind 'error' or 'info') until the next page or message. */
+export function showMessage(text, kind = 'error') {
+  messageBox.textContent = text;
+  messageBox.className = kind;
+  messageBox.hidden = false;
+}
+
+export function clearMessage() {
+  messageBox.hidden = true;
+  messageBox.textContent = '';
+}
+
+// Pages return a function that releases what they hold (subscriptions, charts) when left.
+let leavePage = () => {};
+
+function route() {
+  const [, page = 'station', id] = (location.hash || '#/station').split('/');
+  for (const name of ['station', 'runs', 'loop']) {
+    document.getElementById(`nav-${name}`).classList.toggle('current', name === page);
+  }
+  leavePage();
+  clearMessage();
+  const root = document.getElementById('page');
+  root.replaceChildren();
+  const ctx = { root, showMessage, clearMessage };
+  const runId = id ? Number(id) : null;
+  if (page === 'runs') leavePage = showRuns(ctx, runId);
+  else if (page === 'loop') leavePage = showLoop(ctx, runId);
+  else leavePage = showStation(ctx);
+}
+
+const tokenField = document.getElementById('token');
+tokenField.value = token();
+tokenField.addEventListener('input', () => setToken(tokenField.value.trim()));
+
+const streamBadge = document.getElementById('stream-state');
+onStreamState((state) => {
+  streamBadge.textContent = state === 'live' ? 'live' : state;
+  streamBadge.className = `stream-state ${state}`;
+});
+
+connect();
+window.addEventListener('hashchange', route);
+route();

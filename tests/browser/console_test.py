@@ -1,0 +1,336 @@
+#!/usr/bin/env python3
+"""The web console in a real browser (headless Chromium through Selenium) against calstandd on
+an ephemeral loopback port with the simulated demo station.
+
+Checks, in one daemon's life (it takes seconds: the simulated station runs faster than real time):
+  1. the station page shows live telemetry from the event stream (EventSource('/events'));
+  2. a run submitted from the runs page (plan preview first) completes;
+  3. on the loop page of a thermal calibration run, fit, diagnose, and the recommended term
+     added with one click lowers the displayed chi2/dof to the value the API returns for the
+     same model;
+  4. a mutating click without the token (the daemon has one) is refused with a message shown.
+Screenshots and the page's HTML are saved into --out when a check fails.
+
+Exit codes: 0 passed, 1 failed, 77 skipped (no chromium, chromedriver or selenium; a failure
+instead when CALSTAND_REQUIRE_BROWSER=1).
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+import urllib.error
+import urllib.request
+
+SKIP = 77
+TOKEN = "console-test-token-0123456789"
+
+
+def browser_missing():
+    """What is missing to drive a browser, or None."""
+    missing = [name for name in ("chromium", "chromedriver") if not shutil.which(name)]
+    try:
+        import selenium  # noqa: F401
+    except ImportError:
+        missing.append("python3-selenium")
+    return ", ".join(missing) or None
+
+
+class Daemon:
+    """calstandd on 127.0.0.1:0; the port is read from its first stdout line."""
+
+    def __init__(self, binary, workdir, station):
+        self.db = os.path.join(workdir, "console.db")
+        token_file = os.path.join(workdir, "token")
+        with open(token_file, "w") as f:
+            f.write(TOKEN + "\n")
+        os.chmod(token_file, 0o600)
+        self.log_path = os.path.join(workdir, "calstandd.log")
+        self.log = open(self.log_path, "w")
+        self.proc = subprocess.Popen(
+            [binary, "--db", self.db, "--listen", "127.0.0.1:0", "--token-file", token_file,
+             "--station", station],
+            stdout=subprocess.PIPE, stderr=self.log, text=True)
+        line = self.proc.stdout.readline()
+        if "listening on http://" not in line:
+            raise RuntimeError(f"calstandd did not start: {line!r} (log {self.log_path})")
+        self.url = line.strip().split("listening on ", 1)[1]
+
+    def request(self, method, path, body=None, token=TOKEN):
+        data = None if body is None else json.dumps(body).encode()
+        req = urllib.request.Request(self.url + path, data=data, method=method)
+        req.add_header("Content-Type", "application/json")
+        if token:
+            req.add_header("Authorization", f"Bearer {token}")
+        try:
+            with urllib.request.urlopen(req, timeout=120) as r:
+                return r.status, json.loads(r.read() or b"null")
+        except urllib.error.HTTPError as e:
+            return e.code, json.loads(e.read() or b"null")
+
+    def wait_run(self, run, statuses=("completed",), timeout_s=60):
+        deadline = time.time() + timeout_s
+        while time.time() < deadline:
+            _, doc = self.request("GET", f"/runs/{run}")
+            if doc["status"] in statuses or doc["status"] in ("failed", "aborted"):
+                return doc["status"]
+            time.sleep(0.2)
+        raise AssertionError(f"run {run} did not end within {timeout_s} s")
+
+    def stop(self):
+        self.proc.terminate()
+        try:
+            self.proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+        self.log.close()
+
+
+def make_driver():
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+    options = webdriver.ChromeOptions()
+    options.binary_location = shutil.which("chromium")
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--window-size=1400,1100", "--no-first-run", "--disable-extensions"):
+        options.add_argument(arg)
+    return webdriver.Chrome(service=Service(shutil.which("chromedriver")), options=options)
+
+
+class ConsoleTest:
+    def __init__(self, driver, daemon, out_dir):
+        self.driver = driver
+        self.daemon = daemon
+        self.out_dir = out_dir
+        self.failures = []
+
+    # Helpers -------------------------------------------------------------------------------
+    def find(self, css):
+        from selenium.webdriver.common.by import By
+        return self.driver.find_element(By.CSS_SELECTOR, css)
+
+    def wait(self, what, condition, timeout_s=20):
+        """Waits until condition() is truthy; returns its value, or fails naming `what`."""
+        deadline = time.time() + timeout_s
+        last_error = None
+        while time.time() < deadline:
+            try:
+                value = condition()
+                if value:
+                    return value
+            except Exception as e:  # an element not there yet, or being replaced
+                last_error = e
+            time.sleep(0.1)
+        raise AssertionError(f"timed out ({timeout_s} s) waiting for {what}"
+                             + (f" (last error: {last_error})" if last_error else ""))
+
+    def text(self, css):
+        return self.find(css).text
+
+    def open(self, hash_route):
+        self.driver.get(f"{self.daemon.url}/{hash_route}")
+
+    def set_token(self, value):
+        field = self.find("#token")
+        field.clear()
+        if value:
+            field.send_keys(value)
+        # The field is read on 'input'; clear() alone fires none.
+        self.driver.execute_script(
+            "const f = document.getElementById('token'); f.value = arguments[0];"
+            "f.dispatchEvent(new Event('input'));", value)
+
+    def check(self, name, fn):
+        started = time.time()
+        try:
+            fn()
+            print(f"ok   {name} ({time.time() - started:.1f} s)")
+        except Exception:
+            self.failures.append(name)
+            print(f"FAIL {name} ({time.time() - started:.1f} s)\n{traceback.format_exc()}")
+            stem = os.path.join(self.out_dir, "console_test_" + name.replace(" ", "_"))
+            try:
+                self.driver.save_screenshot(stem + ".png")
+                with open(stem + ".html", "w") as f:
+                    f.write(self.driver.page_source)
+                print(f"     screenshot {stem}.png, page {stem}.html")
+            except Exception as e:
+                print(f"     no screenshot: {e}")
+
+    # Checks --------------------------------------------------------------------------------
+    def static_files_served(self):
+        """The console's files from the binary, with their types and revalidation."""
+        def fetch(path, headers=None):
+            req = urllib.request.Request(self.daemon.url + path, headers=headers or {})
+            try:
+                with urllib.request.urlopen(req, timeout=10) as r:
+                    return r.status, r.headers, r.read()
+            except urllib.error.HTTPError as e:
+                return e.code, e.headers, e.read()
+        status, headers, body = fetch("/")
+        assert status == 200 and headers["Content-Type"] == "text/html; charset=utf-8", (status, headers)
+        assert b"/console/app.js" in body and b"http" not in body.replace(b"http-equiv", b""), \
+            "the page must load nothing from elsewhere"
+        assert "default-src 'self'" in headers["Content-Security-Policy"]
+        for path, kind in (("/console/app.js", "text/javascript"), ("/console/console.css", "text/css"),
+                           ("/console/uPlot.iife.min.js", "text/javascript"), ("/console/uPlot.min.css", "text/css")):
+            status, headers, body = fetch(path)
+            assert status == 200 and headers["Content-Type"].startswith(kind), (path, status, headers["Content-Type"])
+            assert headers["Cache-Control"] == "no-cache" and headers["ETag"], (path, dict(headers))
+            again, _, rest = fetch(path, {"If-None-Match": headers["ETag"]})
+            assert again == 304 and not rest, (path, again)
+        # Byte for byte the npm file (the embedder's raw strings must not cut or alter it).
+        status, _, body = fetch("/console/uPlot.iife.min.js")
+        npm_file = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "console",
+                                "node_modules", "uplot", "dist", "uPlot.iife.min.js")
+        with open(npm_file, "rb") as f:
+            assert body == f.read(), f"served uPlot ({len(body)} bytes) differs from {npm_file}"
+        status, _, _ = fetch("/console/package.json")
+        assert status == 404, f"/console/package.json answered {status}"
+
+    def station_shows_live_telemetry(self):
+        self.open("#/station")
+        # Telemetry comes from the stream every second between runs: two messages show it is live.
+        self.wait("two telemetry messages on the station page",
+                  lambda: int(self.text("#telemetry-count")) >= 2, timeout_s=15)
+        self.wait("the stream badge saying live", lambda: self.text("#stream-state") == "live")
+        air = self.wait("the chamber air temperature", lambda: "°C" in self.text("#chamber-air") and self.text("#chamber-air"))
+        _, station = self.daemon.request("GET", "/station")
+        expected = station["telemetry"]["chamber"]["air_c"]
+        shown = float(air.split()[0])
+        assert abs(shown - expected) < 1.0, f"chamber air shown {shown}, the daemon says {expected}"
+        assert "table" in self.text("#devices"), "the devices table lists no table"
+        # uPlot drew the temperature plot (a canvas inside .uplot).
+        self.wait("a drawn plot", lambda: self.find(".uplot canvas"))
+
+    def submitted_run_completes(self):
+        from selenium.webdriver.support.ui import Select
+        self.open("#/runs")
+        self.set_token(TOKEN)
+        self.wait("the procedure list", lambda: self.find("#procedure option"))
+        Select(self.find("#procedure")).select_by_value("six-position")
+        capture = self.wait("the capture_s field", lambda: self.find("#param-capture_s"))
+        # A value below the parameter's minimum is shown at its field by the preview.
+        capture.clear()
+        capture.send_keys("-5")
+        self.find("#preview").click()
+        self.wait("the violation at capture_s",
+                  lambda: "invalid" in capture.get_attribute("class") and self.text("#error-capture_s"))
+        assert not self.find("#submit").is_enabled(), "submit enabled with a violation"
+        capture.clear()
+        capture.send_keys("5")
+        self.find("#preview").click()
+        self.wait("a plan within limits", lambda: self.find("#plan-ok"))
+        assert self.text("#plan-duration"), "no duration shown"
+        self.wait("submit enabled", lambda: self.find("#submit").is_enabled())
+        self.find("#submit").click()
+        self.wait("the run page", lambda: "#/runs/" in self.driver.current_url)
+        run = int(self.driver.current_url.rsplit("/", 1)[1])
+        self.wait("the run completed, shown live",
+                  lambda: self.text("#run-status") == "completed", timeout_s=60)
+        _, doc = self.daemon.request("GET", f"/runs/{run}")
+        assert doc["status"] == "completed" and doc["parameters"]["capture_s"] == 5, doc
+
+    def recommended_term_lowers_chi2(self):
+        from selenium.webdriver.common.by import By
+        status, _ = self.daemon.request("GET", "/catalogue")
+        assert status == 200, f"GET /catalogue answers {status}: this calstandd has no analysis routes"
+        # The demo campaign's thermal calibration (scripts/demo-campaign.sh): the demo IMU's
+        # temperature drift is what the classical model lacks.
+        status, answer = self.daemon.request("POST", "/runs", {"procedure": "thermal-calibration", "parameters": {
+            "temperatures": [-10, 25, 60], "soak_s": 600, "capture_s": 20, "outer_angles": [0, 90, 180, 270],
+            "inner_angles": [0, 90], "rates": [30, 100, 300]}})
+        assert status == 201, answer
+        run = answer["id"]
+        assert self.daemon.wait_run(run) == "completed"
+        self.open(f"#/loop/{run}")
+        self.set_token(TOKEN)
+        self.wait("the catalogue", lambda: self.find("#term-gyro_bias").is_selected())
+        self.find("#fit").click()
+        before = float(self.wait("the first fit's chi2/dof", lambda: self.text("#chi2-dof").strip() not in ("", "–")
+                                 and self.text("#chi2-dof"), timeout_s=60))
+        self.wait("the groups of steps", lambda: self.find("#groups"))
+        self.find("#diagnose").click()
+        self.wait("the candidates", lambda: self.find("#candidates"), timeout_s=60)
+        model = [box.get_attribute("id")[len("term-"):] for box in
+                 self.driver.find_elements(By.CSS_SELECTOR, "#terms input[type=checkbox]") if box.is_selected()]
+        _, diagnosis = self.daemon.request("POST", f"/runs/{run}/diagnose",
+                                           {"model": model, "custom": [], "sensor": "both", "white_noise": False})
+        recommended = diagnosis["recommended"]
+        assert recommended, f"diagnose recommends nothing: {diagnosis.get('advice')}"
+        self.find(f"#add-{recommended.replace(':', '-')}").click()
+        self.wait("the recommended term in the model", lambda: self.find(f"#term-{recommended.split(':')[0]}").is_selected())
+        after_text = self.wait("the new chi2/dof", lambda: self.text("#chi2-dof") != f"{before:g}" and
+                               self.text("#busy").startswith("fitting took") and self.text("#chi2-dof"), timeout_s=60)
+        after = float(after_text)
+        _, fit = self.daemon.request("POST", f"/runs/{run}/fits", {
+            "model": model + [recommended], "custom": [], "sensor": "both", "white_noise": False})
+        assert after < before, f"chi2/dof did not fall: {before} -> {after}"
+        assert abs(after - fit["chi2_dof"]) <= 1e-3 * fit["chi2_dof"], \
+            f"shown chi2/dof {after}, the API's {fit['chi2_dof']}"
+        # The history shows the fits as a falling curve (one row per fit).
+        self.wait("the history rows", lambda: len(self.driver.find_elements(By.CSS_SELECTOR, "#history tbody tr")) >= 2)
+
+    def action_without_token_refused(self):
+        status, answer = self.daemon.request("POST", "/runs", {"procedure": "six-position",
+                                                                "parameters": {"capture_s": 30000}})
+        assert status == 201, answer
+        run = answer["id"]
+        self.open(f"#/runs/{run}")
+        self.set_token("")
+        self.wait("the abort button enabled", lambda: self.find("#abort").is_enabled())
+        self.find("#abort").click()
+        message = self.wait("the refusal message", lambda: self.find("#message").is_displayed() and self.text("#message"))
+        assert "401" in message and "token" in message.lower(), message
+        _, doc = self.daemon.request("GET", f"/runs/{run}")
+        assert doc["status"] not in ("aborted",), f"the run was aborted without the token: {doc['status']}"
+        self.daemon.request("POST", f"/runs/{run}/abort", {"reason": "test over"})
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calstandd", required=True)
+    parser.add_argument("--station", required=True, help="station file (the demo station)")
+    parser.add_argument("--out", required=True, help="directory for screenshots on failure")
+    args = parser.parse_args()
+
+    missing = browser_missing()
+    if missing:
+        if os.environ.get("CALSTAND_REQUIRE_BROWSER") == "1":
+            print(f"console_test: {missing} missing, and CALSTAND_REQUIRE_BROWSER=1: failing")
+            return 1
+        print(f"console_test: SKIPPED: {missing} not installed (scripts/setup-deps.sh installs them)")
+        return SKIP
+
+    os.makedirs(args.out, exist_ok=True)
+    started = time.time()
+    with tempfile.TemporaryDirectory(prefix="calstand-console-") as workdir:
+        daemon = Daemon(args.calstandd, workdir, args.station)
+        driver = None
+        try:
+            driver = make_driver()
+            test = ConsoleTest(driver, daemon, args.out)
+            test.check("static files served", test.static_files_served)
+            test.check("station shows live telemetry", test.station_shows_live_telemetry)
+            test.check("submitted run completes", test.submitted_run_completes)
+            test.check("recommended term lowers chi2", test.recommended_term_lowers_chi2)
+            test.check("action without token refused", test.action_without_token_refused)
+            for entry in driver.get_log("browser"):
+                if entry.get("level") == "SEVERE":
+                    print(f"browser console: {entry.get('message')}")
+        finally:
+            if driver:
+                driver.quit()
+            daemon.stop()
+            if 'test' not in locals() or test.failures:
+                shutil.copy(daemon.log_path, os.path.join(args.out, "console_test_calstandd.log"))
+    print(f"console_test: {time.time() - started:.1f} s")
+    return 1 if test.failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+// The noise JSON and the one "long enough static record" threshold, on static records of the
+// known IMU (white noise of known density only).
+#include "analysis/noise_json.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "recorded_run.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+// The known IMU's angle random walk [deg/sqrt(h)] (tests/integration/known_imu_station.hpp).
+constexpr double kTrueArwDegRtH = 0.1;
+
+std::int64_t static_run(const std::string& db, int duration_s) {
+  return testing::record_run(db, "static-allan",
+                             {"duration_s=" + std::to_string(duration_s), "soak_s=1", "warmup_s=1"}, 21);
+}
+
+TEST(NoiseRecordThreshold, IsOneConstantWithASamplePeriodsSlack) {
+  EXPECT_TRUE(long_enough_for_noise(kMinNoiseRecordS));
+  EXPECT_TRUE(long_enough_for_noise(kMinNoiseRecordS - 0.005));  // 600 s at 200 Hz, first to last
+  EXPECT_FALSE(long_enough_for_noise(0.9 * kMinNoiseRecordS));
+  EXPECT_FALSE(long_enough_for_noise(100.0));  // what `calibrate` used to take
+}
+
+TEST(CalibrationNoiseFigures, ALongStaticRecordGivesTheTrueRandomWalk) {
+  testing::TempDatabase file("noise-long");
+  const std::int64_t run = static_run(file.path(), static_cast<int>(kMinNoiseRecordS));
+  store::Database db(file.path());
+  const nlohmann::json j = calibration_noise_figures(db, run, "imu0");
+  ASSERT_TRUE(j.is_object()) << j;
+  EXPECT_EQ(j.at("step"), 3);
+  EXPECT_GE(j.at("duration_s").get<double>(), 0.99 * kMinNoiseRecordS);
+  for (const char* channel : {"gx", "gy", "gz"}) {
+    bool found = false;
+    for (const auto& f : j.at("channels").at(channel)) {
+      if (f.at("name") != "angle_random_walk") continue;
+      found = true;
+      EXPECT_EQ(f.at("unit"), "deg/sqrt(h)");
+      EXPECT_NEAR(f.at("value").get<double>(), kTrueArwDegRtH, 0.15 * kTrueArwDegRtH) << channel;
+    }
+    EXPECT_TRUE(found) << channel;
+  }
+}
+
+TEST(CalibrationNoiseFigures, AShortStaticRecordGivesNone) {
+  testing::TempDatabase file("noise-short");
+  const std::int64_t run = static_run(file.path(), 300);
+  store::Database db(file.path());
+  EXPECT_TRUE(calibration_noise_figures(db, run, "imu0").is_null());
+}
+
+TEST(RunNoiseJson, HoldsEveryChannelWithFiguresAndTermsInTheDataUnit) {
+  testing::TempDatabase file("noise-json");
+  const std::int64_t run = static_run(file.path(), 300);
+  store::Database db(file.path());
+  solver::RunNoiseOptions options;
+  const solver::RunNoise noise = solver::analyse_run_noise(db, run, options);
+  const nlohmann::ordered_json j = run_noise_json(noise);
+  EXPECT_EQ(j.at("run"), run);
+  EXPECT_EQ(j.at("device"), "imu0");
+  EXPECT_NEAR(j.at("sample_rate_hz").get<double>(), 200.0, 1e-6);
+  ASSERT_EQ(j.at("channels").size(), 6u);
+  const auto& gx = j.at("channels").at(0);
+  EXPECT_EQ(gx.at("channel"), "gx");
+  EXPECT_EQ(gx.at("unit"), "deg/s");
+  const auto& rw = gx.at("terms").at("random_walk");
+  EXPECT_EQ(rw.at("unit"), "deg/s/sqrt(Hz)");
+  // deg/sqrt(h) to deg/s/sqrt(Hz): divide by 60.
+  EXPECT_NEAR(rw.at("value").get<double>(), kTrueArwDegRtH / 60.0, 0.15 * kTrueArwDegRtH / 60.0);
+  EXPECT_TRUE(gx.at("figures").is_array());
+  // The keys keep the documented order (ordered_json).
+  EXPECT_EQ(j.begin().key(), "run");
+}
+
+TEST(AllanJson, ListsTheCurveAndNullNoiseWithoutAFit) {
+  solver::AllanResult r;
+  r.samples = 1000;
+  r.confidence = 0.683;
+  r.points.push_back({});
+  r.points.back().tau_s = 1.0;
+  r.points.back().deviation = 0.5;
+  const nlohmann::ordered_json j = allan_json(r, "test", "adev", "deg/s", 100.0, std::nullopt, std::nullopt);
+  EXPECT_EQ(j.at("kind"), "adev");
+  EXPECT_EQ(j.at("tau").at(0), 1.0);
+  EXPECT_EQ(j.at("adev").at(0), 0.5);
+  EXPECT_TRUE(j.contains("adev_lo"));
+  EXPECT_TRUE(j.at("noise").is_null());
+}
+
+}  // namespace
+}  // namespace calstand::analysis
