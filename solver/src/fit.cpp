@@ -328,6 +328,10 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     StepResidual sr;
     sr.index = s.index;
     sr.label = s.label;
+    sr.start_s = s.start_s;
+    sr.end_s = s.end_s;
+    sr.is_static = s.is_static;
+    sr.signals = s.signals;
     sr.sigma = marginal_sigma[static_cast<std::size_t>(&s - steps.data())];
     sr.residual = s.measured - s.reference - s.regressors * fit.values;
     sum_g += sr.residual.head<3>().squaredNorm();
@@ -377,10 +381,20 @@ nlohmann::json fit_to_json(const FitResult& fit) {
   j["steps"] = nlohmann::json::array();
   for (const auto& s : fit.steps) {
     const Vector6d z = s.z();
+    // The step's mean of every signal, so that a reader (the console, a script) can draw the
+    // residual against what it may follow without reading the samples again.
+    nlohmann::json signals = nlohmann::json::object();
+    for (std::size_t k = 0; k < kSignalCount; ++k) {
+      signals[std::string(signal_names()[k])] = finite_or_null(s.signals[k]);
+    }
     j["steps"].push_back({{"step", s.index},
                           {"label", s.label},
+                          {"start_s", s.start_s},
+                          {"end_s", s.end_s},
+                          {"static", s.is_static},
                           {"residual", std::vector<double>(s.residual.data(), s.residual.data() + 6)},
-                          {"z", std::vector<double>(z.data(), z.data() + 6)}});
+                          {"z", std::vector<double>(z.data(), z.data() + 6)},
+                          {"signals", std::move(signals)}});
   }
   return j;
 }

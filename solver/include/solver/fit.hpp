@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -46,6 +47,10 @@ struct Unidentifiable {
 struct StepResidual {
   std::size_t index = 0;
   std::string label;
+  double start_s = 0.0;  ///< first sample, since the run's first sample [s]
+  double end_s = 0.0;    ///< last sample, since the run's first sample [s]
+  bool is_static = false;
+  std::array<double, kSignalCount> signals{};  ///< the step's mean of each signal (signal_names())
   Vector6d residual = Vector6d::Zero();  ///< [deg/s, m/s^2]
   /// The noise of this step's mean alone (white part and wander; neighbouring steps' noise is
   /// correlated with it when the noise model has a wander)

@@ -195,5 +195,39 @@ TEST(Fit, JsonHasTheDocumentedFields) {
   EXPECT_EQ(j["parameters"][0]["unit"], "deg/s");
 }
 
+
+// Each step of the JSON carries its time span and the mean of every signal, so that the
+// residual can be drawn against what it follows (the console does) without the samples.
+TEST(Fit, JsonStepsCarryTheirSignals) {
+  const Model model = Model::parse(kBaseModel);
+  const auto summaries = summarize_steps(simulate_run(random_unit(11), base_campaign(), 11), model);
+  const FitResult fit = fit_model(summaries, model, measure_noise_floor(summaries), {});
+  const nlohmann::json j = fit_to_json(fit);
+  ASSERT_EQ(j["steps"].size(), summaries.size());
+  bool saw_a_rate_step = false;
+  for (std::size_t i = 0; i < summaries.size(); ++i) {
+    const auto& js = j["steps"][i];
+    EXPECT_EQ(js["step"], summaries[i].index);
+    EXPECT_DOUBLE_EQ(js["start_s"].get<double>(), summaries[i].start_s);
+    EXPECT_DOUBLE_EQ(js["end_s"].get<double>(), summaries[i].end_s);
+    EXPECT_EQ(js["static"].get<bool>(), summaries[i].is_static);
+    ASSERT_EQ(js["signals"].size(), kSignalCount);
+    for (std::size_t k = 0; k < kSignalCount; ++k) {
+      const std::string name(signal_names()[k]);
+      if (std::isfinite(summaries[i].signals[k])) {
+        EXPECT_DOUBLE_EQ(js["signals"][name].get<double>(), summaries[i].signals[k]) << name;
+      } else {
+        EXPECT_TRUE(js["signals"][name].is_null()) << name;
+      }
+    }
+    // A rate step about a table axis shows its rate in the body-frame signals.
+    const double rate = std::abs(js["signals"]["table_rate_x"].get<double>()) +
+                        std::abs(js["signals"]["table_rate_y"].get<double>()) +
+                        std::abs(js["signals"]["table_rate_z"].get<double>());
+    if (!summaries[i].is_static && rate > 10.0) saw_a_rate_step = true;
+  }
+  EXPECT_TRUE(saw_a_rate_step);
+}
+
 }  // namespace
 }  // namespace calstand::solver
