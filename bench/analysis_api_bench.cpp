@@ -3,9 +3,11 @@
 // behind both, so the difference is the HTTP round trip against the process start. Plain
 // program (prints figures), not a Google Benchmark: the run is recorded once, then each way is
 // timed a few times.
+// clang-format off
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
-#include <fmt/format.h>
 #include <httplib.h>
+// clang-format on
+#include <fmt/format.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -62,9 +64,8 @@ int main(int argc, char** argv) {
   const std::string db = (dir / "bench.db").string();
 
   daemon::service::EventHub hub(4096);
-  daemon::service::RunService service({sim::load_station_or_default(""), db,
-                                       daemon::service::RecoveryPolicy::kAuto},
-                                      hub);
+  daemon::service::RunService service(
+      {sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto}, hub);
   daemon::api::ApiOptions options;
   options.port = 0;
   daemon::api::ApiServer server(service, hub, options);
@@ -76,7 +77,8 @@ int main(int argc, char** argv) {
   const auto t_record = Clock::now();
   const auto submitted = client.Post(
       "/runs",
-      nlohmann::json{{"procedure", "six-position"}, {"parameters", {{"capture_s", capture_s}}}}.dump(),
+      nlohmann::json{{"procedure", "six-position"}, {"parameters", {{"capture_s", capture_s}}}}
+          .dump(),
       "application/json");
   if (!submitted || submitted->status != 201) {
     fmt::print(stderr, "submit refused\n");
@@ -124,9 +126,10 @@ int main(int argc, char** argv) {
     client.Get(fmt::format("/runs/{}/series?signal=gz&max_points=2000", run));
     series.push_back(seconds_since(t0));
   }
-  fmt::print("median of {}: POST /runs/{{id}}/fits {:.3f} s, calstand fit --json {:.3f} s, "
-             "analysis::fit_request in process {:.3f} s; GET /series (2000 points) {:.3f} s\n",
-             repeats, median(api), median(cli), median(library), median(series));
+  fmt::print(
+      "median of {}: POST /runs/{{id}}/fits {:.3f} s, calstand fit --json {:.3f} s, "
+      "analysis::fit_request in process {:.3f} s; GET /series (2000 points) {:.3f} s\n",
+      repeats, median(api), median(cli), median(library), median(series));
   service.stop("bench over");
   server.stop();
   std::filesystem::remove_all(dir);

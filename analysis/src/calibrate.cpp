@@ -67,8 +67,7 @@ ApplyOutcome apply_calibration(store::Database& db, std::int64_t run, const std:
   }
   store::DerivedRun derived;
   derived.source_run = run;
-  derived.procedure_name =
-      "corrected " + store::RunStore(db).load_run(run).summary.procedure_name;
+  derived.procedure_name = "corrected " + store::RunStore(db).load_run(run).summary.procedure_name;
   derived.status = "corrected";
   derived.parameters = {{"calibration", record_name}};
   derived.device = data.setup.device;

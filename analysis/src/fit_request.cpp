@@ -32,8 +32,7 @@ nlohmann::json to_json(const FitOutcome& outcome) {
   return j;
 }
 
-DiagnoseOutcome diagnose_request(store::Database& db, std::int64_t run,
-                                 const FitRequest& request) {
+DiagnoseOutcome diagnose_request(store::Database& db, std::int64_t run, const FitRequest& request) {
   solver::FitOptions options;
   options.rows = parse_sensor_rows(request.sensor);
   const solver::RunData data = load_fit_data(db, run, request.device);

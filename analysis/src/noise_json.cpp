@@ -119,8 +119,9 @@ nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
     return nullptr;  // no static capture
   }
   if (!long_enough_for_noise(noise.duration_s)) return nullptr;
-  nlohmann::json j = {
-      {"step", noise.step}, {"duration_s", noise.duration_s}, {"channels", nlohmann::json::object()}};
+  nlohmann::json j = {{"step", noise.step},
+                      {"duration_s", noise.duration_s},
+                      {"channels", nlohmann::json::object()}};
   for (const auto& c : noise.channels) {
     nlohmann::json figures = nlohmann::json::array();
     for (const auto& f : c.figures) {

@@ -61,8 +61,8 @@ RunSeries run_series(store::Database& db, std::int64_t run, const SeriesRequest&
     known += (known.empty() ? "" : ", ") + std::string(s.name);
   }
   if (signal == nullptr) {
-    throw core::InputError("signal", fmt::format("unknown signal '{}' (known: {})",
-                                                 request.signal, known));
+    throw core::InputError("signal",
+                           fmt::format("unknown signal '{}' (known: {})", request.signal, known));
   }
   if (request.max_points < 2) throw core::InputError("max_points", "must be at least 2");
   if (!(request.from_s < request.to_s)) {
@@ -92,7 +92,8 @@ RunSeries run_series(store::Database& db, std::int64_t run, const SeriesRequest&
     for (const auto& step : runs.load_steps(run)) {
       store::for_each_chunk(db, run, step.index, out.device,
                             [&](const store::ChunkInfo&, std::span<const core::ImuSample> chunk) {
-                              for (const auto& s : chunk) add(s.receive_time_s, imu_value(s, *channel));
+                              for (const auto& s : chunk)
+                                add(s.receive_time_s, imu_value(s, *channel));
                             });
     }
   } else {
@@ -107,8 +108,8 @@ RunSeries run_series(store::Database& db, std::int64_t run, const SeriesRequest&
 }
 
 nlohmann::json to_json(const RunSeries& s) {
-  return {{"signal", s.signal},       {"unit", s.unit},       {"t_s", s.series.t_s},
-          {"min", s.series.min},      {"max", s.series.max},  {"mean", s.series.mean},
+  return {{"signal", s.signal},         {"unit", s.unit},      {"t_s", s.series.t_s},
+          {"min", s.series.min},        {"max", s.series.max}, {"mean", s.series.mean},
           {"samples", s.series.samples}};
 }
 

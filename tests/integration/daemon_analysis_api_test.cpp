@@ -28,7 +28,8 @@ using calstand::testing::wait_until;
 class AnalysisDaemon {
  public:
   explicit AnalysisDaemon(const std::string& db)
-      : service_({sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto}, hub_),
+      : service_({sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto},
+                 hub_),
         server_(service_, hub_, options()) {
     port_ = server_.start();
     service_.start();
@@ -56,20 +57,22 @@ class AnalysisDaemon {
 class AnalysisApi : public ::testing::Test {
  protected:
   void SetUp() override {
-    db_ = calstand::testing::fresh_dir(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+    db_ = calstand::testing::fresh_dir(
+              ::testing::UnitTest::GetInstance()->current_test_info()->name()) +
           "/station.db";
     daemon_ = std::make_unique<AnalysisDaemon>(db_);
     api_ = std::make_unique<ApiClient>(daemon_->port());
     run_ = api_->submit("six-position", {{"capture_s", 5}});
     ASSERT_GT(run_, 0);
     ASSERT_TRUE(wait_until([&] {
-      const Reply r = api_->get(path("")); return r.status == 200 && r.body.value("status", "") == "completed";
+      const Reply r = api_->get(path(""));
+      return r.status == 200 && r.body.value("status", "") == "completed";
     }));
   }
   std::string path(const std::string& tail) const { return "/runs/" + std::to_string(run_) + tail; }
   nlohmann::json cli_json(const std::string& args) {
-    const auto r = calstand::testing::run(args + " --db " + db_ + " --run " + std::to_string(run_) + " --json",
-                                          "/dev/null");
+    const auto r = calstand::testing::run(
+        args + " --db " + db_ + " --run " + std::to_string(run_) + " --json", "/dev/null");
     EXPECT_EQ(r.exit_code, 0) << args << ": " << r.out;
     return nlohmann::json::parse(r.out, nullptr, false);
   }
@@ -89,8 +92,8 @@ TEST_F(AnalysisApi, AFitOverTheApiIsTheCommandLinesFitAndIsStoredInTheHistory) {
   const std::int64_t history_id = fit.body["history_id"];
   nlohmann::json from_api = fit.body;
   from_api.erase("history_id");
-  const nlohmann::json from_cli =
-      cli_json("fit --model accel_bias,accel_scale,gyro_bias,earth_rate --custom 'k=accel.z:force_z^2'");
+  const nlohmann::json from_cli = cli_json(
+      "fit --model accel_bias,accel_scale,gyro_bias,earth_rate --custom 'k=accel.z:force_z^2'");
   ASSERT_FALSE(from_cli.is_discarded());
   EXPECT_EQ(from_api, from_cli) << "API:\n" << from_api.dump(1) << "\nCLI:\n" << from_cli.dump(1);
   EXPECT_GT(from_api.at("parameters").size(), 6u);
@@ -206,14 +209,16 @@ TEST_F(AnalysisApi, CatalogueReportAndCalibrationsAreServed) {
     ASSERT_EQ(report.status, 200) << report.raw.substr(0, 300);
     EXPECT_EQ(report.raw.rfind("<!DOCTYPE html>", 0), 0u);
     bool html = false;
-    for (const auto& [k, v] : report.headers) html |= k == "Content-Type" && v.starts_with("text/html");
+    for (const auto& [k, v] : report.headers)
+      html |= k == "Content-Type" && v.starts_with("text/html");
     EXPECT_TRUE(html);
   }
 
   EXPECT_EQ(api_->get(path("/calibrations")).body.size(), 0u);
-  const auto c = calstand::testing::run("calibrate --db " + db_ + " --run " + std::to_string(run_) +
-                                         " --model accel_bias,gyro_bias,earth_rate --json --out " +
-                                         db_ + ".cal.json", "/dev/null");
+  const auto c = calstand::testing::run(
+      "calibrate --db " + db_ + " --run " + std::to_string(run_) +
+          " --model accel_bias,gyro_bias,earth_rate --json --out " + db_ + ".cal.json",
+      "/dev/null");
   ASSERT_EQ(c.exit_code, 0) << c.out;
   const std::int64_t id = nlohmann::json::parse(c.out)["calibration_id"];
   const Reply cals = api_->get(path("/calibrations"));

@@ -19,8 +19,8 @@ struct CalibrationOutcome {
   std::string procedure;
   std::string device;
   solver::FitResult fit;
-  std::size_t steps = 0;    ///< steps fitted
-  nlohmann::json record;    ///< schemas/calibration.schema.json, checked against it
+  std::size_t steps = 0;        ///< steps fitted
+  nlohmann::json record;        ///< schemas/calibration.schema.json, checked against it
   std::int64_t history_id = 0;  ///< the fit's row in the run's history (command "calibrate")
 };
 
@@ -38,7 +38,7 @@ std::string default_calibration_file(std::int64_t run, const std::string& device
 
 /// A run corrected with a calibration, written as a new run.
 struct ApplyOutcome {
-  std::int64_t run = 0;         ///< the new run
+  std::int64_t run = 0;  ///< the new run
   std::int64_t source_run = 0;
   std::size_t steps = 0;
   double min_temperature_c = 0.0;  ///< of the source run's samples [degC]

@@ -10,7 +10,7 @@ namespace calstand::analysis {
 
 /// A signal of custom-term expressions (error-model.md, "Signals").
 struct CustomSignal {
-  std::string_view name;     ///< as solver::signal_names()
+  std::string_view name;  ///< as solver::signal_names()
   std::string_view unit;
   std::string_view meaning;
 };

@@ -21,10 +21,10 @@ namespace calstand::analysis {
 
 /// What to fit to a run.
 struct FitRequest {
-  solver::Model model;         ///< parsed: Model::parse() or model_from_lists()
-  std::string device;          ///< "" = the run's only IMU
+  solver::Model model;          ///< parsed: Model::parse() or model_from_lists()
+  std::string device;           ///< "" = the run's only IMU
   std::string sensor = "both";  ///< rows to fit: both, gyro or accel
-  bool white_noise = false;    ///< weights from the white noise alone (no wandering bias)
+  bool white_noise = false;     ///< weights from the white noise alone (no wandering bias)
   /// The command recorded in the fit history ("fit", "diagnose"); empty: not recorded.
   std::string history_command;
 };

@@ -25,8 +25,8 @@ struct SeriesSignal {
 const std::vector<SeriesSignal>& series_signals();
 
 struct SeriesRequest {
-  std::string signal;         ///< one of series_signals()
-  std::string device;         ///< "" = the run's only IMU
+  std::string signal;             ///< one of series_signals()
+  std::string device;             ///< "" = the run's only IMU
   std::size_t max_points = 2000;  ///< at most this many buckets, >= 2
   /// Window in seconds since the run's first sample (of its first step with samples).
   double from_s = -std::numeric_limits<double>::infinity();

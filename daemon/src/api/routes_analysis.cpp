@@ -55,9 +55,11 @@ std::vector<std::string> string_list(const nlohmann::json& body, const char* fie
   return out;
 }
 
-std::string string_field(const nlohmann::json& body, const char* field, const std::string& fallback) {
+std::string string_field(const nlohmann::json& body, const char* field,
+                         const std::string& fallback) {
   if (!body.contains(field) || body[field].is_null()) return fallback;
-  if (!body[field].is_string()) throw BadRequest(400, fmt::format("body.{}", field), "must be a string");
+  if (!body[field].is_string())
+    throw BadRequest(400, fmt::format("body.{}", field), "must be a string");
   return body[field].get<std::string>();
 }
 
@@ -75,7 +77,8 @@ analysis::FitRequest fit_request_of(const httplib::Request& req, const std::stri
   }
   analysis::FitRequest request;
   try {
-    request.model = analysis::model_from_lists(string_list(body, "model"), string_list(body, "custom"));
+    request.model =
+        analysis::model_from_lists(string_list(body, "model"), string_list(body, "custom"));
   } catch (const core::InputError& e) {
     const std::string what = e.what();
     const std::string why = what.substr(std::min(what.size(), e.where().size() + 2));
@@ -85,7 +88,8 @@ analysis::FitRequest fit_request_of(const httplib::Request& req, const std::stri
   request.sensor = string_field(body, "sensor", "both");
   analysis::parse_sensor_rows(request.sensor, "body.sensor");
   if (body.contains("white_noise") && !body["white_noise"].is_null()) {
-    if (!body["white_noise"].is_boolean()) throw BadRequest(400, "body.white_noise", "must be true or false");
+    if (!body["white_noise"].is_boolean())
+      throw BadRequest(400, "body.white_noise", "must be true or false");
     request.white_noise = body["white_noise"].get<bool>();
   }
   request.history_command = command;
@@ -117,7 +121,8 @@ std::optional<double> double_param(const httplib::Request& req, const std::strin
   return v;
 }
 
-std::string text_param(const httplib::Request& req, const std::string& name, const std::string& fallback) {
+std::string text_param(const httplib::Request& req, const std::string& name,
+                       const std::string& fallback) {
   return req.has_param(name) ? req.get_param_value(name) : fallback;
 }
 
@@ -125,100 +130,110 @@ std::string text_param(const httplib::Request& req, const std::string& name, con
 
 void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Get("/catalogue", guarded([](const httplib::Request&, httplib::Response& res) {
-    static const nlohmann::json catalogue = analysis::catalogue_json();
-    send_json(res, 200, catalogue);
-  }));
+               static const nlohmann::json catalogue = analysis::catalogue_json();
+               send_json(res, 200, catalogue);
+             }));
 
-  server.Post(R"(/runs/(\d+)/fits)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    const analysis::FitRequest request = fit_request_of(req, "fit");
-    store::Database db(ctx.db_path);
-    const analysis::FitOutcome outcome = on_run(id, [&] { return analysis::fit_request(db, id, request); });
-    nlohmann::json out = analysis::to_json(outcome);
-    out["history_id"] = *outcome.history_id;
-    send_json(res, 200, out);
-  }));
+  server.Post(R"(/runs/(\d+)/fits)",
+              guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+                const std::int64_t id = id_from_path(req);
+                const analysis::FitRequest request = fit_request_of(req, "fit");
+                store::Database db(ctx.db_path);
+                const analysis::FitOutcome outcome =
+                    on_run(id, [&] { return analysis::fit_request(db, id, request); });
+                nlohmann::json out = analysis::to_json(outcome);
+                out["history_id"] = *outcome.history_id;
+                send_json(res, 200, out);
+              }));
 
-  server.Post(R"(/runs/(\d+)/diagnose)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    const analysis::FitRequest request = fit_request_of(req, "diagnose");
-    store::Database db(ctx.db_path);
-    const analysis::DiagnoseOutcome outcome =
-        on_run(id, [&] { return analysis::diagnose_request(db, id, request); });
-    send_json(res, 200, analysis::to_json(outcome));
-  }));
+  server.Post(R"(/runs/(\d+)/diagnose)",
+              guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+                const std::int64_t id = id_from_path(req);
+                const analysis::FitRequest request = fit_request_of(req, "diagnose");
+                store::Database db(ctx.db_path);
+                const analysis::DiagnoseOutcome outcome =
+                    on_run(id, [&] { return analysis::diagnose_request(db, id, request); });
+                send_json(res, 200, analysis::to_json(outcome));
+              }));
 
-  server.Get(R"(/runs/(\d+)/history)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    store::Database db(ctx.db_path);
-    require_run_or_404(db, id);
-    send_json(res, 200, analysis::history_to_json(store::fit_history(db, id)));
-  }));
+  server.Get(R"(/runs/(\d+)/history)",
+             guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+               const std::int64_t id = id_from_path(req);
+               store::Database db(ctx.db_path);
+               require_run_or_404(db, id);
+               send_json(res, 200, analysis::history_to_json(store::fit_history(db, id)));
+             }));
 
-  server.Get(R"(/runs/(\d+)/report)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    analysis::ReportRequest request;
-    request.run = id_from_path(req);
-    request.db = std::filesystem::path(ctx.db_path).filename().string();
-    request.model = text_param(req, "model", analysis::kDefaultModel);
-    for (std::size_t i = 0; i < req.get_param_value_count("custom"); ++i) {
-      request.customs.push_back(req.get_param_value("custom", i));
-    }
-    request.device = text_param(req, "device", "");
-    request.sensor = text_param(req, "sensor", "both");
-    analysis::parse_sensor_rows(request.sensor, "?sensor");
-    store::Database db(ctx.db_path);
-    std::string page;
-    try {
-      page = on_run(request.run, [&] { return analysis::run_report_html(db, request); });
-    } catch (const core::InputError& e) {
-      // The station lacks the plotter: not the request's fault.
-      if (e.where() == "gnuplot") throw BadRequest(503, e.where(), e.what());
-      throw;
-    }
-    res.status = 200;
-    res.set_content(page, "text/html; charset=utf-8");
-  }));
+  server.Get(R"(/runs/(\d+)/report)",
+             guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+               analysis::ReportRequest request;
+               request.run = id_from_path(req);
+               request.db = std::filesystem::path(ctx.db_path).filename().string();
+               request.model = text_param(req, "model", analysis::kDefaultModel);
+               for (std::size_t i = 0; i < req.get_param_value_count("custom"); ++i) {
+                 request.customs.push_back(req.get_param_value("custom", i));
+               }
+               request.device = text_param(req, "device", "");
+               request.sensor = text_param(req, "sensor", "both");
+               analysis::parse_sensor_rows(request.sensor, "?sensor");
+               store::Database db(ctx.db_path);
+               std::string page;
+               try {
+                 page = on_run(request.run, [&] { return analysis::run_report_html(db, request); });
+               } catch (const core::InputError& e) {
+                 // The station lacks the plotter: not the request's fault.
+                 if (e.where() == "gnuplot") throw BadRequest(503, e.where(), e.what());
+                 throw;
+               }
+               res.status = 200;
+               res.set_content(page, "text/html; charset=utf-8");
+             }));
 
-  server.Get(R"(/runs/(\d+)/calibrations)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    store::Database db(ctx.db_path);
-    require_run_or_404(db, id);
-    nlohmann::json out = nlohmann::json::array();
-    for (const auto& c : store::calibrations_of_run(db, id)) {
-      const nlohmann::json* chi2_dof = nullptr;
-      if (c.record.contains("fit") && c.record["fit"].contains("chi2_dof")) chi2_dof = &c.record["fit"]["chi2_dof"];
-      out.push_back({{"id", c.id},
-                     {"run", c.run},
-                     {"imu", c.imu},
-                     {"model", c.model},
-                     {"created_utc", c.created_utc},
-                     {"chi2_dof", chi2_dof ? *chi2_dof : nlohmann::json()},
-                     {"href", fmt::format("/calibrations/{}", c.id)}});
-    }
-    send_json(res, 200, out);
-  }));
+  server.Get(R"(/runs/(\d+)/calibrations)",
+             guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+               const std::int64_t id = id_from_path(req);
+               store::Database db(ctx.db_path);
+               require_run_or_404(db, id);
+               nlohmann::json out = nlohmann::json::array();
+               for (const auto& c : store::calibrations_of_run(db, id)) {
+                 const nlohmann::json* chi2_dof = nullptr;
+                 if (c.record.contains("fit") && c.record["fit"].contains("chi2_dof"))
+                   chi2_dof = &c.record["fit"]["chi2_dof"];
+                 out.push_back({{"id", c.id},
+                                {"run", c.run},
+                                {"imu", c.imu},
+                                {"model", c.model},
+                                {"created_utc", c.created_utc},
+                                {"chi2_dof", chi2_dof ? *chi2_dof : nlohmann::json()},
+                                {"href", fmt::format("/calibrations/{}", c.id)}});
+               }
+               send_json(res, 200, out);
+             }));
 
-  server.Get(R"(/runs/(\d+)/series)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    if (!req.has_param("signal")) throw BadRequest(400, "?signal", "required (e.g. ?signal=gz)");
-    analysis::SeriesRequest request;
-    request.signal = req.get_param_value("signal");
-    request.device = text_param(req, "device", "");
-    request.max_points = static_cast<std::size_t>(
-        int_param(req, "max_points", 2, kMaxSeriesPoints).value_or(kDefaultSeriesPoints));
-    if (const auto from = double_param(req, "from_s")) request.from_s = *from;
-    if (const auto to = double_param(req, "to_s")) request.to_s = *to;
-    store::Database db(ctx.db_path);
-    analysis::RunSeries series;
-    try {
-      series = on_run(id, [&] { return analysis::run_series(db, id, request); });
-    } catch (const core::InputError& e) {
-      // The library names its own fields; on the API they are query parameters.
-      const bool field = e.where() == "signal" || e.where() == "max_points" || e.where() == "from_s/to_s";
-      throw BadRequest(400, field ? "?" + e.where() : e.where(), e.what());
-    }
-    send_json(res, 200, analysis::to_json(series));
-  }));
+  server.Get(
+      R"(/runs/(\d+)/series)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+        const std::int64_t id = id_from_path(req);
+        if (!req.has_param("signal"))
+          throw BadRequest(400, "?signal", "required (e.g. ?signal=gz)");
+        analysis::SeriesRequest request;
+        request.signal = req.get_param_value("signal");
+        request.device = text_param(req, "device", "");
+        request.max_points = static_cast<std::size_t>(
+            int_param(req, "max_points", 2, kMaxSeriesPoints).value_or(kDefaultSeriesPoints));
+        if (const auto from = double_param(req, "from_s")) request.from_s = *from;
+        if (const auto to = double_param(req, "to_s")) request.to_s = *to;
+        store::Database db(ctx.db_path);
+        analysis::RunSeries series;
+        try {
+          series = on_run(id, [&] { return analysis::run_series(db, id, request); });
+        } catch (const core::InputError& e) {
+          // The library names its own fields; on the API they are query parameters.
+          const bool field =
+              e.where() == "signal" || e.where() == "max_points" || e.where() == "from_s/to_s";
+          throw BadRequest(400, field ? "?" + e.where() : e.where(), e.what());
+        }
+        send_json(res, 200, analysis::to_json(series));
+      }));
 }
 
 }  // namespace calstand::daemon::api

@@ -14,7 +14,8 @@
 namespace calstand::analysis {
 namespace {
 
-constexpr const char* kAccelModel = "accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate";
+constexpr const char* kAccelModel =
+    "accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate";
 
 const solver::FittedParameter& parameter(const solver::FitResult& fit, const std::string& name) {
   for (const auto& p : fit.parameters) {
@@ -44,7 +45,8 @@ TEST(Calibrate, ARecordAppliedToItsRunRemovesTheErrorsItFitted) {
   ASSERT_EQ(stored.size(), 1u);
   EXPECT_EQ(stored[0].id, id);
   EXPECT_EQ(stored[0].model, c.fit.model);
-  EXPECT_EQ(default_calibration_file(run, "imu0"), "calibration-run" + std::to_string(run) + "-imu0.json");
+  EXPECT_EQ(default_calibration_file(run, "imu0"),
+            "calibration-run" + std::to_string(run) + "-imu0.json");
 
   const solver::Calibration calibration = solver::read_calibration(c.record, "record");
   const ApplyOutcome applied = apply_calibration(db, run, "", calibration, "record.json");

@@ -71,7 +71,8 @@ TEST(Downsampler, TheMeansWeightedByBucketReproduceTheSeriesMean) {
   Downsampler d(64);
   for (std::size_t i = 0; i < s.t.size(); ++i) d.add(s.t[i], s.v[i] + 5.0);
   const DownsampledSeries r = d.result();
-  const double mean = std::accumulate(s.v.begin(), s.v.end(), 0.0) / static_cast<double>(s.v.size()) + 5.0;
+  const double mean =
+      std::accumulate(s.v.begin(), s.v.end(), 0.0) / static_cast<double>(s.v.size()) + 5.0;
   // Equal-width buckets of a uniformly sampled series hold equal counts but the last.
   const double bucket_mean = std::accumulate(r.mean.begin(), r.mean.end() - 1, 0.0) /
                              static_cast<double>(r.mean.size() - 1);
@@ -98,7 +99,9 @@ TEST(Downsampler, CountsButSkipsNonFiniteValues) {
   EXPECT_DOUBLE_EQ(r.mean[0], 1.0);
 }
 
-TEST(Downsampler, RefusesFewerThanTwoPoints) { EXPECT_THROW(Downsampler(1), std::invalid_argument); }
+TEST(Downsampler, RefusesFewerThanTwoPoints) {
+  EXPECT_THROW(Downsampler(1), std::invalid_argument);
+}
 
 }  // namespace
 }  // namespace calstand::analysis

@@ -17,7 +17,8 @@ class FitHistoryTest : public ::testing::Test {
   void SetUp() override {
     run_ = testing::record_run(db_file_.path(), "six-position", {"capture_s=10"}, 5);
   }
-  FitOutcome fit(store::Database& db, const std::string& sensor, const std::vector<std::string>& customs = {}) {
+  FitOutcome fit(store::Database& db, const std::string& sensor,
+                 const std::vector<std::string>& customs = {}) {
     FitRequest r;
     r.model = model_from_lists({"accel_bias", "gyro_bias"}, customs);
     r.sensor = sensor;

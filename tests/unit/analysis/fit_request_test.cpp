@@ -16,7 +16,8 @@ namespace {
 
 using testing::known_imu_truth;
 
-const solver::FittedParameter* find_parameter(const solver::FitResult& fit, const std::string& name) {
+const solver::FittedParameter* find_parameter(const solver::FitResult& fit,
+                                              const std::string& name) {
   for (const auto& p : fit.parameters) {
     if (p.name == name) return &p;
   }
@@ -33,7 +34,9 @@ void expect_recovered(const solver::FitResult& fit, const std::string& name, dou
 
 class FitRequestTest : public ::testing::Test {
  protected:
-  void SetUp() override { run_ = testing::record_run(db_file_.path(), "six-position", {"capture_s=10"}, 11); }
+  void SetUp() override {
+    run_ = testing::record_run(db_file_.path(), "six-position", {"capture_s=10"}, 11);
+  }
 
   FitRequest request(const std::vector<std::string>& terms,
                      const std::vector<std::string>& customs = {}) {
@@ -50,13 +53,14 @@ class FitRequestTest : public ::testing::Test {
 TEST_F(FitRequestTest, RecoversTheKnownAccelerometerErrorsAndRecordsTheFit) {
   store::Database db(db_file_.path());
   const FitOutcome out = fit_request(
-      db, run_, request({"accel_bias", "accel_scale", "accel_misalignment", "gyro_bias", "earth_rate"}));
+      db, run_,
+      request({"accel_bias", "accel_scale", "accel_misalignment", "gyro_bias", "earth_rate"}));
   EXPECT_EQ(out.procedure, "six-position");
   EXPECT_EQ(out.device, "imu0");
   EXPECT_EQ(out.steps.size(), 6u);
-  for (const char* name : {"accel_bias.x", "accel_bias.y", "accel_bias.z", "accel_scale.x",
-                           "accel_scale.y", "accel_scale.z", "gyro_bias.x", "gyro_bias.y",
-                           "gyro_bias.z"}) {
+  for (const char* name :
+       {"accel_bias.x", "accel_bias.y", "accel_bias.z", "accel_scale.x", "accel_scale.y",
+        "accel_scale.z", "gyro_bias.x", "gyro_bias.y", "gyro_bias.z"}) {
     expect_recovered(out.fit, name, known_imu_truth(name));
   }
   ASSERT_TRUE(out.history_id.has_value());
@@ -77,9 +81,10 @@ TEST_F(FitRequestTest, ACustomTermStandsInForTheScaleFactorItEquals) {
   // c * force_{axis} on each accelerometer axis is the scale factor by another name: it must
   // come out as the true scale factor (ppm in the catalogue, plain ratio here).
   store::Database db(db_file_.path());
-  const FitOutcome out = fit_request(
-      db, run_, request({"accel_bias", "accel_misalignment", "gyro_bias", "earth_rate"},
-                        {"s=accel:force_{axis}"}));
+  const FitOutcome out =
+      fit_request(db, run_,
+                  request({"accel_bias", "accel_misalignment", "gyro_bias", "earth_rate"},
+                          {"s=accel:force_{axis}"}));
   for (const char* axis : {"x", "y", "z"}) {
     expect_recovered(out.fit, std::string("s.") + axis,
                      known_imu_truth(std::string("accel_scale.") + axis) * 1e-6);

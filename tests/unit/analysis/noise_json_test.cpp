@@ -16,7 +16,8 @@ constexpr double kTrueArwDegRtH = 0.1;
 
 std::int64_t static_run(const std::string& db, int duration_s) {
   return testing::record_run(db, "static-allan",
-                             {"duration_s=" + std::to_string(duration_s), "soak_s=1", "warmup_s=1"}, 21);
+                             {"duration_s=" + std::to_string(duration_s), "soak_s=1", "warmup_s=1"},
+                             21);
 }
 
 TEST(NoiseRecordThreshold, IsOneConstantWithASamplePeriodsSlack) {
@@ -83,7 +84,8 @@ TEST(AllanJson, ListsTheCurveAndNullNoiseWithoutAFit) {
   r.points.push_back({});
   r.points.back().tau_s = 1.0;
   r.points.back().deviation = 0.5;
-  const nlohmann::ordered_json j = allan_json(r, "test", "adev", "deg/s", 100.0, std::nullopt, std::nullopt);
+  const nlohmann::ordered_json j =
+      allan_json(r, "test", "adev", "deg/s", 100.0, std::nullopt, std::nullopt);
   EXPECT_EQ(j.at("kind"), "adev");
   EXPECT_EQ(j.at("tau").at(0), 1.0);
   EXPECT_EQ(j.at("adev").at(0), 0.5);

@@ -37,7 +37,8 @@ class TempDatabase {
  private:
   void remove() {
     std::error_code ignored;
-    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path_ + suffix, ignored);
+    for (const char* suffix : {"", "-wal", "-shm"})
+      std::filesystem::remove(path_ + suffix, ignored);
   }
   std::string path_;
 };
@@ -55,7 +56,8 @@ inline std::int64_t record_run(const std::string& db_path, const std::string& na
                                bool run = true) {
   const core::StationConfig station = known_station(seed);
   const auto procedure = procedures::load_procedure(name);
-  const auto plan = procedures::make_plan(procedure, station, procedures::parse_overrides(overrides));
+  const auto plan =
+      procedures::make_plan(procedure, station, procedures::parse_overrides(overrides));
   std::int64_t run_id = 0;
   {
     store::Database db(db_path);

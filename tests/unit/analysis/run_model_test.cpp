@@ -6,7 +6,8 @@
 namespace calstand::analysis {
 namespace {
 
-std::string where_of(const std::vector<std::string>& terms, const std::vector<std::string>& customs) {
+std::string where_of(const std::vector<std::string>& terms,
+                     const std::vector<std::string>& customs) {
   try {
     model_from_lists(terms, customs);
   } catch (const core::InputError& e) {
@@ -20,8 +21,10 @@ TEST(ModelFromLists, AnEmptyListIsTheDefaultModel) {
 }
 
 TEST(ModelFromLists, TermsAndCustomsMakeTheSameModelAsTheCommandLine) {
-  const solver::Model m = model_from_lists({"gyro_bias", "gyro_temp_bias:2"}, {"k=gyro.z:force_z^2"});
-  const solver::Model cli = solver::Model::parse("gyro_bias,gyro_temp_bias:2", {"k=gyro.z:force_z^2"});
+  const solver::Model m =
+      model_from_lists({"gyro_bias", "gyro_temp_bias:2"}, {"k=gyro.z:force_z^2"});
+  const solver::Model cli =
+      solver::Model::parse("gyro_bias,gyro_temp_bias:2", {"k=gyro.z:force_z^2"});
   EXPECT_EQ(m.text(), cli.text());
   EXPECT_EQ(m.size(), cli.size());
 }

@@ -7,8 +7,8 @@
 
 #include "analysis/run_model.hpp"
 #include "recorded_run.hpp"
-#include "store/sample_reader.hpp"
 #include "store/run_store.hpp"
+#include "store/sample_reader.hpp"
 
 namespace calstand::analysis {
 namespace {
