@@ -12,6 +12,7 @@
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 #include "daemon_test_support.hpp"
+#include "in_process_daemon.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/run_store.hpp"
@@ -24,34 +25,7 @@ using calstand::testing::ApiClient;
 using calstand::testing::Reply;
 using calstand::testing::wait_until;
 
-// calstandd in-process: hub, run service and API, as calstandd_main.cpp puts them together.
-class AnalysisDaemon {
- public:
-  explicit AnalysisDaemon(const std::string& db)
-      : service_({sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto},
-                 hub_),
-        server_(service_, hub_, options()) {
-    port_ = server_.start();
-    service_.start();
-  }
-  ~AnalysisDaemon() {
-    service_.stop("test over");
-    server_.stop();
-  }
-  int port() const { return port_; }
-
- private:
-  static daemon::api::ApiOptions options() {
-    daemon::api::ApiOptions o;
-    o.port = 0;
-    o.token = calstand::testing::kTestToken;
-    return o;
-  }
-  daemon::service::EventHub hub_{4096};
-  daemon::service::RunService service_;
-  daemon::api::ApiServer server_;
-  int port_ = 0;
-};
+using calstand::testing::InProcessDaemon;
 
 // One recorded six-position run (5 s captures) in a fresh database, served by a daemon.
 class AnalysisApi : public ::testing::Test {
@@ -60,7 +34,7 @@ class AnalysisApi : public ::testing::Test {
     db_ = calstand::testing::fresh_dir(
               ::testing::UnitTest::GetInstance()->current_test_info()->name()) +
           "/station.db";
-    daemon_ = std::make_unique<AnalysisDaemon>(db_);
+    daemon_ = std::make_unique<InProcessDaemon>(db_);
     api_ = std::make_unique<ApiClient>(daemon_->port());
     run_ = api_->submit("six-position", {{"capture_s", 5}});
     ASSERT_GT(run_, 0);
@@ -78,7 +52,7 @@ class AnalysisApi : public ::testing::Test {
   }
 
   std::string db_;
-  std::unique_ptr<AnalysisDaemon> daemon_;
+  std::unique_ptr<InProcessDaemon> daemon_;
   std::unique_ptr<ApiClient> api_;
   std::int64_t run_ = 0;
 };

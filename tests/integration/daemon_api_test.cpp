@@ -11,6 +11,7 @@
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 #include "daemon_test_support.hpp"
+#include "in_process_daemon.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/run_store.hpp"
@@ -30,36 +31,7 @@ using daemon::service::RecoveryPolicy;
 const nlohmann::json kShort = {{"capture_s", 5}};
 const nlohmann::json kLong = {{"capture_s", 300}};
 
-// calstandd in-process: hub, run service and API, as calstandd_main.cpp puts them together.
-class InProcessDaemon {
- public:
-  explicit InProcessDaemon(const std::string& db, RecoveryPolicy recovery = RecoveryPolicy::kAuto,
-                           std::size_t live_messages_kept = 4096)
-      : hub_(live_messages_kept),
-        service_({sim::load_station_or_default(""), db, recovery}, hub_),
-        server_(service_, hub_, options()) {
-    port_ = server_.start();
-    service_.start();
-  }
-  ~InProcessDaemon() {
-    service_.stop("test over");
-    server_.stop();
-  }
-  int port() const { return port_; }
-
- private:
-  static daemon::api::ApiOptions options() {
-    daemon::api::ApiOptions o;
-    o.port = 0;
-    o.token = calstand::testing::kTestToken;
-    o.max_body_bytes = 64 * 1024;
-    return o;
-  }
-  daemon::service::EventHub hub_;
-  daemon::service::RunService service_;
-  daemon::api::ApiServer server_;
-  int port_ = 0;
-};
+using calstand::testing::InProcessDaemon;
 
 std::string status_of(ApiClient& api, std::int64_t run) {
   const Reply r = api.get("/runs/" + std::to_string(run));
@@ -79,7 +51,8 @@ bool running_with_steps_done(ApiClient& api, std::int64_t run, std::size_t steps
 
 bool has_event(const Reply& events, const std::string& source, const std::string& text) {
   for (const auto& e : events.body) {
-    if (e["source"] == source && e["message"].get<std::string>().find(text) != std::string::npos) return true;
+    if (e["source"] == source && e["message"].get<std::string>().find(text) != std::string::npos)
+      return true;
   }
   return false;
 }
@@ -88,9 +61,11 @@ TEST(DaemonApi, SubmitsAndWatchesARunToCompletion) {
   InProcessDaemon d(calstand::testing::fresh_dir("watch") + "/station.db");
   ApiClient api(d.port());
   EventStreamReader stream(d.port());
-  ASSERT_TRUE(wait_until([&] { return stream.saw([](const auto& m) { return m.type == "station"; }); }));
+  ASSERT_TRUE(
+      wait_until([&] { return stream.saw([](const auto& m) { return m.type == "station"; }); }));
 
-  const Reply submitted = api.post_json("/runs", {{"procedure", "six-position"}, {"parameters", kShort}});
+  const Reply submitted =
+      api.post_json("/runs", {{"procedure", "six-position"}, {"parameters", kShort}});
   ASSERT_EQ(submitted.status, 201) << submitted.raw;
   const std::int64_t run = submitted.body.at("id");
   ASSERT_TRUE(wait_for_status(api, run, "completed"));
@@ -111,15 +86,20 @@ TEST(DaemonApi, SubmitsAndWatchesARunToCompletion) {
   // The live stream told the story: the run starting and ending, every step completing, and
   // telemetry on the way.
   ASSERT_TRUE(wait_until([&] {
-    return stream.saw([&](const auto& m) { return m.type == "run" && m.data["state"] == "completed"; });
+    return stream.saw(
+        [&](const auto& m) { return m.type == "run" && m.data["state"] == "completed"; });
   }));
   for (int i = 0; i < 12; ++i) {
     EXPECT_TRUE(stream.saw([&](const auto& m) {
-      return m.type == "step" && m.data["step"] == i && m.data["status"] == "completed" && m.data["run"] == run;
-    })) << "step " << i;
+      return m.type == "step" && m.data["step"] == i && m.data["status"] == "completed" &&
+             m.data["run"] == run;
+    })) << "step "
+        << i;
   }
-  EXPECT_TRUE(stream.saw([](const auto& m) { return m.type == "run" && m.data["state"] == "running"; }));
-  EXPECT_TRUE(stream.saw([](const auto& m) { return m.type == "telemetry" && m.data.contains("table"); }));
+  EXPECT_TRUE(
+      stream.saw([](const auto& m) { return m.type == "run" && m.data["state"] == "running"; }));
+  EXPECT_TRUE(
+      stream.saw([](const auto& m) { return m.type == "telemetry" && m.data.contains("table"); }));
 
   const Reply listing = api.get("/runs");
   ASSERT_EQ(listing.status, 200);
@@ -256,9 +236,10 @@ TEST(DaemonApi, PausesAndResumesARun) {
   EXPECT_FALSE(where.body["current_step"]["label"].get<std::string>().empty());
   // At least the captures not yet done (300 s each; six-position has 6), at most the plan.
   const double eta_s = where.body["eta_s"].get<double>();
-  EXPECT_GE(eta_s, 300.0 * (12 - where.body["current_step"]["index"].get<int>()) / 2 - 300.0) << where.raw;
+  EXPECT_GE(eta_s, 300.0 * (12 - where.body["current_step"]["index"].get<int>()) / 2 - 300.0)
+      << where.raw;
   EXPECT_LE(eta_s, 12 * 400.0) << where.raw;
-  EXPECT_EQ(api.post(path + "/pause", "").status, 409);                        // already paused
+  EXPECT_EQ(api.post(path + "/pause", "").status, 409);  // already paused
 
   const Reply resumed = api.post(path + "/resume", "");
   ASSERT_EQ(resumed.status, 202) << resumed.raw;
@@ -288,10 +269,12 @@ TEST(DaemonApi, AbortsARunToTheSafeState) {
   // The engine made the station safe without a fault, and said so on the stream.
   const Reply events = api.get(path + "/events");
   for (const auto& e : events.body) {
-    EXPECT_EQ(e["message"].get<std::string>().find("making the station safe"), std::string::npos) << e.dump();
+    EXPECT_EQ(e["message"].get<std::string>().find("making the station safe"), std::string::npos)
+        << e.dump();
   }
   ASSERT_TRUE(wait_until([&] {
-    return stream.saw([&](const auto& m) { return m.type == "run" && m.data["state"] == "aborted"; });
+    return stream.saw(
+        [&](const auto& m) { return m.type == "run" && m.data["state"] == "aborted"; });
   }));
   EXPECT_EQ(api.post(path + "/abort", "").status, 409);  // already ended
   // The station is free again: the next run goes.
@@ -315,25 +298,32 @@ TEST(DaemonApi, AbortsAQueuedRunBeforeItStarts) {
 TEST(DaemonApi, RefusesBadRequestsWithClearErrorsAndKeepsServing) {
   InProcessDaemon d(calstand::testing::fresh_dir("refuse") + "/station.db");
   ApiClient api(d.port());
-  const std::string good = nlohmann::json{{"procedure", "six-position"}, {"parameters", kShort}}.dump();
+  const std::string good =
+      nlohmann::json{{"procedure", "six-position"}, {"parameters", kShort}}.dump();
 
   // 401: no token, a wrong one, a prefix of the right one; reads need none.
   EXPECT_EQ(api.post("/runs", good, "").status, 401);
   EXPECT_EQ(api.post("/runs", good, "wrong").status, 401);
-  EXPECT_EQ(api.post("/runs", good, std::string(calstand::testing::kTestToken).substr(0, 10)).status, 401);
+  EXPECT_EQ(
+      api.post("/runs", good, std::string(calstand::testing::kTestToken).substr(0, 10)).status,
+      401);
   EXPECT_EQ(api.get("/runs").status, 200);
 
   // 400: malformed JSON, with the place.
   const Reply malformed = api.post("/runs", "{\n  \"procedure\": \"six-position\",,\n}");
   EXPECT_EQ(malformed.status, 400);
-  EXPECT_NE(malformed.body.value("where", "").find("line 2, column"), std::string::npos) << malformed.raw;
-  EXPECT_NE(malformed.body.value("error", "").find("malformed JSON"), std::string::npos) << malformed.raw;
+  EXPECT_NE(malformed.body.value("where", "").find("line 2, column"), std::string::npos)
+      << malformed.raw;
+  EXPECT_NE(malformed.body.value("error", "").find("malformed JSON"), std::string::npos)
+      << malformed.raw;
   EXPECT_EQ(api.post("/runs", "").status, 400);
   // Nested without end: refused before anything recurses over it (it overflowed the stack).
-  const Reply deep = api.post("/runs", "{\"procedure\": \"six-position\", \"parameters\": {\"x\": " +
-                                           std::string(20000, '[') + std::string(20000, ']') + "}}");
+  const Reply deep =
+      api.post("/runs", "{\"procedure\": \"six-position\", \"parameters\": {\"x\": " +
+                            std::string(20000, '[') + std::string(20000, ']') + "}}");
   EXPECT_EQ(deep.status, 400) << deep.raw.substr(0, 200);
-  EXPECT_NE(deep.body.value("error", "").find("nested deeper than"), std::string::npos) << deep.raw.substr(0, 200);
+  EXPECT_NE(deep.body.value("error", "").find("nested deeper than"), std::string::npos)
+      << deep.raw.substr(0, 200);
 
   // 404: unknown routes and ids.
   EXPECT_EQ(api.get("/nope").status, 404);
@@ -356,8 +346,8 @@ TEST(DaemonApi, RefusesBadRequestsWithClearErrorsAndKeepsServing) {
       "/runs", {{"procedure", "six-position"}, {"parameters", {{"capture_s", -5}, {"bogus", 1}}}});
   ASSERT_EQ(bad_params.status, 422) << bad_params.raw;
   EXPECT_GE(bad_params.body["violations"].size(), 2u) << bad_params.raw;
-  const Reply bad_inline = api.post_json(
-      "/runs", {{"procedure", {{"name", "x"}, {"steps", {{{"kind", "fly"}}}}}}});
+  const Reply bad_inline =
+      api.post_json("/runs", {{"procedure", {{"name", "x"}, {"steps", {{{"kind", "fly"}}}}}}});
   ASSERT_EQ(bad_inline.status, 422) << bad_inline.raw;
   EXPECT_FALSE(bad_inline.body["violations"].empty());
   const Reply bad_shape = api.post_json("/runs", {{"procedure", 3}, {"extra", true}});
@@ -393,7 +383,8 @@ TEST(DaemonApi, StopCheckpointsTheRunAndARestartResumesIt) {
         << record.summary.exit_reason;
     EXPECT_TRUE(record.summary.ended_utc.empty());  // not ended: it resumes
     bool said = false;
-    for (const auto& e : record.events) said = said || e.message.find("checkpointed: station made safe") == 0;
+    for (const auto& e : record.events)
+      said = said || e.message.find("checkpointed: station made safe") == 0;
     EXPECT_TRUE(said);
     before = record.steps;
   }
@@ -410,7 +401,8 @@ TEST(DaemonApi, StopCheckpointsTheRunAndARestartResumesIt) {
       EXPECT_EQ(after[i].ended_clock_s, before[i].ended_clock_s) << i;
     }
   }
-  EXPECT_TRUE(has_event(api.get("/runs/" + std::to_string(run) + "/events"), "daemon", "resuming at step"));
+  EXPECT_TRUE(
+      has_event(api.get("/runs/" + std::to_string(run) + "/events"), "daemon", "resuming at step"));
 }
 
 TEST(DaemonApi, HoldPolicyKeepsAnInterruptedRunUntilAnOperatorResumesIt) {
@@ -453,7 +445,9 @@ TEST(DaemonApi, HoldPolicyLetsAnOperatorAbortTheInterruptedRun) {
   InProcessDaemon d(db, RecoveryPolicy::kHold);
   ApiClient api(d.port());
   ASSERT_TRUE(wait_for_status(api, run, "held"));
-  ASSERT_EQ(api.post_json("/runs/" + std::to_string(run) + "/abort", {{"reason", "unit removed"}}).status, 202);
+  ASSERT_EQ(
+      api.post_json("/runs/" + std::to_string(run) + "/abort", {{"reason", "unit removed"}}).status,
+      202);
   EXPECT_EQ(status_of(api, run), "aborted");
   EXPECT_TRUE(api.get("/station").body["held"].is_null());
 }
@@ -493,7 +487,8 @@ TEST(DaemonApi, SkipsTheStepInProgressAndRecordsWhoAndWhy) {
   }));
   EXPECT_EQ(api.get(path).body["steps_done"], 11);  // the skipped step is not done
   const Reply events = api.get(path + "/events");
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "skip requested: connector re-seated")) << events.raw;
+  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "skip requested: connector re-seated"))
+      << events.raw;
   // Refusals: a run that has ended, a bad body, an unknown run.
   EXPECT_EQ(api.post(path + "/skip", "").status, 409);
   EXPECT_EQ(api.post(path + "/skip", "{\"step\": -1}").status, 400);
@@ -510,7 +505,8 @@ TEST(DaemonApi, SkipRefusesARunNotOnTheStationOrAStepItIsNotAt) {
   EXPECT_EQ(queued.status, 409) << queued.raw;
   const Reply elsewhere = api.post_json("/runs/" + std::to_string(first) + "/skip", {{"step", 11}});
   EXPECT_EQ(elsewhere.status, 409) << elsewhere.raw;
-  EXPECT_NE(elsewhere.body.value("error", "").find("not step 11"), std::string::npos) << elsewhere.raw;
+  EXPECT_NE(elsewhere.body.value("error", "").find("not step 11"), std::string::npos)
+      << elsewhere.raw;
   ASSERT_EQ(api.post("/runs/" + std::to_string(first) + "/abort", "").status, 202);
   ASSERT_TRUE(wait_for_status(api, second, "completed"));
   const Reply steps = api.get("/runs/" + std::to_string(second) + "/steps");
@@ -557,8 +553,9 @@ TEST(DaemonApi, EventStreamReplaysWhatAReconnectingReaderMissed) {
     }
     return true;
   });
-  c.Get("/events", {{"Last-Event-ID", first_id}},
-        [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
+  c.Get("/events", {{"Last-Event-ID", first_id}}, [&](const char* data, std::size_t n) {
+    return parser.feed({data, n});
+  });
   EXPECT_TRUE(saw_station);
   EXPECT_FALSE(saw_gap);
   EXPECT_TRUE(saw_completed);
@@ -575,7 +572,8 @@ TEST(DaemonApi, StationBetweenRunsShowsTheTableAndTheChamber) {
   EventStreamReader stream(d.port());
   ASSERT_TRUE(wait_until([&] {
     const Reply r = api.get("/station");
-    return r.status == 200 && !r.body["telemetry"]["chamber"].is_null() && !r.body["telemetry"]["table"].is_null();
+    return r.status == 200 && !r.body["telemetry"]["chamber"].is_null() &&
+           !r.body["telemetry"]["table"].is_null();
   }));
   const Reply station = api.get("/station");
   EXPECT_TRUE(station.body["run"].is_null());
@@ -588,7 +586,8 @@ TEST(DaemonApi, StationBetweenRunsShowsTheTableAndTheChamber) {
   EXPECT_GT(chamber["air_c"].get<double>(), 10.0);  // the lab's air, not a made-up zero
   EXPECT_LT(chamber["air_c"].get<double>(), 40.0);
   EXPECT_TRUE(wait_until([&] {
-    return stream.saw([](const auto& m) { return m.type == "telemetry" && m.data["run"].is_null(); });
+    return stream.saw(
+        [](const auto& m) { return m.type == "telemetry" && m.data["run"].is_null(); });
   }));
   // And a run still takes the station as before.
   const std::int64_t run = api.submit("six-position", kShort);
@@ -656,7 +655,9 @@ TEST(DaemonApi, EventStreamSaysHowManyMessagesAReaderLost) {
     if (!m.id.empty()) seqs.push_back(std::stoull(m.id.substr(m.id.find('-') + 1)));
     return seqs.size() < 16;
   });
-  c.Get("/events", {{"Last-Event-ID", first_id}}, [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
+  c.Get("/events", {{"Last-Event-ID", first_id}}, [&](const char* data, std::size_t n) {
+    return parser.feed({data, n});
+  });
   ASSERT_TRUE(gap.is_object());
   EXPECT_EQ(gap["after_id"], first_id);
   ASSERT_EQ(seqs.size(), 16u);
@@ -690,7 +691,8 @@ TEST(DaemonApi, ARunPausedAtTheCheckpointIsHeldOnRestart) {
   EXPECT_EQ(status_of(api, run), "held");
   ASSERT_EQ(api.post("/runs/" + std::to_string(run) + "/resume", "").status, 202);
   EXPECT_TRUE(wait_for_status(api, run, "completed"));
-  EXPECT_TRUE(has_event(api.get("/runs/" + std::to_string(run) + "/events"), "daemon", "it was paused"));
+  EXPECT_TRUE(
+      has_event(api.get("/runs/" + std::to_string(run) + "/events"), "daemon", "it was paused"));
 }
 
 // The export is served at any byte range (a download resumed halfway).
@@ -721,58 +723,86 @@ TEST(DaemonApi, MangledRequestsGetClearRefusalsAndTheDaemonServesOn) {
   InProcessDaemon d(calstand::testing::fresh_dir("mangled") + "/station.db");
   ApiClient api(d.port());
   std::mt19937 rng(20261201);
-  auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
-  const std::vector<nlohmann::json> oddities = {
-      nullptr, true, -1, 0, 1e308, -1e308, 18446744073709551615ULL, -9223372036854775807LL - 1,
-      "", std::string(300, 'x'), "\u0000", nlohmann::json::array(), nlohmann::json::object(),
-      nlohmann::json::array({1, "a", nullptr}), "six-position\n; rm -rf /", "' OR 1=1 --"};
-  const std::vector<std::string> keys = {"procedure", "parameters", "capture_s", "steps", "name", "kind",
-                                         "immediate", "reason", "step", "temperatures", "x"};
-  const std::string good = nlohmann::json{{"procedure", "two-position"}, {"parameters", {{"capture_s", 2}}}}.dump();
-  const std::vector<std::string> paths = {"/runs", "/runs/1/pause", "/runs/1/resume", "/runs/1/abort",
-                                          "/runs/1/skip", "/runs/0/skip", "/runs/-1/abort", "/runs/1/%00",
-                                          "/runs/1/../../etc/passwd", "/station", "/calibrations/1x"};
+  auto pick = [&](std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  };
+  const std::vector<nlohmann::json> oddities = {nullptr,
+                                                true,
+                                                -1,
+                                                0,
+                                                1e308,
+                                                -1e308,
+                                                18446744073709551615ULL,
+                                                -9223372036854775807LL - 1,
+                                                "",
+                                                std::string(300, 'x'),
+                                                "\u0000",
+                                                nlohmann::json::array(),
+                                                nlohmann::json::object(),
+                                                nlohmann::json::array({1, "a", nullptr}),
+                                                "six-position\n; rm -rf /",
+                                                "' OR 1=1 --"};
+  const std::vector<std::string> keys = {"procedure", "parameters",   "capture_s", "steps",
+                                         "name",      "kind",         "immediate", "reason",
+                                         "step",      "temperatures", "x"};
+  const std::string good =
+      nlohmann::json{{"procedure", "two-position"}, {"parameters", {{"capture_s", 2}}}}.dump();
+  const std::vector<std::string> paths = {
+      "/runs",          "/runs/1/pause",   "/runs/1/resume",
+      "/runs/1/abort",  "/runs/1/skip",    "/runs/0/skip",
+      "/runs/-1/abort", "/runs/1/%00",     "/runs/1/../../etc/passwd",
+      "/station",       "/calibrations/1x"};
   std::map<int, int> statuses;
   for (int i = 0; i < 300; ++i) {
     std::string body;
     switch (pick(4)) {
       case 0: {  // bytes flipped in a good request
         body = good;
-        for (std::size_t k = 0, n = 1 + pick(4); k < n; ++k) body[pick(body.size())] = static_cast<char>(pick(256));
+        for (std::size_t k = 0, n = 1 + pick(4); k < n; ++k)
+          body[pick(body.size())] = static_cast<char>(pick(256));
         break;
       }
       case 1:  // cut short
         body = good.substr(0, pick(good.size()));
         break;
       case 2: {  // right shape, odd values
-        nlohmann::json j = {{"procedure", "two-position"}, {"parameters", nlohmann::json::object()}};
+        nlohmann::json j = {{"procedure", "two-position"},
+                            {"parameters", nlohmann::json::object()}};
         j["parameters"][keys[pick(keys.size())]] = oddities[pick(oddities.size())];
-        j[keys[pick(keys.size())]] = oddities[pick(oddities.size())];  // may replace "parameters" too
+        j[keys[pick(keys.size())]] =
+            oddities[pick(oddities.size())];  // may replace "parameters" too
         body = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
         break;
       }
       default: {  // an inline procedure with odd steps
-        nlohmann::json step = {{"kind", oddities[pick(oddities.size())]}, {keys[pick(keys.size())], oddities[pick(oddities.size())]}};
-        body = nlohmann::json{{"procedure", {{"name", oddities[pick(oddities.size())]}, {"steps", {step}}}}}.dump(
-            -1, ' ', false, nlohmann::json::error_handler_t::replace);
+        nlohmann::json step = {{"kind", oddities[pick(oddities.size())]},
+                               {keys[pick(keys.size())], oddities[pick(oddities.size())]}};
+        body = nlohmann::json{{"procedure",
+                               {{"name", oddities[pick(oddities.size())]}, {"steps", {step}}}}}
+                   .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
       }
     }
-    const std::string& path = pick(2) == 0 ? paths[0] : paths[pick(paths.size())];  // half to POST /runs
+    const std::string& path =
+        pick(2) == 0 ? paths[0] : paths[pick(paths.size())];  // half to POST /runs
     const Reply r = pick(5) == 0 ? api.get(path) : api.post(path, body);
     ++statuses[r.status];
-    ASSERT_TRUE(r.status >= 200 && r.status < 500) << r.status << " for " << path << " " << body << ": " << r.raw;
+    ASSERT_TRUE(r.status >= 200 && r.status < 500)
+        << r.status << " for " << path << " " << body << ": " << r.raw;
     if (r.status >= 400) {
       EXPECT_TRUE(r.body.is_object() && r.body.contains("error")) << path << ": " << r.raw;
     }
   }
-  EXPECT_GT(statuses[400] + statuses[422], 60);  // most submissions were refused, each with its reason
+  EXPECT_GT(statuses[400] + statuses[422],
+            60);  // most submissions were refused, each with its reason
   EXPECT_EQ(api.get("/station").status, 200);
   const std::int64_t run = api.submit("six-position", kShort);
   ASSERT_GT(run, 0);
   EXPECT_TRUE(wait_until([&] {
-    const std::string s = status_of(api, run);
-    return s == "completed";
-  }) || status_of(api, run) == "queued");  // behind a mangled but valid submission still running
+                const std::string s = status_of(api, run);
+                return s == "completed";
+              }) ||
+              status_of(api, run) ==
+                  "queued");  // behind a mangled but valid submission still running
 }
 
 }  // namespace

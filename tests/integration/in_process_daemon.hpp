@@ -1,0 +1,52 @@
+#pragma once
+// calstandd in-process for the API tests: hub, run service and API on a free loopback port,
+// put together as calstandd_main.cpp does, with the simulated station and the test token.
+
+#include <cstddef>
+#include <string>
+
+#include "daemon/api/api_server.hpp"
+#include "daemon/service/event_hub.hpp"
+#include "daemon/service/run_service.hpp"
+#include "daemon_test_support.hpp"
+#include "sim/sim_world.hpp"
+
+namespace calstand::testing {
+
+class InProcessDaemon {
+ public:
+  /// `live_messages_kept`: the hub's replay buffer (small to provoke a gap); request bodies
+  /// above `max_body_bytes` get 413 (small to test that without sending megabytes).
+  explicit InProcessDaemon(
+      const std::string& db,
+      daemon::service::RecoveryPolicy recovery = daemon::service::RecoveryPolicy::kAuto,
+      std::size_t live_messages_kept = 4096, std::size_t max_body_bytes = 64 * 1024)
+      : hub_(live_messages_kept),
+        service_({sim::load_station_or_default(""), db, recovery}, hub_),
+        server_(service_, hub_, options(max_body_bytes)) {
+    port_ = server_.start();
+    service_.start();
+  }
+  ~InProcessDaemon() {
+    service_.stop("test over");
+    server_.stop();
+  }
+  InProcessDaemon(const InProcessDaemon&) = delete;
+  InProcessDaemon& operator=(const InProcessDaemon&) = delete;
+  int port() const { return port_; }
+
+ private:
+  static daemon::api::ApiOptions options(std::size_t max_body_bytes) {
+    daemon::api::ApiOptions o;
+    o.port = 0;
+    o.token = kTestToken;
+    o.max_body_bytes = max_body_bytes;
+    return o;
+  }
+  daemon::service::EventHub hub_;
+  daemon::service::RunService service_;
+  daemon::api::ApiServer server_;
+  int port_ = 0;
+};
+
+}  // namespace calstand::testing
