@@ -24,7 +24,8 @@ void BM_ThermalCalibrationCampaign(benchmark::State& state) {
   const auto procedure = procedures::load_procedure("thermal-calibration");
   const auto plan = procedures::make_plan(procedure, station);
   const auto dir = std::filesystem::temp_directory_path();
-  const std::string db_path = (dir / ("calstand_campaign_bench_" + std::to_string(getpid()) + ".db")).string();
+  const std::string db_path =
+      (dir / ("calstand_campaign_bench_" + std::to_string(getpid()) + ".db")).string();
   double station_s = 0.0;
   double bytes = 0.0;
   for (auto _ : state) {

@@ -14,11 +14,11 @@
 //                both IMUs' 1 kHz frames over pseudo-terminals, as in a lab.
 //
 //   calstand_daemon_load_bench [--capture-s S] [--clients N] [--drivers] [--time-scale K]
-#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <fmt/format.h>
 #include <httplib.h>
 #include <unistd.h>
 
+#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -32,7 +32,6 @@
 #include <vector>
 
 #include "daemon/api/api_server.hpp"
-#include "wire/sse_decoder.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 #include "drivers/protocol_simulator.hpp"
@@ -41,6 +40,7 @@
 #include "store/database.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
+#include "wire/sse_decoder.hpp"
 
 namespace {
 
@@ -56,7 +56,8 @@ core::StationConfig two_imus_at_1khz(const std::filesystem::path& dir) {
   station["name"] = "load-bench";
   station["imus"] = nlohmann::json::array();
   for (const char* name : {"imu0", "imu1"}) {
-    station["imus"].push_back({{"name", name}, {"backend", "sim"}, {"spec_file", "ln200-1khz.spec.json"}});
+    station["imus"].push_back(
+        {{"name", name}, {"backend", "sim"}, {"spec_file", "ln200-1khz.spec.json"}});
   }
   return core::StationConfig::from_json(station, (dir / "station.json").string(), dir.string());
 }
@@ -86,12 +87,14 @@ int main(int argc, char** argv) {
     } else if (a == "--time-scale" && has_value) {
       time_scale = std::stod(argv[++i]);
     } else {
-      fmt::print(stderr, "usage: {} [--capture-s S] [--clients N] [--drivers] [--time-scale K]\n", argv[0]);
+      fmt::print(stderr, "usage: {} [--capture-s S] [--clients N] [--drivers] [--time-scale K]\n",
+                 argv[0]);
       return 2;
     }
   }
   if (capture_s <= 0.0) capture_s = through_drivers ? 10.0 : 60.0;
-  const auto dir = std::filesystem::temp_directory_path() / fmt::format("calstandd-load-{}", getpid());
+  const auto dir =
+      std::filesystem::temp_directory_path() / fmt::format("calstandd-load-{}", getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string db = (dir / "station.db").string();
@@ -132,10 +135,12 @@ int main(int argc, char** argv) {
     });
     sse.Get("/events", [&](const char* data, std::size_t n) { return parser.feed({data, n}); });
   });
-  for (int i = 0; i < 1000 && !sse_greeted; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int i = 0; i < 1000 && !sse_greeted; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
 
   httplib::Client submitter("127.0.0.1", port);
-  const nlohmann::json body = {{"procedure", "six-position"}, {"parameters", {{"capture_s", capture_s}}}};
+  const nlohmann::json body = {{"procedure", "six-position"},
+                               {"parameters", {{"capture_s", capture_s}}}};
   const auto submitted = submitter.Post("/runs", body.dump(), "application/json");
   if (!sse_greeted || !submitted || submitted->status != 201) {
     fmt::print(stderr, "{}\n", sse_greeted ? "submit failed" : "the live stream did not open");
@@ -177,7 +182,8 @@ int main(int argc, char** argv) {
   for (auto& t : pollers) t.join();
   const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   // The run's last message may still be on its way to the stream reader.
-  for (int i = 0; i < 500 && !sse_saw_end; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  for (int i = 0; i < 500 && !sse_saw_end; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   sse.stop();
   reader.join();
   service.stop("bench over");
@@ -218,18 +224,21 @@ int main(int argc, char** argv) {
     by_type += fmt::format("{}{} {}", by_type.empty() ? "" : ", ", count, type);
     sse_total += count;
   }
-  fmt::print("{}: run {}: {} samples of 2 IMUs at 1 kHz in {:.2f} s wall; {} clients, {} status requests "
-             "({} failed)\n",
-             through_drivers ? fmt::format("real drivers, time scale {}", time_scale) : "simulated station",
-             run, total, wall_s, clients, latencies_ms.size(), failures.load());
+  fmt::print(
+      "{}: run {}: {} samples of 2 IMUs at 1 kHz in {:.2f} s wall; {} clients, {} status requests "
+      "({} failed)\n",
+      through_drivers ? fmt::format("real drivers, time scale {}", time_scale)
+                      : "simulated station",
+      run, total, wall_s, clients, latencies_ms.size(), failures.load());
   // Every step starts and completes once (no capture is repeated on a healthy station).
   const bool every_step_seen = sse_by_type["step"] >= static_cast<int>(2 * steps.size());
-  fmt::print("SSE reader: {} messages ({}){}{}\n", sse_total, by_type,
-             sse_saw_end ? "" : "; the run's completion NOT seen",
-             every_step_seen ? "" : fmt::format("; fewer step messages than 2 x {} steps", steps.size()));
+  fmt::print(
+      "SSE reader: {} messages ({}){}{}\n", sse_total, by_type,
+      sse_saw_end ? "" : "; the run's completion NOT seen",
+      every_step_seen ? "" : fmt::format("; fewer step messages than 2 x {} steps", steps.size()));
   fmt::print("GET {} latency [ms]: p50 {:.2f}  p95 {:.2f}  p99 {:.2f}  max {:.2f}\n", path,
-             percentile(latencies_ms, 0.5), percentile(latencies_ms, 0.95), percentile(latencies_ms, 0.99),
-             percentile(latencies_ms, 1.0));
+             percentile(latencies_ms, 0.5), percentile(latencies_ms, 0.95),
+             percentile(latencies_ms, 0.99), percentile(latencies_ms, 1.0));
   fmt::print("dropped samples: {}\n", dropped ? "YES" : "none");
   std::filesystem::remove_all(dir);
   return dropped || failures > 0 || !sse_saw_end || !every_step_seen ? 1 : 0;

@@ -61,12 +61,14 @@ void DriverImuFrameDecode(benchmark::State& state) {
     out.clear();
     // Reads of 4 KiB, as the serial driver does.
     for (std::size_t at = 0; at < bytes.size(); at += 4096) {
-      decoder.feed(std::span(bytes).subspan(at, std::min<std::size_t>(4096, bytes.size() - at)), out);
+      decoder.feed(std::span(bytes).subspan(at, std::min<std::size_t>(4096, bytes.size() - at)),
+                   out);
     }
     frames += out.size();
     benchmark::DoNotOptimize(out.data());
   }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
+  state.counters["frames/s"] =
+      benchmark::Counter(static_cast<double>(frames), benchmark::Counter::kIsRate);
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes.size()));
 }
 BENCHMARK(DriverImuFrameDecode)->Unit(benchmark::kMillisecond);
@@ -97,7 +99,8 @@ void DriverSerialImuThroughPty(benchmark::State& state) {
     received += got;
     if (got != kFrames) state.SkipWithError("frames lost on the pseudo-terminal");
   }
-  state.counters["frames/s"] = benchmark::Counter(static_cast<double>(received), benchmark::Counter::kIsRate);
+  state.counters["frames/s"] =
+      benchmark::Counter(static_cast<double>(received), benchmark::Counter::kIsRate);
 }
 BENCHMARK(DriverSerialImuThroughPty)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
@@ -128,8 +131,8 @@ void DriverModbusReadField(benchmark::State& state) {
   server->start();
   core::ChamberConfig chamber = config.chamber;
   chamber.backend = "modbus";
-  chamber.connection = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", server->port()},
-                        {"map", "watlow-f4t"}};
+  chamber.connection = {
+      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", server->port()}, {"map", "watlow-f4t"}};
   ModbusClientLink link(ModbusChamberOptions::from_config(chamber));
   if (!link.connect().ok()) state.SkipWithError("connect failed");
   const auto field = watlow_f4t_map().process_value;

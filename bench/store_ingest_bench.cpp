@@ -10,12 +10,11 @@
 // CPU time / wall time (how many cores the ingest kept busy); cpu_ns_per_sample = process CPU
 // time per sample, all threads (1e9 / it is the rate one core would sustain, and it is less
 // disturbed than wall time on a machine shared with other work).
+#include <SQLiteCpp/Statement.h>
+#include <SQLiteCpp/Transaction.h>
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <unistd.h>
-
-#include <SQLiteCpp/Statement.h>
-#include <SQLiteCpp/Transaction.h>
 
 #include <filesystem>
 #include <string>
@@ -117,7 +116,10 @@ void BM_IngestCaptureWriter(benchmark::State& state) {
   state.counters["cpu_cores"] = cpu / wall;
   state.counters["cpu_ns_per_sample"] = 1e9 * cpu / static_cast<double>(total);
 }
-BENCHMARK(BM_IngestCaptureWriter)->Arg(1 << 20)->UseRealTime()->Unit(benchmark::kMillisecond)
+BENCHMARK(BM_IngestCaptureWriter)
+    ->Arg(1 << 20)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
     ->MinTime(3.0);
 
 void BM_IngestRowPerSampleBaseline(benchmark::State& state) {
@@ -171,8 +173,11 @@ void BM_IngestRowPerSampleBaseline(benchmark::State& state) {
   state.counters["bytes_per_sample"] = bytes / static_cast<double>(total);
   state.counters["cpu_ns_per_sample"] = 1e9 * cpu / static_cast<double>(total);
 }
-BENCHMARK(BM_IngestRowPerSampleBaseline)->Arg(1 << 17)->UseRealTime()
-    ->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_IngestRowPerSampleBaseline)
+    ->Arg(1 << 17)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(3.0);
 
 }  // namespace
 }  // namespace calstand::store

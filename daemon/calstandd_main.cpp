@@ -52,8 +52,9 @@ std::string read_token(const Options& opt) {
   std::string token;
   std::getline(in, token);
   while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
-  if (token.size() < 16) throw InputError(opt.token_file, "the token must have at least 16 characters");
-  struct stat st{};
+  if (token.size() < 16)
+    throw InputError(opt.token_file, "the token must have at least 16 characters");
+  struct stat st {};
   if (::stat(opt.token_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0) {
     spdlog::warn("{}: readable by others than its owner (chmod 600)", opt.token_file);
   }
@@ -128,12 +129,15 @@ int main(int argc, char** argv) {
   Options opt;
   app.add_option("--station", opt.station_file, "Station file (default: built-in simulator)");
   app.add_option("--db", opt.db, "SQLite database (runs, queue, samples)")->required();
-  app.add_option("--listen", opt.listen, "Address and port of the control API")->capture_default_str();
-  app.add_option("--token-file", opt.token_file, "File holding the bearer token (else env CALSTAND_TOKEN)");
+  app.add_option("--listen", opt.listen, "Address and port of the control API")
+      ->capture_default_str();
+  app.add_option("--token-file", opt.token_file,
+                 "File holding the bearer token (else env CALSTAND_TOKEN)");
   app.add_option("--log-dir", opt.log_dir, "Directory of the rotating log file calstandd.log");
   app.add_option("--recovery", opt.recovery, "Interrupted run on start: auto (resume) or hold")
       ->capture_default_str();
-  app.add_option("--log-level", opt.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.add_option("--log-level", opt.log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
   app.set_version_flag("--version", std::string("calstandd ") + calstand::core::kVersion);
   try {
     app.parse(argc, argv);

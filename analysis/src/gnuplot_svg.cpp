@@ -13,8 +13,8 @@
 #include <regex>
 #include <sstream>
 
-#include "core/error.hpp"
 #include "analysis/markup_escape.hpp"
+#include "core/error.hpp"
 
 namespace calstand::analysis {
 namespace {

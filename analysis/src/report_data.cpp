@@ -7,9 +7,9 @@
 #include <set>
 #include <utility>
 
-#include "core/error.hpp"
 #include "analysis/fit_history.hpp"
 #include "analysis/noise_json.hpp"
+#include "core/error.hpp"
 #include "solver/groups.hpp"
 #include "solver/signals.hpp"
 

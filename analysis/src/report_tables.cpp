@@ -185,8 +185,8 @@ std::string noise_figures_table(const ReportData& r, bool gyro) {
       }
       const auto& f = c->figures[i];
       out += num_cell(!f.resolved              ? std::string("-")
-                 : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
-                                          : fmt::format("{:.3g}", f.value));
+                      : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
+                                               : fmt::format("{:.3g}", f.value));
     }
     out += "</tr>\n";
   }

@@ -134,13 +134,15 @@ void run_allan(const AllanArgs& a) {
       throw core::InputError("--csv", "needs --column NAME and --rate HZ");
     }
     rate_hz = parse_double(a.rate, "--rate");
-    if (rate_hz <= 0.0) throw core::InputError("--rate", fmt::format("must be positive, got {}", rate_hz));
+    if (rate_hz <= 0.0)
+      throw core::InputError("--rate", fmt::format("must be positive, got {}", rate_hz));
     data = read_csv_column(a.csv, a.column);
     source = fmt::format("{} column {}", a.csv, a.column);
   } else {
     if (a.db.empty() || a.run.empty() || a.channel.empty()) {
-      throw core::InputError("allan", "give --db FILE --run ID --channel gx|gy|gz|ax|ay|az "
-                                      "(and --step N), or --csv FILE --column NAME --rate HZ");
+      throw core::InputError("allan",
+                             "give --db FILE --run ID --channel gx|gy|gz|ax|ay|az "
+                             "(and --step N), or --csv FILE --column NAME --rate HZ");
     }
     channel = solver::parse_channel(a.channel);
     const std::int64_t run = parse_int(a.run, "--run", 1);
@@ -149,13 +151,14 @@ void run_allan(const AllanArgs& a) {
     std::string device = a.device;
     if (device.empty()) {
       const auto devices = store::sample_devices(db, run);
-      if (devices.empty()) throw core::InputError("--run", fmt::format("run {} holds no samples", run));
+      if (devices.empty())
+        throw core::InputError("--run", fmt::format("run {} holds no samples", run));
       device = devices.front();
     }
     const auto samples = store::read_samples(db, run, step, device);
     if (samples.empty()) {
-      throw core::InputError("--step", fmt::format("step {} of run {} holds no samples of '{}'",
-                                                   step, run, device));
+      throw core::InputError(
+          "--step", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
     }
     rate_hz = solver::sample_rate_of(samples);
     data = solver::channel_series(samples, *channel);
@@ -183,8 +186,8 @@ void run_allan(const AllanArgs& a) {
   }
   std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals [{}]\n", key,
                            source, r.samples, rate_hz, 100.0 * r.confidence, unit);
-  std::cout << fmt::format("{:>12} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", key, "lo",
-                           "hi", "edf", "alpha");
+  std::cout << fmt::format("{:>12} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", key, "lo", "hi",
+                           "edf", "alpha");
   for (const auto& p : r.points) {
     std::cout << fmt::format("{:>12.6g} {:>13.6e} {:>13.6e} {:>13.6e} {:>10.4g} {:>6}\n", p.tau_s,
                              p.deviation, p.lo, p.hi, p.edf, p.alpha);
@@ -218,9 +221,10 @@ void print_noise_table(const solver::RunNoise& r, bool gyro) {
     std::cout << fmt::format("{:<40} {:<14}", f0.label, f0.unit);
     for (const auto* c : chans) {
       const auto& f = c->figures[i];
-      std::string cell = !f.resolved            ? "-"
-                         : std::isfinite(f.sigma) ? fmt::format("{:.4g} +- {:.2g}", f.value, f.sigma)
-                                                  : fmt::format("{:.4g}", f.value);
+      std::string cell = !f.resolved ? "-"
+                         : std::isfinite(f.sigma)
+                             ? fmt::format("{:.4g} +- {:.2g}", f.value, f.sigma)
+                             : fmt::format("{:.4g}", f.value);
       std::cout << fmt::format(" {:>22}", cell);
     }
     std::cout << "\n";
@@ -311,7 +315,8 @@ void register_allan(CLI::App& app) {
       ->type_name("NAME");
   noise->add_option("--step", n->step, "step index (default: the longest static capture)")
       ->type_name("N");
-  noise->add_option("--taus", n->taus, "averaging times of the fit: octave, decade, dense or a list")
+  noise
+      ->add_option("--taus", n->taus, "averaging times of the fit: octave, decade, dense or a list")
       ->capture_default_str();
   noise->add_option("--kalibr", n->kalibr, "also write the figures as a Kalibr imu.yaml")
       ->type_name("FILE");

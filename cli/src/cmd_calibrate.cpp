@@ -63,10 +63,10 @@ void run_apply(const ApplyOptions& opt) {
       analysis::apply_calibration(db, opt.run, opt.device, calibration, opt.record);
   fmt::print("run {}: run {} corrected with {} ({} steps)\n", a.run, opt.run, opt.record, a.steps);
   if (a.outside_valid_range) {
-    fmt::print("warning: the run spans {:.1f} to {:.1f} degC; the record was fitted on {:.1f} to "
-               "{:.1f} degC\n",
-               a.min_temperature_c, a.max_temperature_c, calibration.valid_min_c,
-               calibration.valid_max_c);
+    fmt::print(
+        "warning: the run spans {:.1f} to {:.1f} degC; the record was fitted on {:.1f} to "
+        "{:.1f} degC\n",
+        a.min_temperature_c, a.max_temperature_c, calibration.valid_min_c, calibration.valid_max_c);
   }
   fmt::print("check it: calstand fit --db {} --run {} --model earth_rate\n", opt.db, a.run);
 }

@@ -1,5 +1,5 @@
-// Client commands of calstandd: `submit`, `status`, `pause`, `resume`, `abort`, `skip` (and `watch`,
-// in cmd_client_watch.cpp). They talk to the daemon's control API; nothing runs here.
+// Client commands of calstandd: `submit`, `status`, `pause`, `resume`, `abort`, `skip` (and
+// `watch`, in cmd_client_watch.cpp). They talk to the daemon's control API; nothing runs here.
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -47,8 +47,9 @@ nlohmann::json procedure_field(const std::string& name_or_path) {
 int submit(const ClientOptions& opt) {
   nlohmann::json parameters = nlohmann::json::object();
   for (const auto& [k, v] : procedures::parse_overrides(opt.set_args)) parameters[k] = v;
-  const auto reply = DaemonClient(opt.address).post(
-      "/runs", {{"procedure", procedure_field(opt.procedure)}, {"parameters", parameters}});
+  const auto reply = DaemonClient(opt.address)
+                         .post("/runs", {{"procedure", procedure_field(opt.procedure)},
+                                         {"parameters", parameters}});
   if (opt.json) {
     fmt::print("{}\n", reply.dump());
   } else {
@@ -58,14 +59,17 @@ int submit(const ClientOptions& opt) {
 }
 
 void print_run(const nlohmann::json& r) {
-  fmt::print("run {} {}: {} ({}/{} steps)", r["id"].get<std::int64_t>(), r["procedure"].get<std::string>(),
-             r["status"].get<std::string>(), r["steps_done"].get<int>(), r["steps_total"].get<int>());
+  fmt::print("run {} {}: {} ({}/{} steps)", r["id"].get<std::int64_t>(),
+             r["procedure"].get<std::string>(), r["status"].get<std::string>(),
+             r["steps_done"].get<int>(), r["steps_total"].get<int>());
   if (r.contains("live")) {
     fmt::print(", {} at step {} \"{}\", ETA {}", r["live"]["phase"].get<std::string>(),
-               r["current_step"]["index"].get<int>() + 1, r["current_step"]["label"].get<std::string>(),
+               r["current_step"]["index"].get<int>() + 1,
+               r["current_step"]["label"].get<std::string>(),
                format_duration(r["eta_s"].get<double>()));
   }
-  if (!r["exit_reason"].get<std::string>().empty()) fmt::print(" ({})", r["exit_reason"].get<std::string>());
+  if (!r["exit_reason"].get<std::string>().empty())
+    fmt::print(" ({})", r["exit_reason"].get<std::string>());
   fmt::print("\n");
 }
 
@@ -89,22 +93,26 @@ int client_status(const ClientOptions& opt) {
   for (const auto& d : station["devices"]) {
     std::string faults;
     for (const auto& [name, count] : d["fault_counters"].items()) {
-      if (count.get<std::uint64_t>() > 0) faults += fmt::format(" {}={}", name, count.get<std::uint64_t>());
+      if (count.get<std::uint64_t>() > 0)
+        faults += fmt::format(" {}={}", name, count.get<std::uint64_t>());
     }
-    fmt::print("  {:<8} {:<10} {:<8} {}{}\n", d["kind"].get<std::string>(), d["name"].get<std::string>(),
-               d["backend"].get<std::string>(), d["state"].get<std::string>(), faults);
+    fmt::print("  {:<8} {:<10} {:<8} {}{}\n", d["kind"].get<std::string>(),
+               d["name"].get<std::string>(), d["backend"].get<std::string>(),
+               d["state"].get<std::string>(), faults);
   }
-  if (!station["run"].is_null()) print_run(client.get(fmt::format("/runs/{}", station["run"].get<std::int64_t>())));
+  if (!station["run"].is_null())
+    print_run(client.get(fmt::format("/runs/{}", station["run"].get<std::int64_t>())));
   if (!station["held"].is_null()) {
     fmt::print("run {} is held after an interruption: calstand resume {} or calstand abort {}\n",
                station["held"].get<std::int64_t>(), station["held"].get<std::int64_t>(),
                station["held"].get<std::int64_t>());
   }
   for (const auto& q : station["queue"]) {
-    fmt::print("queued: run {} (by {} at {})\n", q["run"].get<std::int64_t>(), q["submitted_by"].get<std::string>(),
-               q["submitted_utc"].get<std::string>());
+    fmt::print("queued: run {} (by {} at {})\n", q["run"].get<std::int64_t>(),
+               q["submitted_by"].get<std::string>(), q["submitted_utc"].get<std::string>());
   }
-  if (station["run"].is_null() && station["queue"].empty() && station["held"].is_null()) fmt::print("idle\n");
+  if (station["run"].is_null() && station["queue"].empty() && station["held"].is_null())
+    fmt::print("idle\n");
   return 0;
 }
 
@@ -113,7 +121,8 @@ int action(const ClientOptions& opt, const std::string& verb) {
   if (verb == "pause") body["immediate"] = opt.now;
   if (verb == "abort" || verb == "skip") body["reason"] = opt.reason;
   if (verb == "skip" && opt.step) body["step"] = *opt.step;
-  const auto reply = DaemonClient(opt.address).post(fmt::format("/runs/{}/{}", opt.run, verb), body);
+  const auto reply =
+      DaemonClient(opt.address).post(fmt::format("/runs/{}/{}", opt.run, verb), body);
   fmt::print("run {}: {} requested\n", opt.run, reply.value("requested", verb));
   return 0;
 }
@@ -135,7 +144,8 @@ void register_client(CLI::App& app) {
   submit_cmd->add_flag("--json", opt->json, "Print {\"id\": RUN}");
   submit_cmd->callback([opt] { submit(*opt); });
 
-  CLI::App* status_cmd = add_client_command(app, "status", "The daemon's station, run and queue, or one run", opt);
+  CLI::App* status_cmd =
+      add_client_command(app, "status", "The daemon's station, run and queue, or one run", opt);
   status_cmd->add_option("run", opt->run, "Run id (default: the whole station)");
   status_cmd->add_flag("--json", opt->json, "JSON as the API gives it");
   status_cmd->callback([opt] { client_status(*opt); });
@@ -145,17 +155,20 @@ void register_client(CLI::App& app) {
   pause_cmd->add_flag("--now", opt->now, "At once (the capture in progress is repeated on resume)");
   pause_cmd->callback([opt] { action(*opt, "pause"); });
 
-  CLI::App* resume_cmd = add_client_command(app, "resume", "Resume a paused or held run on calstandd", opt);
+  CLI::App* resume_cmd =
+      add_client_command(app, "resume", "Resume a paused or held run on calstandd", opt);
   resume_cmd->add_option("run", opt->run, "Run id")->required();
   resume_cmd->callback([opt] { action(*opt, "resume"); });
 
-  CLI::App* abort_cmd = add_client_command(app, "abort", "Abort a run on calstandd (station to safe state)", opt);
+  CLI::App* abort_cmd =
+      add_client_command(app, "abort", "Abort a run on calstandd (station to safe state)", opt);
   abort_cmd->add_option("run", opt->run, "Run id")->required();
   abort_cmd->add_option("--reason", opt->reason, "Why (recorded)")->capture_default_str();
   abort_cmd->callback([opt] { action(*opt, "abort"); });
 
   CLI::App* skip_cmd = add_client_command(
-      app, "skip", "Skip the step in progress of a run on calstandd (or the next one while paused)", opt);
+      app, "skip", "Skip the step in progress of a run on calstandd (or the next one while paused)",
+      opt);
   skip_cmd->add_option("run", opt->run, "Run id")->required();
   skip_cmd->add_option("--step", opt->step, "The step meant: refused when the run is at another");
   skip_cmd->add_option("--reason", opt->reason, "Why (recorded)")->capture_default_str();

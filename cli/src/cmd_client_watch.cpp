@@ -30,7 +30,8 @@ daemon::Progress progress_of(const nlohmann::json& r) {
     p.label = r["current_step"]["label"].get<std::string>();
   }
   if (r.contains("live")) {
-    p.state = daemon::run_state_named(r["live"]["state"].get<std::string>()).value_or(daemon::RunState::kIdle);
+    p.state = daemon::run_state_named(r["live"]["state"].get<std::string>())
+                  .value_or(daemon::RunState::kIdle);
     p.phase = r["live"]["phase"].get<std::string>();
     p.eta_s = r["live"]["eta_s"].get<double>();
     p.station_time_s = r["live"]["station_time_s"].get<double>();
@@ -73,7 +74,8 @@ int watch(const WatchOptions& opt) {
         return true;
       }
       // Messages of other runs, and of the station between runs ("run": null), are not ours.
-      const bool ours = data.is_object() && data.contains("run") && data["run"].is_number_integer() &&
+      const bool ours = data.is_object() && data.contains("run") &&
+                        data["run"].is_number_integer() &&
                         data["run"].get<std::int64_t>() == opt.run;
       if (!ours) return true;
       if (type == "fault" || (type == "event" && data.value("kind", "") == "operator")) {
@@ -92,7 +94,8 @@ int watch(const WatchOptions& opt) {
   bar.finish();
   status = client.get(path);
   int skipped = 0;
-  for (const auto& step : client.get(path + "/steps")) skipped += step.value("status", "") == "skipped";
+  for (const auto& step : client.get(path + "/steps"))
+    skipped += step.value("status", "") == "skipped";
   fmt::print("run {} {}: {}/{} steps{}{}\n", opt.run, status["status"].get<std::string>(),
              status["steps_done"].get<int>(), status["steps_total"].get<int>(),
              skipped > 0 ? fmt::format(", {} skipped", skipped) : "",
@@ -106,7 +109,8 @@ int watch(const WatchOptions& opt) {
 
 void register_client_watch(CLI::App& app) {
   auto opt = std::make_shared<WatchOptions>();
-  CLI::App* cmd = app.add_subcommand("watch", "Follow a run on calstandd live, with a progress bar");
+  CLI::App* cmd =
+      app.add_subcommand("watch", "Follow a run on calstandd live, with a progress bar");
   add_daemon_options(*cmd, opt->address);
   cmd->add_option("run", opt->run, "Run id")->required();
   cmd->add_option("--reconnect", opt->reconnect_s, "Seconds to keep reopening a lost stream")

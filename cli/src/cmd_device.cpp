@@ -2,8 +2,8 @@
 // engine uses, for setting up and debugging a station by hand:
 //   calstand device --station lab.json status
 //   calstand device --station lab.json chamber get|set TEMP [--ramp R] [--wait]|standby
-//   calstand device --station lab.json table get|move --outer D --inner D|rate --axis A --dps R|stop
-//   calstand device --station lab.json imu stream --count N [--imu NAME]
+//   calstand device --station lab.json table get|move --outer D --inner D|rate --axis A --dps
+//   R|stop calstand device --station lab.json imu stream --count N [--imu NAME]
 // Output is JSON (one object, or JSON lines for `imu stream`), so scripts can read it.
 #include <fmt/format.h>
 
@@ -80,8 +80,10 @@ json device_json(drivers::Device& d) {
   for (const auto& e : d.take_events()) {
     events.push_back({{"time_s", e.time_s}, {"fault", e.fault}, {"message", e.message}});
   }
-  return {{"name", d.name()}, {"state", std::string(drivers::to_string(d.state()))},
-          {"fault_counters", d.fault_counters()}, {"events", events}};
+  return {{"name", d.name()},
+          {"state", std::string(drivers::to_string(d.state()))},
+          {"fault_counters", d.fault_counters()},
+          {"events", events}};
 }
 
 void print(const json& j) { fmt::print("{}\n", j.dump()); }
@@ -129,10 +131,10 @@ void chamber_set(const DeviceOptions& opt) {
     const bool air_there = std::abs(s.air_temperature_c - opt.temperature_c) <= opt.tolerance_c;
     if (setpoint_there && (!opt.wait || air_there)) break;
     if (clock.now_s() - start > opt.timeout_s) {
-      throw std::runtime_error(fmt::format("chamber did not reach {} degC within {:.0f} s "
-                                           "(air {:.2f}, setpoint {:.2f})",
-                                           opt.temperature_c, opt.timeout_s,
-                                           s.air_temperature_c, s.setpoint_c));
+      throw std::runtime_error(
+          fmt::format("chamber did not reach {} degC within {:.0f} s "
+                      "(air {:.2f}, setpoint {:.2f})",
+                      opt.temperature_c, opt.timeout_s, s.air_temperature_c, s.setpoint_c));
     }
   }
   print(core::to_json(chamber.read_state()));
@@ -168,8 +170,8 @@ void wait_table(drivers::Station& station, double timeout_s, Done done, const ch
     if (done(s)) return;
     if (station.clock().now_s() - start > timeout_s) {
       station.table().stop();
-      throw std::runtime_error(fmt::format("table: {} not done within {:.0f} s (stopped)", what,
-                                           timeout_s));
+      throw std::runtime_error(
+          fmt::format("table: {} not done within {:.0f} s (stopped)", what, timeout_s));
     }
     std::this_thread::sleep_for(20ms);
   }
@@ -180,9 +182,9 @@ void table_move(const DeviceOptions& opt) {
   bring_up(station->table());
   check(station->table().move_to(opt.outer_deg, opt.inner_deg), "table");
   std::this_thread::sleep_for(50ms);  // let the controller take the move before polling
-  wait_table(*station, opt.timeout_s,
-             [](const core::TableState& s) { return s.outer.in_position && s.inner.in_position; },
-             "move");
+  wait_table(
+      *station, opt.timeout_s,
+      [](const core::TableState& s) { return s.outer.in_position && s.inner.in_position; }, "move");
   print(core::to_json(station->table().read_state()));
 }
 
@@ -192,11 +194,12 @@ void table_rate(const DeviceOptions& opt) {
   bring_up(station->table());
   check(station->table().set_rate(axis, opt.rate_dps), "table");
   std::this_thread::sleep_for(50ms);
-  wait_table(*station, opt.timeout_s,
-             [&](const core::TableState& s) {
-               return (axis == drivers::TableAxis::kOuter ? s.outer : s.inner).in_position;
-             },
-             "rate");
+  wait_table(
+      *station, opt.timeout_s,
+      [&](const core::TableState& s) {
+        return (axis == drivers::TableAxis::kOuter ? s.outer : s.inner).in_position;
+      },
+      "rate");
   // The axis keeps turning after the command returns: that is what was asked for.
   print(core::to_json(station->table().read_state()));
 }
@@ -220,18 +223,22 @@ void imu_stream(const DeviceOptions& opt) {
         found = true;
       }
     }
-    if (!found) throw core::InputError("--imu", fmt::format("no IMU \"{}\" in the station", opt.imu_name));
+    if (!found)
+      throw core::InputError("--imu", fmt::format("no IMU \"{}\" in the station", opt.imu_name));
   }
   auto& imu = station->imu(index);
   bring_up(imu);
   const double period_s = 1.0 / imu.sample_rate_hz();
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::duration<double>(10.0 + 2.0 * static_cast<double>(opt.count) * period_s);
+  const auto deadline =
+      std::chrono::steady_clock::now() +
+      std::chrono::duration<double>(10.0 + 2.0 * static_cast<double>(opt.count) * period_s);
   std::size_t printed = 0;
   while (printed < opt.count) {
     for (const auto& s : imu.poll()) {
       if (printed == opt.count) break;
-      print({{"imu", imu.name()}, {"sequence", s.sequence}, {"device_time_s", s.device_time_s},
+      print({{"imu", imu.name()},
+             {"sequence", s.sequence},
+             {"device_time_s", s.device_time_s},
              {"receive_time_s", s.receive_time_s},
              {"gyro_dps", {s.gyro_dps.x(), s.gyro_dps.y(), s.gyro_dps.z()}},
              {"accel_mps2", {s.accel_mps2.x(), s.accel_mps2.y(), s.accel_mps2.z()}},
@@ -239,10 +246,10 @@ void imu_stream(const DeviceOptions& opt) {
       ++printed;
     }
     if (std::chrono::steady_clock::now() > deadline) {
-      throw std::runtime_error(fmt::format("{}: {} of {} samples within the time allowed; "
-                                           "counters {}",
-                                           imu.name(), printed, opt.count,
-                                           json(imu.fault_counters()).dump()));
+      throw std::runtime_error(
+          fmt::format("{}: {} of {} samples within the time allowed; "
+                      "counters {}",
+                      imu.name(), printed, opt.count, json(imu.fault_counters()).dump()));
     }
     std::this_thread::sleep_for(5ms);
   }
@@ -262,30 +269,43 @@ void register_device(CLI::App& app) {
 
   auto* chamber = cmd->add_subcommand("chamber", "temperature chamber");
   chamber->require_subcommand(1);
-  chamber->add_subcommand("get", "air temperature, setpoint, mode")->callback([opt] { chamber_get(*opt); });
+  chamber->add_subcommand("get", "air temperature, setpoint, mode")->callback([opt] {
+    chamber_get(*opt);
+  });
   auto* set = chamber->add_subcommand("set", "control the air to TEMP degC");
   set->add_option("temperature", opt->temperature_c, "target [degC]")->required();
   set->add_option("--ramp", opt->ramp_c_per_min, "ramp [degC/min] (default: the chamber's)");
   set->add_flag("--wait", opt->wait, "wait until the air is within --tolerance of TEMP");
   set->add_option("--tolerance", opt->tolerance_c, "with --wait [degC]")->capture_default_str();
-  set->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
+  set->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")
+      ->capture_default_str();
   set->callback([opt] { chamber_set(*opt); });
-  chamber->add_subcommand("standby", "stop controlling (safe state)")->callback([opt] { chamber_standby(*opt); });
+  chamber->add_subcommand("standby", "stop controlling (safe state)")->callback([opt] {
+    chamber_standby(*opt);
+  });
 
   auto* table = cmd->add_subcommand("table", "rate table");
   table->require_subcommand(1);
-  table->add_subcommand("get", "angles, rates, modes, faults")->callback([opt] { table_get(*opt); });
+  table->add_subcommand("get", "angles, rates, modes, faults")->callback([opt] {
+    table_get(*opt);
+  });
   auto* move = table->add_subcommand("move", "both axes to angles, wait until in position");
   move->add_option("--outer", opt->outer_deg, "outer axis angle [deg]")->required();
   move->add_option("--inner", opt->inner_deg, "inner axis angle [deg]")->required();
-  move->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
+  move->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")
+      ->capture_default_str();
   move->callback([opt] { table_move(*opt); });
   auto* rate = table->add_subcommand("rate", "turn one axis at a rate (it keeps turning)");
-  rate->add_option("--axis", opt->axis, "outer or inner")->required()->check(CLI::IsMember({"outer", "inner"}));
+  rate->add_option("--axis", opt->axis, "outer or inner")
+      ->required()
+      ->check(CLI::IsMember({"outer", "inner"}));
   rate->add_option("--dps", opt->rate_dps, "rate [deg/s], signed")->required();
-  rate->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")->capture_default_str();
+  rate->add_option("--timeout", opt->timeout_s, "give up after this much station time [s]")
+      ->capture_default_str();
   rate->callback([opt] { table_rate(*opt); });
-  table->add_subcommand("stop", "both axes to rest (safe state)")->callback([opt] { table_stop(*opt); });
+  table->add_subcommand("stop", "both axes to rest (safe state)")->callback([opt] {
+    table_stop(*opt);
+  });
 
   auto* imu = cmd->add_subcommand("imu", "IMU streams");
   imu->require_subcommand(1);

@@ -107,7 +107,8 @@ void run_history(const HistoryOptions& opt) {
     return;
   }
   if (fits.empty()) {
-    fmt::print("run {} has no fits yet: try calstand fit --db {} --run {}\n", opt.run, opt.db, opt.run);
+    fmt::print("run {} has no fits yet: try calstand fit --db {} --run {}\n", opt.run, opt.db,
+               opt.run);
     return;
   }
   fmt::print("{:>4}  {:<24} {:<9} {:>6} {:>10} {:>14} {:>14}  {}\n", "fit", "time", "command",

@@ -40,8 +40,8 @@ void print_per_plateau(const FitCommandOptions& opt, const analysis::PlateauFitO
   fmt::print("run {} ({}), device {}: per-plateau fits of {}\n", opt.run, outcome.procedure,
              outcome.device, r.model);
   for (const auto& p : r.plateaus) {
-    fmt::print("  plateau {:>7.2f} degC: {:>3} steps, chi2/dof {:.3g}\n", p.temperature_c,
-               p.steps, p.chi2_dof);
+    fmt::print("  plateau {:>7.2f} degC: {:>3} steps, chi2/dof {:.3g}\n", p.temperature_c, p.steps,
+               p.chi2_dof);
   }
   fmt::print("\npolynomial of order {} in T - {:g} degC:\n", r.order, r.temperature_ref_c);
   fmt::print("{:<28} {:>15} {:>12}  {}\n", "parameter", "value", "sigma", "unit");
@@ -60,7 +60,8 @@ void run_fit(const FitCommandOptions& opt) {
   const analysis::FitRequest request = fit_request_of(opt, per_plateau ? "" : "fit");
   store::Database db = open_existing_database(opt.db);
   if (per_plateau) {
-    print_per_plateau(opt, analysis::plateau_fit_request(db, opt.run, request, opt.per_plateau_order));
+    print_per_plateau(opt,
+                      analysis::plateau_fit_request(db, opt.run, request, opt.per_plateau_order));
     return;
   }
   const analysis::FitOutcome outcome = analysis::fit_request(db, opt.run, request);

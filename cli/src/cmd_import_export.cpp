@@ -50,12 +50,12 @@ void run_export(const ExportOptions& o) {
 
 void register_import_export(CLI::App& app) {
   auto in = std::make_shared<ImportOptions>();
-  CLI::App* imp = app.add_subcommand(
-      "import", "Create a run from a calstand-import/1 folder (meta.json + samples.csv); "
-                "prints the run id");
+  CLI::App* imp =
+      app.add_subcommand("import",
+                         "Create a run from a calstand-import/1 folder (meta.json + samples.csv); "
+                         "prints the run id");
   imp->add_option("dir", in->dir, "folder holding meta.json and samples.csv")->required();
-  imp->add_option("--db", in->db, "database file (created when absent)")
-      ->capture_default_str();
+  imp->add_option("--db", in->db, "database file (created when absent)")->capture_default_str();
   imp->add_flag("--json", in->json, R"(print {"run": ID, "steps": N, "samples": M})");
   imp->callback([in] { run_import(*in); });
 

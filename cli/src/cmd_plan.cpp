@@ -44,17 +44,20 @@ std::string commanded(const procedures::Step& s) {
   switch (s.kind) {
     case StepKind::kSetTemperature: {
       std::string text = fmt::format("target {} degC", format_number(s.target_c));
-      if (s.ramp_c_per_min) text += fmt::format(", ramp {} degC/min", format_number(*s.ramp_c_per_min));
+      if (s.ramp_c_per_min)
+        text += fmt::format(", ramp {} degC/min", format_number(*s.ramp_c_per_min));
       if (s.wait_for_soak) {
-        text += fmt::format(", soak +-{} degC for {} s (timeout {} s)", format_number(s.soak.tolerance_c),
-                            format_number(s.soak.stable_s), format_number(s.soak.timeout_s));
+        text += fmt::format(", soak +-{} degC for {} s (timeout {} s)",
+                            format_number(s.soak.tolerance_c), format_number(s.soak.stable_s),
+                            format_number(s.soak.timeout_s));
       } else {
         text += ", no soak (ramps on)";
       }
       return text;
     }
     case StepKind::kMove:
-      return fmt::format("outer {} deg, inner {} deg", format_number(s.outer_deg), format_number(s.inner_deg));
+      return fmt::format("outer {} deg, inner {} deg", format_number(s.outer_deg),
+                         format_number(s.inner_deg));
     case StepKind::kRate: {
       std::string text = fmt::format("{} {:+g} deg/s, settle {} s, record {} s", s.axis, s.rate_dps,
                                      format_number(s.settle_s), format_number(s.duration_s));
@@ -86,8 +89,9 @@ void print_axis(const char* name, const procedures::AxisEnvelope& a, const core:
   fmt::print(
       "  {} axis    rate steps up to {} deg/s, moves up to {} deg/s, accel {} deg/s^2 "
       "(limits {} deg/s, {} deg/s^2)\n",
-      name, format_number(a.max_rate_dps), format_number(a.max_move_rate_dps), format_number(a.max_accel_dps2),
-      format_number(cfg.max_rate_dps), format_number(cfg.max_accel_dps2));
+      name, format_number(a.max_rate_dps), format_number(a.max_move_rate_dps),
+      format_number(a.max_accel_dps2), format_number(cfg.max_rate_dps),
+      format_number(cfg.max_accel_dps2));
 }
 
 void print_text(const procedures::Plan& plan, const core::StationConfig& station) {
@@ -113,9 +117,9 @@ void print_text(const procedures::Plan& plan, const core::StationConfig& station
     fmt::print(
         "  temperature  {} to {} degC, ramps up to {} degC/min (chamber {} to {} degC, "
         "{} degC/min)\n",
-        format_number(*e.min_temperature_c), format_number(*e.max_temperature_c), format_number(e.max_ramp_c_per_min),
-        format_number(station.chamber.min_c), format_number(station.chamber.max_c),
-        format_number(station.chamber.max_ramp_c_per_min));
+        format_number(*e.min_temperature_c), format_number(*e.max_temperature_c),
+        format_number(e.max_ramp_c_per_min), format_number(station.chamber.min_c),
+        format_number(station.chamber.max_c), format_number(station.chamber.max_ramp_c_per_min));
   } else {
     fmt::print("  temperature  chamber not used\n");
   }

@@ -49,8 +49,8 @@ extern "C" void on_resume_signal(int) { g_resume_signal = true; }
 
 // Runs `plan` as run `run_id` from `start`; returns the process exit code.
 int execute_plan(const core::StationConfig& station_config, const procedures::Plan& plan,
-            const std::string& db_path, std::int64_t run_id, const daemon::CampaignStart& start,
-            bool quiet) {
+                 const std::string& db_path, std::int64_t run_id,
+                 const daemon::CampaignStart& start, bool quiet) {
   ProgressBar bar;
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
@@ -104,15 +104,19 @@ int run_new(const RunOptions& opt) {
 }
 
 int run_resume(const RunOptions& opt) {
-  const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared, "calstand run --resume");
+  const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared,
+                                 "calstand run --resume");
   store::Database db(opt.db);
   store::RunStore run_store(db);
   // The run's own procedure, parameters and station; cut-off attempts discarded.
-  if (const std::string status = run_store.load_run(opt.resume_run).summary.status; status == "queued") {
+  if (const std::string status = run_store.load_run(opt.resume_run).summary.status;
+      status == "queued") {
     // Never started; it waits in calstandd's queue (the daemon is not running, or the lock
     // above would have refused this): start the daemon, or abort it there.
-    throw core::InputError("--resume", fmt::format("run {} is queued for calstandd and never started; "
-                                                   "start the daemon or abort the run", opt.resume_run));
+    throw core::InputError("--resume",
+                           fmt::format("run {} is queued for calstandd and never started; "
+                                       "start the daemon or abort the run",
+                                       opt.resume_run));
   }
   const daemon::StoredRun stored = daemon::prepare_stored_run(run_store, opt.resume_run);
   store::EventRecord e;
@@ -145,7 +149,8 @@ void register_run(CLI::App& app) {
     if (opt->resume_run > 0) {
       code = run_resume(*opt);
     } else {
-      if (opt->procedure.empty()) throw core::InputError("run", "a PROCEDURE or --resume RUN_ID is needed");
+      if (opt->procedure.empty())
+        throw core::InputError("run", "a PROCEDURE or --resume RUN_ID is needed");
       code = run_new(*opt);
     }
     if (code != 0) throw CLI::RuntimeError(code);

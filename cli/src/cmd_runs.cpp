@@ -28,8 +28,8 @@ void list_runs(const RunsOptions& opt) {
   if (opt.limit != -1 && opt.limit < 1) {
     throw core::InputError("--limit", fmt::format("must be at least 1, got {}", opt.limit));
   }
-  const auto list = runs.list_runs(opt.limit > 0 ? std::optional(static_cast<std::size_t>(opt.limit))
-                                                 : std::nullopt);
+  const auto list = runs.list_runs(
+      opt.limit > 0 ? std::optional(static_cast<std::size_t>(opt.limit)) : std::nullopt);
   if (opt.as_json) {
     nlohmann::json out = nlohmann::json::array();
     for (const auto& r : list) out.push_back(store::to_json(r));

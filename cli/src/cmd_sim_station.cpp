@@ -92,14 +92,16 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
   }
   throw core::InputError("command", fmt::format("\"{}\" is not understood (interlock open|clear "
                                                 "AXIS, modbus stop|start, imu silent|talk|garbage "
-                                                "NAME, status, quit)", line));
+                                                "NAME, status, quit)",
+                                                line));
 }
 
 void run_sim_station(SimStationOptions opt) {
   const auto config = sim::load_station_or_default(opt.station_file);
   if (!config.is_simulated()) {
-    throw core::InputError(opt.station_file, "sim-station serves a simulated station; every "
-                                             "backend must be \"sim\"");
+    throw core::InputError(opt.station_file,
+                           "sim-station serves a simulated station; every "
+                           "backend must be \"sim\"");
   }
   opt.serve.f4_rtu = !opt.no_rtu;
   drivers::ProtocolSimulator sim(config, opt.serve);
@@ -123,10 +125,13 @@ void run_sim_station(SimStationOptions opt) {
   while (!g_stop && !quit) {
     // The world falling behind the clock the clients run on (time scale too high for this
     // machine) would make every timing of the rehearsal wrong: say so, at most every 10 s.
-    if (const double lag = sim.runner().lag_s(); lag > 1.0 * opt.serve.time_scale &&
+    if (const double lag = sim.runner().lag_s();
+        lag > 1.0 * opt.serve.time_scale &&
         std::chrono::steady_clock::now() - last_lag_warning > std::chrono::seconds(10)) {
-      std::cerr << fmt::format("sim-station: warning: the world is {:.1f} s behind the wall "
-                               "clock x {}; lower --time-scale\n", lag, opt.serve.time_scale);
+      std::cerr << fmt::format(
+          "sim-station: warning: the world is {:.1f} s behind the wall "
+          "clock x {}; lower --time-scale\n",
+          lag, opt.serve.time_scale);
       last_lag_warning = std::chrono::steady_clock::now();
     }
     if (opt.duration_s > 0.0 &&
@@ -167,9 +172,10 @@ void run_sim_station(SimStationOptions opt) {
 
 void register_sim_station(CLI::App& app) {
   auto opt = std::make_shared<SimStationOptions>();
-  auto* cmd = app.add_subcommand(
-      "sim-station", "Serve a simulated station behind the real protocols (Modbus, table "
-                     "commands, IMU frames) for rehearsing the real drivers");
+  auto* cmd =
+      app.add_subcommand("sim-station",
+                         "Serve a simulated station behind the real protocols (Modbus, table "
+                         "commands, IMU frames) for rehearsing the real drivers");
   cmd->add_option("--station", opt->station_file, "station file (default: the built-in station)");
   cmd->add_option("--time-scale", opt->serve.time_scale, "world seconds per wall second")
       ->capture_default_str()

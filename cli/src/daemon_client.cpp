@@ -1,9 +1,9 @@
 #include "daemon_client.hpp"
 
 #include <fmt/format.h>
-#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
 
+#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -31,7 +31,8 @@ std::string read_token(const std::string& file) {
 }
 
 // The daemon's answer, or an error that says what the daemon said.
-nlohmann::json answer(const httplib::Result& res, const std::string& what, const std::string& where) {
+nlohmann::json answer(const httplib::Result& res, const std::string& what,
+                      const std::string& where) {
   if (!res) {
     throw std::runtime_error(fmt::format("{}: no answer from calstandd at {} ({})", what, where,
                                          httplib::to_string(res.error())));
@@ -39,7 +40,8 @@ nlohmann::json answer(const httplib::Result& res, const std::string& what, const
   nlohmann::json body = nlohmann::json::parse(res->body, nullptr, false);
   if (res->status < 400) return body;
   std::string message = body.is_object() ? body.value("error", res->body) : res->body;
-  if (body.is_object() && body.contains("where")) message = body["where"].get<std::string>() + ": " + message;
+  if (body.is_object() && body.contains("where"))
+    message = body["where"].get<std::string>() + ": " + message;
   if (body.is_object() && body.contains("violations")) {
     for (const auto& v : body["violations"]) {
       message += fmt::format("\n  {}: {}", v.value("path", ""), v.value("message", ""));
@@ -55,7 +57,8 @@ nlohmann::json answer(const httplib::Result& res, const std::string& what, const
 void add_daemon_options(CLI::App& cmd, DaemonAddress& address) {
   cmd.add_option("--daemon", address.daemon, "calstandd address HOST:PORT")->capture_default_str();
   cmd.add_option("--token-file", address.token_file, "Bearer token file (else env CALSTAND_TOKEN)");
-  cmd.add_option("--operator", address.operator_name, "Name recorded with the action (default $USER)");
+  cmd.add_option("--operator", address.operator_name,
+                 "Name recorded with the action (default $USER)");
 }
 
 DaemonClient::DaemonClient(const DaemonAddress& address) {
@@ -85,7 +88,8 @@ nlohmann::json DaemonClient::post(const std::string& path, const nlohmann::json&
 }
 
 void DaemonClient::stream_events(
-    double reconnect_s, const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const {
+    double reconnect_s,
+    const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const {
   std::string last_id;  // of the last message with an id: where a reconnection resumes
   auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(reconnect_s);
   for (;;) {
@@ -101,11 +105,10 @@ void DaemonClient::stream_events(
       stopped = true;
       return false;
     });
-    const auto res = c.Get("/events", headers,
-                           [&](const char* data, std::size_t n) {
-                             received = true;
-                             return parser.feed({data, n});
-                           });
+    const auto res = c.Get("/events", headers, [&](const char* data, std::size_t n) {
+      received = true;
+      return parser.feed({data, n});
+    });
     if (stopped) return;
     // A stream that broke mid-body gives no response, only the bytes it delivered.
     const bool connected = received || (res && res->status == 200);
@@ -115,7 +118,8 @@ void DaemonClient::stream_events(
     }
     if (std::chrono::steady_clock::now() >= give_up) {
       throw std::runtime_error(fmt::format(
-          "GET /events: the stream from calstandd at {}:{} ended ({}) and did not come back within {:.0f} s",
+          "GET /events: the stream from calstandd at {}:{} ended ({}) and did not come back within "
+          "{:.0f} s",
           host_, port_, res ? fmt::format("HTTP {}", res->status) : httplib::to_string(res.error()),
           reconnect_s));
     }

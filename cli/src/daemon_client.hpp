@@ -33,8 +33,9 @@ class DaemonClient {
   /// (the daemon restarting, a network hiccup) is opened again with Last-Event-ID for up to
   /// `reconnect_s` seconds, so nothing the daemon still keeps is missed (a "gap" message says
   /// when something was); throws std::runtime_error naming the daemon when it stays away.
-  void stream_events(double reconnect_s,
-                     const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const;
+  void stream_events(
+      double reconnect_s,
+      const std::function<bool(const std::string&, const nlohmann::json&)>& on_message) const;
 
  private:
   std::string host_;

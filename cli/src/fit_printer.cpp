@@ -43,24 +43,27 @@ void print_fit(const solver::FitResult& fit) {
   const bool gyro = fit.rows != solver::SensorRows::kAccel;
   const bool accel = fit.rows != solver::SensorRows::kGyro;
   if (gyro) {
-    fmt::print("  gyro  chi2/dof {:.3g}, step residual rms {:.3g} deg/s, noise of a step mean {:.3g} "
-               "{:.3g} {:.3g} deg/s\n",
-               fit.chi2_dof_gyro, fit.residual_rms_gyro_dps, fit.noise_floor[0],
-               fit.noise_floor[1], fit.noise_floor[2]);
+    fmt::print(
+        "  gyro  chi2/dof {:.3g}, step residual rms {:.3g} deg/s, noise of a step mean {:.3g} "
+        "{:.3g} {:.3g} deg/s\n",
+        fit.chi2_dof_gyro, fit.residual_rms_gyro_dps, fit.noise_floor[0], fit.noise_floor[1],
+        fit.noise_floor[2]);
   }
   if (accel) {
-    fmt::print("  accel chi2/dof {:.3g}, step residual rms {:.3g} m/s^2, noise of a step mean {:.3g} "
-               "{:.3g} {:.3g} m/s^2\n",
-               fit.chi2_dof_accel, fit.residual_rms_accel_mps2, fit.noise_floor[3],
-               fit.noise_floor[4], fit.noise_floor[5]);
+    fmt::print(
+        "  accel chi2/dof {:.3g}, step residual rms {:.3g} m/s^2, noise of a step mean {:.3g} "
+        "{:.3g} {:.3g} m/s^2\n",
+        fit.chi2_dof_accel, fit.residual_rms_accel_mps2, fit.noise_floor[3], fit.noise_floor[4],
+        fit.noise_floor[5]);
   }
   print_noise_model(fit);
   const auto verdict = [](const char* sensor, double chi2_dof, int dof) {
     if (!std::isfinite(chi2_dof)) return;
     if (solver::above_noise(chi2_dof, dof)) {
-      fmt::print("  {}: the residuals are {:.2g} times the noise, more than chance gives over {} "
-                 "degrees of freedom: the model misses an effect (try `calstand diagnose`)\n",
-                 sensor, std::sqrt(chi2_dof), dof);
+      fmt::print(
+          "  {}: the residuals are {:.2g} times the noise, more than chance gives over {} "
+          "degrees of freedom: the model misses an effect (try `calstand diagnose`)\n",
+          sensor, std::sqrt(chi2_dof), dof);
     } else {
       fmt::print("  {}: the residuals are at the noise floor\n", sensor);
     }
@@ -109,8 +112,8 @@ void print_groups(const std::vector<solver::GroupQuality>& groups,
 std::string catalogue_help() {
   std::string text = "Error terms (error-model.md):\n";
   for (const auto& t : core::error_term_catalogue()) {
-    text += fmt::format("  {:<22} [{}] {}\n", std::string(t.name) + (t.polynomial_order ? "[:N]" : ""),
-                        t.unit, t.effect);
+    text += fmt::format("  {:<22} [{}] {}\n",
+                        std::string(t.name) + (t.polynomial_order ? "[:N]" : ""), t.unit, t.effect);
   }
   return text;
 }

@@ -21,7 +21,8 @@ void ProgressBar::update(const daemon::Progress& p) {
   last_draw_ = now;
   drawn_ = true;
   constexpr int kWidth = 24;
-  const double fraction = p.steps ? static_cast<double>(p.step) / static_cast<double>(p.steps) : 0.0;
+  const double fraction =
+      p.steps ? static_cast<double>(p.step) / static_cast<double>(p.steps) : 0.0;
   const int filled = static_cast<int>(fraction * kWidth);
   std::string label = p.label.size() > 32 ? p.label.substr(0, 31) + "~" : p.label;
   fmt::print(stderr, "\r[{}{}] step {}/{} {:<11} {:<32} ETA {}\x1b[K", std::string(filled, '#'),

@@ -10,14 +10,14 @@ SteadyClock::SteadyClock(double time_scale, double start_s)
       start_s_(start_s) {}
 
 double SteadyClock::now_s() const {
-  return start_s_ + time_scale_ * std::chrono::duration<double>(
-                                      std::chrono::steady_clock::now() - epoch_).count();
+  return start_s_ +
+         time_scale_ *
+             std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch_).count();
 }
 
 void SteadyClock::sleep_until(double t_s) {
-  const auto deadline =
-      epoch_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                   std::chrono::duration<double>((t_s - start_s_) / time_scale_));
+  const auto deadline = epoch_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>((t_s - start_s_) / time_scale_));
   std::this_thread::sleep_until(deadline);
 }
 

@@ -9,15 +9,18 @@ namespace {
 
 const std::vector<std::string_view> kXyz{"x", "y", "z"};
 const std::vector<std::string_view> kOffDiagonal{"xy", "xz", "yx", "yz", "zx", "zy"};
-const std::vector<std::string_view> kFull3x3{"xx", "xy", "xz", "yx", "yy",
-                                             "yz", "zx", "zy", "zz"};
+const std::vector<std::string_view> kFull3x3{"xx", "xy", "xz", "yx", "yy", "yz", "zx", "zy", "zz"};
 
 int axis_index(char c) {
   switch (c) {
-    case 'x': return 0;
-    case 'y': return 1;
-    case 'z': return 2;
-    default: return -1;
+    case 'x':
+      return 0;
+    case 'y':
+      return 1;
+    case 'z':
+      return 2;
+    default:
+      return -1;
   }
 }
 
@@ -37,12 +40,20 @@ const std::vector<ErrorTermInfo>& error_term_catalogue() {
        "scale-factor nonlinearity growing with the square of the rate", false},
       {"gyro_g_sensitivity", TermSensor::kGyro, kFull3x3, "(deg/s)/g",
        "gyro bias that depends on the specific force (orientation in gravity)", false},
-      {"gyro_temp_bias", TermSensor::kGyro, {}, "deg/s/degC^k",
-       "gyro bias drifting with temperature (polynomial in T - Tref)", true},
+      {"gyro_temp_bias",
+       TermSensor::kGyro,
+       {},
+       "deg/s/degC^k",
+       "gyro bias drifting with temperature (polynomial in T - Tref)",
+       true},
       {"gyro_temp_scale", TermSensor::kGyro, kXyz, "ppm/degC",
        "gyro scale factor drifting with temperature", false},
-      {"earth_rate", TermSensor::kReference, {}, "-",
-       "the Earth's rotation seen by the gyros, added to the table rate", false},
+      {"earth_rate",
+       TermSensor::kReference,
+       {},
+       "-",
+       "the Earth's rotation seen by the gyros, added to the table rate",
+       false},
       {"accel_bias", TermSensor::kAccel, kXyz, "m/s^2", "constant offset of each accelerometer",
        false},
       {"accel_scale", TermSensor::kAccel, kXyz, "ppm",
@@ -54,15 +65,23 @@ const std::vector<ErrorTermInfo>& error_term_catalogue() {
        "scale factor differs between +g and -g along an axis", false},
       {"accel_quadratic", TermSensor::kAccel, kXyz, "ug/g^2",
        "nonlinearity (vibration rectification) growing with the square of the force", false},
-      {"accel_temp_bias", TermSensor::kAccel, {}, "m/s^2/degC^k",
-       "accelerometer bias drifting with temperature (polynomial in T - Tref)", true},
+      {"accel_temp_bias",
+       TermSensor::kAccel,
+       {},
+       "m/s^2/degC^k",
+       "accelerometer bias drifting with temperature (polynomial in T - Tref)",
+       true},
       {"accel_temp_scale", TermSensor::kAccel, kXyz, "ppm/degC",
        "accelerometer scale factor drifting with temperature", false},
       {"accel_lever_arm", TermSensor::kAccel, kXyz, "m",
        "accelerometers off the rotation centre feel centripetal and tangential acceleration",
        false},
-      {"table_tilt", TermSensor::kReference, {"east", "north"}, "rad",
-       "the table base is not level: gravity is tilted in the body frame", false},
+      {"table_tilt",
+       TermSensor::kReference,
+       {"east", "north"},
+       "rad",
+       "the table base is not level: gravity is tilted in the body frame",
+       false},
   };
   return kTerms;
 }
@@ -94,15 +113,14 @@ std::optional<ParameterName> parse_parameter_name(std::string_view full_name, st
   if (term->polynomial_order) {
     // x1, y1, z1, x2, ...: axis letter then the power of dT.
     int order = 0;
-    const bool ok = component.size() >= 2 && axis_index(component[0]) >= 0 &&
-                    std::from_chars(component.data() + 1, component.data() + component.size(),
-                                    order)
-                            .ec == std::errc{} &&
-                    order >= 1 && order <= 9 &&
-                    std::to_string(order) == component.substr(1);
+    const bool ok =
+        component.size() >= 2 && axis_index(component[0]) >= 0 &&
+        std::from_chars(component.data() + 1, component.data() + component.size(), order).ec ==
+            std::errc{} &&
+        order >= 1 && order <= 9 && std::to_string(order) == component.substr(1);
     if (!ok) {
-      return fail(fmt::format("unknown component \"{}\" of {} (expected x1..z9)", component,
-                              term_name));
+      return fail(
+          fmt::format("unknown component \"{}\" of {} (expected x1..z9)", component, term_name));
     }
     p.axis = axis_index(component[0]);
     p.order = order;

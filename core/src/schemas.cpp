@@ -14,8 +14,8 @@ const JsonSchema& schema(std::string_view file_name) {
   if (auto it = cache.find(file_name); it != cache.end()) return it->second;
   const auto text = schema_text(file_name);
   if (!text) throw std::logic_error("no compiled-in schema " + std::string(file_name));
-  auto parsed = JsonSchema::parse(parse_json_text(*text, std::string(file_name)),
-                                  std::string(file_name));
+  auto parsed =
+      JsonSchema::parse(parse_json_text(*text, std::string(file_name)), std::string(file_name));
   return cache.emplace(std::string(file_name), std::move(parsed)).first->second;
 }
 

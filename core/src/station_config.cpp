@@ -142,7 +142,8 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
   c.table.inner_axis = vec3(table.at("inner_axis"));
   c.table.outer = axis_from_json(table.at("outer"));
   c.table.inner = axis_from_json(table.at("inner"));
-  c.table.connection = resolve_connection_files(table.value("connection", json::object()), base_dir);
+  c.table.connection =
+      resolve_connection_files(table.value("connection", json::object()), base_dir);
   if (table.contains("tilt_rad")) {
     c.table.tilt_rad = {table.at("tilt_rad").value("east", 0.0),
                         table.at("tilt_rad").value("north", 0.0)};

@@ -21,15 +21,16 @@ std::int64_t create_run_record(store::RunStore& runs, const core::StationConfig&
   const std::int64_t run_id = runs.create_run(run);
   std::vector<store::NewStep> steps;
   for (const auto& s : plan.steps) {
-    steps.push_back({std::string(procedures::to_string(s.kind)), s.label, s.to_json(), s.origin_path});
+    steps.push_back(
+        {std::string(procedures::to_string(s.kind)), s.label, s.to_json(), s.origin_path});
   }
   runs.add_steps(run_id, steps);
   return run_id;
 }
 
-CampaignResult run_campaign(const core::StationConfig& station_config,
-                            const procedures::Plan& plan, const std::string& db_path,
-                            std::int64_t run_id, const CampaignStart& start,
+CampaignResult run_campaign(const core::StationConfig& station_config, const procedures::Plan& plan,
+                            const std::string& db_path, std::int64_t run_id,
+                            const CampaignStart& start,
                             std::function<void(RunEngine&, const Progress&)> on_tick) {
   StationRun wired(station_config, db_path, run_id, start.start_time_s);
   return wired.run(plan, start, wired.store_journal(), std::move(on_tick));

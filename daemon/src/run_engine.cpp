@@ -85,9 +85,9 @@ void RunEngine::apply(const EngineCommand& c) {
     case Kind::kPause:
       pause_immediate_ = c.immediate;
       pause_requested_ = true;
-      record_event(EventKind::kOperator, c.who,
-                   c.immediate ? "pause requested (at once)"
-                               : "pause requested (at step boundary)");
+      record_event(
+          EventKind::kOperator, c.who,
+          c.immediate ? "pause requested (at once)" : "pause requested (at step boundary)");
       break;
     case Kind::kResume:
       resume_requested_ = true;
@@ -129,8 +129,9 @@ bool RunEngine::skip_wanted() {
     // The step the operator meant ended before the request arrived: skipping the next one
     // instead would skip what nobody asked to skip.
     skip_requested_ = false;
-    record_event(EventKind::kInfo, "engine",
-                 fmt::format("skip of step {} not applied: the run is at step {}", *meant, current));
+    record_event(
+        EventKind::kInfo, "engine",
+        fmt::format("skip of step {} not applied: the run is at step {}", *meant, current));
     return false;
   }
   return true;
@@ -142,7 +143,8 @@ void RunEngine::skip_step(std::size_t index) {
   const Step& step = plan_.steps[index];
   if (step.kind == StepKind::kRate && step.rest_after) {
     // The next step expects the table at rest, as after a completed rate step.
-    const auto axis = step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
+    const auto axis =
+        step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
     station_.table().set_rate(axis, 0.0);
   }
   journal_.step_skipped(index, station_.clock().now_s(), why);
@@ -164,7 +166,8 @@ void RunEngine::set_phase(const char* phase) {
   if (options_.on_progress) options_.on_progress(snapshot);
 }
 
-RunState RunEngine::run(std::size_t first_step, int first_attempt, const std::vector<std::size_t>& skipped) {
+RunState RunEngine::run(std::size_t first_step, int first_attempt,
+                        const std::vector<std::size_t>& skipped) {
   state_ = RunState::kRunning;
   attempt_ = first_attempt;
   journal_.run_state(RunState::kRunning, station_.clock().now_s(), "");
@@ -214,7 +217,10 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt, const std::ve
     // A run the operator had paused stays in the operator's hands after the restart: held.
     const bool checkpoint = interrupt_requested_ && a.why == abort_reason_;
     const bool paused = state_ == RunState::kPaused;
-    finish(!checkpoint ? RunState::kAborted : paused ? RunState::kHeld : RunState::kInterrupted, a.why);
+    finish(!checkpoint ? RunState::kAborted
+           : paused    ? RunState::kHeld
+                       : RunState::kInterrupted,
+           a.why);
   } catch (const StepFailed& f) {
     finish(RunState::kFailed, f.why);
   } catch (...) {
@@ -248,7 +254,8 @@ void RunEngine::finish(RunState final_state, const std::string& reason) {
   }
   record_device_events();
   std::string final_reason = reason;
-  if (!safe) final_reason += (final_reason.empty() ? "" : "; ") + ("station NOT safe: " + safe.message);
+  if (!safe)
+    final_reason += (final_reason.empty() ? "" : "; ") + ("station NOT safe: " + safe.message);
   {
     std::lock_guard lock(mutex_);
     exit_reason_ = final_reason;
@@ -361,8 +368,8 @@ void RunEngine::soak(const Step& step, std::size_t index) {
 
 void RunEngine::move(const Step& step, std::size_t index) {
   if (auto r = station_.table().move_to(step.outer_deg, step.inner_deg); !r) {
-    throw StepFailed{fmt::format("step {} ({}): table refused the move: {}", index, step.label,
-                                 r.message)};
+    throw StepFailed{
+        fmt::format("step {} ({}): table refused the move: {}", index, step.label, r.message)};
   }
   set_phase("moving");
   const double start = station_.clock().now_s();
@@ -380,8 +387,8 @@ void RunEngine::move(const Step& step, std::size_t index) {
 void RunEngine::rate(const Step& step, std::size_t index) {
   const auto axis = step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
   if (auto r = station_.table().set_rate(axis, step.rate_dps); !r) {
-    throw StepFailed{fmt::format("step {} ({}): table refused the rate: {}", index, step.label,
-                                 r.message)};
+    throw StepFailed{
+        fmt::format("step {} ({}): table refused the rate: {}", index, step.label, r.message)};
   }
   set_phase("settling");
   const double start = station_.clock().now_s();
@@ -427,8 +434,9 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
     }
     journal_.discard_attempt(index, attempt, *invalid);
     last_invalid_reason = *invalid;
-    record_event(EventKind::kInterlock, "engine",
-                 fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
+    record_event(
+        EventKind::kInterlock, "engine",
+        fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
     if (tries + 1 == options_.max_capture_attempts) break;  // no attempt left to prepare for
     // A repeat while an IMU is still silent would be invalid at once: give the streams time
     // to come back first.
@@ -447,7 +455,8 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
       soak(resoak, index);
     }
   }
-  journal_.step_failed(index, attempt - 1, station_.clock().now_s(), "capture invalidated too often");
+  journal_.step_failed(index, attempt - 1, station_.clock().now_s(),
+                       "capture invalidated too often");
   throw StepFailed{fmt::format("step {}: capture invalidated {} times (last: {})", index,
                                options_.max_capture_attempts, last_invalid_reason)};
 }
@@ -483,8 +492,9 @@ void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_
     if (plan_.steps[i].kind == StepKind::kSetTemperature) last_temperature = i;
     if (plan_.steps[i].kind == StepKind::kMove) last_move = i;
   }
-  record_event(EventKind::kInfo, "engine",
-               fmt::format("resuming at step {}: re-establishing temperature and position", first_step));
+  record_event(
+      EventKind::kInfo, "engine",
+      fmt::format("resuming at step {}: re-establishing temperature and position", first_step));
   if (last_temperature) set_temperature(plan_.steps[*last_temperature], *last_temperature);
   if (last_move) move(plan_.steps[*last_move], *last_move);
 }
@@ -515,7 +525,8 @@ void RunEngine::tick() {
     double remaining = 0.0;
     if (progress_.step < plan_.step_duration_s.size()) {
       const double planned = plan_.step_duration_s[progress_.step];
-      remaining = std::isnan(step_started_s_) ? planned : std::max(0.0, planned - (t - step_started_s_));
+      remaining =
+          std::isnan(step_started_s_) ? planned : std::max(0.0, planned - (t - step_started_s_));
     }
     for (std::size_t i = progress_.step + 1; i < plan_.step_duration_s.size(); ++i) {
       remaining += plan_.step_duration_s[i];
@@ -536,9 +547,9 @@ void RunEngine::poll_imus() {
       if (now - health.last_sample_s > options_.imu_stale_s) {
         if (!health.stale) {
           health.stale = true;
-          record_event(EventKind::kFault, imu.name(),
-                       fmt::format("stream stale: no sample for {:.1f} s",
-                                   now - health.last_sample_s));
+          record_event(
+              EventKind::kFault, imu.name(),
+              fmt::format("stream stale: no sample for {:.1f} s", now - health.last_sample_s));
         }
         // Every capture that sees the stream silent is affected, not only the one during which
         // it fell silent: a repeated capture of a still-silent IMU must not pass as valid.
@@ -591,11 +602,13 @@ void RunEngine::poll_imus() {
         in_capture = &late_trimmed;
       }
       if (in_capture->empty()) continue;
-      bool queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
+      bool queued =
+          journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
       if (!queued && station_.clock().is_virtual()) {
         // Simulated time waits for the disk: back-pressure, not loss.
         journal_.wait_for_writer();
-        queued = journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
+        queued =
+            journal_.add_samples(capturing_->step, capturing_->attempt, imu.name(), *in_capture);
       }
       if (!queued) {
         record_event(EventKind::kFault, "writer", "capture queue overflow: samples not stored");
@@ -634,9 +647,9 @@ void RunEngine::check_interlocks() {
   }
   if (capturing_ && setpoint_c_ && !capturing_->invalid_reason &&
       std::abs(chamber.air_temperature_c - *setpoint_c_) > band_c_) {
-    capturing_->invalid_reason = fmt::format(
-        "chamber air {:.2f} degC left the band {:.2f} +/- {:.2f} degC", chamber.air_temperature_c,
-        *setpoint_c_, band_c_);
+    capturing_->invalid_reason =
+        fmt::format("chamber air {:.2f} degC left the band {:.2f} +/- {:.2f} degC",
+                    chamber.air_temperature_c, *setpoint_c_, band_c_);
   }
 }
 

@@ -3,8 +3,8 @@
 namespace calstand::daemon {
 
 StoreJournal::StoreJournal(store::RunStore& store, store::CaptureWriter& writer,
-                           std::int64_t run_id, double telemetry_period_s,
-                           bool wait_when_busy, std::size_t writer_queue_capacity)
+                           std::int64_t run_id, double telemetry_period_s, bool wait_when_busy,
+                           std::size_t writer_queue_capacity)
     : store_(store),
       writer_(writer),
       run_id_(run_id),

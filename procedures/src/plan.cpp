@@ -224,9 +224,10 @@ Plan make_plan(const Procedure& procedure, const core::StationConfig& station,
   // would never end is refused here, not left to spin in the engine.
   if (!std::isfinite(plan.total_s) || plan.total_s > kMaxPlanDuration_s) {
     plan.violations.push_back(
-        {"procedure", fmt::format("the plan takes {:.3g} s of station time, more than a year ({:.3g} s): "
-                                  "a duration or a count is out of proportion",
-                                  plan.total_s, kMaxPlanDuration_s)});
+        {"procedure",
+         fmt::format("the plan takes {:.3g} s of station time, more than a year ({:.3g} s): "
+                     "a duration or a count is out of proportion",
+                     plan.total_s, kMaxPlanDuration_s)});
   }
   return plan;
 }

@@ -1,10 +1,10 @@
 #include "sim/chamber_sim.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
-
-#include <fmt/format.h>
 
 namespace calstand::sim {
 namespace {
@@ -37,13 +37,13 @@ Status ChamberSim::set_setpoint(double target_c, std::optional<double> ramp_c_pe
     return Status::refused(fmt::format("setpoint {} degC is not finite", target_c));
   }
   if (target_c < params_.min_c || target_c > params_.max_c) {
-    return Status::refused(fmt::format("setpoint {} degC is outside the chamber range [{}, {}] degC",
-                                       target_c, params_.min_c, params_.max_c));
+    return Status::refused(
+        fmt::format("setpoint {} degC is outside the chamber range [{}, {}] degC", target_c,
+                    params_.min_c, params_.max_c));
   }
   const double ramp = ramp_c_per_min.value_or(params_.max_ramp_c_per_min);
   if (!std::isfinite(ramp) || ramp <= 0.0) {
-    return Status::refused(
-        fmt::format("ramp {} degC/min must be positive and finite", ramp));
+    return Status::refused(fmt::format("ramp {} degC/min must be positive and finite", ramp));
   }
   if (mode_ != core::ChamberMode::kActive) working_setpoint_c_ = air_c_;
   target_c_ = target_c;
@@ -84,8 +84,7 @@ void ChamberSim::step(double dt_s) {
   const bool controlling = mode_ == core::ChamberMode::kActive;
   if (controlling) {
     const double ramp_step = ramp_c_per_min_ / 60.0 * dt_s;
-    working_setpoint_c_ +=
-        std::clamp(target_c_ - working_setpoint_c_, -ramp_step, ramp_step);
+    working_setpoint_c_ += std::clamp(target_c_ - working_setpoint_c_, -ramp_step, ramp_step);
   }
   const double goal_c = controlling ? working_setpoint_c_ : params_.ambient_c;
   // Exact lag with the goal held over the step, then the chamber's own rate limit (heater and

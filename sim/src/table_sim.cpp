@@ -1,10 +1,10 @@
 #include "sim/table_sim.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
-
-#include <fmt/format.h>
 
 namespace calstand::sim {
 namespace {
@@ -145,9 +145,8 @@ void TableAxisSim::step_servo(double dt_s, double profile_before_deg) {
   // steady rate exact whatever decay it is given, so a decay from a dt 1e-6 off costs nothing.
   if (std::abs(dt_s - servo_dt_s_) > 1e-6 * dt_s) {
     servo_dt_s_ = dt_s;
-    servo_decay_ = limits_.servo_time_constant_s > 0.0
-                       ? std::exp(-dt_s / limits_.servo_time_constant_s)
-                       : 0.0;
+    servo_decay_ =
+        limits_.servo_time_constant_s > 0.0 ? std::exp(-dt_s / limits_.servo_time_constant_s) : 0.0;
   }
   // The true angle is the profile angle through a first-order lag, solved exactly for a
   // profile that moves linearly over the step (first-order hold): with the profile going from
@@ -160,8 +159,8 @@ void TableAxisSim::step_servo(double dt_s, double profile_before_deg) {
   const double tau = limits_.servo_time_constant_s;
   const double v = (profile_angle_deg_ - profile_before_deg) / dt_s;
   const double lag_term = v * tau;
-  const double wanted_angle = profile_angle_deg_ - lag_term +
-                              (angle_deg_ - profile_before_deg + lag_term) * servo_decay_;
+  const double wanted_angle =
+      profile_angle_deg_ - lag_term + (angle_deg_ - profile_before_deg + lag_term) * servo_decay_;
   const double wanted_rate = (wanted_angle - angle_deg_) / dt_s;
   const double max_dv = limits_.max_accel_dps2 * dt_s;
   const double rate = std::clamp(std::clamp(wanted_rate, rate_dps_ - max_dv, rate_dps_ + max_dv),

@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -112,10 +111,14 @@ double hadamard_plain_sum(std::span<const double> x, std::size_t m) {
 
 std::size_t term_count(AllanKind kind, std::size_t phase_points, std::size_t m) {
   switch (kind) {
-    case AllanKind::kAllan: return phase_points - 2 * m;
-    case AllanKind::kModified: return phase_points - 3 * m + 1;
-    case AllanKind::kHadamard: return phase_points - 3 * m;
-    case AllanKind::kHadamardNonOverlapping: return (phase_points - 1) / m - 2;
+    case AllanKind::kAllan:
+      return phase_points - 2 * m;
+    case AllanKind::kModified:
+      return phase_points - 3 * m + 1;
+    case AllanKind::kHadamard:
+      return phase_points - 3 * m;
+    case AllanKind::kHadamardNonOverlapping:
+      return (phase_points - 1) / m - 2;
   }
   return 0;
 }
@@ -215,10 +218,14 @@ class PhaseBuffer {
 
 std::string_view to_string(AllanKind kind) {
   switch (kind) {
-    case AllanKind::kAllan: return "adev";
-    case AllanKind::kModified: return "mdev";
-    case AllanKind::kHadamard: return "ohdev";
-    case AllanKind::kHadamardNonOverlapping: return "hdev";
+    case AllanKind::kAllan:
+      return "adev";
+    case AllanKind::kModified:
+      return "mdev";
+    case AllanKind::kHadamard:
+      return "ohdev";
+    case AllanKind::kHadamardNonOverlapping:
+      return "hdev";
   }
   return "?";
 }
@@ -280,7 +287,8 @@ std::vector<std::size_t> averaging_factors(const TauSet& taus, std::size_t sampl
       }
       break;
     case TauSpacing::kExplicit: {
-      if (taus.taus_s.empty()) throw core::InputError("taus", "the list of averaging times is empty");
+      if (taus.taus_s.empty())
+        throw core::InputError("taus", "the list of averaging times is empty");
       const double dt = 1.0 / sample_rate_hz;
       for (const double tau : taus.taus_s) {
         const double m = tau * sample_rate_hz;
@@ -288,8 +296,8 @@ std::vector<std::size_t> averaging_factors(const TauSet& taus, std::size_t sampl
           throw core::InputError(
               "taus", fmt::format("averaging time {} s is outside [{} s, {} s], the range {} "
                                   "samples at {} Hz allow for {}",
-                                  tau, dt, static_cast<double>(max_m) * dt, samples,
-                                  sample_rate_hz, to_string(kind)));
+                                  tau, dt, static_cast<double>(max_m) * dt, samples, sample_rate_hz,
+                                  to_string(kind)));
         }
         add_factor(out, m, max_m);
       }
@@ -299,8 +307,8 @@ std::vector<std::size_t> averaging_factors(const TauSet& taus, std::size_t sampl
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   if (out.empty()) {
-    throw core::InputError("taus", fmt::format("{} samples are too few for {}", samples,
-                                               to_string(kind)));
+    throw core::InputError("taus",
+                           fmt::format("{} samples are too few for {}", samples, to_string(kind)));
   }
   return out;
 }
@@ -310,9 +318,9 @@ void AllanOptions::validate() const {
     throw core::InputError("confidence", fmt::format("must be in (0, 1), got {}", confidence));
   }
   if (alpha && (*alpha < min_alpha(kind) || *alpha > kMaxAlpha)) {
-    throw core::InputError("alpha", fmt::format("noise exponent {} is outside [{}, {}] for {}",
-                                                *alpha, min_alpha(kind), kMaxAlpha,
-                                                to_string(kind)));
+    throw core::InputError("alpha",
+                           fmt::format("noise exponent {} is outside [{}, {}] for {}", *alpha,
+                                       min_alpha(kind), kMaxAlpha, to_string(kind)));
   }
   if (taus.spacing == TauSpacing::kExplicit) {
     if (taus.taus_s.empty()) throw core::InputError("taus", "the list of averaging times is empty");
@@ -337,10 +345,14 @@ double allan_variance_from_phase(std::span<const double> phase, std::size_t m, A
                                             m, max_averaging_factor(kind, samples), samples));
   }
   switch (kind) {
-    case AllanKind::kAllan: return allan_sum(phase, m);
-    case AllanKind::kModified: return modified_sum(phase, m);
-    case AllanKind::kHadamard: return hadamard_sum(phase, m);
-    case AllanKind::kHadamardNonOverlapping: return hadamard_plain_sum(phase, m);
+    case AllanKind::kAllan:
+      return allan_sum(phase, m);
+    case AllanKind::kModified:
+      return modified_sum(phase, m);
+    case AllanKind::kHadamard:
+      return hadamard_sum(phase, m);
+    case AllanKind::kHadamardNonOverlapping:
+      return hadamard_plain_sum(phase, m);
   }
   return 0.0;
 }
@@ -371,7 +383,8 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
   std::vector<double> var(ms.size());
   if (options.kind == AllanKind::kAllan) var = allan_sums_blocked(x, ms);
   for (std::size_t k = 0; k < ms.size(); ++k) {
-    if (options.kind != AllanKind::kAllan) var[k] = allan_variance_from_phase(x, ms[k], options.kind);
+    if (options.kind != AllanKind::kAllan)
+      var[k] = allan_variance_from_phase(x, ms[k], options.kind);
     AllanPoint p;
     p.m = ms[k];
     p.tau_s = static_cast<double>(ms[k]) / sample_rate_hz;

@@ -19,8 +19,7 @@ constexpr int kCorrectionIterations = 6;
 }  // namespace
 
 nlohmann::json make_calibration_record(const RunSetup& setup, const Model& model,
-                                       const FitResult& fit,
-                                       const std::vector<StepSummary>& steps,
+                                       const FitResult& fit, const std::vector<StepSummary>& steps,
                                        const nlohmann::json& noise) {
   double tmin = std::numeric_limits<double>::infinity();
   double tmax = -tmin;
@@ -39,7 +38,8 @@ nlohmann::json make_calibration_record(const RunSetup& setup, const Model& model
   for (const auto& c : model.customs()) r["custom_terms"].push_back(c.text());
   r["parameters"] = nlohmann::json::array();
   for (const auto& p : fit.parameters) {
-    r["parameters"].push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}, {"unit", p.unit}});
+    r["parameters"].push_back(
+        {{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}, {"unit", p.unit}});
   }
   r["unidentifiable"] = nlohmann::json::array();
   for (const auto& u : fit.unidentifiable) {
@@ -111,7 +111,8 @@ Corrector::Corrector(const Calibration& calibration, const RunSetup& setup)
       build_(with_reference_temperature(setup, calibration.temperature_ref_c), false) {
   // The table tilt belongs to the station, not the IMU: it is not removed from the samples.
   for (std::size_t p = 0; p < model_.size(); ++p) {
-    if (model_.parameters()[p].name.rfind("table_tilt.", 0) == 0) values_[static_cast<Eigen::Index>(p)] = 0.0;
+    if (model_.parameters()[p].name.rfind("table_tilt.", 0) == 0)
+      values_[static_cast<Eigen::Index>(p)] = 0.0;
   }
 }
 

@@ -21,7 +21,8 @@ void require_finite(double v, const std::string& where, const std::string& what)
 
 void require_sigma(double sigma, const std::string& where, const std::string& what) {
   require_finite(sigma, where, what);
-  if (sigma < 0.0) throw core::InputError(where, fmt::format("{} {} must not be negative", what, sigma));
+  if (sigma < 0.0)
+    throw core::InputError(where, fmt::format("{} {} must not be negative", what, sigma));
 }
 
 const std::vector<std::string>& matrix_unknown_names() {

@@ -14,9 +14,7 @@
 
 namespace calstand::solver {
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 RateTestResult rate_test_cw_ccw(double angle_cw_deg, double angle_ccw_deg,
                                 double reference_angle_deg, double duration_s,

@@ -54,15 +54,16 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
   const auto eq = text.find('=');
   const auto colon = text.find(':', eq == std::string_view::npos ? 0 : eq);
   if (eq == std::string_view::npos || colon == std::string_view::npos) {
-    throw core::InputError(where, "expected NAME=SENSOR:EXPRESSION, e.g. grad=gyro:temperature_rate");
+    throw core::InputError(where,
+                           "expected NAME=SENSOR:EXPRESSION, e.g. grad=gyro:temperature_rate");
   }
   CustomTermSpec spec;
   spec.name = std::string(text.substr(0, eq));
   std::string_view sensor = text.substr(eq + 1, colon - eq - 1);
   spec.expression = std::string(text.substr(colon + 1));
   if (!is_identifier(spec.name)) {
-    throw core::InputError(where, fmt::format("term name \"{}\" must be letters, digits and _",
-                                              spec.name));
+    throw core::InputError(
+        where, fmt::format("term name \"{}\" must be letters, digits and _", spec.name));
   }
   if (core::find_error_term(spec.name)) {
     throw core::InputError(where, fmt::format("\"{}\" is a catalogue term: choose another name "
@@ -105,9 +106,8 @@ CustomTermSpec parse_custom_term(std::string_view text, const std::string& where
       bind_signals(p, vars, expr);
       p.Eval();
     } catch (const mu::Parser::exception_type& e) {
-      throw core::InputError(
-          where, fmt::format("expression \"{}\": {} (known signals: {})", expr, e.GetMsg(),
-                             fmt::join(signal_names(), ", ")));
+      throw core::InputError(where, fmt::format("expression \"{}\": {} (known signals: {})", expr,
+                                                e.GetMsg(), fmt::join(signal_names(), ", ")));
     }
   }
   return spec;

@@ -34,7 +34,9 @@ std::vector<CandidateModel> candidate_models(const Model& model, SensorRows rows
   for (const auto& info : core::error_term_catalogue()) {
     // Terms of a sensor whose rows are not fitted, and the Earth rate without gyro rows, cannot
     // change the fit.
-    if (rows == SensorRows::kAccel && (info.sensor == core::TermSensor::kGyro || info.name == "earth_rate")) continue;
+    if (rows == SensorRows::kAccel &&
+        (info.sensor == core::TermSensor::kGyro || info.name == "earth_rate"))
+      continue;
     if (rows == SensorRows::kGyro && info.sensor == core::TermSensor::kAccel) continue;
     const ModelTerm* present = model.find(info.name);
     if (present && !info.polynomial_order) continue;
@@ -71,8 +73,9 @@ std::string what_it_fixes(const FitResult& before, const std::vector<GroupQualit
   std::vector<std::pair<double, std::string>> step_gains;
   for (std::size_t k = 0; k < before.steps.size() && k < after.steps.size(); ++k) {
     step_gains.emplace_back(squared_z(before, before.steps[k]) - squared_z(after, after.steps[k]),
-                            before.steps[k].label.empty() ? fmt::format("step {}", before.steps[k].index)
-                                                          : before.steps[k].label);
+                            before.steps[k].label.empty()
+                                ? fmt::format("step {}", before.steps[k].index)
+                                : before.steps[k].label);
   }
   std::sort(step_gains.begin(), step_gains.end(), std::greater<>());
   std::vector<std::string> words;
@@ -194,7 +197,8 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       d.untestable.push_back(c.term);  // more parameters than the run has rows
       continue;
     }
-    const int added = static_cast<int>(after.parameters.size()) - static_cast<int>(d.fit.parameters.size());
+    const int added =
+        static_cast<int>(after.parameters.size()) - static_cast<int>(d.fit.parameters.size());
     if (added <= 0 && c.info->name != "earth_rate") {
       d.untestable.push_back(c.term);
       continue;
@@ -209,20 +213,22 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       const boost::math::fisher_f_distribution<double> dist(added, after.dof);
       k.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
     }
-    k.explanation = fmt::format("{}: {}", c.info->effect, what_it_fixes(d.fit, d.groups, after, steps));
+    k.explanation =
+        fmt::format("{}: {}", c.info->effect, what_it_fixes(d.fit, d.groups, after, steps));
     d.candidates.push_back(std::move(k));
   }
-  std::stable_sort(d.candidates.begin(), d.candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.delta_bic < b.delta_bic; });
+  std::stable_sort(
+      d.candidates.begin(), d.candidates.end(),
+      [](const Candidate& a, const Candidate& b) { return a.delta_bic < b.delta_bic; });
 
   const bool model_fits = d.fit.chi2_dof <= kExplainedChi2Dof;
-  const bool best_fits = !d.candidates.empty() && d.candidates.front().chi2_dof_after <= kExplainedChi2Dof;
+  const bool best_fits =
+      !d.candidates.empty() && d.candidates.front().chi2_dof_after <= kExplainedChi2Dof;
   // Several effects missing at once: the best candidate removes most of the excess over the
   // noise but not all. It explains what it removes; the user adds it and diagnoses again.
-  const bool best_dominates =
-      !d.candidates.empty() && d.candidates.front().p_value < 1e-6 &&
-      (d.fit.chi2_dof - d.candidates.front().chi2_dof_after) >
-          kDominantShareOfExcess * (d.fit.chi2_dof - 1.0);
+  const bool best_dominates = !d.candidates.empty() && d.candidates.front().p_value < 1e-6 &&
+                              (d.fit.chi2_dof - d.candidates.front().chi2_dof_after) >
+                                  kDominantShareOfExcess * (d.fit.chi2_dof - 1.0);
   d.explained = model_fits || best_fits || best_dominates;
   // Strong evidence (BIC lower by more than 10, F-test p under 1e-6) recommends a term even when
   // the model is already near the floor: with hundreds of rows, chi2/dof 1.2 is still a signal.
@@ -282,32 +288,34 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
         top.held_out_chi2_dof_after, top.held_out,
         d.recommended.empty() ? "" : fmt::format(" {} does nearly as well.", d.recommended));
   } else if (model_fits && strong) {
-    d.advice = fmt::format("the model is near the noise floor (chi2/dof {:.2f}), but adding {} is "
-                           "strongly supported (BIC {:+.0f}, chi2/dof to {:.2f})",
-                           d.fit.chi2_dof, d.candidates.front().term, d.candidates.front().delta_bic,
-                           d.candidates.front().chi2_dof_after);
+    d.advice = fmt::format(
+        "the model is near the noise floor (chi2/dof {:.2f}), but adding {} is "
+        "strongly supported (BIC {:+.0f}, chi2/dof to {:.2f})",
+        d.fit.chi2_dof, d.candidates.front().term, d.candidates.front().delta_bic,
+        d.candidates.front().chi2_dof_after);
   } else if (model_fits) {
-    d.advice = fmt::format("the model fits to the noise floor (chi2/dof {:.2f}); nothing is missing",
-                           d.fit.chi2_dof);
+    d.advice = fmt::format(
+        "the model fits to the noise floor (chi2/dof {:.2f}); nothing is missing", d.fit.chi2_dof);
   } else if (best_fits) {
-    d.advice = fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}", d.candidates.front().term,
-                           d.fit.chi2_dof, d.candidates.front().chi2_dof_after);
+    d.advice =
+        fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}", d.candidates.front().term,
+                    d.fit.chi2_dof, d.candidates.front().chi2_dof_after);
   } else if (best_dominates) {
-    d.advice = fmt::format("add {}: chi2/dof falls from {:.2f} to {:.2f}; more than one effect is "
-                           "missing, so diagnose again with it in the model",
-                           d.candidates.front().term, d.fit.chi2_dof,
-                           d.candidates.front().chi2_dof_after);
+    d.advice = fmt::format(
+        "add {}: chi2/dof falls from {:.2f} to {:.2f}; more than one effect is "
+        "missing, so diagnose again with it in the model",
+        d.candidates.front().term, d.fit.chi2_dof, d.candidates.front().chi2_dof_after);
   } else {
     std::string follows;
     for (std::size_t i = 0; i < d.signals.size() && i < 3; ++i) {
       follows += fmt::format("{}{} ({}, r = {:.2f})", i ? ", " : "", d.signals[i].signal,
                              d.signals[i].channel, d.signals[i].correlation);
     }
-    const std::string best = d.candidates.empty()
-                                 ? std::string("no candidate could be tested")
-                                 : fmt::format("even the best candidate, {}, leaves chi2/dof {:.2f}",
-                                               d.candidates.front().term,
-                                               d.candidates.front().chi2_dof_after);
+    const std::string best =
+        d.candidates.empty()
+            ? std::string("no candidate could be tested")
+            : fmt::format("even the best candidate, {}, leaves chi2/dof {:.2f}",
+                          d.candidates.front().term, d.candidates.front().chi2_dof_after);
     d.advice = fmt::format("no catalogue term explains the residual: {}. The residual follows {}.",
                            best, follows.empty() ? "no signal" : follows);
     if (!d.suggestions.empty()) {
@@ -325,7 +333,8 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     } else if (!d.signals.empty()) {
       const auto& top = d.signals.front();
       const char* sensor = top.channel[0] == 'g' ? "gyro" : "accel";
-      d.advice += fmt::format(" Try a custom term built on it, e.g. --custom k1={}:{}", sensor, top.signal);
+      d.advice +=
+          fmt::format(" Try a custom term built on it, e.g. --custom k1={}:{}", sensor, top.signal);
     }
   }
   return d;
@@ -335,7 +344,8 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
   nlohmann::json j;
   j["model"] = d.fit.terms;
   j["chi2_dof"] = d.fit.chi2_dof;
-  j["residual_rms"] = {{"gyro", d.fit.residual_rms_gyro_dps}, {"accel", d.fit.residual_rms_accel_mps2}};
+  j["residual_rms"] = {{"gyro", d.fit.residual_rms_gyro_dps},
+                       {"accel", d.fit.residual_rms_accel_mps2}};
   j["candidates"] = nlohmann::json::array();
   for (const auto& c : d.candidates) {
     j["candidates"].push_back({{"term", c.term},
@@ -348,7 +358,8 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
   j["untestable"] = d.untestable;
   j["signals"] = nlohmann::json::array();
   for (const auto& s : d.signals) {
-    j["signals"].push_back({{"signal", s.signal}, {"channel", s.channel}, {"correlation", s.correlation}});
+    j["signals"].push_back(
+        {{"signal", s.signal}, {"channel", s.channel}, {"correlation", s.correlation}});
   }
   j["suggestions"] = nlohmann::json::array();
   for (const auto& s : d.suggestions) {

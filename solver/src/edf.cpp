@@ -22,13 +22,20 @@ double tlog(double t, int p) { return t == 0.0 ? 0.0 : std::pow(t, p) * std::log
 double sw(double t, int alpha) {
   const double a = std::abs(t);
   switch (alpha) {
-    case 2: return -a;
-    case 1: return tlog(t, 2);
-    case 0: return a * a * a;
-    case -1: return -tlog(t, 4);
-    case -2: return -std::pow(a, 5);
-    case -3: return tlog(t, 6);
-    default: return std::pow(a, 7);  // -4
+    case 2:
+      return -a;
+    case 1:
+      return tlog(t, 2);
+    case 0:
+      return a * a * a;
+    case -1:
+      return -tlog(t, 4);
+    case -2:
+      return -std::pow(a, 5);
+    case -3:
+      return tlog(t, 6);
+    default:
+      return std::pow(a, 7);  // -4
   }
 }
 
@@ -39,26 +46,40 @@ double sw2(double t, int alpha) {
   if (a == 0.0) return 0.0;
   const double l = std::log(a);
   switch (alpha) {
-    case 2: return 0.0;
-    case 1: return 2.0 * l + 3.0;
-    case 0: return 6.0 * a;
-    case -1: return -(12.0 * l + 7.0) * t * t;
-    case -2: return -20.0 * a * a * a;
-    case -3: return (30.0 * l + 11.0) * std::pow(t, 4);
-    default: return 42.0 * std::pow(a, 5);
+    case 2:
+      return 0.0;
+    case 1:
+      return 2.0 * l + 3.0;
+    case 0:
+      return 6.0 * a;
+    case -1:
+      return -(12.0 * l + 7.0) * t * t;
+    case -2:
+      return -20.0 * a * a * a;
+    case -3:
+      return (30.0 * l + 11.0) * std::pow(t, 4);
+    default:
+      return 42.0 * std::pow(a, 5);
   }
 }
 double sw4(double t, int alpha) {
   const double a = std::abs(t);
   const double l = std::log(a);
   switch (alpha) {
-    case 2: return 0.0;
-    case 1: return -2.0 / (t * t);
-    case 0: return 0.0;
-    case -1: return -(24.0 * l + 50.0);
-    case -2: return -120.0 * a;
-    case -3: return (360.0 * l + 342.0) * t * t;
-    default: return 840.0 * a * a * a;
+    case 2:
+      return 0.0;
+    case 1:
+      return -2.0 / (t * t);
+    case 0:
+      return 0.0;
+    case -1:
+      return -(24.0 * l + 50.0);
+    case -2:
+      return -120.0 * a;
+    case -3:
+      return (360.0 * l + 342.0) * t * t;
+    default:
+      return 840.0 * a * a * a;
   }
 }
 
@@ -139,10 +160,10 @@ int min_alpha(AllanKind kind) { return difference_order(kind) == 3 ? -4 : -2; }
 
 double equivalent_dof(AllanKind kind, int alpha, std::size_t m, std::size_t samples) {
   if (alpha < min_alpha(kind) || alpha > kMaxAlpha) {
-    throw core::InputError("alpha", fmt::format("noise exponent {} is outside [{}, {}] where {} "
-                                                "converges",
-                                                alpha, min_alpha(kind), kMaxAlpha,
-                                                to_string(kind)));
+    throw core::InputError("alpha",
+                           fmt::format("noise exponent {} is outside [{}, {}] where {} "
+                                       "converges",
+                                       alpha, min_alpha(kind), kMaxAlpha, to_string(kind)));
   }
   if (m == 0 || m > max_averaging_factor(kind, samples)) {
     throw core::InputError("m", fmt::format("averaging factor {} is outside [1, {}] for {} samples",
@@ -203,8 +224,8 @@ double equivalent_dof(AllanKind kind, int alpha, std::size_t m, std::size_t samp
     // Kinks and log singularities of the kernel sit at whole t: integrate piece by piece.
     for (double a = 0.0; a < upper; a += 1.0) {
       const double b = std::min(upper, a + 1.0);
-      integral +=
-          boost::math::quadrature::gauss_kronrod<double, 31>::integrate(integrand, a, b, kQuadratureDepth, 1e-7);
+      integral += boost::math::quadrature::gauss_kronrod<double, 31>::integrate(
+          integrand, a, b, kQuadratureDepth, 1e-7);
     }
     inv_edf = 2.0 * integral / r;
   }

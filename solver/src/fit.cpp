@@ -6,8 +6,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
-#include <boost/math/distributions/chi_squared.hpp>
 #include <array>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -52,10 +52,9 @@ void temperature_rules(const Model& model, std::size_t plateaus, std::vector<boo
 /// exceeds it is barely excited by the run (fitted to noise), though not collinear with others.
 double implausible_sigma(const std::string& unit) {
   static const std::vector<std::pair<std::string, double>> kBounds{
-      {"deg/s", 1.0},          {"ppm", 1e4},          {"rad", 0.05},
-      {"ppm/(deg/s)", 100.0},  {"(deg/s)/g", 0.1},    {"deg/s/degC^k", 0.1},
-      {"ppm/degC", 1e3},       {"m/s^2", 1.0},        {"ug/g^2", 1e4},
-      {"m/s^2/degC^k", 0.1},   {"m", 1.0}};
+      {"deg/s", 1.0},     {"ppm", 1e4},          {"rad", 0.05},     {"ppm/(deg/s)", 100.0},
+      {"(deg/s)/g", 0.1}, {"deg/s/degC^k", 0.1}, {"ppm/degC", 1e3}, {"m/s^2", 1.0},
+      {"ug/g^2", 1e4},    {"m/s^2/degC^k", 0.1}, {"m", 1.0}};
   for (const auto& [u, bound] : kBounds) {
     if (u == unit) return bound;
   }
@@ -87,7 +86,8 @@ SensorQuality sensor_quality(const Eigen::VectorXd& whitened_residual,
   }
   std::array<int, 2> parameters{0, 0};
   for (Eigen::Index p : accepted) {
-    ++parameters[static_cast<std::size_t>(sensor_of(model.parameters()[static_cast<std::size_t>(p)]))];
+    ++parameters[static_cast<std::size_t>(
+        sensor_of(model.parameters()[static_cast<std::size_t>(p)]))];
   }
   for (std::size_t s = 0; s < 2; ++s) q.dof[s] = rows[s] > 0 ? rows[s] - parameters[s] : 0;
   return q;
@@ -100,7 +100,8 @@ Eigen::VectorXd parameter_inflation(const SensorQuality& q, const Model& model,
   Eigen::VectorXd f = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(accepted.size()));
   if (!inflate) return f;
   for (std::size_t j = 0; j < accepted.size(); ++j) {
-    const double c = q.chi2_dof(sensor_of(model.parameters()[static_cast<std::size_t>(accepted[j])]));
+    const double c =
+        q.chi2_dof(sensor_of(model.parameters()[static_cast<std::size_t>(accepted[j])]));
     if (std::isfinite(c) && c > 1.0) f[static_cast<Eigen::Index>(j)] = c;
   }
   return f;
@@ -184,7 +185,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   std::vector<Eigen::Index> accepted;
   Eigen::MatrixXd basis(rows, 0);
   double largest_column = 0.0;
-  for (Eigen::Index c = 0; c < A.cols(); ++c) largest_column = std::max(largest_column, A.col(c).norm());
+  for (Eigen::Index c = 0; c < A.cols(); ++c)
+    largest_column = std::max(largest_column, A.col(c).norm());
   for (std::size_t p = 0; p < P; ++p) {
     const auto col = static_cast<Eigen::Index>(p);
     const std::string& name = model.parameters()[p].name;
@@ -212,14 +214,18 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       u.name = name;
       if (!accepted.empty()) {
         Eigen::MatrixXd Aa(rows, static_cast<Eigen::Index>(accepted.size()));
-        for (std::size_t k = 0; k < accepted.size(); ++k) Aa.col(static_cast<Eigen::Index>(k)) = A.col(accepted[k]);
+        for (std::size_t k = 0; k < accepted.size(); ++k)
+          Aa.col(static_cast<Eigen::Index>(k)) = A.col(accepted[k]);
         const Eigen::VectorXd coef = Aa.colPivHouseholderQr().solve(A.col(col));
         Eigen::VectorXd contribution(coef.size());
-        for (Eigen::Index k = 0; k < coef.size(); ++k) contribution[k] = std::abs(coef[k]) * Aa.col(k).norm();
+        for (Eigen::Index k = 0; k < coef.size(); ++k)
+          contribution[k] = std::abs(coef[k]) * Aa.col(k).norm();
         const double biggest = contribution.maxCoeff();
         for (Eigen::Index k = 0; k < coef.size(); ++k) {
           if (contribution[k] >= 0.1 * biggest) {
-            u.related.push_back(model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])].name);
+            u.related.push_back(
+                model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])]
+                    .name);
           }
         }
       }
@@ -227,9 +233,10 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
                                                  : fmt::format("{}", fmt::join(u.related, ", "));
       u.reason = sine < options.collinear_sine
                      ? fmt::format("not determined by this run: its effect equals that of {}", with)
-                     : fmt::format("nearly collinear with {} (sine {:.1e}): it would be fitted to "
-                                   "noise",
-                                   with, sine);
+                     : fmt::format(
+                           "nearly collinear with {} (sine {:.1e}): it would be fitted to "
+                           "noise",
+                           with, sine);
       fit.unidentifiable.push_back(std::move(u));
       continue;
     }
@@ -275,8 +282,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
     }
     // The sigmas as they will be reported (inflated by a poor fit of their own sensor's rows)
     // decide what is determined.
-    const Eigen::VectorXd e =
-        y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale))) : Eigen::VectorXd::Zero(rows));
+    const Eigen::VectorXd e = y - (k > 0 ? Eigen::VectorXd(Ak * (theta.cwiseProduct(scale)))
+                                         : Eigen::VectorXd::Zero(rows));
     chi2 = e.squaredNorm();
     quality = sensor_quality(e, gyro_row, model, accepted);
     inflation = parameter_inflation(quality, model, accepted, options.inflate_sigma_by_chi2);
@@ -317,8 +324,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   for (Eigen::Index j = 0; j < k; ++j) {
     const auto p = static_cast<std::size_t>(accepted[static_cast<std::size_t>(j)]);
     fit.values[static_cast<Eigen::Index>(p)] = theta[j];
-    fit.parameters.push_back({model.parameters()[p].name, model.parameters()[p].unit, theta[j],
-                              std::sqrt(cov(j, j))});
+    fit.parameters.push_back(
+        {model.parameters()[p].name, model.parameters()[p].unit, theta[j], std::sqrt(cov(j, j))});
   }
 
   // Step-mean residuals in physical units.
@@ -345,7 +352,8 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   fit.noise_floor = (sum_sigma2 / n).cwiseSqrt();
   for (const StepSummary& s : steps) {
     if (s.count > 1 && s.duration_s > 0.0) {
-      fit.sample_rate_hz = std::max(fit.sample_rate_hz, static_cast<double>(s.count - 1) / s.duration_s);
+      fit.sample_rate_hz =
+          std::max(fit.sample_rate_hz, static_cast<double>(s.count - 1) / s.duration_s);
     }
   }
   return fit;
@@ -363,16 +371,20 @@ nlohmann::json fit_to_json(const FitResult& fit) {
   j["chi2_dof"] = fit.chi2_dof;
   j["chi2"] = fit.chi2;
   j["dof"] = fit.dof;
-  const auto finite_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
-  j["by_sensor"] = {{"gyro", {{"chi2_dof", finite_or_null(fit.chi2_dof_gyro)}, {"dof", fit.dof_gyro}}},
-                    {"accel", {{"chi2_dof", finite_or_null(fit.chi2_dof_accel)}, {"dof", fit.dof_accel}}}};
+  const auto finite_or_null = [](double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+  };
+  j["by_sensor"] = {
+      {"gyro", {{"chi2_dof", finite_or_null(fit.chi2_dof_gyro)}, {"dof", fit.dof_gyro}}},
+      {"accel", {{"chi2_dof", finite_or_null(fit.chi2_dof_accel)}, {"dof", fit.dof_accel}}}};
   j["noise_model"] = step_noise_to_json(fit.noise, fit.sample_rate_hz);
   j["residual_rms"] = {{"gyro", fit.residual_rms_gyro_dps}, {"accel", fit.residual_rms_accel_mps2}};
   j["noise_floor"] = {{"gyro", {fit.noise_floor[0], fit.noise_floor[1], fit.noise_floor[2]}},
                       {"accel", {fit.noise_floor[3], fit.noise_floor[4], fit.noise_floor[5]}}};
   j["parameters"] = nlohmann::json::array();
   for (const auto& p : fit.parameters) {
-    j["parameters"].push_back({{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}, {"unit", p.unit}});
+    j["parameters"].push_back(
+        {{"name", p.name}, {"value", p.value}, {"sigma", p.sigma}, {"unit", p.unit}});
   }
   j["unidentifiable"] = nlohmann::json::array();
   for (const auto& u : fit.unidentifiable) {
@@ -387,14 +399,15 @@ nlohmann::json fit_to_json(const FitResult& fit) {
     for (std::size_t k = 0; k < kSignalCount; ++k) {
       signals[std::string(signal_names()[k])] = finite_or_null(s.signals[k]);
     }
-    j["steps"].push_back({{"step", s.index},
-                          {"label", s.label},
-                          {"start_s", s.start_s},
-                          {"end_s", s.end_s},
-                          {"static", s.is_static},
-                          {"residual", std::vector<double>(s.residual.data(), s.residual.data() + 6)},
-                          {"z", std::vector<double>(z.data(), z.data() + 6)},
-                          {"signals", std::move(signals)}});
+    j["steps"].push_back(
+        {{"step", s.index},
+         {"label", s.label},
+         {"start_s", s.start_s},
+         {"end_s", s.end_s},
+         {"static", s.is_static},
+         {"residual", std::vector<double>(s.residual.data(), s.residual.data() + 6)},
+         {"z", std::vector<double>(z.data(), z.data() + 6)},
+         {"signals", std::move(signals)}});
   }
   return j;
 }

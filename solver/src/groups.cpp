@@ -57,7 +57,8 @@ std::vector<StepConditions> step_conditions(const std::vector<StepSummary>& step
       Eigen::Index i = 0;
       force.cwiseAbs().maxCoeff(&i);
       if (std::abs(force[i]) / force.norm() >= kUpCosine && force.norm() > 0.5 * 9.8) {
-        c.orientation = fmt::format("{}{} up", force[i] > 0.0 ? "+" : "-", axis_name(static_cast<int>(i)));
+        c.orientation =
+            fmt::format("{}{} up", force[i] > 0.0 ? "+" : "-", axis_name(static_cast<int>(i)));
       }
     }
     const Eigen::Vector3d rate(s.signals[9], s.signals[10], s.signals[11]);
@@ -71,7 +72,8 @@ std::vector<StepConditions> step_conditions(const std::vector<StepSummary>& step
       c.direction = rate[i] > 0.0 ? "positive (CCW) turn" : "negative (CW) turn";
     }
     const double span = t_last - t_first;
-    const int quarter = span > 0.0 ? std::min(3, static_cast<int>(4.0 * (s.signals[2] - t_first) / span)) : 0;
+    const int quarter =
+        span > 0.0 ? std::min(3, static_cast<int>(4.0 * (s.signals[2] - t_first) / span)) : 0;
     static const char* kQuarters[4] = {"1st", "2nd", "3rd", "4th"};
     c.time = fmt::format("run {} quarter", kQuarters[quarter]);
     out.push_back(std::move(c));
@@ -108,8 +110,9 @@ std::vector<GroupQuality> group_quality(const FitResult& fit,
     if (a.steps.size() == steps.size()) continue;
     out.push_back({name, a.chi2 / static_cast<double>(a.rows), std::move(a.steps)});
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const GroupQuality& a, const GroupQuality& b) { return a.chi2_dof > b.chi2_dof; });
+  std::stable_sort(out.begin(), out.end(), [](const GroupQuality& a, const GroupQuality& b) {
+    return a.chi2_dof > b.chi2_dof;
+  });
   return out;
 }
 
@@ -117,7 +120,8 @@ std::vector<WorstStep> worst_steps(const FitResult& fit, std::size_t count) {
   std::vector<WorstStep> all;
   for (const auto& s : fit.steps) {
     const Vector6d z = s.z();
-    for (int c : fit_channels(fit.rows)) all.push_back({s.index, std::string(channel_name(c)), z[c]});
+    for (int c : fit_channels(fit.rows))
+      all.push_back({s.index, std::string(channel_name(c)), z[c]});
   }
   std::sort(all.begin(), all.end(),
             [](const WorstStep& a, const WorstStep& b) { return std::abs(a.z) > std::abs(b.z); });

@@ -7,9 +7,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "solver/run_noise.hpp"
-
 #include "core/error.hpp"
+#include "solver/run_noise.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -83,8 +82,8 @@ std::string kalibr_yaml(const KalibrImu& imu) {
       "gyroscope_random_walk: {:.6g}  # [rad/s^2/sqrt(Hz)]\n"
       "rostopic: \"{}\"\n"
       "update_rate: {:.6g}  # [Hz]\n",
-      imu.accelerometer_noise_density, imu.accelerometer_random_walk,
-      imu.gyroscope_noise_density, imu.gyroscope_random_walk, topic, imu.update_rate_hz);
+      imu.accelerometer_noise_density, imu.accelerometer_random_walk, imu.gyroscope_noise_density,
+      imu.gyroscope_random_walk, topic, imu.update_rate_hz);
 }
 
 }  // namespace calstand::solver

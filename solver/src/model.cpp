@@ -22,7 +22,8 @@ std::string term_name(const core::ErrorTermInfo& info, int order) {
                                              : std::string(info.name);
 }
 
-std::string unknown_term_message(std::string_view name, const std::vector<CustomTermSpec>& customs) {
+std::string unknown_term_message(std::string_view name,
+                                 const std::vector<CustomTermSpec>& customs) {
   std::vector<std::string_view> names;
   for (const auto& t : core::error_term_catalogue()) names.push_back(t.name);
   for (const auto& c : customs) names.push_back(c.name);
@@ -128,8 +129,8 @@ Model Model::parse(std::string_view terms, const std::vector<std::string>& custo
         }
         if (ec != std::errc{} || end != digits.data() + digits.size() || order < 1 ||
             order > kMaxTemperatureOrder) {
-          throw core::InputError(where, fmt::format("order \"{}\" must be an integer 1..{}",
-                                                    digits, kMaxTemperatureOrder));
+          throw core::InputError(where, fmt::format("order \"{}\" must be an integer 1..{}", digits,
+                                                    kMaxTemperatureOrder));
         }
         term.order = order;
       }

@@ -25,11 +25,16 @@ constexpr double kMinEdfForMinimum = 10.0;
 // Allan variance of each term per unit squared coefficient at tau.
 double basis(std::size_t term, double tau) {
   switch (term) {
-    case 0: return 3.0 / (tau * tau);
-    case 1: return 1.0 / tau;
-    case 2: return 2.0 * std::numbers::ln2 / std::numbers::pi;
-    case 3: return tau / 3.0;
-    default: return tau * tau / 2.0;
+    case 0:
+      return 3.0 / (tau * tau);
+    case 1:
+      return 1.0 / tau;
+    case 2:
+      return 2.0 * std::numbers::ln2 / std::numbers::pi;
+    case 3:
+      return tau / 3.0;
+    default:
+      return tau * tau / 2.0;
   }
 }
 
@@ -38,8 +43,8 @@ double basis(std::size_t term, double tau) {
 // one: the optimum is the unconstrained solution on its own support. Columns are scaled to
 // unit weighted norm first (they span many decades of tau).
 struct NnlsResult {
-  Eigen::VectorXd c;          // all columns; zero outside the support
-  Eigen::MatrixXd cov;        // covariance of c on the support (zero elsewhere)
+  Eigen::VectorXd c;    // all columns; zero outside the support
+  Eigen::MatrixXd cov;  // covariance of c on the support (zero elsewhere)
   std::vector<bool> support;
   double cost = 0.0;
 };
@@ -89,9 +94,9 @@ NnlsResult nnls(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, const Eigen:
       best.c(idx[k]) = x(static_cast<Eigen::Index>(k)) * scale(idx[k]);
       best.support[static_cast<std::size_t>(idx[k])] = true;
       for (std::size_t l = 0; l < idx.size(); ++l) {
-        best.cov(idx[k], idx[l]) = info_inv(static_cast<Eigen::Index>(k),
-                                            static_cast<Eigen::Index>(l)) *
-                                   scale(idx[k]) * scale(idx[l]);
+        best.cov(idx[k], idx[l]) =
+            info_inv(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(l)) * scale(idx[k]) *
+            scale(idx[l]);
       }
     }
   }
@@ -208,7 +213,8 @@ NoiseTerms fit_noise_terms(const AllanResult& curve, const NoiseFitOptions& opti
   Eigen::VectorXd b(n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto ui = static_cast<std::size_t>(i);
-    for (std::size_t j = 0; j < kTerms; ++j) a(i, static_cast<Eigen::Index>(j)) = basis(j, d.tau[ui]);
+    for (std::size_t j = 0; j < kTerms; ++j)
+      a(i, static_cast<Eigen::Index>(j)) = basis(j, d.tau[ui]);
     b(i) = d.var[ui];
   }
   const std::vector<bool> allowed = {options.quantization, options.random_walk,
@@ -237,8 +243,7 @@ NoiseTerms fit_noise_terms(const AllanResult& curve, const NoiseFitOptions& opti
   // weights treat every point as independent: scale the sigmas by the square root of the
   // number of points per octave (1 for octave spacing, about 3 for dense).
   const double octaves = std::log2(d.tau.back() / d.tau.front());
-  const double per_octave =
-      octaves > 0.0 ? static_cast<double>(t.points - 1) / octaves : 1.0;
+  const double per_octave = octaves > 0.0 ? static_cast<double>(t.points - 1) / octaves : 1.0;
   const double sigma_scale =
       std::sqrt(std::max(1.0, t.chi2_dof)) * std::sqrt(std::max(1.0, per_octave));
   t.quantization = term_from(r, 0, sigma_scale);

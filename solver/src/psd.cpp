@@ -82,9 +82,9 @@ void WelchOptions::validate() const {
     throw core::InputError("overlap", fmt::format("must be in [0, 1), got {}", overlap));
   }
   if (segment_length != 0 && segment_length < 4) {
-    throw core::InputError("segment_length",
-                           fmt::format("must be at least 4 samples (or 0: automatic), got {}",
-                                       segment_length));
+    throw core::InputError(
+        "segment_length",
+        fmt::format("must be at least 4 samples (or 0: automatic), got {}", segment_length));
   }
 }
 

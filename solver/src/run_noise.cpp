@@ -18,16 +18,17 @@ namespace {
 
 constexpr double kSecondsPerHour = 3600.0;
 constexpr double kSqrtSecondsPerHour = 60.0;  // 1/sqrt(s) = 60/sqrt(h)
-constexpr double kMicroG = 9.80665e-6;         // [m/s^2]
+constexpr double kMicroG = 9.80665e-6;        // [m/s^2]
 
 DatasheetFigure figure(std::string name, std::string label, const NoiseTerm& t, double scale,
                        std::string unit) {
-  return {std::move(name), std::move(label), t.value * scale, t.sigma * scale, std::move(unit),
-          t.resolved};
+  return {std::move(name), std::move(label), t.value * scale,
+          t.sigma * scale, std::move(unit),  t.resolved};
 }
 
 DatasheetFigure read_off(std::string name, std::string label, double value, std::string unit) {
-  return {std::move(name), std::move(label), value, std::numeric_limits<double>::quiet_NaN(),
+  return {std::move(name), std::move(label),
+          value,           std::numeric_limits<double>::quiet_NaN(),
           std::move(unit), true};
 }
 
@@ -35,12 +36,18 @@ DatasheetFigure read_off(std::string name, std::string label, double value, std:
 
 std::string_view to_string(ImuChannel channel) {
   switch (channel) {
-    case ImuChannel::kGx: return "gx";
-    case ImuChannel::kGy: return "gy";
-    case ImuChannel::kGz: return "gz";
-    case ImuChannel::kAx: return "ax";
-    case ImuChannel::kAy: return "ay";
-    case ImuChannel::kAz: return "az";
+    case ImuChannel::kGx:
+      return "gx";
+    case ImuChannel::kGy:
+      return "gy";
+    case ImuChannel::kGz:
+      return "gz";
+    case ImuChannel::kAx:
+      return "ax";
+    case ImuChannel::kAy:
+      return "ay";
+    case ImuChannel::kAz:
+      return "az";
   }
   return "?";
 }
@@ -49,8 +56,7 @@ ImuChannel parse_channel(std::string_view text) {
   for (const ImuChannel c : kAllChannels) {
     if (text == to_string(c)) return c;
   }
-  throw core::InputError("channel",
-                         fmt::format("'{}' is not one of gx, gy, gz, ax, ay, az", text));
+  throw core::InputError("channel", fmt::format("'{}' is not one of gx, gy, gz, ax, ay, az", text));
 }
 
 bool is_gyro(ImuChannel channel) {
@@ -97,8 +103,8 @@ std::vector<DatasheetFigure> datasheet_figures(const NoiseTerms& t, bool gyro) {
                        kSecondsPerHour, "deg/h"));
     f.push_back(figure("rate_random_walk", "rate random walk K", t.rate_random_walk,
                        kSecondsPerHour * kSqrtSecondsPerHour, "deg/h/sqrt(h)"));
-    f.push_back(figure("rate_ramp", "rate ramp R", t.rate_ramp,
-                       kSecondsPerHour * kSecondsPerHour, "deg/h/h"));
+    f.push_back(figure("rate_ramp", "rate ramp R", t.rate_ramp, kSecondsPerHour * kSecondsPerHour,
+                       "deg/h/h"));
     f.push_back(figure("angle_quantization", "angle quantization Q", t.quantization,
                        kSecondsPerHour, "arcsec"));
   } else {
@@ -112,13 +118,12 @@ std::vector<DatasheetFigure> datasheet_figures(const NoiseTerms& t, bool gyro) {
                          t.bias_instability_from_min / kMicroG, "ug"));
     f.push_back(figure("bias_instability_fit", "bias instability B, fitted", t.bias_instability,
                        1.0 / kMicroG, "ug"));
-    f.push_back(figure("acceleration_random_walk", "acceleration random walk K",
-                       t.rate_random_walk, kSecondsPerHour * kSqrtSecondsPerHour,
-                       "m/s/h/sqrt(h)"));
+    f.push_back(figure("acceleration_random_walk", "acceleration random walk K", t.rate_random_walk,
+                       kSecondsPerHour * kSqrtSecondsPerHour, "m/s/h/sqrt(h)"));
     f.push_back(figure("acceleration_ramp", "acceleration ramp R", t.rate_ramp,
                        kSecondsPerHour * kSecondsPerHour, "m/s/h/h"));
-    f.push_back(figure("velocity_quantization", "velocity quantization Q", t.quantization, 1.0,
-                       "m/s"));
+    f.push_back(
+        figure("velocity_quantization", "velocity quantization Q", t.quantization, 1.0, "m/s"));
   }
   return f;
 }
@@ -155,8 +160,7 @@ std::size_t choose_noise_step(store::Database& db, std::int64_t run,
   return *best;
 }
 
-RunNoise analyse_run_noise(store::Database& db, std::int64_t run,
-                           const RunNoiseOptions& options) {
+RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoiseOptions& options) {
   if (options.allan.kind != AllanKind::kAllan) {
     throw core::InputError("kind", "the noise terms are fitted to the Allan deviation (adev)");
   }

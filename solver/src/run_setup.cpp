@@ -36,12 +36,12 @@ RunSetup run_setup(const store::RunRecord& run, std::int64_t run_id, const std::
   if (site.contains("gravity_mps2") && site["gravity_mps2"].is_number()) {
     setup.site.gravity_mps2 = site["gravity_mps2"].get<double>();
   }
-  setup.geometry.outer_axis = vector3(snap["table"].value("outer_axis", nlohmann::json()),
-                                      where + ": table.outer_axis")
-                                  .normalized();
-  setup.geometry.inner_axis = vector3(snap["table"].value("inner_axis", nlohmann::json()),
-                                      where + ": table.inner_axis")
-                                  .normalized();
+  setup.geometry.outer_axis =
+      vector3(snap["table"].value("outer_axis", nlohmann::json()), where + ": table.outer_axis")
+          .normalized();
+  setup.geometry.inner_axis =
+      vector3(snap["table"].value("inner_axis", nlohmann::json()), where + ": table.inner_axis")
+          .normalized();
   setup.temperature_ref_c = snap.value("temperature_ref_c", 25.0);
   if (snap.contains("mount_rpy_deg")) {  // calstand-import/1
     setup.geometry.mount_C_PB =

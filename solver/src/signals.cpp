@@ -8,16 +8,15 @@ namespace calstand::solver {
 
 const std::vector<std::string_view>& signal_names() {
   static const std::vector<std::string_view> kNames{
-      "temperature", "temperature_rate", "elapsed",      "rate_x",       "rate_y",
-      "rate_z",      "force_x",          "force_y",      "force_z",      "table_rate_x",
-      "table_rate_y", "table_rate_z"};
+      "temperature", "temperature_rate", "elapsed", "rate_x",       "rate_y",       "rate_z",
+      "force_x",     "force_y",          "force_z", "table_rate_x", "table_rate_y", "table_rate_z"};
   return kNames;
 }
 
 std::array<double, kSignalCount> signal_values(const Signals& s) {
-  return {s.temperature_c,     s.temperature_rate_cpm, s.elapsed_s,          s.rate_dps.x(),
-          s.rate_dps.y(),      s.rate_dps.z(),         s.force_mps2.x(),     s.force_mps2.y(),
-          s.force_mps2.z(),    s.table_rate_dps.x(),   s.table_rate_dps.y(), s.table_rate_dps.z()};
+  return {s.temperature_c,  s.temperature_rate_cpm, s.elapsed_s,          s.rate_dps.x(),
+          s.rate_dps.y(),   s.rate_dps.z(),         s.force_mps2.x(),     s.force_mps2.y(),
+          s.force_mps2.z(), s.table_rate_dps.x(),   s.table_rate_dps.y(), s.table_rate_dps.z()};
 }
 
 SignalBuilder::SignalBuilder(const RunSetup& setup, bool with_earth_rate)
@@ -31,8 +30,8 @@ Signals SignalBuilder::operator()(const core::ImuSample& sample, const store::Ta
                                   double temperature_rate_cpm, double elapsed_s) const {
   Signals s = with_inputs(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), table,
                           sample.temperature_c, temperature_rate_cpm, elapsed_s);
-  s.rate_dps = with_earth_rate_ ? Eigen::Vector3d(s.table_rate_dps + s.earth_rate_dps)
-                                : s.table_rate_dps;
+  s.rate_dps =
+      with_earth_rate_ ? Eigen::Vector3d(s.table_rate_dps + s.earth_rate_dps) : s.table_rate_dps;
   s.force_mps2 = s.C_BL * force_level_mps2_;
   return s;
 }
@@ -49,9 +48,9 @@ Signals SignalBuilder::with_inputs(const Eigen::Vector3d& rate_dps,
   s.C_BL = geometry_.body_to_level(table.outer_deg, table.inner_deg).transpose();
   s.table_rate_dps = s.C_BL * geometry_.table_rate_level_dps(table.outer_deg, table.outer_rate_dps,
                                                              table.inner_rate_dps);
-  s.table_accel_dps2 = s.C_BL * geometry_.table_accel_level_dps2(
-                                   table.outer_deg, table.outer_rate_dps, table.inner_rate_dps,
-                                   0.0, 0.0);
+  s.table_accel_dps2 =
+      s.C_BL * geometry_.table_accel_level_dps2(table.outer_deg, table.outer_rate_dps,
+                                                table.inner_rate_dps, 0.0, 0.0);
   s.earth_rate_dps = s.C_BL * earth_level_dps_;
   s.rate_dps = rate_dps;
   s.force_mps2 = force_mps2;

@@ -41,7 +41,8 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
   // step's start and end are then non-negative, as the noise model's random walk needs.
   double run_start_s = data.steps.front().samples.front().receive_time_s;
   for (const store::StepData& step : data.steps) {
-    for (const core::ImuSample& sample : step.samples) run_start_s = std::min(run_start_s, sample.receive_time_s);
+    for (const core::ImuSample& sample : step.samples)
+      run_start_s = std::min(run_start_s, sample.receive_time_s);
   }
   const auto P = static_cast<Eigen::Index>(model.size());
   Eigen::MatrixXd g(kChannels, P);
@@ -59,18 +60,18 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     s.end_s = step.samples.back().receive_time_s - run_start_s;
     s.regressors = Eigen::MatrixXd::Zero(kChannels, P);
     // Block means of measurement - reference for the batch-means variance.
-    const int blocks = n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock)
-                           ? kBatchBlocks
-                           : 0;
+    const int blocks =
+        n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock) ? kBatchBlocks : 0;
     std::vector<Vector6d> block_sum(static_cast<std::size_t>(blocks), Vector6d::Zero());
     std::vector<double> block_count(static_cast<std::size_t>(blocks), 0.0);
     double max_rate = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       const core::ImuSample& sample = step.samples[i];
       const store::TableSample& table = step.table[i];
-      max_rate = std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
-      const Signals sig = build(sample, table, temperature_rates[i],
-                                sample.receive_time_s - run_start_s);
+      max_rate =
+          std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
+      const Signals sig =
+          build(sample, table, temperature_rates[i], sample.receive_time_s - run_start_s);
       Vector6d meas;
       meas << sample.gyro_dps, sample.accel_mps2;
       const Vector6d ref = model.reference(sig);
@@ -109,8 +110,10 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       // mean averages `blocks` of them.
       Vector6d avar = Vector6d::Zero();
       for (int b = 0; b + 1 < blocks; ++b) {
-        const Vector6d d = block_sum[static_cast<std::size_t>(b + 1)] / block_count[static_cast<std::size_t>(b + 1)] -
-                           block_sum[static_cast<std::size_t>(b)] / block_count[static_cast<std::size_t>(b)];
+        const Vector6d d =
+            block_sum[static_cast<std::size_t>(b + 1)] /
+                block_count[static_cast<std::size_t>(b + 1)] -
+            block_sum[static_cast<std::size_t>(b)] / block_count[static_cast<std::size_t>(b)];
         avar += 0.5 * d.cwiseProduct(d);
       }
       avar /= static_cast<double>(blocks - 1);
@@ -167,7 +170,8 @@ NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps) {
       for (int sensor = 0; sensor < 2; ++sensor) {
         double smallest = std::numeric_limits<double>::infinity();
         for (int i = 0; i < 3; ++i) {
-          if (floor.density[3 * sensor + i] > 0.0) smallest = std::min(smallest, floor.density[3 * sensor + i]);
+          if (floor.density[3 * sensor + i] > 0.0)
+            smallest = std::min(smallest, floor.density[3 * sensor + i]);
         }
         for (int i = 0; i < 3; ++i) {
           if (!(floor.density[3 * sensor + i] > 0.0)) {

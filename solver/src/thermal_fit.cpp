@@ -115,7 +115,8 @@ ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Mo
   const std::vector<double> temperatures = temperature_plateaus(steps);
   const std::vector<std::vector<std::size_t>> groups = group_by_plateau(steps);
   if (groups.size() != temperatures.size()) {
-    throw std::logic_error("fit_per_plateau: plateau grouping disagrees with temperature_plateaus()");
+    throw std::logic_error(
+        "fit_per_plateau: plateau grouping disagrees with temperature_plateaus()");
   }
 
   ThermalFitResult result;
@@ -126,10 +127,10 @@ ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Mo
   if (static_cast<std::size_t>(order) >= groups.size()) {
     std::vector<std::string> t;
     for (double temp : temperatures) t.push_back(fmt::format("{:.1f}", temp));
-    throw core::InputError(kWhere, fmt::format("order {} needs at least {} temperature plateaus, "
-                                               "the run has {} (at {} degC)",
-                                               order, order + 1, groups.size(),
-                                               fmt::join(t, ", ")));
+    throw core::InputError(kWhere,
+                           fmt::format("order {} needs at least {} temperature plateaus, "
+                                       "the run has {} (at {} degC)",
+                                       order, order + 1, groups.size(), fmt::join(t, ", ")));
   }
   for (std::size_t g = 0; g < groups.size(); ++g) {
     result.plateaus.push_back(
@@ -154,7 +155,8 @@ ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Mo
     }
     if (!missing.empty()) {
       result.skipped.push_back(
-          {info.name, fmt::format("not identified on the plateau(s) at {} degC", fmt::join(missing, ", "))});
+          {info.name,
+           fmt::format("not identified on the plateau(s) at {} degC", fmt::join(missing, ", "))});
       continue;
     }
     const Kind kind = kind_of(info.name);
@@ -194,7 +196,8 @@ nlohmann::json thermal_fit_to_json(const ThermalFitResult& result) {
   for (const PlateauFit& p : result.plateaus) {
     nlohmann::json params = nlohmann::json::array();
     for (const auto& f : p.parameters) {
-      params.push_back({{"name", f.name}, {"value", f.value}, {"sigma", f.sigma}, {"unit", f.unit}});
+      params.push_back(
+          {{"name", f.name}, {"value", f.value}, {"sigma", f.sigma}, {"unit", f.unit}});
     }
     nlohmann::json unid = nlohmann::json::array();
     for (const auto& u : p.unidentifiable) unid.push_back({{"name", u.name}, {"reason", u.reason}});
@@ -218,7 +221,8 @@ nlohmann::json thermal_fit_to_json(const ThermalFitResult& result) {
                                 {"residuals", std::vector<double>(r.data(), r.data() + r.size())}});
   }
   j["skipped"] = nlohmann::json::array();
-  for (const ThermalSkip& s : result.skipped) j["skipped"].push_back({{"name", s.name}, {"reason", s.reason}});
+  for (const ThermalSkip& s : result.skipped)
+    j["skipped"].push_back({{"name", s.name}, {"reason", s.reason}});
   return j;
 }
 

@@ -11,8 +11,11 @@ namespace calstand::store {
 namespace {
 
 CalibrationRow row_of(SQLite::Statement& q) {
-  return {q.getColumn(0).getInt64(), q.getColumn(1).getInt64(), q.getColumn(2).getString(),
-          q.getColumn(3).getString(), nlohmann::json::parse(q.getColumn(4).getString()),
+  return {q.getColumn(0).getInt64(),
+          q.getColumn(1).getInt64(),
+          q.getColumn(2).getString(),
+          q.getColumn(3).getString(),
+          nlohmann::json::parse(q.getColumn(4).getString()),
           q.getColumn(5).getString()};
 }
 

@@ -10,8 +10,8 @@
 #include <stdexcept>
 
 #include "sql_util.hpp"
-#include "store/stamp.hpp"
 #include "step_stats.hpp"
+#include "store/stamp.hpp"
 
 namespace calstand::store {
 
@@ -55,8 +55,7 @@ class CaptureWriter::Sink {
  public:
   Sink(const std::string& path, int busy_timeout_ms)
       : db_(guarded("open " + path + " for capture", [&] {
-          return SQLite::Database(path, SQLite::OPEN_READWRITE | SQLite::OPEN_URI,
-                                  busy_timeout_ms);
+          return SQLite::Database(path, SQLite::OPEN_READWRITE | SQLite::OPEN_URI, busy_timeout_ms);
         })) {
     guarded("prepare capture connection", [&] {
       const std::string file = db_.getFilename();

@@ -46,8 +46,8 @@ void check_identity(SQLite::Database& db, const std::string& path) {
   const int app_id = pragma_int(db, "application_id");
   const int version = pragma_int(db, "user_version");
   if (app_id != 0 && app_id != kApplicationId) {
-    throw StoreError("open " + path, "not a calstand database (application_id " +
-                                         std::to_string(app_id) + ")");
+    throw StoreError("open " + path,
+                     "not a calstand database (application_id " + std::to_string(app_id) + ")");
   }
   if (app_id == 0 && version == 0) {
     const int tables =
@@ -58,10 +58,10 @@ void check_identity(SQLite::Database& db, const std::string& path) {
     }
   }
   if (version > latest_schema_version()) {
-    throw StoreError("open " + path,
-                     "database schema version " + std::to_string(version) +
-                         " is newer than this calstand's " +
-                         std::to_string(latest_schema_version()) + "; use a newer calstand");
+    throw StoreError("open " + path, "database schema version " + std::to_string(version) +
+                                         " is newer than this calstand's " +
+                                         std::to_string(latest_schema_version()) +
+                                         "; use a newer calstand");
   }
   snapshot.commit();  // read only: ends the snapshot
 }
@@ -78,7 +78,8 @@ bool is_busy(const SQLite::Exception& e) {
 template <class F>
 void retry_while_busy(int timeout_ms, F&& fn) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  for (auto pause = std::chrono::milliseconds(1);; pause = std::min(pause * 2, std::chrono::milliseconds(50))) {
+  for (auto pause = std::chrono::milliseconds(1);;
+       pause = std::min(pause * 2, std::chrono::milliseconds(50))) {
     try {
       fn();
       return;

@@ -28,7 +28,8 @@ DatabaseLock::DatabaseLock(const std::string& db_path, Mode mode, const std::str
   const std::string path = lock_path(db_path);
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) {
-    throw std::runtime_error(fmt::format("{}: cannot open the lock file: {}", path, std::strerror(errno)));
+    throw std::runtime_error(
+        fmt::format("{}: cannot open the lock file: {}", path, std::strerror(errno)));
   }
   const int operation = (mode == Mode::kExclusive ? LOCK_EX : LOCK_SH) | LOCK_NB;
   int rc = 0;
@@ -46,11 +47,13 @@ DatabaseLock::DatabaseLock(const std::string& db_path, Mode mode, const std::str
     if (mode == Mode::kShared) {
       throw DatabaseBusy(fmt::format(
           "{}: a station daemon owns this database ({}); queue the run with `calstand submit` "
-          "instead", db_path, holder.empty() ? "calstandd" : holder));
+          "instead",
+          db_path, holder.empty() ? "calstandd" : holder));
     }
     throw DatabaseBusy(fmt::format(
         "{}: in use by another calstandd or by a foreground `calstand run` (lock {}); one "
-        "process drives a database's station at a time", db_path, path));
+        "process drives a database's station at a time",
+        db_path, path));
   }
   if (mode == Mode::kExclusive) {
     const std::string text = owner + "\n";

@@ -33,8 +33,14 @@ std::int64_t write_derived_run(Database& db, const DerivedRun& derived) {
     st.bind(6, source.station_snapshot.dump());
     st.bind(7, derived.status);
     st.bind(8, utc_now_iso8601());
-    if (source.started_clock_s) st.bind(9, *source.started_clock_s); else st.bind(9);
-    if (source.ended_clock_s) st.bind(10, *source.ended_clock_s); else st.bind(10);
+    if (source.started_clock_s)
+      st.bind(9, *source.started_clock_s);
+    else
+      st.bind(9);
+    if (source.ended_clock_s)
+      st.bind(10, *source.ended_clock_s);
+    else
+      st.bind(10);
     st.exec();
     const std::int64_t run = db.sql().getLastInsertRowid();
     detail::StepWriter writer(db.sql());

@@ -28,7 +28,8 @@ double estimated_rate_hz(Database& db, std::int64_t run, const std::string& devi
   q.bind(1, run);
   q.bind(2, device);
   if (q.executeStep() && q.getColumn(1).getDouble() > 0.0) {
-    const double hz = static_cast<double>(q.getColumn(0).getInt64() - 1) / q.getColumn(1).getDouble();
+    const double hz =
+        static_cast<double>(q.getColumn(0).getInt64() - 1) / q.getColumn(1).getDouble();
     return std::stod(fmt::format("{:.6g}", hz));
   }
   return 1.0;
@@ -50,8 +51,8 @@ nlohmann::json meta_from_station(Database& db, std::int64_t run, const nlohmann:
     }
   }
   meta["sample_rate_hz"] = estimated_rate_hz(db, run, device);
-  meta["units"] = {{"gyro", "deg/s"},      {"accel", "m/s^2"},      {"angle", "deg"},
-                   {"rate", "deg/s"},      {"temperature", "degC"}, {"time", "s"}};
+  meta["units"] = {{"gyro", "deg/s"}, {"accel", "m/s^2"},      {"angle", "deg"},
+                   {"rate", "deg/s"}, {"temperature", "degC"}, {"time", "s"}};
   return nlohmann::json::parse(meta.dump());
 }
 
@@ -72,12 +73,14 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
   const nlohmann::json meta =
       record.station_snapshot.value("format", "") == detail::kImportFormat
           ? record.station_snapshot
-          : detail::guarded("read run for export",
-                            [&] { return meta_from_station(db, run, record.station_snapshot, device); });
+          : detail::guarded("read run for export", [&] {
+              return meta_from_station(db, run, record.station_snapshot, device);
+            });
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw std::runtime_error(out_dir.string() + ": cannot create the folder: " + ec.message());
+  if (ec)
+    throw std::runtime_error(out_dir.string() + ": cannot create the folder: " + ec.message());
 
   // One step at a time: a long run's CSV (a gigabyte for an hour of two 1 kHz IMUs) never
   // sits in memory whole. Written under a temporary name and renamed when whole, meta.json
@@ -90,9 +93,10 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
     fmt::memory_buffer csv;
     for_each_step_data(db, run, device, [&](const StepData& data) {
       const auto& c = data.step.commanded;
-      const std::int64_t step_value = c.contains("import_step") && c["import_step"].is_number_integer()
-                                          ? c["import_step"].get<std::int64_t>()
-                                          : static_cast<std::int64_t>(data.step.index);
+      const std::int64_t step_value =
+          c.contains("import_step") && c["import_step"].is_number_integer()
+              ? c["import_step"].get<std::int64_t>()
+              : static_cast<std::int64_t>(data.step.index);
       csv.clear();
       for (std::size_t i = 0; i < data.samples.size(); ++i) {
         const core::ImuSample& s = data.samples[i];

@@ -66,7 +66,8 @@ std::vector<FitRecord> fit_history(Database& db, std::int64_t run) {
       f.device = q.getColumn(2).getString();
       f.command = q.getColumn(3).getString();
       f.model = q.getColumn(4).getString();
-      f.custom_terms = nlohmann::json::parse(q.getColumn(5).getString()).get<std::vector<std::string>>();
+      f.custom_terms =
+          nlohmann::json::parse(q.getColumn(5).getString()).get<std::vector<std::string>>();
       f.sensors = q.getColumn(6).getString();
       f.parameters = q.getColumn(7).getInt();
       f.chi2_dof = optional_column(q.getColumn(8));

@@ -14,9 +14,19 @@
 namespace calstand::store::detail {
 namespace {
 
-constexpr std::array<std::string_view, 13> kColumns = {
-    "t", "step", "outer_deg", "inner_deg", "outer_rate_dps", "inner_rate_dps", "temp_c",
-    "gx", "gy", "gz", "ax", "ay", "az"};
+constexpr std::array<std::string_view, 13> kColumns = {"t",
+                                                       "step",
+                                                       "outer_deg",
+                                                       "inner_deg",
+                                                       "outer_rate_dps",
+                                                       "inner_rate_dps",
+                                                       "temp_c",
+                                                       "gx",
+                                                       "gy",
+                                                       "gz",
+                                                       "ax",
+                                                       "ay",
+                                                       "az"};
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -100,8 +110,7 @@ std::vector<ImportRow> read_import_samples(const std::filesystem::path& path) {
       continue;
     }
     if (blank_line != 0) {
-      throw core::InputError(fmt::format("{}:{}", file, blank_line),
-                             "empty line before more data");
+      throw core::InputError(fmt::format("{}:{}", file, blank_line), "empty line before more data");
     }
     std::size_t n = 0;
     std::string_view rest = line;

@@ -149,7 +149,8 @@ ImportResult import_run(Database& db, const std::filesystem::path& dir) {
     ImportResult result;
     result.run = insert_import_run(db.sql(), meta, dir, first, last);
     const std::string csv = (dir / "samples.csv").string();
-    for (std::size_t i = 0; i < steps.size(); ++i) write_import_step(writer, result.run, i, steps[i], csv);
+    for (std::size_t i = 0; i < steps.size(); ++i)
+      write_import_step(writer, result.run, i, steps[i], csv);
     tx.commit();
     result.steps = steps.size();
     result.samples = rows.size();

@@ -9,8 +9,8 @@ namespace calstand::store {
 
 void enqueue_run(Database& db, std::int64_t run, const std::string& submitted_by) {
   detail::guarded("enqueue run", [&] {
-    SQLite::Statement st(db.sql(),
-                         "INSERT INTO run_queue (run_id, submitted_utc, submitted_by) VALUES (?, ?, ?)");
+    SQLite::Statement st(
+        db.sql(), "INSERT INTO run_queue (run_id, submitted_utc, submitted_by) VALUES (?, ?, ?)");
     st.bind(1, run);
     st.bind(2, utc_now_iso8601());
     st.bind(3, submitted_by);
@@ -26,7 +26,8 @@ std::vector<QueuedRun> queued_runs(Database& db) {
                         "ORDER BY q.rowid");
     std::vector<QueuedRun> out;
     while (q.executeStep()) {
-      out.push_back({q.getColumn(0).getInt64(), q.getColumn(1).getString(), q.getColumn(2).getString()});
+      out.push_back(
+          {q.getColumn(0).getInt64(), q.getColumn(1).getString(), q.getColumn(2).getString()});
     }
     return out;
   });

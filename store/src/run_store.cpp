@@ -162,8 +162,7 @@ std::int64_t RunStore::create_run(const NewRun& run) {
   });
 }
 
-std::vector<std::int64_t> RunStore::add_steps(std::int64_t run,
-                                              const std::vector<NewStep>& steps) {
+std::vector<std::int64_t> RunStore::add_steps(std::int64_t run, const std::vector<NewStep>& steps) {
   require_run(run);
   return guarded("insert steps", [&] {
     SQLite::Transaction tx(db_.sql(), SQLite::TransactionBehavior::IMMEDIATE);
@@ -255,8 +254,7 @@ void RunStore::mark_step_failed(std::int64_t run, std::size_t index, const Stamp
   });
 }
 
-void RunStore::mark_step_invalidated(std::int64_t run, std::size_t index,
-                                     const std::string& why) {
+void RunStore::mark_step_invalidated(std::int64_t run, std::size_t index, const std::string& why) {
   const std::int64_t id = step_id(run, index);
   guarded("mark step invalidated", [&] {
     SQLite::Statement st(db_.sql(),
@@ -271,8 +269,7 @@ void RunStore::mark_step_invalidated(std::int64_t run, std::size_t index,
 void RunStore::mark_step_skipped(std::int64_t run, std::size_t index, const std::string& why) {
   const std::int64_t id = step_id(run, index);
   guarded("mark step skipped", [&] {
-    SQLite::Statement st(db_.sql(),
-                         "UPDATE steps SET status = 'skipped', reason = ? WHERE id = ?");
+    SQLite::Statement st(db_.sql(), "UPDATE steps SET status = 'skipped', reason = ? WHERE id = ?");
     st.bind(1, why);
     st.bind(2, id);
     st.exec();
@@ -336,8 +333,7 @@ void RunStore::add_chamber_telemetry(std::int64_t run, const core::ChamberState&
   add_chamber_telemetry(run, std::span<const core::ChamberState>(&state, 1));
 }
 
-void RunStore::add_chamber_telemetry(std::int64_t run,
-                                     std::span<const core::ChamberState> states) {
+void RunStore::add_chamber_telemetry(std::int64_t run, std::span<const core::ChamberState> states) {
   guarded("insert chamber telemetry", [&] {
     SQLite::Transaction tx(db_.sql(), SQLite::TransactionBehavior::IMMEDIATE);
     SQLite::Statement st(db_.sql(), kInsertChamber);
@@ -348,8 +344,7 @@ void RunStore::add_chamber_telemetry(std::int64_t run,
 
 void RunStore::set_run_status(std::int64_t run, const std::string& status,
                               const std::optional<Stamp>& started,
-                              const std::optional<Stamp>& ended,
-                              const std::string& exit_reason) {
+                              const std::optional<Stamp>& ended, const std::string& exit_reason) {
   require_run(run);
   guarded("update run status", [&] {
     SQLite::Statement st(
@@ -382,8 +377,8 @@ std::vector<RunSummary> RunStore::list_runs(std::optional<std::size_t> limit,
                                        " ORDER BY r.id DESC" + (limit ? " LIMIT :limit" : ""));
     if (before_id) q.bind(":before", *before_id);
     if (limit) {
-      q.bind(":limit", static_cast<std::int64_t>(
-                           std::min<std::size_t>(*limit, std::numeric_limits<std::int64_t>::max())));
+      q.bind(":limit", static_cast<std::int64_t>(std::min<std::size_t>(
+                           *limit, std::numeric_limits<std::int64_t>::max())));
     }
     std::vector<RunSummary> out;
     while (q.executeStep()) out.push_back(read_summary(q));

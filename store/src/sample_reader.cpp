@@ -76,10 +76,9 @@ void for_each_chunk(
 std::vector<core::ImuSample> read_samples(Database& db, std::int64_t run, std::size_t index,
                                           const std::string& device) {
   std::vector<core::ImuSample> out;
-  for_each_chunk(db, run, index, device,
-                 [&](const ChunkInfo&, std::span<const core::ImuSample> s) {
-                   out.insert(out.end(), s.begin(), s.end());
-                 });
+  for_each_chunk(db, run, index, device, [&](const ChunkInfo&, std::span<const core::ImuSample> s) {
+    out.insert(out.end(), s.begin(), s.end());
+  });
   return out;
 }
 

@@ -23,11 +23,11 @@ struct TimedTable {
 };
 
 std::vector<TimedTable> read_table(SQLite::Database& db, const char* where, std::int64_t id) {
-  SQLite::Statement q(db, fmt::format("SELECT time_s, outer_deg, inner_deg, outer_rate_dps, "
-                                      "inner_rate_dps FROM table_telemetry WHERE {} = ? "
-                                      "ORDER BY {}",
-                                      where,
-                                      std::string_view(where) == "step_id" ? "id" : "time_s, id"));
+  SQLite::Statement q(
+      db, fmt::format("SELECT time_s, outer_deg, inner_deg, outer_rate_dps, "
+                      "inner_rate_dps FROM table_telemetry WHERE {} = ? "
+                      "ORDER BY {}",
+                      where, std::string_view(where) == "step_id" ? "id" : "time_s, id"));
   q.bind(1, id);
   std::vector<TimedTable> out;
   while (q.executeStep()) {
@@ -45,8 +45,9 @@ double wrap180(double deg) {
 }
 
 // Table state at `t_s` from time-ordered telemetry of one step: linear between neighbours
-// (the turn between rows resolved with the recorded rates); outside the rows' span the nearest row, its angles
-// advanced at its rates (a rate step's angles keep turning; a position step's rates are zero).
+// (the turn between rows resolved with the recorded rates); outside the rows' span the nearest row,
+// its angles advanced at its rates (a rate step's angles keep turning; a position step's rates are
+// zero).
 TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
   const auto after = std::lower_bound(rows.begin(), rows.end(), t_s,
                                       [](const TimedTable& r, double t) { return r.time_s < t; });
@@ -69,10 +70,11 @@ TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
     const double predicted = 0.5 * (rate_a + rate_b) * span;
     return predicted + wrap180(to_deg - from_deg - predicted);
   };
-  return {wrap180(a.outer_deg + f * turn(a.outer_deg, b.outer_deg, a.outer_rate_dps, b.outer_rate_dps)),
-          wrap180(a.inner_deg + f * turn(a.inner_deg, b.inner_deg, a.inner_rate_dps, b.inner_rate_dps)),
-          a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps),
-          a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps)};
+  return {
+      wrap180(a.outer_deg + f * turn(a.outer_deg, b.outer_deg, a.outer_rate_dps, b.outer_rate_dps)),
+      wrap180(a.inner_deg + f * turn(a.inner_deg, b.inner_deg, a.inner_rate_dps, b.inner_rate_dps)),
+      a.outer_rate_dps + f * (b.outer_rate_dps - a.outer_rate_dps),
+      a.inner_rate_dps + f * (b.inner_rate_dps - a.inner_rate_dps)};
 }
 
 // The rows of `run_table` (time-ordered) recorded while the step ran. Rows of the move before
@@ -81,12 +83,10 @@ TableSample interpolate(std::span<const TimedTable> rows, double t_s) {
 std::span<const TimedTable> rows_of_step(const std::vector<TimedTable>& run_table,
                                          const StepRecord& step) {
   if (!step.started_clock_s || !step.ended_clock_s) return {};
-  const auto first = std::lower_bound(
-      run_table.begin(), run_table.end(), *step.started_clock_s,
-      [](const TimedTable& r, double t) { return r.time_s < t; });
-  const auto last = std::upper_bound(
-      first, run_table.end(), *step.ended_clock_s,
-      [](double t, const TimedTable& r) { return t < r.time_s; });
+  const auto first = std::lower_bound(run_table.begin(), run_table.end(), *step.started_clock_s,
+                                      [](const TimedTable& r, double t) { return r.time_s < t; });
+  const auto last = std::upper_bound(first, run_table.end(), *step.ended_clock_s,
+                                     [](double t, const TimedTable& r) { return t < r.time_s; });
   return {first, last};
 }
 
@@ -119,8 +119,8 @@ void for_each_step_data(Database& db, std::int64_t run, const std::string& devic
                         const std::function<void(const StepData&)>& use) {
   RunStore runs(db);
   const std::vector<StepRecord> steps = runs.load_steps(run);
-  const std::vector<TimedTable> run_table = detail::guarded(
-      "read table telemetry", [&] { return read_table(db.sql(), "run_id", run); });
+  const std::vector<TimedTable> run_table =
+      detail::guarded("read table telemetry", [&] { return read_table(db.sql(), "run_id", run); });
   for (const StepRecord& step : steps) {
     if (step.status != StepStatus::kCompleted) continue;
     StepData data;

@@ -48,7 +48,7 @@ class StepStats {
 
  private:
   static std::array<double, kChannels> channels(const core::ImuSample& s) {
-    return {s.gyro_dps.x(),   s.gyro_dps.y(),   s.gyro_dps.z(),  s.accel_mps2.x(),
+    return {s.gyro_dps.x(),   s.gyro_dps.y(),   s.gyro_dps.z(), s.accel_mps2.x(),
             s.accel_mps2.y(), s.accel_mps2.z(), s.temperature_c};
   }
 

@@ -9,19 +9,23 @@ namespace calstand::store::detail {
 
 StepWriter::StepWriter(SQLite::Database& db)
     : db_(db),
-      step_(db, "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
-                "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, ?, ?, "
-                "?, 'completed', 1, 1, ?, ?)"),
-      chunk_(db, "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
-                 "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
-                 "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
-      table_(db, "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
-                 "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)"),
-      means_(db, "INSERT INTO step_means (run_id, step_id, attempt, device, count, "
-                 "first_receive_time_s, last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, "
-                 "ay_mps2, az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
-                 "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c) VALUES (?, ?, 1, ?, "
-                 "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)") {}
+      step_(db,
+            "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
+            "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, ?, ?, "
+            "?, 'completed', 1, 1, ?, ?)"),
+      chunk_(db,
+             "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
+             "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
+             "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
+      table_(db,
+             "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
+             "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)"),
+      means_(db,
+             "INSERT INTO step_means (run_id, step_id, attempt, device, count, "
+             "first_receive_time_s, last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, "
+             "ay_mps2, az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
+             "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c) VALUES (?, ?, 1, ?, "
+             "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)") {}
 
 std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std::string& device,
                                std::span<const core::ImuSample> samples,

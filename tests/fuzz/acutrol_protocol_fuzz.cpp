@@ -59,12 +59,13 @@ void client_parsers(std::string_view line) {
     check(!is_ok(reply));
   }
   const std::string_view payload = reply.payload;
-  if (const auto n = parse_number(payload)) check(std::isfinite(*n.value));
-  else check(!n.error.empty());
+  if (const auto n = parse_number(payload))
+    check(std::isfinite(*n.value));
+  else
+    check(!n.error.empty());
   if (const auto s = parse_status(payload)) {
     const auto again = parse_status(format_status(*s.value));
-    check(again && again.value->mode == s.value->mode &&
-          again.value->settled == s.value->settled &&
+    check(again && again.value->mode == s.value->mode && again.value->settled == s.value->settled &&
           again.value->interlock_open == s.value->interlock_open);
   } else {
     check(!s.error.empty());
@@ -200,7 +201,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::lock_guard lock(world_mutex);
         world.advance(step);
       } else if (text[0] == 2) {
-        backend.open_interlock(axis, std::string(text.substr(std::min<std::size_t>(2, text.size()))));
+        backend.open_interlock(axis,
+                               std::string(text.substr(std::min<std::size_t>(2, text.size()))));
       } else {
         backend.clear_interlock_cause(axis);
       }

@@ -58,10 +58,10 @@ std::vector<CanSignalMap> make_maps() {
   maps.push_back(CanSignalMap::from_json(no_time, "no_time"));
   json big = doc;
   big["byte_order"] = "big";
-  big["signals"]["gyro_x"] = {{"id", "0x101"}, {"start_bit", 0}, {"length_bits", 32},
-                              {"type", "float"}, {"scale", 1.0}};
-  big["signals"]["gyro_y"] = {{"id", "0x101"}, {"start_bit", 32}, {"length_bits", 24},
-                              {"type", "signed"}, {"scale", 1e-4}};
+  big["signals"]["gyro_x"] = {
+      {"id", "0x101"}, {"start_bit", 0}, {"length_bits", 32}, {"type", "float"}, {"scale", 1.0}};
+  big["signals"]["gyro_y"] = {
+      {"id", "0x101"}, {"start_bit", 32}, {"length_bits", 24}, {"type", "signed"}, {"scale", 1e-4}};
   maps.push_back(CanSignalMap::from_json(big, "big"));
   json extended = doc;
   extended["signals"]["temperature"]["extended"] = true;
@@ -89,8 +89,8 @@ bool finite(const calstand::core::ImuSample& s) {
 
 void check_counts(const CanSampleAssembler& a) {
   const auto& s = a.stats();
-  check(s.frames == s.unknown_ids + s.bad_frames + s.bad_dlc + s.duplicate_frames +
-                        s.late_frames + s.frames_used + s.frames_discarded + a.pending_frames());
+  check(s.frames == s.unknown_ids + s.bad_frames + s.bad_dlc + s.duplicate_frames + s.late_frames +
+                        s.frames_used + s.frames_discarded + a.pending_frames());
 }
 
 }  // namespace

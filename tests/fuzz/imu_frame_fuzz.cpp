@@ -19,8 +19,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     decoder.feed(std::span(data + at, n), out);
   }
   const auto& s = decoder.stats();
-  const std::uint64_t accounted = s.frames * calstand::drivers::imu_frame::kFrameSize +
-                                  s.garbage_bytes + decoder.buffered();
+  const std::uint64_t accounted =
+      s.frames * calstand::drivers::imu_frame::kFrameSize + s.garbage_bytes + decoder.buffered();
   if (accounted != s.bytes_fed || out.size() != s.frames) std::abort();
   return 0;
 }

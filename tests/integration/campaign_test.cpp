@@ -137,7 +137,8 @@ class Campaign : public ::testing::Test {
   static void SetUpTestSuite() {
     reference_db_ = new std::string(db_path("campaign_reference.db"));
     std::string out;
-    const int code = run_command("run thermal-calibration --quiet --db " + *reference_db_ + kSetArgs, &out);
+    const int code =
+        run_command("run thermal-calibration --quiet --db " + *reference_db_ + kSetArgs, &out);
     ASSERT_EQ(code, 0) << out;
     reference_ = new std::vector<StepData>(check_run(*reference_db_));
   }
@@ -185,7 +186,8 @@ TEST_P(KilledCampaign, ResumesToTheSameStepsWithNoLostOrDuplicatedSamples) {
     EXPECT_EQ(resumed[i].label, (*reference_)[i].label);
     EXPECT_EQ(resumed[i].status, "completed") << resumed[i].label;
     // Same amount of data per step as the uninterrupted run (a tick of slack at each end).
-    EXPECT_NEAR(static_cast<double>(resumed[i].samples), static_cast<double>((*reference_)[i].samples), 41.0)
+    EXPECT_NEAR(static_cast<double>(resumed[i].samples),
+                static_cast<double>((*reference_)[i].samples), 41.0)
         << resumed[i].label;
   }
 }
@@ -215,8 +217,8 @@ TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
     sqlite3_busy_timeout(h, 1000);
     sqlite3_stmt* st = nullptr;
     std::string value;
-    if (sqlite3_prepare_v2(h, sql, -1, &st, nullptr) == SQLITE_OK && sqlite3_step(st) == SQLITE_ROW &&
-        sqlite3_column_text(st, 0)) {
+    if (sqlite3_prepare_v2(h, sql, -1, &st, nullptr) == SQLITE_OK &&
+        sqlite3_step(st) == SQLITE_ROW && sqlite3_column_text(st, 0)) {
       value = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
     }
     sqlite3_finalize(st);
@@ -252,8 +254,9 @@ TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
   for (const auto& s : run.steps) {
     if (s.kind == "capture") {
       repeated |= s.attempts >= 2;
-      EXPECT_NEAR(static_cast<double>(calstand::store::read_samples(handle, 1, s.index, "imu0").size()),
-                  20000.0 * 400.0, 41.0);
+      EXPECT_NEAR(
+          static_cast<double>(calstand::store::read_samples(handle, 1, s.index, "imu0").size()),
+          20000.0 * 400.0, 41.0);
     }
   }
   EXPECT_TRUE(repeated) << "the interrupted capture was not repeated";

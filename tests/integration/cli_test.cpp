@@ -3,12 +3,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdlib>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -390,7 +389,8 @@ TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
   const auto line3 = broken.find('\n', broken.find('\n', broken.find('\n') + 1) + 1) + 1;
   const auto comma = broken.find(',', broken.find(',', line3) + 1);
   broken.insert(comma + 1, "x");
-  std::system(("mkdir -p " + dir + "/broken && cp " + dir + "/first/meta.json " + dir + "/broken/").c_str());
+  std::system(("mkdir -p " + dir + "/broken && cp " + dir + "/first/meta.json " + dir + "/broken/")
+                  .c_str());
   write_text(dir + "/broken/samples.csv", broken);
   const std::string db3 = dir + "/refused.db";
   r = run("import " + dir + "/broken --db " + db3);
@@ -405,12 +405,12 @@ TEST(CliImportExport, RecordedRunRoundTripsThroughTheImportFormat) {
 // leaves no file behind: a typo in --db is not a new empty database, and a poll for a database
 // another process is about to create must not race that process in creating it.
 TEST(CliReadOnly, MissingDatabaseIsExitCode2AndNotCreated) {
-  const std::string db = ::testing::TempDir() + "calstand-typo-" + std::to_string(::getpid()) + ".db";
-  for (const std::string& args : {"runs --db " + db, "show --run 1 --db " + db,
-                                 "fit --run 1 --db " + db, "export --run 1 --out x --db " + db,
-                                 "allan --run 1 --channel gx --db " + db,
-                                 "noise --run 1 --db " + db,
-                                 "report --run 1 --out r.html --db " + db}) {
+  const std::string db =
+      ::testing::TempDir() + "calstand-typo-" + std::to_string(::getpid()) + ".db";
+  for (const std::string& args :
+       {"runs --db " + db, "show --run 1 --db " + db, "fit --run 1 --db " + db,
+        "export --run 1 --out x --db " + db, "allan --run 1 --channel gx --db " + db,
+        "noise --run 1 --db " + db, "report --run 1 --out r.html --db " + db}) {
     const Result r = run(args);
     EXPECT_EQ(r.exit_code, 2) << args << ": " << r.out;
     EXPECT_NE(r.out.find("no such database file"), std::string::npos) << args << ": " << r.out;

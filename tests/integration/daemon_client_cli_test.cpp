@@ -75,7 +75,8 @@ TEST_F(DaemonClientCli, RefusalsAreErrorsWithTheDaemonsReason) {
   const auto invalid = calstand("submit six-position --set capture_s=-5");
   EXPECT_EQ(invalid.exit_code, 2) << invalid.out;
   EXPECT_NE(invalid.out.find("HTTP 422"), std::string::npos) << invalid.out;
-  EXPECT_NE(invalid.out.find("--set capture_s: -5 is below the minimum 1"), std::string::npos) << invalid.out;
+  EXPECT_NE(invalid.out.find("--set capture_s: -5 is below the minimum 1"), std::string::npos)
+      << invalid.out;
 
   const auto unknown = calstand("pause 42");
   EXPECT_EQ(unknown.exit_code, 2) << unknown.out;
@@ -101,7 +102,8 @@ TEST_F(DaemonClientCli, PauseResumeAndAbortARun) {
   const auto paused = calstand("pause 1 --now --operator bob");
   ASSERT_EQ(paused.exit_code, 0) << paused.out;
   EXPECT_EQ(paused.out, "run 1: pause at once requested\n");
-  ASSERT_TRUE(calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
+  ASSERT_TRUE(
+      calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
   EXPECT_EQ(calstand("resume 1").exit_code, 0);
   const auto aborted = calstand("abort 1 --reason 'unit mounted wrong'");
   EXPECT_EQ(aborted.exit_code, 0) << aborted.out;
@@ -124,18 +126,19 @@ TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
     return r.body.contains("live") && r.body["live"]["state"] == "running";
   }));
   ASSERT_EQ(calstand("pause 1").exit_code, 0);  // at the next step boundary
-  ASSERT_TRUE(calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
+  ASSERT_TRUE(
+      calstand::testing::wait_until([&] { return api.get("/runs/1").body["status"] == "paused"; }));
   const std::size_t next = api.get("/runs/1").body["current_step"]["index"].get<std::size_t>();
   const auto wrong = calstand("skip 1 --step " + std::to_string(next + 1));
   EXPECT_EQ(wrong.exit_code, 2) << wrong.out;
   EXPECT_NE(wrong.out.find("HTTP 409"), std::string::npos) << wrong.out;
-  const auto skipped = calstand("skip 1 --step " + std::to_string(next) + " --reason 'not needed' --operator carol");
+  const auto skipped =
+      calstand("skip 1 --step " + std::to_string(next) + " --reason 'not needed' --operator carol");
   ASSERT_EQ(skipped.exit_code, 0) << skipped.out;
   EXPECT_EQ(skipped.out, "run 1: skip requested\n");
   // Still paused, now before the step after the skipped one.
-  ASSERT_TRUE(calstand::testing::wait_until([&] {
-    return api.get("/runs/1/steps").body[next]["status"] == "skipped";
-  }));
+  ASSERT_TRUE(calstand::testing::wait_until(
+      [&] { return api.get("/runs/1/steps").body[next]["status"] == "skipped"; }));
   EXPECT_EQ(api.get("/runs/1").body["status"], "paused");
   EXPECT_EQ(api.get("/runs/1").body["current_step"]["index"], next + 1);
   const auto step = api.get("/runs/1/steps").body[next];
@@ -143,7 +146,8 @@ TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
   ASSERT_EQ(calstand("resume 1").exit_code, 0);
   const auto watched = calstand("watch 1");
   EXPECT_EQ(watched.exit_code, 0) << watched.out;
-  EXPECT_NE(watched.out.find("run 1 completed: 11/12 steps, 1 skipped"), std::string::npos) << watched.out;
+  EXPECT_NE(watched.out.find("run 1 completed: 11/12 steps, 1 skipped"), std::string::npos)
+      << watched.out;
 }
 
 // `calstand watch` rides out a daemon killed and brought back (as systemd's Restart= does):
@@ -151,7 +155,8 @@ TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
 TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) {
   const std::string dir = calstand::testing::fresh_dir("watch-restart");
   const std::string listen = "127.0.0.1:" + std::to_string(calstand::testing::free_loopback_port());
-  auto daemon = std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
+  auto daemon =
+      std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
   ASSERT_GT(daemon->port(), 0);
   calstand::testing::ApiClient api(daemon->port());
   // 1000 s captures: about a second of wall time each, so the kill lands mid-run.

@@ -55,11 +55,13 @@ std::vector<StepSamples> read_steps(const std::string& db_file, std::int64_t run
         EXPECT_EQ(samples[k].sequence, (samples[k - 1].sequence + 1) % 65536) << "step " << s.index;
         if (::testing::Test::HasFailure()) break;
       }
-      SQLite::Statement q(db.sql(), "SELECT COUNT(*) FROM sample_chunks WHERE step_id = ? AND attempt IS NOT ?");
+      SQLite::Statement q(
+          db.sql(), "SELECT COUNT(*) FROM sample_chunks WHERE step_id = ? AND attempt IS NOT ?");
       q.bind(1, s.id);
       q.bind(2, *s.good_attempt);
       q.executeStep();
-      EXPECT_EQ(q.getColumn(0).getInt(), 0) << "samples of a discarded attempt remain in step " << s.index;
+      EXPECT_EQ(q.getColumn(0).getInt(), 0)
+          << "samples of a discarded attempt remain in step " << s.index;
     }
     out.push_back(d);
   }
@@ -80,8 +82,8 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
     // Mid-run: several steps done, a capture in progress (its cut-off attempt must go).
     ASSERT_TRUE(wait_until([&] {
       const auto r = api.get("/runs/" + std::to_string(run));
-      return r.status == 200 && r.body["steps_done"].get<std::size_t>() >= 4 && r.body.contains("live") &&
-             r.body["live"]["phase"] == "capturing";
+      return r.status == 200 && r.body["steps_done"].get<std::size_t>() >= 4 &&
+             r.body.contains("live") && r.body["live"]["phase"] == "capturing";
     }));
     EXPECT_EQ(d.signal_and_wait(SIGKILL), -SIGKILL);
   }
@@ -90,17 +92,22 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
     store::Database database(db);
     EXPECT_EQ(store::RunStore(database).load_run(run).summary.status, "running");  // cut off
   }
-  ASSERT_LT(std::count_if(before.begin(), before.end(), [](const auto& s) { return s.status == "completed"; }), 12)
+  ASSERT_LT(std::count_if(before.begin(), before.end(),
+                          [](const auto& s) { return s.status == "completed"; }),
+            12)
       << "the run finished before the kill";
   // The step cut off mid-capture: its first attempt was under way.
-  const auto cut = std::find_if(before.begin(), before.end(), [](const auto& s) { return s.status != "completed"; });
+  const auto cut = std::find_if(before.begin(), before.end(),
+                                [](const auto& s) { return s.status != "completed"; });
   ASSERT_NE(cut, before.end());
   const std::size_t cut_step = static_cast<std::size_t>(cut - before.begin());
 
   DaemonProcess d(db, dir + "/calstandd.log");
   ASSERT_GT(d.port(), 0);
   ApiClient api(d.port());
-  ASSERT_TRUE(wait_until([&] { return api.get("/runs/" + std::to_string(run)).body.value("status", "") == "completed"; }));
+  ASSERT_TRUE(wait_until([&] {
+    return api.get("/runs/" + std::to_string(run)).body.value("status", "") == "completed";
+  }));
   const auto after = read_steps(db, run);
   ASSERT_EQ(after.size(), before.size());
   std::optional<std::size_t> capture_count;
@@ -116,7 +123,8 @@ TEST(DaemonProcess, KilledMidRunResumesOnRestartWithNoLostOrDuplicatedSamples) {
     if (after[i].count > 0) {
       // Every capture is 300 s at the same rate: the same count, within a control tick.
       if (!capture_count) capture_count = after[i].count;
-      EXPECT_NEAR(static_cast<double>(after[i].count), static_cast<double>(*capture_count), 41.0) << i;
+      EXPECT_NEAR(static_cast<double>(after[i].count), static_cast<double>(*capture_count), 41.0)
+          << i;
     }
   }
   EXPECT_TRUE(capture_count.has_value());
@@ -145,13 +153,14 @@ TEST(DaemonProcess, SigtermCheckpointsTheRunAndExitsCleanly) {
   store::Database database(db);
   const auto record = store::RunStore(database).load_run(run);
   EXPECT_EQ(record.summary.status, "interrupted");
-  EXPECT_NE(record.summary.exit_reason.find("SIGTERM"), std::string::npos) << record.summary.exit_reason;
+  EXPECT_NE(record.summary.exit_reason.find("SIGTERM"), std::string::npos)
+      << record.summary.exit_reason;
 }
 
 TEST(DaemonProcess, RefusesToListenBeyondLoopbackWithoutAToken) {
   const std::string dir = calstand::testing::fresh_dir("no-token");
-  const std::string command = std::string("env -u CALSTAND_TOKEN ") + CALSTANDD_BIN + " --db " + dir +
-                              "/station.db --listen 0.0.0.0:0 2>" + dir + "/err.txt";
+  const std::string command = std::string("env -u CALSTAND_TOKEN ") + CALSTANDD_BIN + " --db " +
+                              dir + "/station.db --listen 0.0.0.0:0 2>" + dir + "/err.txt";
   const int status = std::system(command.c_str());
   EXPECT_EQ(WEXITSTATUS(status), 2);
   std::ifstream err(dir + "/err.txt");
@@ -172,33 +181,36 @@ TEST(DaemonProcess, OwnsItsDatabaseAlone) {
   {
     DaemonProcess d(db, dir + "/calstandd.log");
     ASSERT_GT(d.port(), 0);
-    const std::string second = std::string("env CALSTAND_TOKEN=") + calstand::testing::kTestToken + " " +
-                               CALSTANDD_BIN + " --db " + db + " --listen 127.0.0.1:0 >/dev/null 2>" + dir +
-                               "/second.txt";
+    const std::string second = std::string("env CALSTAND_TOKEN=") + calstand::testing::kTestToken +
+                               " " + CALSTANDD_BIN + " --db " + db +
+                               " --listen 127.0.0.1:0 >/dev/null 2>" + dir + "/second.txt";
     EXPECT_EQ(WEXITSTATUS(std::system(second.c_str())), 1);
     EXPECT_NE(read_text(dir + "/second.txt").find("in use by another calstandd"), std::string::npos)
         << read_text(dir + "/second.txt");
 
-    const std::string run = std::string(CALSTAND_BIN) + " run two-position --quiet --db " + db + " >" + dir +
-                            "/run.txt 2>&1";
+    const std::string run = std::string(CALSTAND_BIN) + " run two-position --quiet --db " + db +
+                            " >" + dir + "/run.txt 2>&1";
     EXPECT_NE(WEXITSTATUS(std::system(run.c_str())), 0);
     const std::string said = read_text(dir + "/run.txt");
-    EXPECT_NE(said.find("a station daemon owns this database (calstandd pid"), std::string::npos) << said;
+    EXPECT_NE(said.find("a station daemon owns this database (calstandd pid"), std::string::npos)
+        << said;
     ApiClient api(d.port());
     EXPECT_EQ(api.get("/runs").body.size(), 0u);  // the refused run wrote nothing
 
     // Nor can another daemon (of another database) share its port and take half its requests.
-    const std::string same_port = std::string("env CALSTAND_TOKEN=") + calstand::testing::kTestToken + " " +
-                                  CALSTANDD_BIN + " --db " + dir + "/other.db --listen 127.0.0.1:" +
-                                  std::to_string(d.port()) + " >/dev/null 2>" + dir + "/port.txt";
+    const std::string same_port = std::string("env CALSTAND_TOKEN=") +
+                                  calstand::testing::kTestToken + " " + CALSTANDD_BIN + " --db " +
+                                  dir + "/other.db --listen 127.0.0.1:" + std::to_string(d.port()) +
+                                  " >/dev/null 2>" + dir + "/port.txt";
     EXPECT_EQ(WEXITSTATUS(std::system(same_port.c_str())), 1);
     EXPECT_NE(read_text(dir + "/port.txt").find("cannot listen on 127.0.0.1:"), std::string::npos)
         << read_text(dir + "/port.txt");
     EXPECT_EQ(d.signal_and_wait(SIGKILL), -SIGKILL);
   }
   // Killed: the kernel released the lock, a foreground run may use the database now.
-  const std::string run = std::string(CALSTAND_BIN) + " run two-position --quiet --set capture_s=2 --db " + db +
-                          " >" + dir + "/run2.txt 2>&1";
+  const std::string run = std::string(CALSTAND_BIN) +
+                          " run two-position --quiet --set capture_s=2 --db " + db + " >" + dir +
+                          "/run2.txt 2>&1";
   EXPECT_EQ(WEXITSTATUS(std::system(run.c_str())), 0) << read_text(dir + "/run2.txt");
 }
 

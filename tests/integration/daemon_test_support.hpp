@@ -2,13 +2,15 @@
 // Helpers of the calstandd tests: a JSON client for the control API, polling with a deadline,
 // and a server-sent-events reader on its own thread.
 
+// clang-format off
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
+// clang-format on
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
-#include <sys/socket.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,14 +56,17 @@ class ApiClient {
     c.set_read_timeout(10, 0);
     return reply(c.Get(path.c_str()));
   }
-  Reply post(const std::string& path, const std::string& body, const std::string& token = kTestToken) {
+  Reply post(const std::string& path, const std::string& body,
+             const std::string& token = kTestToken) {
     httplib::Client c("127.0.0.1", port_);
     c.set_read_timeout(10, 0);
     httplib::Headers headers{{"X-Calstand-Operator", "tester"}};
     if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
     return reply(c.Post(path.c_str(), headers, body, "application/json"));
   }
-  Reply post_json(const std::string& path, const nlohmann::json& body) { return post(path, body.dump()); }
+  Reply post_json(const std::string& path, const nlohmann::json& body) {
+    return post(path, body.dump());
+  }
 
   /// POST /runs of a library procedure with parameters; the run id (0 when refused).
   std::int64_t submit(const std::string& procedure, const nlohmann::json& parameters) {
@@ -111,7 +116,9 @@ class EventStreamReader {
         }) {
     client_.set_read_timeout(5, 0);
     thread_ = std::thread([this] {
-      client_.Get("/events", [this](const char* data, std::size_t n) { return parser_.feed({data, n}) && !stop_; });
+      client_.Get("/events", [this](const char* data, std::size_t n) {
+        return parser_.feed({data, n}) && !stop_;
+      });
     });
   }
   ~EventStreamReader() {
@@ -145,7 +152,8 @@ class EventStreamReader {
 // from its first stdout line.
 class DaemonProcess {
  public:
-  DaemonProcess(const std::string& db, const std::string& log, const std::string& listen = "127.0.0.1:0") {
+  DaemonProcess(const std::string& db, const std::string& log,
+                const std::string& listen = "127.0.0.1:0") {
     int out[2];
     if (pipe(out) != 0) return;
     pid_ = fork();

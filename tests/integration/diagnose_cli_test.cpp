@@ -26,11 +26,12 @@ TEST(DiagnoseCli, TheLoopFindsTheDemoImusEffectsOnImportedData) {
       ::testing::TempDir() + "calstand-diagnose-cli-" + std::to_string(::getpid()) + "/";
   std::filesystem::create_directories(dir);
   const std::string recorded = dir + "recorded.db";
-  auto r = run("run thermal-calibration --station " CALSTAND_SOURCE_DIR
-               "/sim/stations/demo.json --db " + recorded +
-               " --quiet --set 'temperatures=[-10,25,60]' --set soak_s=300 --set capture_s=20"
-               " --set 'outer_angles=[0,90,180,270]' --set 'inner_angles=[0,90]'"
-               " --set 'rates=[30,100,300]'");
+  auto r =
+      run("run thermal-calibration --station " CALSTAND_SOURCE_DIR "/sim/stations/demo.json --db " +
+          recorded +
+          " --quiet --set 'temperatures=[-10,25,60]' --set soak_s=300 --set capture_s=20"
+          " --set 'outer_angles=[0,90,180,270]' --set 'inner_angles=[0,90]'"
+          " --set 'rates=[30,100,300]'");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   ASSERT_EQ(run("export --db " + recorded + " --run 1 --out " + dir + "export").exit_code, 0);
   const std::string db = dir + "imported.db";
@@ -43,13 +44,16 @@ TEST(DiagnoseCli, TheLoopFindsTheDemoImusEffectsOnImportedData) {
   for (int round = 0; round < 6; ++round) {
     r = run("diagnose --db " + db + " --run 1 --model " + model, dir + "stderr.txt");
     ASSERT_EQ(r.exit_code, 0) << read_text(dir + "stderr.txt");
-    const std::string next = trim(run("diagnose --db " + db + " --run 1 --model " + model + " --suggest").out);
+    const std::string next =
+        trim(run("diagnose --db " + db + " --run 1 --model " + model + " --suggest").out);
     if (next.empty()) break;
     added.insert(next);
     model += "," + next;
   }
-  EXPECT_EQ(added, (std::set<std::string>{"accel_temp_bias", "gyro_temp_bias", "gyro_g_sensitivity"}));
-  const auto diagnosis = nlohmann::json::parse(run("diagnose --db " + db + " --run 1 --model " + model + " --json").out);
+  EXPECT_EQ(added,
+            (std::set<std::string>{"accel_temp_bias", "gyro_temp_bias", "gyro_g_sensitivity"}));
+  const auto diagnosis = nlohmann::json::parse(
+      run("diagnose --db " + db + " --run 1 --model " + model + " --json").out);
   EXPECT_LT(diagnosis["chi2_dof"].get<double>(), 1.3);
   EXPECT_TRUE(diagnosis["explained"].get<bool>());
   for (const char* key : {"candidates", "signals", "groups", "worst_steps"}) {
@@ -71,8 +75,8 @@ TEST(DiagnoseCli, TheLoopFindsTheDemoImusEffectsOnImportedData) {
 
   // The classical thermal calibration (per-plateau fits, then a line in temperature) finds the
   // demo IMU's accelerometer temperature drift (sim/stations/demo.json: x1 = 1e-4 m/s^2/degC).
-  const auto thermal = nlohmann::json::parse(
-      run("fit --db " + db + " --run 1 --per-plateau 1 --json").out);
+  const auto thermal =
+      nlohmann::json::parse(run("fit --db " + db + " --run 1 --per-plateau 1 --json").out);
   bool found = false;
   for (const auto& c : thermal["coefficients"]) {
     if (c["name"] == "accel_temp_bias.x1") {

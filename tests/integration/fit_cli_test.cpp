@@ -6,8 +6,8 @@
 
 #include <cmath>
 #include <filesystem>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 #include "cli_runner.hpp"
@@ -49,7 +49,8 @@ class FitCli : public ::testing::Test {
 double truth(const std::string& name) { return calstand::testing::known_imu_truth(name); }
 
 TEST_F(FitCli, SixPositionRecoversTheAccelerometerWithinThreeSigma) {
-  const auto j = fit_json("--run 1 --sensor accel --model accel_bias,accel_scale,accel_misalignment");
+  const auto j =
+      fit_json("--run 1 --sensor accel --model accel_bias,accel_scale,accel_misalignment");
   ASSERT_EQ(j["parameters"].size(), 12u) << j.dump(2);
   for (const auto& p : j["parameters"]) {
     const std::string name = p["name"];
@@ -85,8 +86,10 @@ TEST_F(FitCli, RateLadderRecoversTheGyroAndReportsWhatItCannotSee) {
 
 TEST_F(FitCli, CalibrateStoresAndApplyCorrectsAValidationRun) {
   const std::string record = dir_ + "cal.json";
-  auto r = run("calibrate --db " + db_ + " --run 1 --model accel_bias,accel_scale,accel_misalignment,"
-               "gyro_bias,earth_rate --out " + record + " --json");
+  auto r = run("calibrate --db " + db_ +
+               " --run 1 --model accel_bias,accel_scale,accel_misalignment,"
+               "gyro_bias,earth_rate --out " +
+               record + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto out = nlohmann::json::parse(r.out);
   EXPECT_GE(out["calibration_id"].get<int>(), 1);
@@ -102,7 +105,8 @@ TEST_F(FitCli, CalibrateStoresAndApplyCorrectsAValidationRun) {
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const std::string prefix = "run ";
   const int corrected = std::stoi(r.out.substr(prefix.size()));
-  const auto after = fit_json("--run " + std::to_string(corrected) + " --sensor accel --model earth_rate");
+  const auto after =
+      fit_json("--run " + std::to_string(corrected) + " --sensor accel --model earth_rate");
   EXPECT_LT(after["chi2_dof"].get<double>(), 3.0);
   const double floor = after["noise_floor"]["accel"][2].get<double>();
   EXPECT_LT(after["residual_rms"]["accel"].get<double>(), 2.0 * floor);
@@ -115,12 +119,14 @@ TEST_F(FitCli, ImportedCopyFitsTheSame) {
   const auto r = run("import " + out + " --db " + other);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto a = fit_json("--run 1 --sensor accel --model accel_bias,accel_scale");
-  const auto rb = run("fit --db " + other + " --run 1 --sensor accel --model accel_bias,accel_scale --json");
+  const auto rb =
+      run("fit --db " + other + " --run 1 --sensor accel --model accel_bias,accel_scale --json");
   ASSERT_EQ(rb.exit_code, 0) << rb.out;
   const auto b = nlohmann::json::parse(rb.out);
   ASSERT_EQ(a["parameters"].size(), b["parameters"].size());
   for (std::size_t i = 0; i < a["parameters"].size(); ++i) {
-    EXPECT_NEAR(a["parameters"][i]["value"].get<double>(), b["parameters"][i]["value"].get<double>(),
+    EXPECT_NEAR(a["parameters"][i]["value"].get<double>(),
+                b["parameters"][i]["value"].get<double>(),
                 1e-9 * (1.0 + std::abs(a["parameters"][i]["value"].get<double>())));
   }
 }

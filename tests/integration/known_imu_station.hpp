@@ -23,15 +23,16 @@ inline double known_imu_truth(const std::string& name) {
 
 /// The station file text: seeded with `seed`, the IMU at 200 Hz.
 inline std::string known_imu_station(const std::string& name, int seed) {
-  return std::string(R"({"format": "calstand-station/1", "name": ")") + name +
-         R"(", "seed": )" + std::to_string(seed) + R"(,
+  return std::string(R"({"format": "calstand-station/1", "name": ")") + name + R"(", "seed": )" +
+         std::to_string(seed) + R"(,
       "site": {"latitude_deg": 30.5, "height_m": 25},
       "table": {"backend": "sim", "outer_axis": [0, 1, 0], "inner_axis": [0, 0, 1],
                 "outer": {"max_rate_dps": 400, "max_accel_dps2": 300},
                 "inner": {"max_rate_dps": 1000, "max_accel_dps2": 500}},
       "chamber": {"backend": "sim", "min_c": -55, "max_c": 125, "max_ramp_c_per_min": 5},
       "imus": [{"name": "imu0", "backend": "sim", "truth": {"format": "calstand-truth/1",
-        "parameters": )" + kKnownImuParameters + R"(,
+        "parameters": )" +
+         kKnownImuParameters + R"(,
         "noise": {"gyro": {"arw_deg_per_sqrt_h": 0.1}, "accel": {"vrw_mps_per_sqrt_h": 0.03}},
         "output": {"sample_rate_hz": 200}}}]})";
 }

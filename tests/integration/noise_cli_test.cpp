@@ -77,8 +77,8 @@ TEST_F(NoiseCli, NoiseGivesDatasheetFiguresAndAKalibrFile) {
   const Result truth_run = run("station --json");
   const auto noise = nlohmann::json::parse(truth_run.out)["derived"]["imus"][0]["truth"]["noise"];
   const std::string yaml = dir_ + "/imu.yaml";
-  const Result r = run("noise --db " + db_ + " --run 1 --json --kalibr " + yaml,
-                       dir_ + "/noise.err");
+  const Result r =
+      run("noise --db " + db_ + " --run 1 --json --kalibr " + yaml, dir_ + "/noise.err");
   ASSERT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "/noise.err");
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["step"], 3);  // the capture step of static-allan

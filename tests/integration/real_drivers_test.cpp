@@ -127,7 +127,8 @@ TEST_F(RealDrivers, RateLadderRecoversTheGyroAsWellAsInProcess) {
   auto station = serve(lab);
   const auto r = run_procedure(procedure, lab, dir_ + "ladder-real.db");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const std::string model = "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
+  const std::string model =
+      "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
   expect_same_quality(fit_json(dir_ + "ladder-sim.db", model),
                       fit_json(dir_ + "ladder-real.db", model), 4.0);
 }
@@ -164,12 +165,12 @@ bool wait_until_capturing(const std::string& db,
   return false;
 }
 
-FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
-                          const std::string& fault, double after_wall_s,
-                          const std::function<std::unique_ptr<SimStationProcess>(const std::string&)>& serve,
-                          const std::string& dir,
-                          const std::function<void(FaultedRun&)>& before = {},
-                          const std::function<void(FaultedRun&)>& after_fault = {}) {
+FaultedRun run_with_fault(
+    const std::string& name, const std::string& procedure, const std::string& fault,
+    double after_wall_s,
+    const std::function<std::unique_ptr<SimStationProcess>(const std::string&)>& serve,
+    const std::string& dir, const std::function<void(FaultedRun&)>& before = {},
+    const std::function<void(FaultedRun&)>& after_fault = {}) {
   FaultedRun out;
   out.lab = dir + name + "-lab.json";
   out.station = serve(out.lab);
@@ -183,7 +184,8 @@ FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
     if (running.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
       const auto r = running.get();
       ADD_FAILURE() << "the run ended before capturing; calstand run exited " << r.exit_code
-                    << ":\n" << r.out;
+                    << ":\n"
+                    << r.out;
       out.result = r;
       return out;
     }
@@ -198,7 +200,8 @@ FaultedRun run_with_fault(const std::string& name, const std::string& procedure,
   const auto shown = run("show --db " + db + " --run 1 --json");
   out.shown = json::parse(shown.out, nullptr, false);
   if (out.shown.is_discarded()) {
-    ADD_FAILURE() << "show after the run: " << shown.out << "\ncalstand run said:\n" << out.result.out;
+    ADD_FAILURE() << "show after the run: " << shown.out << "\ncalstand run said:\n"
+                  << out.result.out;
     out.shown = json::object();
   }
   return out;
@@ -300,8 +303,10 @@ TEST_F(RealDrivers, DeviceCommandsDriveTheStationByHand) {
   while (std::getline(lines, line)) samples.push_back(json::parse(line));
   ASSERT_EQ(samples.size(), 50u);
   for (std::size_t i = 1; i < samples.size(); ++i) {
-    EXPECT_EQ(samples[i]["sequence"].get<int>(), (samples[i - 1]["sequence"].get<int>() + 1) % 65536);
-    EXPECT_NEAR(samples[i]["accel_mps2"][2].get<double>(), samples[0]["accel_mps2"][2].get<double>(), 0.5);
+    EXPECT_EQ(samples[i]["sequence"].get<int>(),
+              (samples[i - 1]["sequence"].get<int>() + 1) % 65536);
+    EXPECT_NEAR(samples[i]["accel_mps2"][2].get<double>(),
+                samples[0]["accel_mps2"][2].get<double>(), 0.5);
   }
 
   // Mistakes are refused with where and why.

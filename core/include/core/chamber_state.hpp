@@ -16,7 +16,7 @@ std::string_view to_string(ChamberMode mode);
 
 /// State of the chamber at one instant.
 struct ChamberState {
-  double time_s = 0.0;          ///< station clock [s]
+  double time_s = 0.0;             ///< station clock [s]
   double air_temperature_c = 0.0;  ///< process value: chamber air [degC]
   double setpoint_c = 0.0;         ///< active setpoint [degC]
   ChamberMode mode = ChamberMode::kStandby;

@@ -19,8 +19,8 @@ double normal_gravity(double latitude_deg, double height_m);
 struct Site {
   double latitude_deg = 0.0;
   double longitude_deg = 0.0;
-  double height_m = 0.0;                      ///< ellipsoidal height [m]
-  std::optional<double> gravity_mps2;         ///< measured local gravity, overrides the formula
+  double height_m = 0.0;               ///< ellipsoidal height [m]
+  std::optional<double> gravity_mps2;  ///< measured local gravity, overrides the formula
 
   /// Local gravity magnitude [m/s^2]: configured value, else normal_gravity().
   double gravity() const;

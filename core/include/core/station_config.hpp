@@ -66,8 +66,8 @@ struct FaultPolicy {
   /// "record" (event, keep the capture), "repeat_capture" or "abort".
   std::string on_sequence_gap = "record";
   std::string on_stale_stream = "repeat_capture";
-  double stale_after_s = 1.0;         ///< silence that makes a stream stale [s]
-  double capture_band_factor = 2.0;   ///< band = factor * soak tolerance around the setpoint
+  double stale_after_s = 1.0;        ///< silence that makes a stream stale [s]
+  double capture_band_factor = 2.0;  ///< band = factor * soak tolerance around the setpoint
   int max_capture_attempts = 3;
 };
 

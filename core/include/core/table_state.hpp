@@ -17,12 +17,12 @@ std::string_view to_string(AxisMode mode);
 
 /// State of one axis as the controller reports it.
 struct AxisState {
-  double angle_deg = 0.0;     ///< encoder reading, wrapped to [-180, 180) [deg]
-  double rate_dps = 0.0;      ///< angular rate about the axis, right-handed [deg/s]
+  double angle_deg = 0.0;  ///< encoder reading, wrapped to [-180, 180) [deg]
+  double rate_dps = 0.0;   ///< angular rate about the axis, right-handed [deg/s]
   AxisMode mode = AxisMode::kRest;
-  bool in_position = true;    ///< position mode: settled within tolerance; rate mode: rate settled
+  bool in_position = true;  ///< position mode: settled within tolerance; rate mode: rate settled
   bool fault = false;
-  std::string fault_text;     ///< why the axis faulted (empty when fault is false)
+  std::string fault_text;  ///< why the axis faulted (empty when fault is false)
 };
 
 /// State of the dual-axis table at one instant.

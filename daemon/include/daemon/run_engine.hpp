@@ -33,26 +33,26 @@ GapPolicy parse_gap_policy(const std::string& name);
 /// Where the run is, for progress bars and status requests.
 struct Progress {
   RunState state = RunState::kIdle;
-  std::size_t step = 0;           ///< index of the current step
-  std::size_t steps = 0;          ///< number of steps in the run
-  std::string label;              ///< the current step's label
-  std::string phase;              ///< e.g. "soaking", "moving", "settling", "capturing"
+  std::size_t step = 0;   ///< index of the current step
+  std::size_t steps = 0;  ///< number of steps in the run
+  std::string label;      ///< the current step's label
+  std::string phase;      ///< e.g. "soaking", "moving", "settling", "capturing"
   double station_time_s = 0.0;
-  double eta_s = 0.0;             ///< estimated station time still needed [s]
+  double eta_s = 0.0;  ///< estimated station time still needed [s]
 };
 
 /// Options of the engine, with defaults a lab would pick.
 struct EngineOptions {
-  double tick_s = 0.1;                  ///< control-loop period in station time [s]
-  double telemetry_period_s = 1.0;      ///< table/chamber telemetry recording period [s]
-  double move_timeout_s = 600.0;        ///< a move must settle within this [s]
-  double rate_settle_timeout_s = 120.0; ///< a rate must settle within this [s]
-  double capture_band_factor = 2.0;     ///< capture invalid when |air - setpoint| exceeds this
-                                        ///< times the soak tolerance
-  double imu_stale_s = 1.0;             ///< no sample for this long is a stale stream [s]
+  double tick_s = 0.1;                   ///< control-loop period in station time [s]
+  double telemetry_period_s = 1.0;       ///< table/chamber telemetry recording period [s]
+  double move_timeout_s = 600.0;         ///< a move must settle within this [s]
+  double rate_settle_timeout_s = 120.0;  ///< a rate must settle within this [s]
+  double capture_band_factor = 2.0;      ///< capture invalid when |air - setpoint| exceeds this
+                                         ///< times the soak tolerance
+  double imu_stale_s = 1.0;              ///< no sample for this long is a stale stream [s]
   GapPolicy gap_policy = GapPolicy::kRecord;
   GapPolicy stale_policy = GapPolicy::kRepeatCapture;
-  int max_capture_attempts = 3;         ///< repeats of an invalidated capture before failing
+  int max_capture_attempts = 3;  ///< repeats of an invalidated capture before failing
   /// Before repeating a capture invalidated by a stale stream, wait up to this long for the
   /// stream to come back [s].
   double stream_recovery_timeout_s = 30.0;
@@ -178,7 +178,7 @@ class RunEngine {
   std::string abort_reason_;
   std::string skip_reason_;
   bool reestablishing_ = false;  // resuming after a crash: pause and skip wait for the first step
-  mutable std::mutex mutex_;  // guards progress_ and exit_reason_ (read by other threads)
+  mutable std::mutex mutex_;     // guards progress_ and exit_reason_ (read by other threads)
   Progress progress_;
   std::string exit_reason_;
 
@@ -190,7 +190,7 @@ class RunEngine {
     double start_s = 0.0;  // samples taken before this (station time) belong to no step
   };
   std::optional<Capturing> capturing_;
-  int attempt_ = 1;  // attempt number of the current step
+  int attempt_ = 1;              // attempt number of the current step
   double step_started_s_ = 0.0;  // station time the current step (attempt) started [s]
 
   // Temperature band of the last set_temperature step (captures must stay in it).

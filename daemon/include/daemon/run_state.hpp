@@ -11,7 +11,17 @@ namespace calstand::daemon {
 /// station safe for a checkpoint (a daemon stopping); it resumes at its first unfinished step.
 /// Held: interrupted while an operator had it paused, or waiting for an operator after a crash
 /// (recovery policy hold); it resumes only when an operator says so.
-enum class RunState { kIdle, kRunning, kPaused, kAborting, kCompleted, kAborted, kFailed, kInterrupted, kHeld };
+enum class RunState {
+  kIdle,
+  kRunning,
+  kPaused,
+  kAborting,
+  kCompleted,
+  kAborted,
+  kFailed,
+  kInterrupted,
+  kHeld
+};
 
 std::string_view to_string(RunState state);
 /// The state named `name` as to_string() writes it; nullopt for any other text.

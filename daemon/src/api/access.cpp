@@ -30,7 +30,8 @@ bool bearer_token_accepted(std::string_view authorization_header, std::string_vi
 }
 
 std::string operator_name(std::string_view operator_header, std::string_view remote_addr) {
-  std::string name(operator_header.empty() ? std::string_view("api") : operator_header.substr(0, 64));
+  std::string name(operator_header.empty() ? std::string_view("api")
+                                           : operator_header.substr(0, 64));
   for (char& c : name) {
     if (c < 0x21 || c > 0x7e) c = '?';
   }

@@ -89,7 +89,8 @@ std::string ExportArchive::read_at(std::uint64_t offset, std::size_t max_bytes) 
         open_entry_ = i;
         file_open_ = true;
       }
-      std::string chunk(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, padding - offset)), '\0');
+      std::string chunk(
+          static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, padding - offset)), '\0');
       file_.seekg(static_cast<std::streamoff>(offset - content));
       file_.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
       if (static_cast<std::size_t>(file_.gcount()) != chunk.size()) {
@@ -97,11 +98,13 @@ std::string ExportArchive::read_at(std::uint64_t offset, std::size_t max_bytes) 
       }
       return chunk;
     }
-    return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, next - offset)), '\0');
+    return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, next - offset)),
+                       '\0');
   }
   const std::uint64_t end = size();
   if (offset >= end) return {};
-  return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, end - offset)), '\0');
+  return std::string(static_cast<std::size_t>(std::min<std::uint64_t>(max_bytes, end - offset)),
+                     '\0');
 }
 
 std::string export_run_archive(store::Database& db, std::int64_t run, const std::string& device,

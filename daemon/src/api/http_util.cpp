@@ -18,20 +18,23 @@ void send_json(httplib::Response& res, int status, const nlohmann::json& body) {
                   "application/json");
 }
 
-void send_error(httplib::Response& res, int status, const std::string& where, const std::string& why) {
+void send_error(httplib::Response& res, int status, const std::string& where,
+                const std::string& why) {
   nlohmann::json body = {{"error", why}};
   if (!where.empty()) body["where"] = where;
   send_json(res, status, body);
 }
 
-nlohmann::json parse_json_body(const httplib::Request& req, const std::optional<nlohmann::json>& empty_as) {
+nlohmann::json parse_json_body(const httplib::Request& req,
+                               const std::optional<nlohmann::json>& empty_as) {
   if (req.body.empty() && empty_as) return *empty_as;
   // Copying, printing and validating a JSON value recurse once per level: a body of a million
   // '[' would overflow the handler's stack. No request needs more than a few levels.
   const nlohmann::json::parser_callback_t depth_limit = [](int depth, nlohmann::json::parse_event_t,
-                                                               nlohmann::json&) {
+                                                           nlohmann::json&) {
     if (depth >= kMaxJsonDepth) {  // the outermost value is at depth 0
-      throw BadRequest(400, "body", fmt::format("JSON nested deeper than {} levels", kMaxJsonDepth));
+      throw BadRequest(400, "body",
+                       fmt::format("JSON nested deeper than {} levels", kMaxJsonDepth));
     }
     return true;
   };
@@ -72,13 +75,15 @@ std::optional<std::int64_t> int_param(const httplib::Request& req, const std::st
   std::int64_t value = 0;
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
   if (ec != std::errc() || ptr != text.data() + text.size() || value < min || value > max) {
-    throw BadRequest(400, "?" + name, fmt::format("must be a whole number from {} to {} (got \"{}\")",
-                                                  min, max, text));
+    throw BadRequest(
+        400, "?" + name,
+        fmt::format("must be a whole number from {} to {} (got \"{}\")", min, max, text));
   }
   return value;
 }
 
-httplib::Server::Handler guarded(std::function<void(const httplib::Request&, httplib::Response&)> fn) {
+httplib::Server::Handler guarded(
+    std::function<void(const httplib::Request&, httplib::Response&)> fn) {
   return [fn = std::move(fn)](const httplib::Request& req, httplib::Response& res) {
     try {
       fn(req, res);
@@ -86,8 +91,10 @@ httplib::Server::Handler guarded(std::function<void(const httplib::Request&, htt
       send_error(res, e.status(), e.where(), e.what());
     } catch (const procedures::ProcedureError& e) {
       nlohmann::json violations = nlohmann::json::array();
-      for (const auto& v : e.violations()) violations.push_back({{"path", v.path}, {"message", v.message}});
-      send_json(res, 422, {{"error", "invalid procedure"}, {"where", e.where()}, {"violations", violations}});
+      for (const auto& v : e.violations())
+        violations.push_back({{"path", v.path}, {"message", v.message}});
+      send_json(res, 422,
+                {{"error", "invalid procedure"}, {"where", e.where()}, {"violations", violations}});
     } catch (const service::ActionRefused& e) {
       send_error(res, 409, req.path, e.what());
     } catch (const core::InputError& e) {

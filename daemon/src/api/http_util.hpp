@@ -1,9 +1,11 @@
 #pragma once
 
 // Helpers the route files share: JSON responses, request bodies, ids, error mapping.
+
+// clang-format off
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
-
+// clang-format on
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -28,7 +30,8 @@ class BadRequest : public std::runtime_error {
 
 void send_json(httplib::Response& res, int status, const nlohmann::json& body);
 /// {"error": why, "where": where} with `status`.
-void send_error(httplib::Response& res, int status, const std::string& where, const std::string& why);
+void send_error(httplib::Response& res, int status, const std::string& where,
+                const std::string& why);
 
 /// Request bodies nested deeper than this are refused (400).
 inline constexpr int kMaxJsonDepth = 64;
@@ -50,6 +53,7 @@ std::optional<std::int64_t> int_param(const httplib::Request& req, const std::st
 /// Wraps a handler so that no exception leaves it: BadRequest -> its status, a procedure
 /// error -> 422 with every violation, ActionRefused -> 409, core::InputError -> 400, anything
 /// else -> 500 (logged).
-httplib::Server::Handler guarded(std::function<void(const httplib::Request&, httplib::Response&)> fn);
+httplib::Server::Handler guarded(
+    std::function<void(const httplib::Request&, httplib::Response&)> fn);
 
 }  // namespace calstand::daemon::api

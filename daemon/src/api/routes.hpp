@@ -1,9 +1,11 @@
 #pragma once
 
 // The API's routes, by resource; api_server.cpp registers them.
+
+// clang-format off
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
-
+// clang-format on
 #include <atomic>
 #include <string>
 

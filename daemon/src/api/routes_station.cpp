@@ -34,15 +34,18 @@ nlohmann::json station_json(const RouteContext& ctx) {
   store::Database db(ctx.db_path);
   nlohmann::json queue = nlohmann::json::array();
   for (const auto& q : store::queued_runs(db)) {
-    queue.push_back({{"run", q.run}, {"submitted_utc", q.submitted_utc}, {"submitted_by", q.submitted_by}});
+    queue.push_back(
+        {{"run", q.run}, {"submitted_utc", q.submitted_utc}, {"submitted_by", q.submitted_by}});
   }
-  nlohmann::json j = {{"name", ctx.service.options().station.name},
-                      {"devices", devices},
-                      {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
-                      {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
-                      {"queue", queue},
-                      {"telemetry", {{"table", live.table ? core::to_json(*live.table) : nlohmann::json()},
-                                     {"chamber", live.chamber ? core::to_json(*live.chamber) : nlohmann::json()}}}};
+  nlohmann::json j = {
+      {"name", ctx.service.options().station.name},
+      {"devices", devices},
+      {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
+      {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
+      {"queue", queue},
+      {"telemetry",
+       {{"table", live.table ? core::to_json(*live.table) : nlohmann::json()},
+        {"chamber", live.chamber ? core::to_json(*live.chamber) : nlohmann::json()}}}};
   if (live.run) {
     j["progress"] = {{"state", std::string(to_string(live.progress.state))},
                      {"step", live.progress.step},
@@ -69,7 +72,8 @@ class StreamSlot {
 
 // One message; `id` empty for the greeting, which is a snapshot, not one of the hub's messages
 // (a reader that reconnects names the last real message it saw).
-std::string sse_message(const std::string& id, const std::string& type, const nlohmann::json& data) {
+std::string sse_message(const std::string& id, const std::string& type,
+                        const nlohmann::json& data) {
   return wire::encode_sse_event(
       {type, data.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), id});
 }
@@ -78,83 +82,97 @@ std::string sse_message(const std::string& id, const std::string& type, const nl
 
 void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Get("/station", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
-    send_json(res, 200, station_json(ctx));
-  }));
+               send_json(res, 200, station_json(ctx));
+             }));
 
-  server.Get(R"(/calibrations/(\d+))", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    const std::int64_t id = id_from_path(req);
-    store::Database db(ctx.db_path);
-    store::CalibrationRow row;
-    try {
-      row = store::load_calibration(db, id);
-    } catch (const core::InputError&) {
-      throw BadRequest(404, req.path, fmt::format("no calibration {}", id));
-    }
-    send_json(res, 200, {{"id", row.id}, {"run", row.run}, {"imu", row.imu}, {"model", row.model},
-                         {"created_utc", row.created_utc}, {"record", row.record}});
-  }));
+  server.Get(R"(/calibrations/(\d+))",
+             guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+               const std::int64_t id = id_from_path(req);
+               store::Database db(ctx.db_path);
+               store::CalibrationRow row;
+               try {
+                 row = store::load_calibration(db, id);
+               } catch (const core::InputError&) {
+                 throw BadRequest(404, req.path, fmt::format("no calibration {}", id));
+               }
+               send_json(res, 200,
+                         {{"id", row.id},
+                          {"run", row.run},
+                          {"imu", row.imu},
+                          {"model", row.model},
+                          {"created_utc", row.created_utc},
+                          {"record", row.record}});
+             }));
 
   // Server-sent events: first a "station" message with the whole status, then every message
   // the hub publishes (step, run, event, fault, telemetry), each with its id. A reader that
   // reconnects with Last-Event-ID first gets what it missed that the hub still keeps; when
   // messages were lost (too far behind, or no longer kept) a "gap" message says how many.
-  server.Get("/events", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-    if (ctx.open_streams.fetch_add(1) >= ctx.max_streams) {
-      ctx.open_streams.fetch_sub(1);
-      res.set_header("Retry-After", "5");
-      throw BadRequest(503, "GET /events", fmt::format("{} live streams are open already (the most this "
-                                                       "daemon serves at once); try again later", ctx.max_streams));
-    }
-    // The stream's slot is given back when its response goes away, however the stream ended.
-    auto slot = std::make_shared<StreamSlot>(ctx.open_streams);
-    std::uint64_t after = ctx.hub.last_seq();
-    std::string restart_gap;
-    if (req.has_header("Last-Event-ID")) {
-      const std::string last_id = req.get_header_value("Last-Event-ID");
-      if (const auto replay = ctx.hub.replay_after(last_id)) {
-        after = replay->after_seq;
-        if (replay->restarted) {
-          restart_gap = sse_message("", "gap", {{"missed", nullptr}, {"after_id", last_id},
-                                                {"reason", "the daemon restarted since that message"}});
+  server.Get(
+      "/events", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+        if (ctx.open_streams.fetch_add(1) >= ctx.max_streams) {
+          ctx.open_streams.fetch_sub(1);
+          res.set_header("Retry-After", "5");
+          throw BadRequest(503, "GET /events",
+                           fmt::format("{} live streams are open already (the most this "
+                                       "daemon serves at once); try again later",
+                                       ctx.max_streams));
         }
-      }
-    }
-    auto last_seq = std::make_shared<std::uint64_t>(after);
-    auto greeting = std::make_shared<std::string>(sse_message("", "station", station_json(ctx)) + restart_gap);
-    res.set_header("Cache-Control", "no-cache");
-    res.set_chunked_content_provider(
-        "text/event-stream",
-        [hub = &ctx.hub, last_seq, greeting, slot](std::size_t, httplib::DataSink& sink) {
-          // No exception may leave a content provider: httplib's writer would terminate.
-          try {
-            if (!greeting->empty()) {
-              const std::string first = std::move(*greeting);
-              greeting->clear();
-              return sink.write(first.data(), first.size());
+        // The stream's slot is given back when its response goes away, however the stream ended.
+        auto slot = std::make_shared<StreamSlot>(ctx.open_streams);
+        std::uint64_t after = ctx.hub.last_seq();
+        std::string restart_gap;
+        if (req.has_header("Last-Event-ID")) {
+          const std::string last_id = req.get_header_value("Last-Event-ID");
+          if (const auto replay = ctx.hub.replay_after(last_id)) {
+            after = replay->after_seq;
+            if (replay->restarted) {
+              restart_gap = sse_message("", "gap",
+                                        {{"missed", nullptr},
+                                         {"after_id", last_id},
+                                         {"reason", "the daemon restarted since that message"}});
             }
-            if (hub->closed()) {
-              sink.done();
-              return true;
-            }
-            const auto events = hub->wait_after(*last_seq, kKeepAlive);
-            if (events.empty()) {
-              static const std::string kPing = wire::encode_sse_comment("keep-alive");
-              return sink.write(kPing.data(), kPing.size());
-            }
-            std::string chunk;
-            if (events.front().seq > *last_seq + 1) {
-              chunk += sse_message("", "gap", {{"missed", events.front().seq - *last_seq - 1},
-                                               {"after_id", hub->event_id(*last_seq)}});
-            }
-            for (const auto& e : events) chunk += sse_message(hub->event_id(e.seq), e.type, e.data);
-            *last_seq = events.back().seq;
-            return sink.write(chunk.data(), chunk.size());
-          } catch (const std::exception& e) {
-            spdlog::error("GET /events: {}", e.what());
-            return false;
           }
-        });
-  }));
+        }
+        auto last_seq = std::make_shared<std::uint64_t>(after);
+        auto greeting = std::make_shared<std::string>(
+            sse_message("", "station", station_json(ctx)) + restart_gap);
+        res.set_header("Cache-Control", "no-cache");
+        res.set_chunked_content_provider(
+            "text/event-stream",
+            [hub = &ctx.hub, last_seq, greeting, slot](std::size_t, httplib::DataSink& sink) {
+              // No exception may leave a content provider: httplib's writer would terminate.
+              try {
+                if (!greeting->empty()) {
+                  const std::string first = std::move(*greeting);
+                  greeting->clear();
+                  return sink.write(first.data(), first.size());
+                }
+                if (hub->closed()) {
+                  sink.done();
+                  return true;
+                }
+                const auto events = hub->wait_after(*last_seq, kKeepAlive);
+                if (events.empty()) {
+                  static const std::string kPing = wire::encode_sse_comment("keep-alive");
+                  return sink.write(kPing.data(), kPing.size());
+                }
+                std::string chunk;
+                if (events.front().seq > *last_seq + 1) {
+                  chunk += sse_message("", "gap",
+                                       {{"missed", events.front().seq - *last_seq - 1},
+                                        {"after_id", hub->event_id(*last_seq)}});
+                }
+                for (const auto& e : events)
+                  chunk += sse_message(hub->event_id(e.seq), e.type, e.data);
+                *last_seq = events.back().seq;
+                return sink.write(chunk.data(), chunk.size());
+              } catch (const std::exception& e) {
+                spdlog::error("GET /events: {}", e.what());
+                return false;
+              }
+            });
+      }));
 }
 
 }  // namespace calstand::daemon::api

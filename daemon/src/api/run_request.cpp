@@ -31,9 +31,9 @@ RunRequest parse_run_request(const nlohmann::json& body) {
   } else if (!proc->is_string() && !proc->is_object()) {
     violations.push_back({"procedure", "must be a library name or a procedure document"});
   } else if (proc->is_string() && !procedures::library_text(proc->get<std::string>())) {
-    violations.push_back({"procedure", fmt::format("'{}' is not a library procedure ({})",
-                                                   proc->get<std::string>(),
-                                                   fmt::join(procedures::library_names(), ", "))});
+    violations.push_back(
+        {"procedure", fmt::format("'{}' is not a library procedure ({})", proc->get<std::string>(),
+                                  fmt::join(procedures::library_names(), ", "))});
   }
   if (!violations.empty()) throw procedures::ProcedureError("request", std::move(violations));
 

@@ -26,22 +26,22 @@ std::string ustar_header(std::string_view name, std::uint64_t size, std::int64_t
     throw std::invalid_argument("ustar: file name '" + std::string(name) + "' not admitted");
   }
   char header[kBlock] = {};
-  std::memcpy(header, name.data(), name.size());     // name[100]
-  put_octal(header + 100, 8, 0644);                  // mode
-  put_octal(header + 108, 8, 0);                     // uid
-  put_octal(header + 116, 8, 0);                     // gid
+  std::memcpy(header, name.data(), name.size());  // name[100]
+  put_octal(header + 100, 8, 0644);               // mode
+  put_octal(header + 108, 8, 0);                  // uid
+  put_octal(header + 116, 8, 0);                  // gid
   if (size < (std::uint64_t{1} << 33)) {
-    put_octal(header + 124, 12, size);               // size: 11 octal digits hold < 8 GiB
+    put_octal(header + 124, 12, size);  // size: 11 octal digits hold < 8 GiB
   } else {
     // Larger: the base-256 size field GNU tar and bsdtar read (high bit set, big-endian).
     header[124] = static_cast<char>(0x80);
     for (int i = 11; i >= 1; --i, size >>= 8) header[124 + i] = static_cast<char>(size & 0xFF);
   }
   put_octal(header + 136, 12, static_cast<std::uint64_t>(mtime_s < 0 ? 0 : mtime_s));
-  std::memset(header + 148, ' ', 8);                 // checksum counts as spaces
-  header[156] = '0';                                 // typeflag: regular file
-  std::memcpy(header + 257, "ustar", 6);             // magic "ustar\0"
-  std::memcpy(header + 263, "00", 2);                // version
+  std::memset(header + 148, ' ', 8);      // checksum counts as spaces
+  header[156] = '0';                      // typeflag: regular file
+  std::memcpy(header + 257, "ustar", 6);  // magic "ustar\0"
+  std::memcpy(header + 263, "00", 2);     // version
   unsigned checksum = 0;
   for (unsigned char c : header) checksum += c;
   put_octal(header + 148, 7, checksum);  // six digits and a NUL, then the space kept

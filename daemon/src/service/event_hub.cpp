@@ -16,7 +16,9 @@ std::string wall_clock_epoch() {
 EventHub::EventHub(std::size_t capacity, std::string epoch)
     : capacity_(capacity), epoch_(epoch.empty() ? wall_clock_epoch() : std::move(epoch)) {}
 
-std::string EventHub::event_id(std::uint64_t seq) const { return epoch_ + "-" + std::to_string(seq); }
+std::string EventHub::event_id(std::uint64_t seq) const {
+  return epoch_ + "-" + std::to_string(seq);
+}
 
 std::optional<EventHub::Replay> EventHub::replay_after(const std::string& last_event_id) const {
   const auto dash = last_event_id.rfind('-');

@@ -12,8 +12,8 @@ ObservedJournal::ObservedJournal(RunJournal& inner, EventHub& hub, LiveStatus& l
 
 void ObservedJournal::publish_step(std::size_t step, int attempt, double t_s, const char* status,
                                    const std::string& why) {
-  nlohmann::json data = {{"run", run_id_}, {"step", step},     {"attempt", attempt},
-                         {"time_s", t_s},  {"status", status}};
+  nlohmann::json data = {
+      {"run", run_id_}, {"step", step}, {"attempt", attempt}, {"time_s", t_s}, {"status", status}};
   if (!why.empty()) data["reason"] = why;
   hub_.publish("step", std::move(data));
 }
@@ -39,8 +39,11 @@ bool ObservedJournal::add_samples(std::size_t step, int attempt, const std::stri
 
 void ObservedJournal::discard_attempt(std::size_t step, int attempt, const std::string& why) {
   inner_.discard_attempt(step, attempt, why);
-  hub_.publish("step", {{"run", run_id_}, {"step", step}, {"attempt", attempt},
-                        {"status", "discarded"}, {"reason", why}});
+  hub_.publish("step", {{"run", run_id_},
+                        {"step", step},
+                        {"attempt", attempt},
+                        {"status", "discarded"},
+                        {"reason", why}});
 }
 
 void ObservedJournal::step_completed(std::size_t step, int attempt, double t_s) {
@@ -56,8 +59,9 @@ void ObservedJournal::step_failed(std::size_t step, int attempt, double t_s,
 
 void ObservedJournal::step_skipped(std::size_t step, double t_s, const std::string& why) {
   inner_.step_skipped(step, t_s, why);
-  hub_.publish("step", {{"run", run_id_}, {"step", step}, {"time_s", t_s}, {"status", "skipped"},
-                        {"reason", why}});
+  hub_.publish(
+      "step",
+      {{"run", run_id_}, {"step", step}, {"time_s", t_s}, {"status", "skipped"}, {"reason", why}});
 }
 
 void ObservedJournal::event(double t_s, EventKind kind, const std::string& source,
@@ -72,11 +76,16 @@ void ObservedJournal::event(double t_s, EventKind kind, const std::string& sourc
                                            {"message", message}});
 }
 
-void ObservedJournal::table_telemetry(const core::TableState& state) { inner_.table_telemetry(state); }
+void ObservedJournal::table_telemetry(const core::TableState& state) {
+  inner_.table_telemetry(state);
+}
 
-void ObservedJournal::chamber_telemetry(const core::ChamberState& state) { inner_.chamber_telemetry(state); }
+void ObservedJournal::chamber_telemetry(const core::ChamberState& state) {
+  inner_.chamber_telemetry(state);
+}
 
-void ObservedJournal::publish_telemetry(const core::TableState& table, const core::ChamberState& chamber) {
+void ObservedJournal::publish_telemetry(const core::TableState& table,
+                                        const core::ChamberState& chamber) {
   next_telemetry_ = std::chrono::steady_clock::now() + telemetry_period_;
   live_.update([&](LiveSnapshot& s) {
     s.table = table;
@@ -108,7 +117,8 @@ void ObservedJournal::publish_telemetry(const core::TableState& table, const cor
 
 void ObservedJournal::run_state(RunState state, double t_s, const std::string& reason) {
   inner_.run_state(state, t_s, reason);
-  nlohmann::json data = {{"run", run_id_}, {"state", std::string(to_string(state))}, {"time_s", t_s}};
+  nlohmann::json data = {
+      {"run", run_id_}, {"state", std::string(to_string(state))}, {"time_s", t_s}};
   if (!reason.empty()) data["reason"] = reason;
   hub_.publish("run", std::move(data));
 }

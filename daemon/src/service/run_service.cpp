@@ -149,7 +149,8 @@ std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
     // A run already held (paused by an operator when the daemon stopped, or held before a
     // crash) waits for an operator whatever the policy.
     const bool held = store::RunStore(db).run_status(interrupted.front()) == store::kHeldStatus;
-    if (options_.recovery == RecoveryPolicy::kAuto && !held) return std::make_pair(interrupted.front(), true);
+    if (options_.recovery == RecoveryPolicy::kAuto && !held)
+      return std::make_pair(interrupted.front(), true);
     hold(interrupted.front());
     return std::nullopt;
   }
@@ -159,7 +160,9 @@ std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
 }
 
 void RunService::hold(std::int64_t run) {
-  spdlog::warn("run {}: interrupted; held with the station safe until an operator resumes or aborts it", run);
+  spdlog::warn(
+      "run {}: interrupted; held with the station safe until an operator resumes or aborts it",
+      run);
   {
     std::lock_guard lock(mutex_);
     held_ = run;
@@ -244,8 +247,9 @@ void RunService::execute(std::int64_t run, bool resuming) {
     return;
   }
   if (resuming) {
-    record_event(run, "daemon", fmt::format("resuming at step {} after an interruption",
-                                            stored->start.first_step), false);
+    record_event(run, "daemon",
+                 fmt::format("resuming at step {} after an interruption", stored->start.first_step),
+                 false);
   }
   spdlog::info("run {}: {} {} at step {}/{}", run, resuming ? "resuming" : "starting",
                stored->procedure_name, stored->start.first_step + 1, stored->plan.steps.size());
@@ -262,7 +266,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
   auto next_device_read = std::chrono::steady_clock::now();
   const auto on_progress = [&](RunEngine&, const Progress& p) {
     // Live telemetry about twice a second of wall time, paused or not (this runs every tick).
-    if (journal.telemetry_due()) journal.publish_telemetry(station.table().read_state(), station.chamber().read_state());
+    if (journal.telemetry_due())
+      journal.publish_telemetry(station.table().read_state(), station.chamber().read_state());
     const auto now = std::chrono::steady_clock::now();
     const bool read_devices_now = now >= next_device_read;
     if (read_devices_now) next_device_read = now + kDeviceReadPeriod;
@@ -284,7 +289,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
     reason = std::string("internal error: ") + e.what();
     spdlog::error("run {}: {}", run, reason);
     try {
-      runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(station.clock().now_s()), reason);
+      runs.set_run_status(run, "failed", std::nullopt, store::Stamp::now(station.clock().now_s()),
+                          reason);
     } catch (const std::exception& e2) {
       spdlog::error("run {}: recording the failure: {}", run, e2.what());
     }
@@ -296,14 +302,18 @@ void RunService::execute(std::int64_t run, bool resuming) {
     const auto first = runs.first_unfinished_step(run);
     const std::string message =
         final_state == RunState::kHeld
-            ? fmt::format("checkpointed while paused: station made safe; held at step {} for an "
-                          "operator's resume or abort on restart", first ? *first : 0)
-            : fmt::format("checkpointed: station made safe; resumes at step {} on restart", first ? *first : 0);
+            ? fmt::format(
+                  "checkpointed while paused: station made safe; held at step {} for an "
+                  "operator's resume or abort on restart",
+                  first ? *first : 0)
+            : fmt::format("checkpointed: station made safe; resumes at step {} on restart",
+                          first ? *first : 0);
     record_event(run, "daemon", message, false);
     spdlog::warn("run {}: {} ({})", run, message, reason);
   } else {
     store::dequeue_run(wired->database(), run);
-    spdlog::info("run {}: {}{}", run, to_string(final_state), reason.empty() ? "" : " (" + reason + ")");
+    spdlog::info("run {}: {}{}", run, to_string(final_state),
+                 reason.empty() ? "" : " (" + reason + ")");
   }
 }
 
@@ -339,8 +349,9 @@ std::int64_t RunService::submit(const procedures::Procedure& procedure,
     store::enqueue_run(db, run, who);
     runs.set_run_status(run, store::kQueuedStatus);
   }
-  record_event(run, who, fmt::format("submitted {} ({} steps, estimated {:.0f} s)", procedure.name,
-                                     plan.steps.size(), plan.total_s));
+  record_event(run, who,
+               fmt::format("submitted {} ({} steps, estimated {:.0f} s)", procedure.name,
+                           plan.steps.size(), plan.total_s));
   hub_.publish("run", {{"run", run}, {"state", store::kQueuedStatus}});
   {
     std::lock_guard lock(mutex_);
@@ -370,10 +381,12 @@ void RunService::pause(std::int64_t run, bool immediate, const std::string& who)
   {
     std::lock_guard lock(mutex_);
     if (current_ != run) {
-      throw ActionRefused(fmt::format("run {} is {}; only the running run can be paused", run, status));
+      throw ActionRefused(
+          fmt::format("run {} is {}; only the running run can be paused", run, status));
     }
   }
-  if (p.state == RunState::kPaused) throw ActionRefused(fmt::format("run {} is already paused", run));
+  if (p.state == RunState::kPaused)
+    throw ActionRefused(fmt::format("run {} is already paused", run));
   command_current(run, {EngineCommand::Kind::kPause, immediate, std::nullopt, "", who});
 }
 
@@ -395,7 +408,8 @@ void RunService::resume(std::int64_t run, const std::string& who) {
   }
   const LiveSnapshot live = live_.snapshot();
   if (live.run != run || live.progress.state != RunState::kPaused) {
-    throw ActionRefused(fmt::format("run {} is {}; only a paused or held run can be resumed", run, status));
+    throw ActionRefused(
+        fmt::format("run {} is {}; only a paused or held run can be resumed", run, status));
   }
   command_current(run, {EngineCommand::Kind::kResume, false, std::nullopt, "", who});
 }
@@ -403,7 +417,9 @@ void RunService::resume(std::int64_t run, const std::string& who) {
 void RunService::abort(std::int64_t run, const std::string& why, const std::string& who) {
   const std::string status = status_of(run);
   // Checked first: an ended run may still be on the station for a moment while it winds up.
-  if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({}); there is nothing to abort", run, status));
+  if (has_ended(status))
+    throw ActionRefused(
+        fmt::format("run {} has ended ({}); there is nothing to abort", run, status));
   bool was_held = false;
   const std::string reason = fmt::format("aborted by {}: {}", who, why);
   {
@@ -428,7 +444,8 @@ void RunService::abort(std::int64_t run, const std::string& why, const std::stri
     runs.set_run_status(run, "aborted", std::nullopt, store::Stamp::now(t_s), reason);
     store::dequeue_run(db, run);
   }
-  record_event(run, who, (was_held ? "abort of the held run: " : "abort of the queued run: ") + why);
+  record_event(run, who,
+               (was_held ? "abort of the held run: " : "abort of the queued run: ") + why);
   if (was_held) live_.update([](LiveSnapshot& s) { s.held.reset(); });
   hub_.publish("run", {{"run", run}, {"state", "aborted"}, {"reason", reason}});
   wake_.notify_all();
@@ -440,11 +457,12 @@ void RunService::skip(std::int64_t run, std::optional<std::size_t> step, const s
   if (has_ended(status)) throw ActionRefused(fmt::format("run {} has ended ({})", run, status));
   const LiveSnapshot live = live_.snapshot();
   if (live.run != run) {
-    throw ActionRefused(fmt::format("run {} is {}; only a step of the run on the station can be skipped",
-                                    run, status));
+    throw ActionRefused(fmt::format(
+        "run {} is {}; only a step of the run on the station can be skipped", run, status));
   }
   if (step && *step != live.progress.step) {
-    throw ActionRefused(fmt::format("run {} is at step {}, not step {}", run, live.progress.step, *step));
+    throw ActionRefused(
+        fmt::format("run {} is at step {}, not step {}", run, live.progress.step, *step));
   }
   if (step && *step >= live.progress.steps) {
     throw ActionRefused(fmt::format("run {} has no step {}", run, *step));

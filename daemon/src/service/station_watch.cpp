@@ -6,7 +6,8 @@ namespace calstand::daemon::service {
 namespace {
 
 DeviceStatus status_of(const char* kind, drivers::Device& device, const std::string& backend) {
-  return {kind, device.name(), backend, std::string(to_string(device.state())), device.fault_counters()};
+  return {kind, device.name(), backend, std::string(to_string(device.state())),
+          device.fault_counters()};
 }
 
 }  // namespace

@@ -43,9 +43,9 @@ struct CanFrameLayout {
 };
 
 /// Which CAN id carries which value of an IMU sample: configuration, not code, so that a new
-/// IMU needs a JSON file rather than a driver. See docs/protocols.md, "IMU over CAN" for the format.
-/// A plain value; from_json() guarantees every invariant (no overlaps, fields inside 64 bits,
-/// every required signal present, at least one frame).
+/// IMU needs a JSON file rather than a driver. See docs/protocols.md, "IMU over CAN" for the
+/// format. A plain value; from_json() guarantees every invariant (no overlaps, fields inside 64
+/// bits, every required signal present, at least one frame).
 struct CanSignalMap {
   std::vector<CanFrameLayout> frames;  ///< one per id, ascending id
   CanField sequence;                   ///< same place in every frame; unsigned, <= 32 bits

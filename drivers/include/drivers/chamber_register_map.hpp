@@ -105,8 +105,8 @@ ChamberRegisterMap watlow_f4t_map(WordOrder order = WordOrder::kHighFirst);
 WordOrder word_order_from_json(const nlohmann::json& j, const std::string& where);
 
 /// A map from the station file: a built-in name ("watlow-f4", "watlow-f4t") or a generic map
-/// object (fields documented in docs/protocols.md, "Chamber over Modbus"). `word_order` applies to float32
-/// fields. Throws core::InputError naming the field path under `where` (e.g.
+/// object (fields documented in docs/protocols.md, "Chamber over Modbus"). `word_order` applies to
+/// float32 fields. Throws core::InputError naming the field path under `where` (e.g.
 /// `chamber.connection.map.setpoint.address`) and why.
 ChamberRegisterMap register_map_from_json(const nlohmann::json& j, const std::string& where,
                                           WordOrder word_order);

@@ -35,8 +35,8 @@ struct ModbusChamberOptions {
   /// "tcp 127.0.0.1:502" or "rtu /dev/ttyUSB0": names the link in every error and event.
   std::string link_name() const;
 
-  /// Parses `config.connection` (fields in docs/protocols.md, "Chamber over Modbus"). Throws core::InputError
-  /// naming `chamber.connection.<field>` (or `chamber.<limit>`) and why.
+  /// Parses `config.connection` (fields in docs/protocols.md, "Chamber over Modbus"). Throws
+  /// core::InputError naming `chamber.connection.<field>` (or `chamber.<limit>`) and why.
   static ModbusChamberOptions from_config(const core::ChamberConfig& config);
 };
 

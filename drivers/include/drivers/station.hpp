@@ -34,7 +34,6 @@ class Station {
 /// The station of `config`: a SimStation when its devices are simulated (its virtual clock
 /// starting at `start_time_s`), a RealStation of drivers otherwise (on the steady clock, which
 /// reads `start_time_s` now). Throws core::InputError naming the device on a bad connection.
-std::unique_ptr<Station> make_station(const core::StationConfig& config,
-                                      double start_time_s = 0.0);
+std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s = 0.0);
 
 }  // namespace calstand::drivers

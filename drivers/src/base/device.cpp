@@ -4,10 +4,14 @@ namespace calstand::drivers {
 
 std::string_view to_string(DeviceState state) {
   switch (state) {
-    case DeviceState::kUnconfigured: return "unconfigured";
-    case DeviceState::kInactive: return "inactive";
-    case DeviceState::kActive: return "active";
-    case DeviceState::kError: return "error";
+    case DeviceState::kUnconfigured:
+      return "unconfigured";
+    case DeviceState::kInactive:
+      return "inactive";
+    case DeviceState::kActive:
+      return "active";
+    case DeviceState::kError:
+      return "error";
   }
   return "unknown";
 }

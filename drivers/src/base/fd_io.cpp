@@ -51,7 +51,8 @@ IoResult write_fd(int fd, std::span<const std::uint8_t> bytes, std::chrono::mill
       sent += static_cast<std::size_t>(n);
       continue;
     }
-    if (n < 0 && errno != EAGAIN && errno != EINTR) return {sent, os_error_text(who, "write", errno)};
+    if (n < 0 && errno != EAGAIN && errno != EINTR)
+      return {sent, os_error_text(who, "write", errno)};
     pollfd pfd{fd, POLLOUT, 0};
     const int ready = ::poll(&pfd, 1, remaining_ms(deadline));
     if (ready < 0 && errno != EINTR) return {sent, os_error_text(who, "poll", errno)};

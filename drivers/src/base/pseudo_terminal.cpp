@@ -14,7 +14,8 @@ namespace calstand::drivers {
 
 PseudoTerminal::PseudoTerminal() {
   master_ = ::posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK);
-  if (master_ < 0) throw std::runtime_error(os_error_text("pseudo-terminal", "posix_openpt", errno));
+  if (master_ < 0)
+    throw std::runtime_error(os_error_text("pseudo-terminal", "posix_openpt", errno));
   if (::grantpt(master_) != 0 || ::unlockpt(master_) != 0) {
     const int err = errno;
     ::close(master_);

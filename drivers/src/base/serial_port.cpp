@@ -1,8 +1,8 @@
 #include "drivers/serial_port.hpp"
 
 #include <fcntl.h>
-#include <sys/file.h>
 #include <poll.h>
+#include <sys/file.h>
 #include <termios.h>
 #include <unistd.h>
 

@@ -20,7 +20,9 @@ class SimLifecycle : public Lifecycle {
   }
 };
 
-Result from_sim(const sim::Status& s) { return s.ok ? Result::success() : Result::failure(s.message); }
+Result from_sim(const sim::Status& s) {
+  return s.ok ? Result::success() : Result::failure(s.message);
+}
 
 }  // namespace
 
@@ -51,7 +53,9 @@ class SimStation::SimTurntable final : public Turntable {
     if (auto r = life_.require_active(name_); !r) return r;
     auto& a = axis == TableAxis::kOuter ? world_.table().outer() : world_.table().inner();
     const auto r = count(from_sim(a.command_rate(rate_dps)));
-    if (!r) return Result::failure(fmt::format("{} axis: {}", axis == TableAxis::kOuter ? "outer" : "inner", r.message));
+    if (!r)
+      return Result::failure(
+          fmt::format("{} axis: {}", axis == TableAxis::kOuter ? "outer" : "inner", r.message));
     return r;
   }
   Result stop() override {

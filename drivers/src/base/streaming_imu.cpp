@@ -23,9 +23,7 @@ constexpr auto kStopCheck = 10ms;
 
 StreamingImu::StreamingImu(std::string name, core::Clock& clock,
                            std::initializer_list<std::string_view> extra_faults)
-    : name_(std::move(name)),
-      clock_(clock),
-      faults_{"read_errors", "reopens", "buffer_overflows"} {
+    : name_(std::move(name)), clock_(clock), faults_{"read_errors", "reopens", "buffer_overflows"} {
   for (auto n : extra_faults) faults_.set(n, 0);
 }
 
@@ -53,8 +51,8 @@ Result StreamingImu::activate() {
       std::lock_guard lock(mutex_);
       buffer_.clear();  // what arrived before activation belongs to nobody
     }
-    capacity_ = static_cast<std::size_t>(
-        std::max(kMinBufferSamples, kBufferSpanS * sample_rate_hz()));
+    capacity_ =
+        static_cast<std::size_t>(std::max(kMinBufferSamples, kBufferSpanS * sample_rate_hz()));
     sample_clock_.reset();
     last_summary_s_ = clock_.now_s();
     on_reader_start();

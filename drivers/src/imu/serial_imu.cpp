@@ -30,7 +30,8 @@ std::unique_ptr<FrameDecoder> make_frame_decoder(const std::string& format,
                                                  std::uint64_t sequence_modulus,
                                                  const std::string& where) {
   if (format == "calstand") return std::make_unique<CalstandFrameDecoder>(sequence_modulus);
-  throw core::InputError(where, fmt::format("unknown frame format \"{}\" (known: calstand)", format));
+  throw core::InputError(where,
+                         fmt::format("unknown frame format \"{}\" (known: calstand)", format));
 }
 
 SerialImu::SerialImu(const core::ImuConfig& config, core::Clock& clock, const std::string& where)

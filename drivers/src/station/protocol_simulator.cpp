@@ -135,13 +135,16 @@ json ProtocolSimulator::endpoints() const {
     if (m.can && i == 0) entry["can"] = m.options.can_interface;
     imus.push_back(std::move(entry));
   }
-  json chamber = {{"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host), m.f4t_server->port())},
-                  {"map", "watlow-f4t"}};
-  if (m.f4_server) chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
+  json chamber = {
+      {"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host), m.f4t_server->port())},
+      {"map", "watlow-f4t"}};
+  if (m.f4_server)
+    chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
   return {{"sim_station", m.sim_config.name},
           {"time_scale", m.options.time_scale},
-          {"table", {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
-                     {"protocol", "acutrol"}}},
+          {"table",
+           {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
+            {"protocol", "acutrol"}}},
           {"chamber", chamber},
           {"imus", imus}};
 }
@@ -156,16 +159,20 @@ core::StationConfig ProtocolSimulator::client_station() const {
   // at K = 20 would otherwise fire on a 50 ms scheduling hiccup).
   c.policy.stale_after_s = m.sim_config.policy.stale_after_s * m.options.time_scale;
   c.table.backend = "acutrol";
-  c.table.connection = {{"transport", "tcp"}, {"host", connect_host(m.options.host)},
+  c.table.connection = {{"transport", "tcp"},
+                        {"host", connect_host(m.options.host)},
                         {"port", m.table_server->port()}};
   c.chamber.backend = "modbus";
-  c.chamber.connection = {{"transport", "tcp"}, {"host", connect_host(m.options.host)},
-                          {"port", m.f4t_server->port()}, {"unit_id", 1}, {"map", "watlow-f4t"},
-                          // Poll as often in world time as a lab station does (4 Hz); the
-                          // staleness rule (5 s in a lab) scaled as the policy above.
-                          {"poll_period_ms", std::max(10, static_cast<int>(std::lround(
-                                                              250.0 / m.options.time_scale)))},
-                          {"stale_after_s", 5.0 * m.options.time_scale}};
+  c.chamber.connection = {
+      {"transport", "tcp"},
+      {"host", connect_host(m.options.host)},
+      {"port", m.f4t_server->port()},
+      {"unit_id", 1},
+      {"map", "watlow-f4t"},
+      // Poll as often in world time as a lab station does (4 Hz); the
+      // staleness rule (5 s in a lab) scaled as the policy above.
+      {"poll_period_ms", std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
+      {"stale_after_s", 5.0 * m.options.time_scale}};
   for (std::size_t i = 0; i < c.imus.size(); ++i) {
     auto& imu = c.imus[i];
     const auto& truth = m.runner.world().imu(i).truth();
@@ -184,9 +191,8 @@ core::StationConfig ProtocolSimulator::client_station() const {
 }
 
 void ProtocolSimulator::open_interlock(TableAxis axis, const std::string& why) {
-  impl_->table_backend.open_interlock(axis == TableAxis::kOuter ? acutrol::kOuterAxis
-                                                                : acutrol::kInnerAxis,
-                                      why);
+  impl_->table_backend.open_interlock(
+      axis == TableAxis::kOuter ? acutrol::kOuterAxis : acutrol::kInnerAxis, why);
 }
 
 void ProtocolSimulator::clear_interlock_cause(TableAxis axis) {

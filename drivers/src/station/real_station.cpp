@@ -15,8 +15,8 @@ namespace {
 
 [[noreturn]] void unknown_backend(const std::string& field, const std::string& backend,
                                   const char* known) {
-  throw core::InputError(field, fmt::format("no driver for backend \"{}\" (real backends: {})",
-                                            backend, known));
+  throw core::InputError(
+      field, fmt::format("no driver for backend \"{}\" (real backends: {})", backend, known));
 }
 
 }  // namespace

@@ -12,15 +12,15 @@ namespace calstand::sim {
 
 /// Thermal behaviour and limits of the simulated chamber and of the IMU inside it.
 struct ChamberParams {
-  double min_c = -60.0;                  ///< lowest accepted setpoint [degC]
-  double max_c = 150.0;                  ///< highest accepted setpoint [degC]
-  double max_ramp_c_per_min = 5.0;       ///< the air never changes faster than this [degC/min]
-  double ambient_c = 23.0;               ///< lab air, where the chamber drifts in standby [degC]
-  double air_time_constant_s = 90.0;     ///< first-order lag of the air behind the setpoint [s]
-  double control_noise_c = 0.02;         ///< 1-sigma controller noise on the air [degC]
-  double control_noise_tau_s = 20.0;     ///< correlation time of that noise [s]
-  double imu_time_constant_s = 600.0;    ///< lag of the IMU's own temperature behind the air [s]
-  double imu_self_heating_c = 3.0;       ///< IMU runs this much above the air when settled [degC]
+  double min_c = -60.0;                ///< lowest accepted setpoint [degC]
+  double max_c = 150.0;                ///< highest accepted setpoint [degC]
+  double max_ramp_c_per_min = 5.0;     ///< the air never changes faster than this [degC/min]
+  double ambient_c = 23.0;             ///< lab air, where the chamber drifts in standby [degC]
+  double air_time_constant_s = 90.0;   ///< first-order lag of the air behind the setpoint [s]
+  double control_noise_c = 0.02;       ///< 1-sigma controller noise on the air [degC]
+  double control_noise_tau_s = 20.0;   ///< correlation time of that noise [s]
+  double imu_time_constant_s = 600.0;  ///< lag of the IMU's own temperature behind the air [s]
+  double imu_self_heating_c = 3.0;     ///< IMU runs this much above the air when settled [degC]
 };
 
 /// The simulated temperature chamber (air temperature) and the IMU thermal mass in it.
@@ -53,8 +53,8 @@ class ChamberSim {
   /// Advances by dt_s > 0; any dt is modelled exactly (other values are ignored).
   void step(double dt_s);
 
-  double air_temperature_c() const;         ///< includes the controller noise [degC]
-  double imu_temperature_c() const { return imu_c_; }         ///< [degC]
+  double air_temperature_c() const;                    ///< includes the controller noise [degC]
+  double imu_temperature_c() const { return imu_c_; }  ///< [degC]
   /// Derivative of the IMU temperature at the end of the last step [degC/min].
   double imu_temperature_rate_c_per_min() const { return imu_rate_c_per_min_; }
   double working_setpoint_c() const { return working_setpoint_c_; }
@@ -67,10 +67,10 @@ class ChamberSim {
 
   ChamberParams params_;
   core::ChamberMode mode_ = core::ChamberMode::kStandby;
-  double target_c_;              // last accepted setpoint (ambient at power-up) [degC]
-  double ramp_c_per_min_;        // ramp in use, already capped at max_ramp_c_per_min
-  double working_setpoint_c_;    // the controller's ramped setpoint; tracks the air when idle
-  double air_c_;                 // without noise [degC]
+  double target_c_;            // last accepted setpoint (ambient at power-up) [degC]
+  double ramp_c_per_min_;      // ramp in use, already capped at max_ramp_c_per_min
+  double working_setpoint_c_;  // the controller's ramped setpoint; tracks the air when idle
+  double air_c_;               // without noise [degC]
   double imu_c_;
   double imu_rate_c_per_min_ = 0.0;
   std::string fault_text_;
@@ -81,10 +81,10 @@ class ChamberSim {
   // exp() per step is avoided: the simulator steps at a fixed dt, so the factors are computed
   // once per distinct dt.
   double factors_dt_s_ = -1.0;
-  double air_keep_ = 0.0;        // exp(-dt / air_time_constant_s)
-  double imu_keep_ = 0.0;        // exp(-dt / imu_time_constant_s)
-  double noise_keep_ = 0.0;      // exp(-dt / control_noise_tau_s)
-  double noise_drive_c_ = 0.0;   // control_noise_c * sqrt(1 - noise_keep^2) [degC]
+  double air_keep_ = 0.0;       // exp(-dt / air_time_constant_s)
+  double imu_keep_ = 0.0;       // exp(-dt / imu_time_constant_s)
+  double noise_keep_ = 0.0;     // exp(-dt / control_noise_tau_s)
+  double noise_drive_c_ = 0.0;  // control_noise_c * sqrt(1 - noise_keep^2) [degC]
 };
 
 }  // namespace calstand::sim

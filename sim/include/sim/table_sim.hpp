@@ -43,9 +43,9 @@ class TableAxisSim {
   /// Advances the axis by dt_s > 0.
   void step(double dt_s);
 
-  double true_angle_deg() const { return angle_deg_; }   ///< continuous, unquantized [deg]
-  double true_rate_dps() const { return rate_dps_; }     ///< [deg/s]
-  double true_accel_dps2() const { return accel_dps2_; } ///< over the last step [deg/s^2]
+  double true_angle_deg() const { return angle_deg_; }    ///< continuous, unquantized [deg]
+  double true_rate_dps() const { return rate_dps_; }      ///< [deg/s]
+  double true_accel_dps2() const { return accel_dps2_; }  ///< over the last step [deg/s^2]
   /// What the controller reports: wrapped, quantized angle, mode, settling and fault.
   core::AxisState state() const;
   const AxisLimits& limits() const { return limits_; }
@@ -62,20 +62,20 @@ class TableAxisSim {
 
   AxisLimits limits_;
   core::AxisMode mode_ = core::AxisMode::kRest;
-  double angle_deg_ = 0.0;           // true axis, continuous (unwrapped) [deg]
-  double rate_dps_ = 0.0;            // true axis, mean over the last step [deg/s]
-  double accel_dps2_ = 0.0;          // true axis, over the last step [deg/s^2]
-  double profile_angle_deg_ = 0.0;   // where the profile is, unwrapped [deg]
-  double profile_rate_dps_ = 0.0;    // profile rate over the last step [deg/s]
-  double target_angle_deg_ = 0.0;    // position mode, unwrapped [deg]
-  double target_rate_dps_ = 0.0;     // rate mode [deg/s]
-  double settled_for_s_ = 0.0;       // how long the error has stayed in tolerance [s]
+  double angle_deg_ = 0.0;          // true axis, continuous (unwrapped) [deg]
+  double rate_dps_ = 0.0;           // true axis, mean over the last step [deg/s]
+  double accel_dps2_ = 0.0;         // true axis, over the last step [deg/s^2]
+  double profile_angle_deg_ = 0.0;  // where the profile is, unwrapped [deg]
+  double profile_rate_dps_ = 0.0;   // profile rate over the last step [deg/s]
+  double target_angle_deg_ = 0.0;   // position mode, unwrapped [deg]
+  double target_rate_dps_ = 0.0;    // rate mode [deg/s]
+  double settled_for_s_ = 0.0;      // how long the error has stayed in tolerance [s]
   bool in_position_ = true;
   std::string fault_text_;
   // exp() is the only costly call in step(); the simulator steps at a fixed dt, so it is
   // evaluated once per distinct dt.
   double servo_dt_s_ = -1.0;
-  double servo_decay_ = 0.0;         // exp(-dt / servo_time_constant_s) for servo_dt_s_
+  double servo_decay_ = 0.0;  // exp(-dt / servo_time_constant_s) for servo_dt_s_
 };
 
 /// The dual-axis table: an outer and an inner axis.

@@ -78,14 +78,14 @@ struct AllanOptions {
 
 /// One averaging time of a deviation curve.
 struct AllanPoint {
-  std::size_t m = 0;         ///< averaging factor (samples per average)
-  double tau_s = 0.0;        ///< averaging time m / sample_rate [s]
-  double deviation = 0.0;    ///< estimated deviation [unit of the data]
-  std::size_t terms = 0;     ///< number of difference terms summed
-  int alpha = 0;             ///< noise exponent used for the degrees of freedom
-  double edf = 0.0;          ///< equivalent degrees of freedom of the variance estimate
-  double lo = 0.0;           ///< lower end of the confidence interval [unit]
-  double hi = 0.0;           ///< upper end of the confidence interval [unit]
+  std::size_t m = 0;       ///< averaging factor (samples per average)
+  double tau_s = 0.0;      ///< averaging time m / sample_rate [s]
+  double deviation = 0.0;  ///< estimated deviation [unit of the data]
+  std::size_t terms = 0;   ///< number of difference terms summed
+  int alpha = 0;           ///< noise exponent used for the degrees of freedom
+  double edf = 0.0;        ///< equivalent degrees of freedom of the variance estimate
+  double lo = 0.0;         ///< lower end of the confidence interval [unit]
+  double hi = 0.0;         ///< upper end of the confidence interval [unit]
 };
 
 /// A deviation curve and how it was made.

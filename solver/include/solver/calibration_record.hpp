@@ -19,8 +19,7 @@ inline constexpr const char* kSoftwareVersion = "calstand " CALSTAND_VERSION;
 /// run of `setup`; `noise` (per-channel noise figures, or null) is stored as given. The valid
 /// temperature range is the range of the steps' mean temperatures.
 nlohmann::json make_calibration_record(const RunSetup& setup, const Model& model,
-                                       const FitResult& fit,
-                                       const std::vector<StepSummary>& steps,
+                                       const FitResult& fit, const std::vector<StepSummary>& steps,
                                        const nlohmann::json& noise = nullptr);
 
 /// A calibration record ready to apply: its model and the value of each model parameter (zero

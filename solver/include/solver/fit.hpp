@@ -51,7 +51,7 @@ struct StepResidual {
   double end_s = 0.0;    ///< last sample, since the run's first sample [s]
   bool is_static = false;
   std::array<double, kSignalCount> signals{};  ///< the step's mean of each signal (signal_names())
-  Vector6d residual = Vector6d::Zero();  ///< [deg/s, m/s^2]
+  Vector6d residual = Vector6d::Zero();        ///< [deg/s, m/s^2]
   /// The noise of this step's mean alone (white part and wander; neighbouring steps' noise is
   /// correlated with it when the noise model has a wander)
   Vector6d sigma = Vector6d::Zero();
@@ -63,9 +63,9 @@ struct FitResult {
   std::vector<std::string> terms;
   std::vector<FittedParameter> parameters;  ///< identified ones, in model order
   std::vector<Unidentifiable> unidentifiable;
-  Eigen::VectorXd values;         ///< every model parameter (0 for unidentifiable ones)
-  Eigen::MatrixXd covariance;     ///< of `parameters`, in their order (sigma inflation applied)
-  double chi2 = 0.0;  ///< against the noise model's covariance (whitened residuals)
+  Eigen::VectorXd values;      ///< every model parameter (0 for unidentifiable ones)
+  Eigen::MatrixXd covariance;  ///< of `parameters`, in their order (sigma inflation applied)
+  double chi2 = 0.0;           ///< against the noise model's covariance (whitened residuals)
   int dof = 0;
   double chi2_dof = 0.0;
   /// Per sensor: chi2/dof of the gyro rows and of the accelerometer rows, each against its own
@@ -74,11 +74,11 @@ struct FitResult {
   double chi2_dof_accel = 0.0;
   int dof_gyro = 0;
   int dof_accel = 0;
-  double residual_rms_gyro_dps = 0.0;    ///< over step-mean residuals of all steps and axes
+  double residual_rms_gyro_dps = 0.0;  ///< over step-mean residuals of all steps and axes
   double residual_rms_accel_mps2 = 0.0;
   Vector6d noise_floor = Vector6d::Zero();  ///< rms of the steps' mean sigmas, per channel
-  NoiseFloor floor;  ///< the white part, measured inside the steps
-  StepNoise noise;   ///< the whole noise model the weights came from
+  NoiseFloor floor;                         ///< the white part, measured inside the steps
+  StepNoise noise;                          ///< the whole noise model the weights came from
   double sample_rate_hz = 0.0;  ///< of the IMU, from the steps' sample counts and durations
   std::vector<StepResidual> steps;
   SensorRows rows = SensorRows::kBoth;

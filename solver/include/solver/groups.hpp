@@ -24,7 +24,7 @@ std::vector<StepConditions> step_conditions(const std::vector<StepSummary>& step
 /// One group of steps sharing a condition, with the fit's chi-square per degree of freedom over
 /// its step-mean rows (z-scores of the channels the fit used).
 struct GroupQuality {
-  std::string group;               ///< e.g. "plateau: T 70 degC"
+  std::string group;  ///< e.g. "plateau: T 70 degC"
   double chi2_dof = 0.0;
   std::vector<std::size_t> steps;  ///< step indexes in the run
 };

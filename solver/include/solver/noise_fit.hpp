@@ -39,11 +39,11 @@ struct NoiseTerm {
 /// from its Allan variance, with the IEEE Std 952 model
 ///   AVAR(tau) = 3 Q^2 / tau^2 + N^2 / tau + (2 ln2 / pi) B^2 + K^2 tau / 3 + R^2 tau^2 / 2.
 struct NoiseTerms {
-  NoiseTerm quantization;       ///< Q [u s] (angle or velocity quantization)
-  NoiseTerm random_walk;        ///< N [u sqrt(s)] = [u/sqrt(Hz)]: angle/velocity random walk
-  NoiseTerm bias_instability;   ///< B [u]: the IEEE 952 coefficient as fitted (floor 0.664 B)
-  NoiseTerm rate_random_walk;   ///< K [u/sqrt(s)]: rate (or acceleration) random walk
-  NoiseTerm rate_ramp;          ///< R [u/s]
+  NoiseTerm quantization;      ///< Q [u s] (angle or velocity quantization)
+  NoiseTerm random_walk;       ///< N [u sqrt(s)] = [u/sqrt(Hz)]: angle/velocity random walk
+  NoiseTerm bias_instability;  ///< B [u]: the IEEE 952 coefficient as fitted (floor 0.664 B)
+  NoiseTerm rate_random_walk;  ///< K [u/sqrt(s)]: rate (or acceleration) random walk
+  NoiseTerm rate_ramp;         ///< R [u/s]
   /// The lowest Allan deviation of the curve [u] and its averaging time [s]: the "bias
   /// instability" most datasheets quote (the flicker floor, 0.664 B when flicker dominates).
   /// Only points with at least 10 degrees of freedom count (the last few taus of a record
@@ -53,8 +53,8 @@ struct NoiseTerms {
   /// min_deviation / 0.664 [u]: the IEEE 952 coefficient B read from the floor, which
   /// overestimates B where white noise or random walk still lift the minimum.
   double bias_instability_from_min = 0.0;
-  double chi2_dof = 0.0;  ///< weighted residual sum of squares per degree of freedom
-  std::size_t points = 0; ///< averaging times used (those from min_tau_s on)
+  double chi2_dof = 0.0;   ///< weighted residual sum of squares per degree of freedom
+  std::size_t points = 0;  ///< averaging times used (those from min_tau_s on)
 };
 
 /// Allan variance sqrt(2 ln 2 / pi) floor factor of flicker noise: 0.664.
@@ -80,9 +80,9 @@ NoiseTerms fit_noise_terms(const AllanResult& curve, const NoiseFitOptions& opti
 /// A first-order Gauss-Markov process (correlation time tau_c, stationary sigma), optionally
 /// on top of white noise, fitted to an Allan deviation curve.
 struct GaussMarkovFit {
-  double sigma = 0.0;           ///< stationary standard deviation [u]
-  double tau_c_s = 0.0;         ///< correlation time [s]
-  double white_density = 0.0;   ///< white noise N [u sqrt(s)] (0 when not fitted)
+  double sigma = 0.0;          ///< stationary standard deviation [u]
+  double tau_c_s = 0.0;        ///< correlation time [s]
+  double white_density = 0.0;  ///< white noise N [u sqrt(s)] (0 when not fitted)
   double chi2_dof = 0.0;
   /// True when the Allan variance peak of the process (at 1.89 tau_c) lies inside the curve's
   /// tau range; otherwise tau_c is an extrapolation and sigma is poorly determined.

@@ -24,7 +24,7 @@ struct Psd {
   std::vector<double> density;       ///< [unit^2/Hz], one-sided (sums to the variance)
   std::size_t segments = 0;          ///< segments averaged
   std::size_t segment_length = 0;
-  double resolution_hz = 0.0;        ///< frequency spacing [Hz]
+  double resolution_hz = 0.0;  ///< frequency spacing [Hz]
   /// Effective noise bandwidth of one bin [Hz]: 1.5 bins for the Hann window.
   double enbw_hz = 0.0;
 };
@@ -39,7 +39,8 @@ struct Psd {
 /// Throws core::InputError for fewer samples than one segment (or 16 with the automatic
 /// length), a non-finite sample (named), a non-positive rate or invalid options. FFTW's planner
 /// is not thread safe; plans are made under a lock shared with autocorrelation().
-Psd welch_psd(std::span<const double> data, double sample_rate_hz, const WelchOptions& options = {});
+Psd welch_psd(std::span<const double> data, double sample_rate_hz,
+              const WelchOptions& options = {});
 
 /// A sample autocorrelation.
 struct Autocorrelation {

@@ -37,8 +37,8 @@ struct DatasheetFigure {
   std::string name;   ///< e.g. "angle_random_walk"
   std::string label;  ///< e.g. "angle random walk N"
   double value = 0.0;
-  double sigma = 0.0;  ///< one sigma, same unit; NaN for figures read off the curve
-  std::string unit;    ///< e.g. "deg/sqrt(h)", "ug"
+  double sigma = 0.0;    ///< one sigma, same unit; NaN for figures read off the curve
+  std::string unit;      ///< e.g. "deg/sqrt(h)", "ug"
   bool resolved = true;  ///< false: the fit found no evidence of the term (value 0)
 };
 

@@ -14,15 +14,15 @@ namespace calstand::solver {
 /// identity of the device and station (for calibration records).
 struct RunSetup {
   std::int64_t run = 0;
-  std::string device;                 ///< samples' device name, e.g. "imu0"
-  std::string imu_model;              ///< e.g. "ln200" ("" when unknown)
-  std::string imu_serial;             ///< "" when the station file does not give one
-  std::string station;                ///< station name ("" for an imported run)
+  std::string device;      ///< samples' device name, e.g. "imu0"
+  std::string imu_model;   ///< e.g. "ln200" ("" when unknown)
+  std::string imu_serial;  ///< "" when the station file does not give one
+  std::string station;     ///< station name ("" for an imported run)
   std::string procedure_name;
   std::string procedure_sha256;
   core::Site site;
-  core::TableGeometry geometry;       ///< mount C_PB of `device` included
-  double temperature_ref_c = 25.0;    ///< T_ref of dT = T - T_ref [degC]
+  core::TableGeometry geometry;     ///< mount C_PB of `device` included
+  double temperature_ref_c = 25.0;  ///< T_ref of dT = T - T_ref [degC]
 };
 
 /// Reads the setup from a run's station snapshot (a calstand-station/1 document for recorded

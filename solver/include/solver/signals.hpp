@@ -14,10 +14,10 @@ namespace calstand::solver {
 /// The signals of error-model.md at one sample, plus the geometry the reference terms need.
 /// Everything is in the body frame B.
 struct Signals {
-  double temperature_c = 0.0;         ///< IMU temperature [degC]
-  double dT_c = 0.0;                  ///< temperature - T_ref [degC]
-  double temperature_rate_cpm = 0.0;  ///< dT/dt [degC/min]
-  double elapsed_s = 0.0;             ///< since the run's first sample [s]
+  double temperature_c = 0.0;                                ///< IMU temperature [degC]
+  double dT_c = 0.0;                                         ///< temperature - T_ref [degC]
+  double temperature_rate_cpm = 0.0;                         ///< dT/dt [degC/min]
+  double elapsed_s = 0.0;                                    ///< since the run's first sample [s]
   Eigen::Vector3d rate_dps = Eigen::Vector3d::Zero();        ///< reference w [deg/s]
   Eigen::Vector3d table_rate_dps = Eigen::Vector3d::Zero();  ///< table part of w [deg/s]
   /// Angular acceleration of the table [deg/s^2]: non-zero at constant axis rates when both

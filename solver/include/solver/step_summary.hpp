@@ -30,12 +30,12 @@ RunData load_run_data(store::Database& db, std::int64_t run, const std::string& 
 /// regressor over the step's samples (exact for terms linear in their parameters), the spread
 /// of the step mean estimated inside the step, and the step's conditions for grouping.
 struct StepSummary {
-  std::size_t index = 0;       ///< step index in the run
+  std::size_t index = 0;  ///< step index in the run
   std::string label;
-  std::int64_t count = 0;      ///< samples
-  double duration_s = 0.0;     ///< first to last sample [s]
-  double start_s = 0.0;        ///< first sample, since the run's first sample [s]
-  double end_s = 0.0;          ///< last sample, since the run's first sample [s]
+  std::int64_t count = 0;                 ///< samples
+  double duration_s = 0.0;                ///< first to last sample [s]
+  double start_s = 0.0;                   ///< first sample, since the run's first sample [s]
+  double end_s = 0.0;                     ///< last sample, since the run's first sample [s]
   Vector6d measured = Vector6d::Zero();   ///< mean measurement [deg/s, m/s^2]
   Vector6d reference = Vector6d::Zero();  ///< mean reference (w, f) of the model
   Eigen::MatrixXd regressors;             ///< kChannels x parameters, step means
@@ -46,7 +46,7 @@ struct StepSummary {
   std::array<double, kSignalCount> signals{};      ///< mean of each signal (signal_names())
   std::array<double, kSignalCount> signals_sq{};   ///< mean of each signal squared
   std::array<double, kSignalCount> signals_abs{};  ///< mean of each signal's absolute value
-  bool is_static = false;                      ///< the table was at rest
+  bool is_static = false;                          ///< the table was at rest
 };
 
 /// Summaries of every step of `data` for `model`, in step order.

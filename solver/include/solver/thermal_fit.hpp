@@ -31,8 +31,8 @@ struct ThermalFitOptions {
 
 /// One plateau's general fit.
 struct PlateauFit {
-  double temperature_c = 0.0;  ///< mean of the plateau's step temperatures [degC]
-  std::size_t steps = 0;       ///< steps on the plateau
+  double temperature_c = 0.0;                  ///< mean of the plateau's step temperatures [degC]
+  std::size_t steps = 0;                       ///< steps on the plateau
   std::vector<FittedParameter> parameters;     ///< identified on this plateau, model order
   std::vector<Unidentifiable> unidentifiable;  ///< as fit_model() reports them
   double chi2_dof = 0.0;
@@ -73,9 +73,9 @@ struct ThermalFitResult {
 
 /// Fits `model` on each temperature plateau of `steps` (plateaus as temperature_plateaus()
 /// forms them: step mean temperatures split at gaps over 2 degC) with fit_model() and the
-/// shared noise model `noise` (white, or with a wandering bias), then fits each parameter identified on every plateau against
-/// dT = T - options.temperature_ref_c: biases by a polynomial of `order`, scale factors
-/// linearly, everything else by its weighted mean (see ThermalFitResult).
+/// shared noise model `noise` (white, or with a wandering bias), then fits each parameter
+/// identified on every plateau against dT = T - options.temperature_ref_c: biases by a polynomial
+/// of `order`, scale factors linearly, everything else by its weighted mean (see ThermalFitResult).
 ///
 /// Throws core::InputError (where() = "fit_per_plateau") when order < 1; when the run has
 /// fewer than order + 1 plateaus (message e.g. "order 2 needs at least 3 temperature
@@ -89,9 +89,10 @@ ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Mo
 
 /// The same with white noise alone.
 inline ThermalFitResult fit_per_plateau(const std::vector<StepSummary>& steps, const Model& model,
-                                 int order, const NoiseFloor& floor,
-                                 const ThermalFitOptions& options = {}) {
-  return fit_per_plateau(steps, model, order, StepNoise::white_only(floor, "white noise only, as asked"), options);
+                                        int order, const NoiseFloor& floor,
+                                        const ThermalFitOptions& options = {}) {
+  return fit_per_plateau(steps, model, order,
+                         StepNoise::white_only(floor, "white noise only, as asked"), options);
 }
 
 /// The result as a JSON document: {"model", "order", "temperature_ref_c", "plateaus": [{

@@ -37,7 +37,7 @@ struct CaptureWriterOptions {
   std::size_t queue_capacity = 1u << 18;  ///< samples waiting for the writer thread, at most
   ChunkLimits chunk;                      ///< when chunks close
   SampleEncoding encoding = SampleEncoding::kCompact;
-  int busy_timeout_ms = 10000;            ///< wait for other writers of the file [ms]
+  int busy_timeout_ms = 10000;  ///< wait for other writers of the file [ms]
   /// Called on the writer thread after an overflow event is recorded; must not block long and
   /// must not call back into the writer.
   std::function<void(const OverflowReport&)> on_overflow;
@@ -48,12 +48,12 @@ struct CaptureWriterOptions {
 
 /// Named counters of a CaptureWriter (monotonic; read at any time).
 struct CaptureWriterCounters {
-  std::uint64_t pushed = 0;           ///< samples accepted by push()
-  std::uint64_t written = 0;          ///< samples stored in chunks (inserted, maybe not committed)
-  std::uint64_t chunks = 0;           ///< chunks inserted
+  std::uint64_t pushed = 0;   ///< samples accepted by push()
+  std::uint64_t written = 0;  ///< samples stored in chunks (inserted, maybe not committed)
+  std::uint64_t chunks = 0;   ///< chunks inserted
   std::uint64_t dropped_queue_full = 0;  ///< samples refused by push() (queue full or failed)
-  std::uint64_t overflow_events = 0;  ///< overflow events recorded
-  std::uint64_t commits = 0;          ///< commit_step() calls completed
+  std::uint64_t overflow_events = 0;     ///< overflow events recorded
+  std::uint64_t commits = 0;             ///< commit_step() calls completed
 };
 
 /// What commit_step() made durable for one step attempt (all its devices).
@@ -142,22 +142,22 @@ class CaptureWriter {
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
-  std::vector<Batch> queue_;                     // guarded by mutex_
-  std::size_t queued_ = 0;                       // samples in queue_; guarded by mutex_
-  std::uint64_t enqueued_ = 0;                   // samples ever queued; guarded by mutex_
-  bool sealed_ = false;  // a command follows queue_.back(): do not append to it; mutex_
+  std::vector<Batch> queue_;    // guarded by mutex_
+  std::size_t queued_ = 0;      // samples in queue_; guarded by mutex_
+  std::uint64_t enqueued_ = 0;  // samples ever queued; guarded by mutex_
+  bool sealed_ = false;         // a command follows queue_.back(): do not append to it; mutex_
   std::vector<std::vector<core::ImuSample>> spare_;  // emptied batch buffers for reuse; mutex_
-  std::deque<std::unique_ptr<Command>> commands_;  // guarded by mutex_
-  std::vector<std::unique_ptr<Stream>> streams_;   // guarded by mutex_ (elements are stable)
+  std::deque<std::unique_ptr<Command>> commands_;    // guarded by mutex_
+  std::vector<std::unique_ptr<Stream>> streams_;     // guarded by mutex_ (elements are stable)
   std::map<std::tuple<std::int64_t, int, std::string>, StreamId> stream_index_;  // mutex_
-  bool stop_ = false;                            // guarded by mutex_
-  bool overflow_pending_ = false;                // refusals not yet recorded; mutex_
-  std::exception_ptr failure_;                   // guarded by mutex_; set once by the thread
+  bool stop_ = false;              // guarded by mutex_
+  bool overflow_pending_ = false;  // refusals not yet recorded; mutex_
+  std::exception_ptr failure_;     // guarded by mutex_; set once by the thread
 
   std::vector<Stream*> local_streams_;  // writer thread only: snapshot of streams_
 
-  std::atomic<std::uint64_t> pushed_{0}, written_{0}, chunks_{0}, dropped_{0},
-      overflow_events_{0}, commits_{0};
+  std::atomic<std::uint64_t> pushed_{0}, written_{0}, chunks_{0}, dropped_{0}, overflow_events_{0},
+      commits_{0};
 
   std::thread thread_;
 };

@@ -13,11 +13,11 @@ namespace calstand::store {
 /// the same station snapshot and steps, new samples.
 struct DerivedRun {
   std::int64_t source_run = 0;
-  std::string procedure_name;      ///< e.g. "corrected six-position"
-  std::string status = "derived";  ///< runs.status of the new run
+  std::string procedure_name;                            ///< e.g. "corrected six-position"
+  std::string status = "derived";                        ///< runs.status of the new run
   nlohmann::json parameters = nlohmann::json::object();  ///< what it was derived with
   std::string device = "imu0";
-  std::vector<StepData> steps;     ///< completed steps with their samples and table state
+  std::vector<StepData> steps;  ///< completed steps with their samples and table state
 };
 
 /// Writes `derived` as a new run in one transaction: the source run's procedure and station

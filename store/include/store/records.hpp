@@ -32,15 +32,15 @@ struct DeviceRecord {
 struct NewRun {
   std::optional<std::int64_t> station_id;  ///< from RunStore::upsert_station, or none
   std::string procedure_name;
-  std::string procedure_text;              ///< exact text; its SHA-256 is stored beside it
+  std::string procedure_text;  ///< exact text; its SHA-256 is stored beside it
   nlohmann::json parameters = nlohmann::json::object();        ///< values after --set overrides
   nlohmann::json station_snapshot = nlohmann::json::object();  ///< station config at start
-  std::string status = "idle";             ///< run engine state name
+  std::string status = "idle";                                 ///< run engine state name
 };
 
 /// One expanded step as the plan gives it.
 struct NewStep {
-  std::string kind;    ///< e.g. "capture", "move", "rate", "set_temperature"
+  std::string kind;  ///< e.g. "capture", "move", "rate", "set_temperature"
   std::string label;
   nlohmann::json commanded = nlohmann::json::object();  ///< commanded state, with units in keys
   std::string origin;  ///< JSON path in the procedure, e.g. "steps[3].steps[1]"
@@ -55,25 +55,25 @@ struct StepRecord {
   nlohmann::json commanded;
   std::string origin;
   StepStatus status = StepStatus::kPending;
-  std::string reason;                    ///< why failed/invalidated/skipped ("" otherwise)
-  int attempts = 0;                      ///< attempts started
-  std::optional<int> good_attempt;       ///< the attempt holding the step's data
-  std::optional<double> started_clock_s; ///< station clock [s]
-  std::optional<double> ended_clock_s;   ///< station clock [s]
+  std::string reason;                     ///< why failed/invalidated/skipped ("" otherwise)
+  int attempts = 0;                       ///< attempts started
+  std::optional<int> good_attempt;        ///< the attempt holding the step's data
+  std::optional<double> started_clock_s;  ///< station clock [s]
+  std::optional<double> ended_clock_s;    ///< station clock [s]
   std::string started_utc;
   std::string ended_utc;
 };
 
 /// An event to record or as stored.
 struct EventRecord {
-  std::int64_t id = 0;                   ///< set by the store
-  std::optional<std::int64_t> run_id;    ///< none: station-wide
-  double time_s = 0.0;                   ///< station clock [s]
-  std::string wall_utc;                  ///< empty: the store stamps the wall clock now
+  std::int64_t id = 0;                 ///< set by the store
+  std::optional<std::int64_t> run_id;  ///< none: station-wide
+  double time_s = 0.0;                 ///< station clock [s]
+  std::string wall_utc;                ///< empty: the store stamps the wall clock now
   EventKind kind = EventKind::kInfo;
-  std::string source;                    ///< e.g. "engine", "table", "capture_writer", "operator"
+  std::string source;  ///< e.g. "engine", "table", "capture_writer", "operator"
   std::string message;
-  nlohmann::json detail;                 ///< null or any JSON
+  nlohmann::json detail;  ///< null or any JSON
 };
 
 /// One line of a run listing.
@@ -81,11 +81,11 @@ struct RunSummary {
   std::int64_t id = 0;
   std::string procedure_name;
   std::string status;
-  std::size_t steps_done = 0;   ///< completed steps
+  std::size_t steps_done = 0;  ///< completed steps
   std::size_t steps_total = 0;
   std::string created_utc;
-  std::string started_utc;      ///< empty when not started
-  std::string ended_utc;        ///< empty while running
+  std::string started_utc;  ///< empty when not started
+  std::string ended_utc;    ///< empty while running
   std::string exit_reason;
 };
 

@@ -10,8 +10,8 @@
 namespace calstand::store {
 
 /// Run statuses of the station daemon beside the engine's (running, paused, completed, ...).
-inline constexpr const char* kQueuedStatus = "queued";            ///< waiting in run_queue
-inline constexpr const char* kHeldStatus = "held";                ///< interrupted, waits for an operator
+inline constexpr const char* kQueuedStatus = "queued";  ///< waiting in run_queue
+inline constexpr const char* kHeldStatus = "held";      ///< interrupted, waits for an operator
 inline constexpr const char* kInterruptedStatus = "interrupted";  ///< checkpointed by a daemon stop
 
 /// A queued run, as table run_queue holds it.

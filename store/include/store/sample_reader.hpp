@@ -51,8 +51,8 @@ struct StepMean {
   int attempt = 0;
   std::string device;
   std::int64_t count = 0;
-  double first_receive_time_s = 0.0;  ///< [s]
-  double last_receive_time_s = 0.0;   ///< [s]
+  double first_receive_time_s = 0.0;                       ///< [s]
+  double last_receive_time_s = 0.0;                        ///< [s]
   Eigen::Vector3d gyro_dps = Eigen::Vector3d::Zero();      ///< mean [deg/s]
   Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();    ///< mean [m/s^2]
   double temperature_c = 0.0;                              ///< mean [degC]

@@ -32,8 +32,8 @@ struct StepData {
 /// interpolated in the table telemetry recorded while the step ran, at the sample's receive
 /// time (linear, the turn between rows resolved with the recorded rates; before the first and
 /// after the last row, that
-/// row advanced at its rates), else the step's commanded state. Throws core::InputError for an unknown
-/// run, StoreError when reading fails.
+/// row advanced at its rates), else the step's commanded state. Throws core::InputError for an
+/// unknown run, StoreError when reading fails.
 std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device);
 
 /// As read_step_data(), one step at a time: `use` gets each step's data in turn, and only one

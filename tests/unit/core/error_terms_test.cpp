@@ -6,15 +6,24 @@ namespace calstand::core {
 namespace {
 
 TEST(ErrorTerms, CatalogueHoldsEveryContractTermOnce) {
-  const char* expected[] = {"gyro_bias",          "gyro_scale",
-                            "gyro_misalignment",  "gyro_scale_asymmetry",
-                            "gyro_quadratic",     "gyro_g_sensitivity",
-                            "gyro_temp_bias",     "gyro_temp_scale",
-                            "earth_rate",         "accel_bias",
-                            "accel_scale",        "accel_misalignment",
-                            "accel_scale_asymmetry", "accel_quadratic",
-                            "accel_temp_bias",    "accel_temp_scale",
-                            "accel_lever_arm",    "table_tilt"};
+  const char* expected[] = {"gyro_bias",
+                            "gyro_scale",
+                            "gyro_misalignment",
+                            "gyro_scale_asymmetry",
+                            "gyro_quadratic",
+                            "gyro_g_sensitivity",
+                            "gyro_temp_bias",
+                            "gyro_temp_scale",
+                            "earth_rate",
+                            "accel_bias",
+                            "accel_scale",
+                            "accel_misalignment",
+                            "accel_scale_asymmetry",
+                            "accel_quadratic",
+                            "accel_temp_bias",
+                            "accel_temp_scale",
+                            "accel_lever_arm",
+                            "table_tilt"};
   ASSERT_EQ(error_term_catalogue().size(), std::size(expected));
   for (const char* name : expected) {
     const ErrorTermInfo* t = find_error_term(name);

@@ -164,7 +164,8 @@ TEST(StationConfig, FaultPolicyDefaultsAndRoundTrips) {
   StationConfig c = StationConfig::from_json(doc, "p.json");
   EXPECT_EQ(c.policy.on_sequence_gap, "record");
   EXPECT_EQ(c.policy.on_stale_stream, "repeat_capture");
-  doc["policy"] = {{"on_sequence_gap", "abort"}, {"stale_after_s", 0.5}, {"max_capture_attempts", 5}};
+  doc["policy"] = {
+      {"on_sequence_gap", "abort"}, {"stale_after_s", 0.5}, {"max_capture_attempts", 5}};
   c = StationConfig::from_json(doc, "p.json");
   EXPECT_EQ(c.policy.on_sequence_gap, "abort");
   EXPECT_DOUBLE_EQ(c.policy.stale_after_s, 0.5);

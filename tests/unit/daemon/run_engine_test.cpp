@@ -27,7 +27,9 @@ class MemoryJournal final : public RunJournal {
     double first_time_s = 0.0;
     double last_time_s = 0.0;
   };
-  void step_started(std::size_t step, int attempt, double) override { started.push_back({step, attempt}); }
+  void step_started(std::size_t step, int attempt, double) override {
+    started.push_back({step, attempt});
+  }
   bool add_samples(std::size_t step, int attempt, const std::string& device,
                    const std::vector<core::ImuSample>& s) override {
     Attempt& a = attempts[{step, attempt, device}];
@@ -45,14 +47,17 @@ class MemoryJournal final : public RunJournal {
       return std::get<0>(e.first) == step && std::get<1>(e.first) == attempt;
     });
   }
-  void step_completed(std::size_t step, int attempt, double) override { completed.push_back({step, attempt}); }
+  void step_completed(std::size_t step, int attempt, double) override {
+    completed.push_back({step, attempt});
+  }
   void step_failed(std::size_t step, int, double, const std::string& why) override {
     failed.push_back({step, why});
   }
   void step_skipped(std::size_t step, double, const std::string& why) override {
     skipped.push_back({step, why});
   }
-  void event(double, EventKind kind, const std::string& source, const std::string& message) override {
+  void event(double, EventKind kind, const std::string& source,
+             const std::string& message) override {
     events.push_back({kind, source + ": " + message});
   }
   void table_telemetry(const core::TableState&) override { ++table_rows; }
@@ -211,9 +216,9 @@ TEST(RunEngine, AbortTakesTheStationSafeAndRecordsWhy) {
   opt.on_progress = [&](const Progress& p) {
     if (p.step == 2 && p.phase == "capturing") e->abort("operator saw smoke", "alice");
   };
-  RunEngine engine(f.station, f.journal,
-                   plan_of({temperature(40.0), rate("inner", 100.0, 30.0), capture(60.0), capture(1.0)}),
-                   opt);
+  RunEngine engine(
+      f.station, f.journal,
+      plan_of({temperature(40.0), rate("inner", 100.0, 30.0), capture(60.0), capture(1.0)}), opt);
   e = &engine;
   EXPECT_EQ(engine.run(), RunState::kAborted);
   EXPECT_NE(engine.exit_reason().find("operator saw smoke"), std::string::npos);
@@ -385,7 +390,8 @@ TEST(RunEngine, SkipDuringACaptureDiscardsItAndGoesOn) {
   ASSERT_EQ(f.journal.completed.size(), 2u);
   EXPECT_EQ(f.journal.completed[0].first, 0u);
   EXPECT_EQ(f.journal.completed[1].first, 2u);
-  EXPECT_TRUE(f.journal.has_event(EventKind::kOperator, "alice: skip requested: sensor warming up"));
+  EXPECT_TRUE(
+      f.journal.has_event(EventKind::kOperator, "alice: skip requested: sensor warming up"));
   // Far less than the 30 s capture passed.
   EXPECT_LT(f.station.clock().now_s(), 10.0);
 }
@@ -398,7 +404,8 @@ TEST(RunEngine, SkippedRateStepLeavesTheTableAtRest) {
   opt.on_progress = [&](const Progress& p) {
     if (p.step == 0 && p.phase == "capturing" && f.journal.skipped.empty()) e->skip("enough");
     if (p.step == 1 && p.phase == "capturing") {
-      rate_when_next_step_ran = std::abs(f.station.table().read_state().inner.rate_dps);  // the last one stays
+      rate_when_next_step_ran =
+          std::abs(f.station.table().read_state().inner.rate_dps);  // the last one stays
     }
   };
   RunEngine engine(f.station, f.journal, plan_of({rate("inner", 60.0, 100.0), capture(3.0)}), opt);
@@ -489,7 +496,8 @@ TEST(RunEngine, PauseAtOnceWhileReestablishingPausesTheFirstStep) {
   EXPECT_EQ(engine.run(2, 3), RunState::kCompleted);
   EXPECT_TRUE(asked);
   EXPECT_TRUE(f.journal.has_event(EventKind::kInfo, "resuming at step 2"));
-  EXPECT_NE(std::find(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused), f.journal.states.end());
+  EXPECT_NE(std::find(f.journal.states.begin(), f.journal.states.end(), RunState::kPaused),
+            f.journal.states.end());
   // The skip applied to step 2 (the first step), not to the re-established ones.
   ASSERT_EQ(f.journal.skipped.size(), 1u);
   EXPECT_EQ(f.journal.skipped[0].first, 2u);
@@ -508,11 +516,11 @@ TEST(RunEngine, ResumeDoesNotReestablishASkippedTemperature) {
     }
   };
   RunEngine engine(f.station, f.journal,
-                   plan_of({temperature(35.0), move(90.0, 0.0), temperature(80.0), capture(2.0)}), opt);
+                   plan_of({temperature(35.0), move(90.0, 0.0), temperature(80.0), capture(2.0)}),
+                   opt);
   EXPECT_EQ(engine.run(3, 1, {2}), RunState::kCompleted);
   EXPECT_NEAR(setpoint_at_capture, 35.0, 1e-9);
 }
-
 
 // Requests wait in the engine's queue and are applied in the order they came: a pause and an
 // abort arriving together are both recorded, pause first, and the abort ends the run (an

@@ -19,15 +19,17 @@ std::vector<std::string> violation_paths(const nlohmann::json& body) {
 }
 
 TEST(RunRequest, ALibraryNameWithParameters) {
-  const auto r = parse_run_request({{"procedure", "six-position"}, {"parameters", {{"capture_s", 5}}}});
+  const auto r =
+      parse_run_request({{"procedure", "six-position"}, {"parameters", {{"capture_s", 5}}}});
   EXPECT_EQ(r.procedure.name, "six-position");
   EXPECT_EQ(r.overrides.at("capture_s"), 5);
 }
 
 TEST(RunRequest, AnInlineProcedureDocument) {
-  const nlohmann::json doc = {{"format", "calstand-procedure/1"},
-                              {"name", "one-capture"},
-                              {"steps", {{{"kind", "capture"}, {"duration_s", 2}, {"label", "still"}}}}};
+  const nlohmann::json doc = {
+      {"format", "calstand-procedure/1"},
+      {"name", "one-capture"},
+      {"steps", {{{"kind", "capture"}, {"duration_s", 2}, {"label", "still"}}}}};
   const auto r = parse_run_request({{"procedure", doc}});
   EXPECT_EQ(r.procedure.name, "one-capture");
   EXPECT_EQ(r.procedure.file_name, "request.procedure");
@@ -40,13 +42,15 @@ TEST(RunRequest, EveryShapeProblemIsListed) {
 }
 
 TEST(RunRequest, NamesAreLibraryProceduresOnlyNeverFiles) {
-  EXPECT_EQ(violation_paths({{"procedure", "/etc/passwd"}}), (std::vector<std::string>{"procedure"}));
+  EXPECT_EQ(violation_paths({{"procedure", "/etc/passwd"}}),
+            (std::vector<std::string>{"procedure"}));
   EXPECT_EQ(violation_paths({{"procedure", "../procedures/library/six-position.json"}}),
             (std::vector<std::string>{"procedure"}));
 }
 
 TEST(RunRequest, AnInvalidInlineProcedureGivesItsViolations) {
-  EXPECT_FALSE(violation_paths({{"procedure", {{"name", "x"}, {"steps", {{{"kind", "fly"}}}}}}}).empty());
+  EXPECT_FALSE(
+      violation_paths({{"procedure", {{"name", "x"}, {"steps", {{{"kind", "fly"}}}}}}}).empty());
 }
 
 }  // namespace

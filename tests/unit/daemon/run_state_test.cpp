@@ -21,7 +21,8 @@ TEST(RunState, OnlyTerminalAndImportedRunsHaveEnded) {
   for (const char* ended : {"completed", "aborted", "failed", "imported"}) {
     EXPECT_TRUE(has_ended(ended)) << ended;
   }
-  for (const char* open : {"queued", "running", "paused", "aborting", "interrupted", "held", "idle", ""}) {
+  for (const char* open :
+       {"queued", "running", "paused", "aborting", "interrupted", "held", "idle", ""}) {
     EXPECT_FALSE(has_ended(open)) << open;
   }
 }

@@ -31,10 +31,13 @@ TEST(UstarWriter, GnuTarReadsBackEveryFileExactly) {
   const std::string archive = std::move(tar).finish();
   EXPECT_EQ(archive.size() % 512, 0u);
 
-  const auto path = std::filesystem::temp_directory_path() / ("ustar-test-" + std::to_string(getpid()) + ".tar");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("ustar-test-" + std::to_string(getpid()) + ".tar");
   std::ofstream(path, std::ios::binary) << archive;
-  EXPECT_EQ(run("tar -tf " + path.string()), "run-7/meta.json\nrun-7/samples.csv\nrun-7/empty.txt\n");
-  EXPECT_EQ(run("tar -xOf " + path.string() + " run-7/meta.json"), "{\"format\": \"calstand-import/1\"}\n");
+  EXPECT_EQ(run("tar -tf " + path.string()),
+            "run-7/meta.json\nrun-7/samples.csv\nrun-7/empty.txt\n");
+  EXPECT_EQ(run("tar -xOf " + path.string() + " run-7/meta.json"),
+            "{\"format\": \"calstand-import/1\"}\n");
   EXPECT_EQ(run("tar -xOf " + path.string() + " run-7/samples.csv"), big);
   std::filesystem::remove(path);
 }
@@ -51,11 +54,14 @@ TEST(UstarWriter, RefusesNamesThatEscapeOrDoNotFit) {
 // says the size in base-256, which GNU tar reads. The archive is a sparse file: no disk used.
 TEST(UstarWriter, SizesOfEightGibibytesAndMoreAreWrittenSoTarReadsThem) {
   const std::uint64_t size = (std::uint64_t{9} << 30) + 123;  // 9 GiB and a bit
-  const std::string header = calstand::daemon::api::ustar_header("run-1/samples.csv", size, 1700000000);
+  const std::string header =
+      calstand::daemon::api::ustar_header("run-1/samples.csv", size, 1700000000);
   ASSERT_EQ(header.size(), 512u);
-  const auto path = std::filesystem::temp_directory_path() / ("ustar-big-" + std::to_string(getpid()) + ".tar");
+  const auto path =
+      std::filesystem::temp_directory_path() / ("ustar-big-" + std::to_string(getpid()) + ".tar");
   std::ofstream(path, std::ios::binary) << header;
-  std::filesystem::resize_file(path, 512 + size + calstand::daemon::api::ustar_padding(size) + 1024);
+  std::filesystem::resize_file(path,
+                               512 + size + calstand::daemon::api::ustar_padding(size) + 1024);
   const std::string listing = run("tar -tvf " + path.string() + " 2>&1");
   std::filesystem::remove(path);
   EXPECT_NE(listing.find(std::to_string(size)), std::string::npos) << listing;

@@ -190,8 +190,9 @@ TEST(PlanJson, HoldsStepsEstimatesEnvelopeAndViolations) {
 TEST(PlanLimits, APlanLongerThanAYearIsRefusedWithTheReason) {
   const Plan ok = plan_of(R"([{"kind": "capture", "label": "a day", "duration_s": 86400}])");
   EXPECT_TRUE(ok.ok()) << test::lines(ok.violations);
-  const Plan absurd = plan_of(R"([{"kind": "capture", "label": "c", "duration_s": "${capture_s}"}])",
-                              R"({"capture_s": {"default": 1, "min": 1, "description": "s"}})", {{"capture_s", 1e308}});
+  const Plan absurd = plan_of(
+      R"([{"kind": "capture", "label": "c", "duration_s": "${capture_s}"}])",
+      R"({"capture_s": {"default": 1, "min": 1, "description": "s"}})", {{"capture_s", 1e308}});
   ASSERT_FALSE(absurd.ok());
   ASSERT_EQ(absurd.violations.size(), 1u) << test::lines(absurd.violations);
   EXPECT_EQ(absurd.violations[0].path, "procedure");

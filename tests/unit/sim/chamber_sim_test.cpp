@@ -222,8 +222,7 @@ TEST(ChamberSim, NoiseIsDeterministicForASeed) {
 }
 
 /// Sample standard deviation and lag-`lag` autocorrelation of the noise on a steady air.
-void noise_stats(const std::vector<double>& dts, double& sigma, double& corr_at_tau,
-                 double tau_s) {
+void noise_stats(const std::vector<double>& dts, double& sigma, double& corr_at_tau, double tau_s) {
   const ChamberParams p;  // standby at ambient: the air itself stays at ambient exactly
   ChamberSim chamber(p, 11);
   std::vector<double> samples;

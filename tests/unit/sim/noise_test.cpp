@@ -195,7 +195,8 @@ TEST(NormalSource, MomentsAndDistributionAreStandardNormal) {
   EXPECT_NEAR(s4 / n, 3.0, kZTolerance * std::sqrt(96.0 / n));  // var(x^4) = 105 - 9 = 96
   for (std::size_t j = 0; j < zs.size(); ++j) {
     const double p = normal_cdf(zs[j]);
-    EXPECT_NEAR(below[j] / n, p, kZTolerance * std::sqrt(p * (1.0 - p) / n) + 1.0 / n) << "z " << zs[j];
+    EXPECT_NEAR(below[j] / n, p, kZTolerance * std::sqrt(p * (1.0 - p) / n) + 1.0 / n)
+        << "z " << zs[j];
   }
 }
 
@@ -404,7 +405,8 @@ TEST(GaussMarkovAllanVariance, MatchesSimulation) {
     const double md = static_cast<double>(m);
     const double edf = std::min(edf_white_fm(n_phase, md), edf_random_walk_fm(n_phase, md));
     const double expected = std::sqrt(gauss_markov_allan_variance(kSigma, kTau, t));
-    EXPECT_NEAR(overlapping_adev(theta, kDt, m) / expected, 1.0, kZTolerance * adev_rel_error(edf) + 1e-3)
+    EXPECT_NEAR(overlapping_adev(theta, kDt, m) / expected, 1.0,
+                kZTolerance * adev_rel_error(edf) + 1e-3)
         << "T " << t;
   }
 }

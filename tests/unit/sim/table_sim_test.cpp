@@ -1,12 +1,12 @@
 #include "sim/table_sim.hpp"
 
-#include "sim/noise.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 #include <random>
+
+#include "sim/noise.hpp"
 
 namespace calstand::sim {
 namespace {
@@ -203,8 +203,8 @@ void check_limits_under_random_commands(AxisLimits limits, std::uint64_t seed, b
       ASSERT_TRUE(axis.command_position(-720.0 + 1440.0 * unit(rng)) || axis.state().fault);
     } else if (pick < 0.70) {
       // Half of them at the full limit either way, so reversals from the limit happen often.
-      const double fraction = unit(rng) < 0.5 ? (unit(rng) < 0.5 ? -1.0 : 1.0)
-                                              : 2.0 * unit(rng) - 1.0;
+      const double fraction =
+          unit(rng) < 0.5 ? (unit(rng) < 0.5 ? -1.0 : 1.0) : 2.0 * unit(rng) - 1.0;
       ASSERT_TRUE(axis.command_rate(limits.max_rate_dps * fraction) || axis.state().fault);
     } else if (pick < 0.80) {
       axis.stop();

@@ -157,9 +157,7 @@ double howe_random_walk_fm(double n, double m) {
 double howe_flicker_fm(double n, double m) {
   return m == 1.0 ? 2.0 * (n - 2.0) / (2.3 * n - 4.9) : 5.0 * n * n / (4.0 * m * (n + 3.0 * m));
 }
-double howe_white_pm(double n, double m) {
-  return (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m));
-}
+double howe_white_pm(double n, double m) { return (n + 1.0) * (n - 2.0 * m) / (2.0 * (n - m)); }
 
 TEST(Edf, ExactForWhiteAndRandomWalkRateAtOneSample) {
   // Rate data at m = 1: the Allan terms are first differences of the rates. White rate noise:
@@ -179,8 +177,9 @@ TEST(Edf, ExactForWhiteAndRandomWalkRateAtOneSample) {
   // correlations -4/6 and 1/6 at one and two terms.
   const std::size_t m = 10;
   const double h_terms = static_cast<double>(samples / m) - 2.0;
-  const double inv = (1.0 + 2.0 * (1.0 - 1.0 / h_terms) * 16.0 / 36.0 +
-                      2.0 * (1.0 - 2.0 / h_terms) / 36.0) / h_terms;
+  const double inv =
+      (1.0 + 2.0 * (1.0 - 1.0 / h_terms) * 16.0 / 36.0 + 2.0 * (1.0 - 2.0 / h_terms) / 36.0) /
+      h_terms;
   EXPECT_NEAR(equivalent_dof(AllanKind::kHadamardNonOverlapping, 0, m, samples), 1.0 / inv,
               1e-6 / inv);
 }
@@ -199,8 +198,8 @@ TEST(Edf, AgreesWithSp1065ClosedForms) {
     // difference of tau-averages of a random walk, a cubic B-spline: (151/315) / (2/3)^2).
     // (At m = 1 the models differ: see ExactForWhiteAndRandomWalkRateAtOneSample.)
     if (m > 1) {
-      expect_relative(equivalent_dof(AllanKind::kAllan, -2, m, samples),
-                      howe_random_walk_fm(n, md), 0.09);
+      expect_relative(equivalent_dof(AllanKind::kAllan, -2, m, samples), howe_random_walk_fm(n, md),
+                      0.09);
     }
     if (m >= 100) {
       const double r = (n - 2.0 * md) / md;

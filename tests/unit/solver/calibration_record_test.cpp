@@ -61,7 +61,9 @@ TEST(CalibrationRecord, IsValidAgainstItsSchemaAndReadsBack) {
   EXPECT_EQ(c.model.text(), f.model.text());
   for (const auto& p : f.fit.parameters) {
     const auto& list = c.model.parameters();
-    const auto i = std::find_if(list.begin(), list.end(), [&](const auto& x) { return x.name == p.name; }) - list.begin();
+    const auto i =
+        std::find_if(list.begin(), list.end(), [&](const auto& x) { return x.name == p.name; }) -
+        list.begin();
     EXPECT_EQ(c.values[i], p.value) << p.name;
   }
   EXPECT_NEAR(c.valid_min_c, 25.0, 1e-9);
@@ -77,7 +79,8 @@ TEST(CalibrationRecord, BadRecordsNameTheField) {
     (void)read_calibration(wrong_unit, "cal.json");
     FAIL();
   } catch (const core::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("cal.json: parameters[0].unit"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cal.json: parameters[0].unit"), std::string::npos)
+        << e.what();
   }
   nlohmann::json stranger = record;
   stranger["parameters"][0]["name"] = "accel_quadratic.x";
@@ -122,8 +125,8 @@ TEST(Corrector, InvertsTheModelExactly) {
   truth.gyro_scale_asymmetry = {200.0, -100.0, 50.0};
   truth.gyro_quadratic = {0.3, -0.2, 0.1};
   truth.accel_quadratic = {80.0, -40.0, 20.0};
-  const Model model = Model::parse(
-      std::string(kModel) + ",gyro_scale_asymmetry,gyro_quadratic,accel_quadratic");
+  const Model model =
+      Model::parse(std::string(kModel) + ",gyro_scale_asymmetry,gyro_quadratic,accel_quadratic");
   Calibration c;
   c.model = model;
   c.values.resize(static_cast<Eigen::Index>(model.size()));

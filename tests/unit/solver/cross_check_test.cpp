@@ -27,8 +27,8 @@
 namespace calstand::solver {
 namespace {
 
-using testing::simulate_run;
 using testing::SimStep;
+using testing::simulate_run;
 using testing::white_noise_truth;
 
 constexpr double kDegPerRad = 180.0 / M_PI;
@@ -179,9 +179,9 @@ TEST(CrossCheck, SixPositionResidualScatterSigmasAreProportional) {
 
 TEST(CrossCheck, MultiPositionMatchesGeneralFit) {
   // Ten attitudes, most of them oblique: every regressor takes many values.
-  const std::vector<SimStep> steps = {position(0, 0),     position(180, 0),   position(90, 0),
-                                      position(-90, 0),   position(90, 90),   position(-90, 90),
-                                      position(45, 30),   position(-60, 120), position(135, -45),
+  const std::vector<SimStep> steps = {position(0, 0),   position(180, 0),   position(90, 0),
+                                      position(-90, 0), position(90, 90),   position(-90, 90),
+                                      position(45, 30), position(-60, 120), position(135, -45),
                                       position(30, 200)};
   const Model model = Model::parse(kAccelMatrixModel);
   const Summaries s = summarize(simulate_run(random_cross_check_unit(3), steps, 13), model);
@@ -207,11 +207,12 @@ TEST(CrossCheck, TwelvePositionMatchesGeneralFitForBothTriads) {
   // deg/s); the general fit refuses sigmas beyond 1e4 ppm as "barely excited".
   const sim::ImuTruth truth = random_cross_check_unit(4, /*gyro_noise_dps_rthz=*/2e-5);
   const Model model = Model::parse(
-      "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment");
+      "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_"
+      "misalignment");
   const Summaries s = summarize(simulate_run(truth, steps, 14), model);
   const FitResult fit = fit_model(s.steps, model, s.floor, no_inflation(SensorRows::kBoth));
-  ASSERT_TRUE(fit.unidentifiable.empty()) << fit.unidentifiable.front().name << ": "
-                                          << fit.unidentifiable.front().reason;
+  ASSERT_TRUE(fit.unidentifiable.empty())
+      << fit.unidentifiable.front().name << ": " << fit.unidentifiable.front().reason;
 
   const std::array<Eigen::Matrix3d, 12> documented = twelve_position_attitudes(180.0);
   std::vector<StaticPosition> positions;
@@ -232,7 +233,8 @@ TEST(CrossCheck, TwelvePositionMatchesGeneralFitForBothTriads) {
   const TwelvePositionResult twelve = twelve_position(
       positions, site.gravity(), site.earth_rate_level_radps() * kDegPerRad, options);
   for (const auto& c : named_parameters(twelve.gyro, ClassicalSensor::kGyro)) expect_agree(fit, c);
-  for (const auto& c : named_parameters(twelve.accel, ClassicalSensor::kAccel)) expect_agree(fit, c);
+  for (const auto& c : named_parameters(twelve.accel, ClassicalSensor::kAccel))
+    expect_agree(fit, c);
 }
 
 // --- Two-position ---------------------------------------------------------------------------
@@ -255,8 +257,8 @@ TEST(CrossCheck, TwoPositionMatchesGeneralFitOnTheExcitedAxis) {
 
     const double sigma_z = s.floor.step_sigma(s.steps.front().count)[kAz];
     const TwoPositionResult two =
-        two_position(s.steps[0].measured[kAz], s.steps[1].measured[kAz], s.data.setup.site.gravity(),
-                     tilt_deg / kDegPerRad, sigma_z);
+        two_position(s.steps[0].measured[kAz], s.steps[1].measured[kAz],
+                     s.data.setup.site.gravity(), tilt_deg / kDegPerRad, sigma_z);
     expect_agree(fit, "accel_bias.z", two.bias, two.bias_sigma);
     expect_agree(fit, "accel_scale.z", two.scale_ppm, two.scale_sigma_ppm);
   }
@@ -297,17 +299,16 @@ TEST(CrossCheck, RateTestCwCcwMatchesGeneralFit) {
   const double w_z = vertical_earth_rate_at_dps(s.data.setup.site);
   const double sigma_z = s.floor.step_sigma(s.steps.front().count)[kGz];
   const double rate = steps[0].inner_rate_dps;
-  const RateTestResult by_rates = rate_test_cw_ccw_rates(s.steps[0].measured[kGz],
-                                                         s.steps[1].measured[kGz], rate, w_z, sigma_z);
+  const RateTestResult by_rates = rate_test_cw_ccw_rates(
+      s.steps[0].measured[kGz], s.steps[1].measured[kGz], rate, w_z, sigma_z);
   expect_agree(fit, "gyro_bias.z", by_rates.bias_dps, by_rates.bias_sigma_dps);
   expect_agree(fit, "gyro_scale.z", by_rates.scale_ppm, by_rates.scale_sigma_ppm);
 
   // The integrated-angle form on the same samples: angle = mean rate * n dt over n samples.
   const double t = static_cast<double>(s.steps[0].count) / kSampleRateHz;
   ASSERT_GT(t, 0.0);
-  const RateTestResult by_angle =
-      rate_test_cw_ccw(s.steps[0].measured[kGz] * t, s.steps[1].measured[kGz] * t, rate * t, t,
-                       w_z, sigma_z * t);
+  const RateTestResult by_angle = rate_test_cw_ccw(
+      s.steps[0].measured[kGz] * t, s.steps[1].measured[kGz] * t, rate * t, t, w_z, sigma_z * t);
   expect_agree(fit, "gyro_bias.z", by_angle.bias_dps, by_angle.bias_sigma_dps);
   expect_agree(fit, "gyro_scale.z", by_angle.scale_ppm, by_angle.scale_sigma_ppm);
 }
@@ -354,11 +355,11 @@ TEST(CrossCheck, ThermalPerPlateauMatchesSingleFitWithTemperatureTerms) {
     const char* plateau_model;
     const char* single_model;
   };
-  for (const Case& c : {Case{SensorRows::kAccel, kAccelMatrixModel,
-                             "accel_bias,accel_scale,accel_misalignment,accel_temp_bias:2,"
-                             "accel_temp_scale"},
-                        Case{SensorRows::kGyro, "gyro_bias,earth_rate",
-                             "gyro_bias,gyro_temp_bias:2,earth_rate"}}) {
+  for (const Case& c :
+       {Case{SensorRows::kAccel, kAccelMatrixModel,
+             "accel_bias,accel_scale,accel_misalignment,accel_temp_bias:2,"
+             "accel_temp_scale"},
+        Case{SensorRows::kGyro, "gyro_bias,earth_rate", "gyro_bias,gyro_temp_bias:2,earth_rate"}}) {
     SCOPED_TRACE(c.plateau_model);
     // One noise floor for both sides: the weights must be the same.
     const Model single_model = Model::parse(c.single_model);

@@ -72,7 +72,8 @@ TEST(Fit, SigmasAreHonestOverSeeds) {
     const sim::ImuTruth truth = random_unit(seed);
     const FitResult fit = fit_run(simulate_run(truth, base_campaign(), 100 + seed), model,
                                   {.inflate_sigma_by_chi2 = false});
-    for (const auto& p : fit.parameters) pulls.push_back((p.value - truth.parameter(p.name)) / p.sigma);
+    for (const auto& p : fit.parameters)
+      pulls.push_back((p.value - truth.parameter(p.name)) / p.sigma);
   }
   double mean = 0.0, sq = 0.0;
   for (double z : pulls) {
@@ -90,7 +91,8 @@ TEST(Fit, SigmasAreHonestOverSeeds) {
 TEST(Fit, AMissingTermShowsInChiSquare) {
   sim::ImuTruth truth = random_unit(3);
   truth.gyro_g_sensitivity(0, 2) = 5e-3;  // (deg/s)/g: far above the step-mean noise
-  const FitResult without = fit_run(simulate_run(truth, base_campaign(), 3), Model::parse(kBaseModel));
+  const FitResult without =
+      fit_run(simulate_run(truth, base_campaign(), 3), Model::parse(kBaseModel));
   EXPECT_GT(without.chi2_dof, 5.0);
   const FitResult with = fit_run(simulate_run(truth, base_campaign(), 3),
                                  Model::parse(std::string(kBaseModel) + ",gyro_g_sensitivity"));
@@ -103,9 +105,10 @@ TEST(Fit, AsymmetryWithoutBothDirectionsIsReportedNotFitted) {
   for (const auto& r : rate_steps({20.0, 100.0})) {
     if (r.inner_rate_dps >= 0.0 && r.outer_rate_dps >= 0.0) steps.push_back(r);  // CW only
   }
-  const FitResult fit = fit_run(simulate_run(random_unit(4), steps, 4),
-                                Model::parse("gyro_bias,gyro_scale,gyro_scale_asymmetry,earth_rate"),
-                                {.rows = SensorRows::kGyro});
+  const FitResult fit =
+      fit_run(simulate_run(random_unit(4), steps, 4),
+              Model::parse("gyro_bias,gyro_scale,gyro_scale_asymmetry,earth_rate"),
+              {.rows = SensorRows::kGyro});
   std::map<std::string, Unidentifiable> flagged;
   for (const auto& u : fit.unidentifiable) flagged[u.name] = u;
   for (const char* axis : {"x", "y", "z"}) {
@@ -123,9 +126,9 @@ TEST(Fit, QuadraticWithOnlyPlusAndMinusOneGIsReported) {
   // Two positions: z up and z down. f_z^2 is g^2 in both, the same as a bias.
   std::vector<testing::SimStep> steps = six_positions();
   steps.resize(2);
-  const FitResult fit = fit_run(simulate_run(random_unit(5), steps, 5),
-                                Model::parse("accel_bias,accel_scale,accel_quadratic"),
-                                {.rows = SensorRows::kAccel});
+  const FitResult fit =
+      fit_run(simulate_run(random_unit(5), steps, 5),
+              Model::parse("accel_bias,accel_scale,accel_quadratic"), {.rows = SensorRows::kAccel});
   bool flagged = false;
   for (const auto& u : fit.unidentifiable) {
     if (u.name == "accel_quadratic.z") {
@@ -141,9 +144,9 @@ TEST(Fit, TemperatureOrderAtOrAbovePlateausIsReported) {
   for (double temp : {-10.0, 25.0}) {
     for (auto s : six_positions(temp)) steps.push_back(s);
   }
-  const FitResult fit = fit_run(simulate_run(random_unit(6), steps, 6),
-                                Model::parse("accel_bias,accel_temp_bias:2"),
-                                {.rows = SensorRows::kAccel});
+  const FitResult fit =
+      fit_run(simulate_run(random_unit(6), steps, 6), Model::parse("accel_bias,accel_temp_bias:2"),
+              {.rows = SensorRows::kAccel});
   std::vector<std::string> names;
   for (const auto& u : fit.unidentifiable) names.push_back(u.name);
   EXPECT_EQ(names, (std::vector<std::string>{"accel_temp_bias.x2", "accel_temp_bias.y2",
@@ -165,12 +168,15 @@ TEST(Fit, CustomTermFollowingTemperatureRate) {
   // Add 1e-3 deg/s per degC/min to gyro x, the effect the simulator lacks.
   for (auto& step : data.steps) {
     const std::vector<double> rates = step_temperature_rates(step.samples);
-    for (std::size_t i = 0; i < step.samples.size(); ++i) step.samples[i].gyro_dps.x() += 1e-3 * rates[i];
+    for (std::size_t i = 0; i < step.samples.size(); ++i)
+      step.samples[i].gyro_dps.x() += 1e-3 * rates[i];
   }
-  const FitResult base = fit_run(data, Model::parse("gyro_bias,earth_rate"), {.rows = SensorRows::kGyro});
+  const FitResult base =
+      fit_run(data, Model::parse("gyro_bias,earth_rate"), {.rows = SensorRows::kGyro});
   EXPECT_GT(base.chi2_dof, 5.0);
-  const FitResult custom = fit_run(data, Model::parse("gyro_bias,earth_rate", {"grad=gyro:temperature_rate"}),
-                                   {.rows = SensorRows::kGyro});
+  const FitResult custom =
+      fit_run(data, Model::parse("gyro_bias,earth_rate", {"grad=gyro:temperature_rate"}),
+              {.rows = SensorRows::kGyro});
   EXPECT_LT(custom.chi2_dof, 1.6);
   EXPECT_NEAR(value_of(custom, "grad.x"), 1e-3, 2e-4);
 }
@@ -184,9 +190,11 @@ TEST(Fit, TooFewRowsIsAnInputError) {
 }
 
 TEST(Fit, JsonHasTheDocumentedFields) {
-  const FitResult fit = fit_run(simulate_run(random_unit(10), base_campaign(), 10), Model::parse(kBaseModel));
+  const FitResult fit =
+      fit_run(simulate_run(random_unit(10), base_campaign(), 10), Model::parse(kBaseModel));
   const nlohmann::json j = fit_to_json(fit);
-  for (const char* key : {"model", "chi2_dof", "residual_rms", "noise_floor", "parameters", "unidentifiable"}) {
+  for (const char* key :
+       {"model", "chi2_dof", "residual_rms", "noise_floor", "parameters", "unidentifiable"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
   EXPECT_EQ(j["model"].size(), 7u);
@@ -194,7 +202,6 @@ TEST(Fit, JsonHasTheDocumentedFields) {
   EXPECT_TRUE(j["parameters"][0].contains("sigma"));
   EXPECT_EQ(j["parameters"][0]["unit"], "deg/s");
 }
-
 
 // Each step of the JSON carries its time span and the mean of every signal, so that the
 // residual can be drawn against what it follows (the console does) without the samples.

@@ -63,14 +63,19 @@ double probe_size(std::string_view unit) {
 
 /// Sets every parameter of `term` to `strength` times its probe size and a fixed pattern of
 /// signs and sizes.
-void set_effect(sim::ImuTruth& truth, Eigen::Vector2d& tilt, const std::string& term, double strength) {
+void set_effect(sim::ImuTruth& truth, Eigen::Vector2d& tilt, const std::string& term,
+                double strength) {
   const auto* info = core::find_error_term(term);
   sim::NormalSource n(17);
   for (const auto& name : core::parameter_names(*info, 1)) {
-    const double v = strength * probe_size(info->unit) * (1.0 + 0.5 * n.next()) * (n.next() > 0 ? 1.0 : -1.0);
-    if (name == "table_tilt.east") tilt.x() = v;
-    else if (name == "table_tilt.north") tilt.y() = v;
-    else truth.set_parameter(name, v);
+    const double v =
+        strength * probe_size(info->unit) * (1.0 + 0.5 * n.next()) * (n.next() > 0 ? 1.0 : -1.0);
+    if (name == "table_tilt.east")
+      tilt.x() = v;
+    else if (name == "table_tilt.north")
+      tilt.y() = v;
+    else
+      truth.set_parameter(name, v);
   }
 }
 
@@ -107,8 +112,8 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndTheRefitReachesTheNoise) {
   EXPECT_GT(d.fit.chi2_dof, 5.0) << term;
   EXPECT_LT(d.fit.chi2_dof, 30.0) << term;
   ASSERT_FALSE(d.candidates.empty());
-  EXPECT_EQ(d.candidates.front().term, term) << "top: " << d.candidates.front().term << ", "
-                                             << d.candidates.front().explanation;
+  EXPECT_EQ(d.candidates.front().term, term)
+      << "top: " << d.candidates.front().term << ", " << d.candidates.front().explanation;
   EXPECT_TRUE(d.explained) << d.advice;
   EXPECT_LT(d.candidates.front().chi2_dof_after, 1.3) << term;
   EXPECT_LT(d.candidates.front().p_value, 1e-6);
@@ -161,7 +166,8 @@ TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
   }
   const Diagnosis d = diagnose(data, Model::parse(kBase));
   EXPECT_GT(d.fit.chi2_dof, 5.0);
-  EXPECT_FALSE(d.explained) << d.advice << " best " << d.candidates.front().term << " " << d.candidates.front().chi2_dof_after << " from " << d.fit.chi2_dof;
+  EXPECT_FALSE(d.explained) << d.advice << " best " << d.candidates.front().term << " "
+                            << d.candidates.front().chi2_dof_after << " from " << d.fit.chi2_dof;
   ASSERT_FALSE(d.signals.empty());
   EXPECT_EQ(d.signals.front().signal, "temperature_rate");
   EXPECT_NE(d.advice.find("temperature_rate"), std::string::npos) << d.advice;

@@ -66,10 +66,10 @@ TEST(Kalibr, FromRunNoiseTakesTheWorstAxisInRadians) {
   RunNoise noise;
   noise.sample_rate_hz = 200.0;
   // Gyro N [deg/sqrt(s)] and K [deg/s/sqrt(s)]; accel N [m/s/sqrt(s)], K [m/s^2/sqrt(s)].
-  noise.channels = {channel(ImuChannel::kGx, 0.002, 1e-5), channel(ImuChannel::kGy, 0.003, 3e-5),
-                    channel(ImuChannel::kGz, 0.001, 2e-5), channel(ImuChannel::kAx, 4e-4, 1e-5),
-                    channel(ImuChannel::kAy, 6e-4, 2e-5, false),
-                    channel(ImuChannel::kAz, 5e-4, 0.0, false)};
+  noise.channels = {
+      channel(ImuChannel::kGx, 0.002, 1e-5),       channel(ImuChannel::kGy, 0.003, 3e-5),
+      channel(ImuChannel::kGz, 0.001, 2e-5),       channel(ImuChannel::kAx, 4e-4, 1e-5),
+      channel(ImuChannel::kAy, 6e-4, 2e-5, false), channel(ImuChannel::kAz, 5e-4, 0.0, false)};
   std::vector<std::string> unresolved;
   const KalibrImu imu = kalibr_from_run_noise(noise, "/imu0", &unresolved);
   const double rad = std::numbers::pi / 180.0;

@@ -14,7 +14,8 @@ namespace {
 using testing::wuhan_site;
 
 TEST(ModelParse, NamesEveryParameterOfTheContract) {
-  const Model m = Model::parse("gyro_bias,gyro_misalignment,gyro_temp_bias:2,earth_rate,table_tilt");
+  const Model m =
+      Model::parse("gyro_bias,gyro_misalignment,gyro_temp_bias:2,earth_rate,table_tilt");
   std::vector<std::string> names;
   for (const auto& p : m.parameters()) names.push_back(p.name);
   const std::vector<std::string> expected{
@@ -87,9 +88,12 @@ TEST_P(ModelRegressorsPerTerm, ReproduceTheSimulatorsErrors) {
     const ParameterInfo& info = model.parameters()[p];
     const double value = typical_value(info, normal);
     theta[static_cast<Eigen::Index>(p)] = value;
-    if (info.name == "table_tilt.east") tilt.x() = value;
-    else if (info.name == "table_tilt.north") tilt.y() = value;
-    else truth.set_parameter(info.name, value);
+    if (info.name == "table_tilt.east")
+      tilt.x() = value;
+    else if (info.name == "table_tilt.north")
+      tilt.y() = value;
+    else
+      truth.set_parameter(info.name, value);
   }
   core::TableGeometry geometry;
   geometry.outer_axis = Eigen::Vector3d(0.3, 0.9, 0.1).normalized();
@@ -114,8 +118,8 @@ TEST_P(ModelRegressorsPerTerm, ReproduceTheSimulatorsErrors) {
 
     core::ImuSample sample;
     sample.temperature_c = temp;
-    const Signals s = build(sample, {k.outer_deg, k.inner_deg, k.outer_rate_dps, k.inner_rate_dps},
-                            0.0, 0.0);
+    const Signals s =
+        build(sample, {k.outer_deg, k.inner_deg, k.outer_rate_dps, k.inner_rate_dps}, 0.0, 0.0);
     model.regressors(s, g);
     const Vector6d modelled = model.reference(s) + g * theta;
     // Exact up to what the linear model leaves out: the tilt squared (g t^2 / 2, about 1e-5
@@ -139,7 +143,8 @@ std::vector<std::string> catalogue_terms() {
 INSTANTIATE_TEST_SUITE_P(EveryTerm, ModelRegressorsPerTerm, ::testing::ValuesIn(catalogue_terms()),
                          [](const auto& param_info) {
                            std::string n = param_info.param;
-                           for (char& c : n) if (c == ':') c = '_';
+                           for (char& c : n)
+                             if (c == ':') c = '_';
                            return n;
                          });
 

@@ -71,7 +71,8 @@ TEST(NoiseFit, RecoversWhiteFlickerAndRandomWalk) {
     // curve's minimum is sqrt(0.664^2 B^2 + 2 N K / sqrt(3)) (at tau = sqrt(3) N / K = 87 s).
     // Within 20 %: the flicker model's 5 % ripple and three sigmas of a deviation with ~100
     // degrees of freedom there (7 % each).
-    const double floor = std::sqrt(std::pow(flicker_floor_factor() * b, 2) + 2.0 * n * k / std::sqrt(3.0));
+    const double floor =
+        std::sqrt(std::pow(flicker_floor_factor() * b, 2) + 2.0 * n * k / std::sqrt(3.0));
     EXPECT_NEAR(t.min_deviation, floor, 0.2 * floor);
     EXPECT_NEAR(t.bias_instability_from_min, t.min_deviation / 0.6643, 1e-4 * t.min_deviation);
     EXPECT_GT(t.min_tau_s, 20.0);

@@ -131,7 +131,8 @@ inline RunData simulate_run(const sim::ImuTruth& truth, const std::vector<SimSte
       kin.inner_deg = st.inner_deg + st.inner_rate_dps * ts;
       kin.outer_rate_dps = st.outer_rate_dps;
       kin.inner_rate_dps = st.inner_rate_dps;
-      const double temp = st.temperature_c + st.temperature_rate_cpm * (ts - 0.5 * st.duration_s) / 60.0;
+      const double temp =
+          st.temperature_c + st.temperature_rate_cpm * (ts - 0.5 * st.duration_s) / 60.0;
       core::ImuSample s = imu.sample(t, kin, temp);
       s.receive_time_s = t;
       step.samples.push_back(s);

@@ -50,7 +50,8 @@ std::vector<SimStep> plateau_campaign(const std::vector<double>& plateaus_c) {
   return steps;
 }
 
-const ClassicalEstimate* find_estimate(const std::vector<ClassicalEstimate>& list, const std::string& name) {
+const ClassicalEstimate* find_estimate(const std::vector<ClassicalEstimate>& list,
+                                       const std::string& name) {
   for (const auto& e : list) {
     if (e.name == name) return &e;
   }
@@ -81,9 +82,9 @@ TEST(ThermalFit, RecoversTemperatureTermsWithinThreeSigma) {
     for (const char* axis : {"x", "y", "z"}) {
       const std::string s(sensor);
       const std::string a(axis);
-      for (const std::string& name : {s + "_bias." + a, s + "_temp_bias." + a + "1",
-                                      s + "_temp_bias." + a + "2", s + "_scale." + a,
-                                      s + "_temp_scale." + a}) {
+      for (const std::string& name :
+           {s + "_bias." + a, s + "_temp_bias." + a + "1", s + "_temp_bias." + a + "2",
+            s + "_scale." + a, s + "_temp_scale." + a}) {
         const ClassicalEstimate* e = find_estimate(r.coefficients, name);
         ASSERT_NE(e, nullptr) << name;
         const double want = truth.parameter(name);
@@ -111,8 +112,8 @@ TEST(ThermalFit, EqualsOneFitWithTemperatureTermsOnAnOrthogonalDesign) {
     for (const SimStep& s : testing::six_positions(temp)) sim_steps.push_back(s);
   }
   const RunData data = simulate_run(truth, sim_steps, 2);
-  const Model single_model = Model::parse(
-      "accel_bias,accel_scale,accel_misalignment,accel_temp_bias:2,accel_temp_scale");
+  const Model single_model =
+      Model::parse("accel_bias,accel_scale,accel_misalignment,accel_temp_bias:2,accel_temp_scale");
   const std::vector<StepSummary> all = summarize_steps(data, single_model);
   const NoiseFloor floor = measure_noise_floor(all);
   FitOptions fit_options;
@@ -124,7 +125,8 @@ TEST(ThermalFit, EqualsOneFitWithTemperatureTermsOnAnOrthogonalDesign) {
   ThermalFitOptions options;
   options.fit = fit_options;
   options.temperature_ref_c = data.setup.temperature_ref_c;
-  const ThermalFitResult r = fit_per_plateau(summarize_steps(data, model), model, 2, floor, options);
+  const ThermalFitResult r =
+      fit_per_plateau(summarize_steps(data, model), model, 2, floor, options);
   ASSERT_EQ(r.coefficients.size(), 15u);
   for (const ClassicalEstimate& e : r.coefficients) {
     const auto it = std::find_if(single.parameters.begin(), single.parameters.end(),
@@ -145,7 +147,8 @@ TEST(ThermalFit, TooFewPlateausIsAnInputErrorNamingOrderAndCount) {
   } catch (const core::InputError& e) {
     EXPECT_EQ(e.where(), "fit_per_plateau");
     const std::string what = e.what();
-    EXPECT_NE(what.find("order 2 needs at least 3 temperature plateaus"), std::string::npos) << what;
+    EXPECT_NE(what.find("order 2 needs at least 3 temperature plateaus"), std::string::npos)
+        << what;
     EXPECT_NE(what.find("the run has 2"), std::string::npos) << what;
   }
   // Order 1 on the same two plateaus is fine.
@@ -184,14 +187,16 @@ TEST(ThermalFit, RejectsTemperatureTermsAndOrderBelowOne) {
     EXPECT_NE(std::string(e.what()).find("gyro_temp_scale"), std::string::npos) << e.what();
   }
   const Model model = Model::parse(kThermalBaseModel);
-  EXPECT_THROW((void)fit_per_plateau(summarize_steps(data, model), model, 0, floor), core::InputError);
+  EXPECT_THROW((void)fit_per_plateau(summarize_steps(data, model), model, 0, floor),
+               core::InputError);
 }
 
 TEST(ThermalFit, JsonHasTheDocumentedFields) {
   const RunData data = simulate_run(thermal_unit(6), plateau_campaign({0.0, 25.0, 50.0}), 6);
   const Model model = Model::parse(kThermalBaseModel);
   const std::vector<StepSummary> steps = summarize_steps(data, model);
-  const nlohmann::json j = thermal_fit_to_json(fit_per_plateau(steps, model, 2, measure_noise_floor(steps)));
+  const nlohmann::json j =
+      thermal_fit_to_json(fit_per_plateau(steps, model, 2, measure_noise_floor(steps)));
   for (const char* key : {"model", "order", "temperature_ref_c", "plateaus", "coefficients",
                           "constants", "polynomials", "skipped"}) {
     EXPECT_TRUE(j.contains(key)) << key;

@@ -31,7 +31,8 @@ TEST(DatabaseLock, AnExclusiveHolderKeepsEveryoneElseOutAndIsNamed) {
     DatabaseLock run(db, Mode::kShared, "calstand run");
     FAIL() << "a shared lock was granted beside an exclusive one";
   } catch (const DatabaseBusy& e) {
-    EXPECT_NE(std::string(e.what()).find("calstandd pid 42 listening on 127.0.0.1:8765"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("calstandd pid 42 listening on 127.0.0.1:8765"),
+              std::string::npos)
         << e.what();
     EXPECT_NE(std::string(e.what()).find("calstand submit"), std::string::npos) << e.what();
   }
@@ -46,7 +47,8 @@ TEST(DatabaseLock, SharedHoldersCoexistButKeepADaemonOut) {
     DatabaseLock daemon(db, Mode::kExclusive, "calstandd");
     FAIL() << "an exclusive lock was granted beside a shared one";
   } catch (const DatabaseBusy& e) {
-    EXPECT_NE(std::string(e.what()).find("foreground `calstand run`"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("foreground `calstand run`"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -41,7 +41,8 @@ TEST(Database, FreshFileIsAtLatestVersionWithEveryTable) {
     EXPECT_EQ(db.sql().tableExists(table), true) << table;
   }
   for (const char* view : {"step_sample_summary", "step_means_view", "run_overview"}) {
-    SQLite::Statement q(db.sql(), "SELECT COUNT(*) FROM sqlite_schema WHERE type = 'view' AND name = ?");
+    SQLite::Statement q(db.sql(),
+                        "SELECT COUNT(*) FROM sqlite_schema WHERE type = 'view' AND name = ?");
     q.bind(1, view);
     q.executeStep();
     EXPECT_EQ(q.getColumn(0).getInt(), 1) << view;

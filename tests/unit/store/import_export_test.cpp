@@ -49,10 +49,9 @@ std::string good_csv() {
   int line = 0;
   auto row = [&](int step, double outer_rate) {
     const double t = 0.02 * line + 1.0 / 3.0;
-    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t, step,
-                       outer_rate * t - 179.99, 90.0, outer_rate, 0, 25.0 + 1e-3 * line,
-                       0.1 * line + 1e-17, -1.0 / 7.0, 4.2e-5, 1e-3, -9.7936 + 1e-6 * line,
-                       1.0 / 3.0);
+    csv += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", t, step, outer_rate * t - 179.99,
+                       90.0, outer_rate, 0, 25.0 + 1e-3 * line, 0.1 * line + 1e-17, -1.0 / 7.0,
+                       4.2e-5, 1e-3, -9.7936 + 1e-6 * line, 1.0 / 3.0);
     ++line;
   };
   for (int i = 0; i < 40; ++i) row(5, 0.0);
@@ -143,16 +142,15 @@ TEST(Import, ExactEncodingKeepsEveryDigit) {
 }
 
 TEST(ImportMetaErrors, UnitOtherThanTheFixedOneNamesTheField) {
-  const auto e = import_error(replace(kMeta, R"("gyro": "deg/s")", R"("gyro": "rad/s")"),
-                              good_csv());
+  const auto e =
+      import_error(replace(kMeta, R"("gyro": "deg/s")", R"("gyro": "rad/s")"), good_csv());
   EXPECT_CONTAINS(e, "meta.json");
   EXPECT_CONTAINS(e, "units.gyro");
 }
 
 TEST(ImportMetaErrors, WrongFormat) {
-  EXPECT_CONTAINS(import_error(replace(kMeta, "calstand-import/1", "calstand-import/2"),
-                               good_csv()),
-                  "format");
+  EXPECT_CONTAINS(
+      import_error(replace(kMeta, "calstand-import/1", "calstand-import/2"), good_csv()), "format");
 }
 
 TEST(ImportMetaErrors, MissingRequiredField) {
@@ -161,9 +159,10 @@ TEST(ImportMetaErrors, MissingRequiredField) {
 }
 
 TEST(ImportMetaErrors, UnknownField) {
-  EXPECT_CONTAINS(import_error(replace(kMeta, R"("sample_rate_hz")", R"("sample_rate": 1, "sample_rate_hz")"),
-                               good_csv()),
-                  "sample_rate");
+  EXPECT_CONTAINS(
+      import_error(replace(kMeta, R"("sample_rate_hz")", R"("sample_rate": 1, "sample_rate_hz")"),
+                   good_csv()),
+      "sample_rate");
 }
 
 TEST(ImportMetaErrors, NonUnitAxis) {
@@ -172,9 +171,9 @@ TEST(ImportMetaErrors, NonUnitAxis) {
 }
 
 TEST(ImportMetaErrors, JsonSyntaxNamesLine) {
-  EXPECT_CONTAINS(import_error(replace(kMeta, R"("height_m": 20.0,)", R"("height_m": 20.0,,)"),
-                               good_csv()),
-                  "meta.json:2:");
+  EXPECT_CONTAINS(
+      import_error(replace(kMeta, R"("height_m": 20.0,)", R"("height_m": 20.0,,)"), good_csv()),
+      "meta.json:2:");
 }
 
 TEST(ImportCsvErrors, HeaderMustBeExact) {
@@ -306,8 +305,7 @@ TEST(Export, RecordedRunUsesStationSnapshotAndTelemetry) {
   std::stringstream csv(read(out.path() / "x" / "samples.csv"));
   std::string line;
   for (int i = 0; i <= 51; ++i) std::getline(csv, line);
-  EXPECT_EQ(line.substr(0, line.find(',', line.find(',', line.find(',') + 1) + 1)),
-            "0.5,0,-180");
+  EXPECT_EQ(line.substr(0, line.find(',', line.find(',', line.find(',') + 1) + 1)), "0.5,0,-180");
   // A recorded run's export is a valid import.
   Database other(":memory:");
   EXPECT_EQ(import_run(other, out.path() / "x").samples, 101u);

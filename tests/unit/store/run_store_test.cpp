@@ -32,13 +32,12 @@ class RunStoreTest : public ::testing::Test {
 };
 
 TEST(Hash, Sha256OfKnownText) {
-  EXPECT_EQ(sha256_hex("abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
 }
 
 TEST_F(RunStoreTest, RunRoundTripKeepsProcedureHashParametersAndSnapshot) {
-  const auto station = store_.upsert_station(
-      "sim-station", {{"seed", 1}}, {{"table", "table", "sim"}, {"imu", "imu0", "sim"}});
+  const auto station = store_.upsert_station("sim-station", {{"seed", 1}},
+                                             {{"table", "table", "sim"}, {"imu", "imu0", "sim"}});
   const auto run = store_.create_run(six_position_run(station));
   const RunRecord r = store_.load_run(run);
   EXPECT_EQ(r.summary.id, run);
@@ -164,8 +163,10 @@ TEST_F(RunStoreTest, RunStatusListAndCounts) {
   EXPECT_EQ(store_.run_status(b), "aborted");
   EXPECT_EQ(store_.run_status(a), store_.load_run(a).summary.status);
   // The plain-SQL view agrees.
-  EXPECT_EQ(db_.sql().execAndGet("SELECT steps_done FROM run_overview WHERE id = " +
-                                 std::to_string(b)).getInt(), 1);
+  EXPECT_EQ(db_.sql()
+                .execAndGet("SELECT steps_done FROM run_overview WHERE id = " + std::to_string(b))
+                .getInt(),
+            1);
 }
 
 TEST_F(RunStoreTest, TelemetryIsStored) {
@@ -183,7 +184,8 @@ TEST_F(RunStoreTest, TelemetryIsStored) {
   store_.add_table_telemetry(run, t);
   std::vector<core::ChamberState> many(5, c);
   store_.add_chamber_telemetry(run, many);
-  SQLite::Statement q(db_.sql(), "SELECT time_s, outer_deg, inner_rate_dps, inner_mode FROM table_telemetry");
+  SQLite::Statement q(db_.sql(),
+                      "SELECT time_s, outer_deg, inner_rate_dps, inner_mode FROM table_telemetry");
   ASSERT_TRUE(q.executeStep());
   EXPECT_EQ(q.getColumn(0).getDouble(), 1.5);
   EXPECT_EQ(q.getColumn(1).getDouble(), 90.0);
@@ -216,7 +218,8 @@ TEST_F(RunStoreTest, DiscardAttemptDeletesOnlyThatAttempt) {
     ins.exec();
   }
   store_.discard_attempt(run, 1, 1);
-  EXPECT_EQ(db_.sql().execAndGet("SELECT group_concat(attempt) FROM sample_chunks").getString(), "2");
+  EXPECT_EQ(db_.sql().execAndGet("SELECT group_concat(attempt) FROM sample_chunks").getString(),
+            "2");
 }
 
 TEST_F(RunStoreTest, UnknownRunOrStepIsAnInputError) {

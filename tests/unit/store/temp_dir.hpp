@@ -14,8 +14,7 @@ class TempDir {
   TempDir() {
     static std::atomic<int> counter{0};
     path_ = std::filesystem::temp_directory_path() /
-            ("calstand-store-test-" + std::to_string(::getpid()) + "-" +
-             std::to_string(counter++));
+            ("calstand-store-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

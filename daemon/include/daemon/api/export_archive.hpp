@@ -44,7 +44,7 @@ class ExportArchive {
   std::filesystem::path dir_;
   std::vector<Entry> entries_;
   std::int64_t mtime_s_ = 0;
-  std::ifstream file_;        // the entry last read, kept open for sequential reads
+  std::ifstream file_;  // the entry last read, kept open for sequential reads
   std::size_t open_entry_ = 0;
   bool file_open_ = false;
 };

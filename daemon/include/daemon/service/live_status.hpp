@@ -15,7 +15,7 @@ namespace calstand::daemon::service {
 
 /// A device as `GET /station` shows it.
 struct DeviceStatus {
-  std::string kind;     ///< "table", "chamber" or "imu"
+  std::string kind;  ///< "table", "chamber" or "imu"
   std::string name;
   std::string backend;  ///< e.g. "sim", "modbus"
   std::string state;    ///< lifecycle state ("active", ...); "offline" between runs

@@ -21,10 +21,10 @@ std::vector<DeviceStatus> read_devices(drivers::Station& station);
 
 /// The table and the chamber between runs. A run opens the station's devices for itself; in
 /// between, the daemon keeps the table and the chamber open for reading only (configured,
-/// which sends the table its axis limits, never activated: no move, rate or setpoint), so `GET /station` and the live stream show where
-/// the table stands and what the chamber air does while the station waits, and a link that
-/// broke overnight shows before the next run. The IMUs stay closed (their streams are only
-/// read during a run) and show "offline".
+/// which sends the table its axis limits, never activated: no move, rate or setpoint), so `GET
+/// /station` and the live stream show where the table stands and what the chamber air does while
+/// the station waits, and a link that broke overnight shows before the next run. The IMUs stay
+/// closed (their streams are only read during a run) and show "offline".
 ///
 /// Used from one thread (the daemon's run thread).
 class IdleStationWatch {

@@ -6,10 +6,10 @@
 #include <cmath>
 #include <string>
 
+#include "../schema_error_field.hpp"
 #include "acutrol_test_support.hpp"
 #include "core/error.hpp"
 #include "drivers/acutrol_server.hpp"
-#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {

@@ -77,8 +77,9 @@ TEST(StreamingImu, CountersMergeTheBasesTheSubclasssAndTheProtocols) {
   ASSERT_TRUE(imu.configure());
   ASSERT_TRUE(imu.activate());
   imu.to_send = 3;
-  ASSERT_TRUE(wait_until([&] { return imu.fault_counters().count("frames") &&
-                                      imu.fault_counters().at("frames") == 3; }));
+  ASSERT_TRUE(wait_until([&] {
+    return imu.fault_counters().count("frames") && imu.fault_counters().at("frames") == 3;
+  }));
   ASSERT_TRUE(imu.deactivate());
   EXPECT_GE(imu.summaries.load(), 1);  // the last summary when the reader stops
 }

@@ -11,11 +11,11 @@
 #include <set>
 #include <thread>
 
+#include "../schema_error_field.hpp"
 #include "can_test_support.hpp"
 #include "core/error.hpp"
 #include "drivers/socketcan_port.hpp"
 #include "drivers/socketpair_can.hpp"
-#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {

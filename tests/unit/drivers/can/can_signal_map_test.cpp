@@ -6,10 +6,10 @@
 #include <fstream>
 #include <string>
 
+#include "../schema_error_field.hpp"
 #include "can_test_support.hpp"
 #include "core/error.hpp"
 #include "drivers/can_sample_assembler.hpp"
-#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {

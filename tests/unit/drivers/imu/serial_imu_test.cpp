@@ -5,9 +5,9 @@
 #include <chrono>
 #include <thread>
 
+#include "../schema_error_field.hpp"
 #include "core/error.hpp"
 #include "drivers/pseudo_terminal.hpp"
-#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -85,11 +85,11 @@ TEST(SerialImu, CountsCorruptFramesAsEventsAndInventsNothing) {
   ASSERT_TRUE(imu.configure());
   ASSERT_TRUE(imu.activate());
   send(pty, encode_imu_frame(make_serial_sample(0)));
-  send(pty, {0x00, 0x13, 0x37, 0xA5});                     // garbage
+  send(pty, {0x00, 0x13, 0x37, 0xA5});  // garbage
   auto corrupt = encode_imu_frame(make_serial_sample(1));
-  corrupt[20] ^= 0x40;                                     // CRC error
+  corrupt[20] ^= 0x40;  // CRC error
   send(pty, corrupt);
-  send(pty, encode_imu_frame(make_serial_sample(3)));             // sample 2 never sent: a gap
+  send(pty, encode_imu_frame(make_serial_sample(3)));  // sample 2 never sent: a gap
   const auto got = collect(imu, 2);
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(got[0].sequence, 0u);
@@ -114,7 +114,8 @@ TEST(SerialImu, ALostLineIsAnErrorStateAndAnEvent) {
   ASSERT_TRUE(imu.configure());
   ASSERT_TRUE(imu.activate());
   pty.reset();  // the device end hangs up (cable pulled)
-  for (int i = 0; i < 200 && imu.state() != DeviceState::kError; ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 200 && imu.state() != DeviceState::kError; ++i)
+    std::this_thread::sleep_for(10ms);
   EXPECT_EQ(imu.state(), DeviceState::kError);
   const auto events = imu.take_events();
   ASSERT_FALSE(events.empty());

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "core/error.hpp"
 #include "../schema_error_field.hpp"
+#include "core/error.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -119,8 +119,7 @@ std::string error_where(const json& doc) {
   try {
     register_map_from_json(doc, "chamber.connection.map", WordOrder::kHighFirst);
   } catch (const core::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("chamber.connection.map"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("chamber.connection.map"), std::string::npos) << e.what();
     return test::error_field(e);
   }
   return "";

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include "../schema_error_field.hpp"
 #include "core/clock.hpp"
 #include "core/error.hpp"
 #include "drivers/modbus_chamber.hpp"
-#include "../schema_error_field.hpp"
 
 namespace calstand::drivers {
 namespace {

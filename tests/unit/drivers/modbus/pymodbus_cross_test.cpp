@@ -4,9 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-
 #include <cmath>
+#include <cstdlib>
 
 #include "drivers/modbus_chamber.hpp"
 #include "drivers/modbus_chamber_server.hpp"
@@ -26,14 +25,15 @@ std::optional<json> last_write_to(const std::vector<json>& writes, int address) 
   return std::nullopt;
 }
 
-#define SKIP_WITHOUT_PYMODBUS()                            \
-  do {                                                     \
-    static const std::string missing = pymodbus_missing(); \
-    if (!missing.empty() && std::getenv("CALSTAND_REQUIRE_PYMODBUS")) {                \
-      FAIL() << missing << " (CALSTAND_REQUIRE_PYMODBUS is set: the test command "     \
-                           "installs python3-pymodbus, so its absence is an error)";  \
-    }                                                      \
-    if (!missing.empty()) GTEST_SKIP() << missing;         \
+#define SKIP_WITHOUT_PYMODBUS()                                           \
+  do {                                                                    \
+    static const std::string missing = pymodbus_missing();                \
+    if (!missing.empty() && std::getenv("CALSTAND_REQUIRE_PYMODBUS")) {   \
+      FAIL() << missing                                                   \
+             << " (CALSTAND_REQUIRE_PYMODBUS is set: the test command "   \
+                "installs python3-pymodbus, so its absence is an error)"; \
+    }                                                                     \
+    if (!missing.empty()) GTEST_SKIP() << missing;                        \
   } while (false)
 
 /// The pymodbus F4T started on an ephemeral port; port() is 0 when it did not come up.
