@@ -10,17 +10,17 @@ export function el(tag, attrs = {}, ...children) {
     else if (key === 'dataset') Object.assign(node.dataset, value);
     else node.setAttribute(key, value === true ? '' : String(value));
   }
-  for (const child of children.flat()) {
+  for (const child of children.flat(Infinity)) {
     if (child === undefined || child === null) continue;
     node.append(child instanceof Node ? child : String(child));
   }
   return node;
 }
 
-/** Replaces every child of `node` with `children`. */
+/** Replaces every child of `node` with `children` (nested arrays flattened, as in `el`). */
 export function replaceChildren(node, ...children) {
   node.replaceChildren();
-  for (const child of children.flat()) if (child !== null && child !== undefined) node.append(child);
+  for (const child of children.flat(Infinity)) if (child !== null && child !== undefined) node.append(child);
 }
 
 /** A number with `digits` significant digits ("–" when absent or not finite). */
