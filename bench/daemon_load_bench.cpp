@@ -14,11 +14,13 @@
 //                both IMUs' 1 kHz frames over pseudo-terminals, as in a lab.
 //
 //   calstand_daemon_load_bench [--capture-s S] [--clients N] [--drivers] [--time-scale K]
-#include <fmt/format.h>
+// clang-format off
+#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <httplib.h>
+// clang-format on
+#include <fmt/format.h>
 #include <unistd.h>
 
-#include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
 #include <algorithm>
 #include <atomic>
 #include <chrono>

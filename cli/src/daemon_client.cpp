@@ -1,9 +1,11 @@
 #include "daemon_client.hpp"
 
-#include <fmt/format.h>
-#include <httplib.h>
-
+// clang-format off
 #include <Eigen/Core>  // before httplib.h: its <resolv.h> defines a macro `_res`, a name Eigen uses
+#include <httplib.h>
+// clang-format on
+#include <fmt/format.h>
+
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
