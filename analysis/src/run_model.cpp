@@ -59,20 +59,28 @@ solver::Model model_from_lists(const std::vector<std::string>& terms,
   }
 }
 
-solver::RunData load_fit_data(store::Database& db, std::int64_t run, const std::string& device) {
+std::string choose_fit_device(store::Database& db, std::int64_t run, const std::string& device) {
   store::RunStore runs(db);
   try {
     runs.run_status(run);  // throws for an unknown run
   } catch (const core::InputError& e) {
     throw RunNotFound(e.where(), reason_of(e));
   }
-  const std::string where = fmt::format("run {}", run);
-  if (store::sample_devices(db, run).empty()) throw NothingToFit(where, "has no samples");
-  const std::string chosen = store::choose_device(db, run, device);
+  if (store::sample_devices(db, run).empty()) {
+    throw NothingToFit(fmt::format("run {}", run), "has no samples");
+  }
+  return store::choose_device(db, run, device);
+}
+
+solver::RunData load_fit_data(store::Database& db, std::int64_t run, const std::string& device) {
+  const std::string chosen = choose_fit_device(db, run, device);
+  store::RunStore runs(db);
   solver::RunData data;
   data.setup = solver::run_setup(runs.load_run(run), run, chosen);
   data.steps = store::read_step_data(db, run, chosen);
-  if (data.steps.empty()) throw NothingToFit(where, "has no completed steps with samples");
+  if (data.steps.empty()) {
+    throw NothingToFit(fmt::format("run {}", run), "has no completed steps with samples");
+  }
   return data;
 }
 

@@ -56,8 +56,9 @@ std::string commanded(const procedures::Step& s) {
       return text;
     }
     case StepKind::kMove:
-      return fmt::format("outer {} deg, inner {} deg", format_number(s.outer_deg),
-                         format_number(s.inner_deg));
+      return fmt::format("{}outer {} deg, inner {} deg",
+                         s.up.empty() ? "" : fmt::format("{} up: ", s.up),
+                         format_number(s.outer_deg), format_number(s.inner_deg));
     case StepKind::kRate: {
       std::string text = fmt::format("{} {:+g} deg/s, settle {} s, record {} s", s.axis, s.rate_dps,
                                      format_number(s.settle_s), format_number(s.duration_s));

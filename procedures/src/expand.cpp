@@ -5,6 +5,7 @@
 #include <set>
 
 #include "parameters.hpp"
+#include "procedures/pointing.hpp"
 #include "procedures/procedure.hpp"
 #include "references.hpp"
 
@@ -17,6 +18,7 @@ using nlohmann::json;
 
 constexpr double kDefaultSettleS = 2.0;    // rate steps without settle_s [s]
 constexpr double kMaxAbsAngleDeg = 360.0;  // move angles beyond one turn are a typo, not intent
+constexpr const char* kBodyDirections = "\"+x\", \"-x\", \"+y\", \"-y\", \"+z\", \"-z\"";
 
 class Expander {
  public:
@@ -132,6 +134,7 @@ class Expander {
 
   void move(const json& j, const std::string& path, Step& s) {
     s.kind = StepKind::kMove;
+    if (j.contains("up")) return point(j, path, s);
     const auto within_turn = [](double a) -> std::string {
       return std::abs(a) <= kMaxAbsAngleDeg ? "" : "is outside [-360, 360]";
     };
@@ -141,6 +144,26 @@ class Expander {
                   ? label(j)
                   : fmt::format("move to outer {}, inner {}", format_number(s.outer_deg),
                                 format_number(s.inner_deg));
+  }
+
+  // A move given as the body direction to point up; make_plan() finds the angles.
+  void point(const json& j, const std::string& path, Step& s) {
+    const json& up = j["up"];
+    if (up.is_string() && parse_body_direction(up.get<std::string>())) {
+      s.up = up.get<std::string>();
+    } else if (const auto ref = detail::parse_reference(up)) {
+      const auto value = lookup(ref->name);
+      if (value && value->is_string() && parse_body_direction(value->get<std::string>())) {
+        s.up = value->get<std::string>();
+        s.references["up"] = ref->text();
+      } else {
+        add(path + ".up", fmt::format("{} = {} is not one of {}", ref->text(),
+                                      value ? quote_value(*value) : "nothing", kBodyDirections));
+      }
+    }
+    if (j.contains("imu")) s.imu = j["imu"].get<std::string>();
+    s.label =
+        j.contains("label") ? label(j) : fmt::format("point {} up", s.up.empty() ? "?" : s.up);
   }
 
   void rate(const json& j, const std::string& path, Step& s) {

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "parameters.hpp"
+#include "procedures/pointing.hpp"
 #include "references.hpp"
 
 namespace calstand::procedures {
@@ -169,6 +170,46 @@ class Planner {
   AxisTrack inner_;
 };
 
+// Fills in the angles of every move given by pointing (`up`), for the station's table and the
+// named (or first) IMU's mount; a pointing the table cannot make is a violation of that step.
+void resolve_pointings(const core::StationConfig& station, Plan& plan) {
+  for (Step& s : plan.steps) {
+    if (s.kind != StepKind::kMove || s.up.empty()) continue;
+    std::size_t imu = 0;
+    if (!s.imu.empty()) {
+      const auto it = std::find_if(station.imus.begin(), station.imus.end(),
+                                   [&](const core::ImuConfig& c) { return c.name == s.imu; });
+      if (it == station.imus.end()) {
+        plan.violations.push_back(
+            {s.origin_path + ".imu",
+             fmt::format("\"{}\" is not an IMU of station \"{}\"", s.imu, station.name)});
+        continue;
+      }
+      imu = static_cast<std::size_t>(it - station.imus.begin());
+    }
+    if (station.imus.empty()) {
+      plan.violations.push_back({s.origin_path + ".up", "the station has no IMU to point"});
+      continue;
+    }
+    const auto direction = parse_body_direction(s.up);
+    const core::TableGeometry geometry = station.geometry(imu);
+    const auto angles = direction ? point_up(geometry, *direction) : std::nullopt;
+    if (!angles) {
+      const auto& o = geometry.outer_axis;
+      const auto& i = geometry.inner_axis;
+      plan.violations.push_back(
+          {s.origin_path + ".up",
+           fmt::format("the table cannot point body axis {} up: no outer and inner angles in "
+                       "steps of 45 deg put it along the vertical (outer axis [{:g} {:g} {:g}], "
+                       "inner axis [{:g} {:g} {:g}], with the mount of IMU \"{}\")",
+                       s.up, o.x(), o.y(), o.z(), i.x(), i.y(), i.z(), station.imus[imu].name)});
+      continue;
+    }
+    s.outer_deg = angles->outer_deg;
+    s.inner_deg = angles->inner_deg;
+  }
+}
+
 nlohmann::json axis_json(const AxisEnvelope& a) {
   return {{"max_rate_dps", a.max_rate_dps},
           {"max_move_rate_dps", a.max_move_rate_dps},
@@ -219,6 +260,7 @@ Plan make_plan(const Procedure& procedure, const core::StationConfig& station,
   std::vector<Violation> ignored;  // reported by expand_collecting below
   plan.parameters = detail::resolve_parameters_collecting(procedure, overrides, ignored);
   plan.steps = expand_collecting(procedure, overrides, plan.violations);
+  resolve_pointings(station, plan);
   Planner(station, plan).run();
   // Every value may be in range and the whole still absurd (a capture of 1e308 s): a run that
   // would never end is refused here, not left to spin in the engine.

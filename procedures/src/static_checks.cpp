@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "procedures/pointing.hpp"
 #include "references.hpp"
 
 namespace calstand::procedures::detail {
@@ -119,6 +120,33 @@ class StepChecker {
     scalar_parameter(*ref, path, Type::kString);
   }
 
+  // `up` of a move: a body direction "+x" ... "-z", or a reference to a string holding one.
+  void up(const json& value, const std::string& path) {
+    if (value.is_string() && parse_body_direction(value.get<std::string>())) return;
+    const auto ref = parse_reference(value);
+    if (!ref || ref->negated) {
+      out_.push_back({path, quote_value(value) +
+                                " is not a body direction (\"+x\", \"-x\", \"+y\", \"-y\", "
+                                "\"+z\", \"-z\") or a reference ${name}"});
+      return;
+    }
+    if (!in_scope(ref->name)) return unknown(path, ref->text());
+    scalar_parameter(*ref, path, Type::kString);
+  }
+
+  // A move gives both angles (the schema requires them without `up`), or the body direction
+  // to point up (and optionally whose), not both.
+  void move(const json& step, const std::string& path) {
+    const bool by_up = step.contains("up");
+    if (by_up) up(step["up"], path + ".up");
+    if (by_up && (step.contains("outer_deg") || step.contains("inner_deg"))) {
+      out_.push_back({path, "has both up and table angles; give outer_deg and inner_deg, or up"});
+    }
+    if (step.contains("imu") && !by_up) {
+      out_.push_back({path + ".imu", "names the IMU whose body axis up points; it needs up"});
+    }
+  }
+
   void for_each(const json& step, const std::string& path) {
     const std::string var = step["var"].get<std::string>();
     if (specs_.count(var) > 0) {
@@ -174,6 +202,7 @@ class StepChecker {
         numeric(step["soak"][f], path + ".soak." + f);
       }
     }
+    if (kind == "move") move(step, path);
     if (kind == "rate") {
       axis(step["axis"], path + ".axis");
       if (step.contains("revolutions")) numeric(step["revolutions"], path + ".revolutions");

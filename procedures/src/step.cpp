@@ -43,6 +43,8 @@ nlohmann::json Step::to_json() const {
     case StepKind::kMove:
       j["outer_deg"] = outer_deg;
       j["inner_deg"] = inner_deg;
+      if (!up.empty()) j["up"] = up;
+      if (!imu.empty()) j["imu"] = imu;
       break;
     case StepKind::kRate:
       j["axis"] = axis;

@@ -133,6 +133,13 @@ void ImuSim::power_on(double time_s) {
   ++power_cycles_;
 }
 
+std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::noise_free_reading(const TableKinematics& table,
+                                                                       double temperature_c) const {
+  const ImuInputs in = input_model_(table, temperature_c);
+  const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
+  return {in.rate_dps + gyro_error + turn_on_gyro_, in.force_mps2 + accel_error + turn_on_accel_};
+}
+
 core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, double temperature_c) {
   const ImuInputs in = input_model_(table, temperature_c);
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);

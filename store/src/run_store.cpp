@@ -342,6 +342,34 @@ void RunStore::add_chamber_telemetry(std::int64_t run, std::span<const core::Cha
   });
 }
 
+std::vector<core::ChamberState> RunStore::chamber_telemetry(std::int64_t run, double from_s,
+                                                            double to_s) {
+  require_run(run);
+  return guarded("read chamber telemetry", [&] {
+    SQLite::Statement q(db_.sql(),
+                        "SELECT time_s, air_c, setpoint_c, mode FROM chamber_telemetry "
+                        "WHERE run_id = ? AND time_s >= ? AND time_s <= ? ORDER BY time_s");
+    q.bind(1, run);
+    q.bind(2, from_s);
+    q.bind(3, to_s);
+    std::vector<core::ChamberState> rows;
+    while (q.executeStep()) {
+      core::ChamberState s;
+      s.time_s = q.getColumn(0).getDouble();
+      s.air_temperature_c = q.getColumn(1).getDouble();
+      s.setpoint_c = q.getColumn(2).getDouble();
+      const std::string mode = q.getColumn(3).isNull() ? "" : q.getColumn(3).getString();
+      for (const auto m :
+           {core::ChamberMode::kStandby, core::ChamberMode::kActive, core::ChamberMode::kFault}) {
+        if (mode == core::to_string(m)) s.mode = m;
+      }
+      s.fault = s.mode == core::ChamberMode::kFault;
+      rows.push_back(std::move(s));
+    }
+    return rows;
+  });
+}
+
 void RunStore::set_run_status(std::int64_t run, const std::string& status,
                               const std::optional<Stamp>& started,
                               const std::optional<Stamp>& ended, const std::string& exit_reason) {

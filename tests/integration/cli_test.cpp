@@ -170,8 +170,9 @@ TEST(CliDemo, TableThatCannotPointAnAxisUpIsRefusedNamingIt) {
   // angles, so "x up" does not exist.
   const std::string path = station_file("flat_table", "[0,0,1]", "[1,0,0]", "[0,0,0]");
   const Result r = run("demo --capture 1 --station " + path);
-  EXPECT_EQ(r.exit_code, 1) << r.out;
-  EXPECT_NE(r.out.find("body axis +x up"), std::string::npos) << r.out;
+  EXPECT_EQ(r.exit_code, 2) << r.out;  // refused by the plan, before any station time
+  EXPECT_NE(r.out.find("steps[4].up: the table cannot point body axis +x up"), std::string::npos)
+      << r.out;
 }
 
 TEST(CliDemo, CaptureMustBeWithinAnHour) {

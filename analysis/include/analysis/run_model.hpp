@@ -44,6 +44,11 @@ class NothingToFit : public core::InputError {
   using core::InputError::InputError;
 };
 
+/// The device of `run` to analyse (`device`, or "" for the run's only IMU), after the checks
+/// every analysis makes: an unknown run throws RunNotFound, a run without samples NothingToFit,
+/// an unknown or ambiguous device core::InputError (store::choose_device()).
+std::string choose_fit_device(store::Database& db, std::int64_t run, const std::string& device);
+
 /// The data of `run` for `device` ("" = the run's only IMU), as solver::load_run_data() with
 /// the same messages, but an unknown run throws RunNotFound and a run without samples or
 /// completed steps NothingToFit; an unknown or ambiguous device stays a core::InputError.

@@ -60,8 +60,10 @@ struct Plan {
   nlohmann::json to_json() const;
 };
 
-/// Expands `procedure` with `overrides` and estimates it on `station`. Rule breaks go to
-/// Plan::violations (never thrown), so that one call lists them all.
+/// Expands `procedure` with `overrides`, resolves every move given by pointing (`"up": "+x"`)
+/// to table angles for the station's table and the IMU's mount (pointing.hpp), and estimates it
+/// on `station`. Rule breaks go to Plan::violations (never thrown), so that one call lists them
+/// all; a pointing the table cannot make is one, at the step's `up`.
 Plan make_plan(const Procedure& procedure, const core::StationConfig& station,
                const Overrides& overrides = {});
 

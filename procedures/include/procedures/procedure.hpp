@@ -69,9 +69,16 @@ struct Step {
   bool wait_for_soak = false;
   SoakCriterion soak;  ///< meaningful when wait_for_soak
 
-  // kMove: absolute angles, reached the shortest way round [deg]
+  // kMove: absolute angles, reached the shortest way round [deg]. A move given by pointing
+  // (`up`) has them filled in by make_plan() for the station's table and the IMU's mount;
+  // expand() leaves them 0.
   double outer_deg = 0.0;
   double inner_deg = 0.0;
+  /// kMove by pointing: the body direction to point up, "+x" ... "-z"; empty when the file
+  /// gives the angles.
+  std::string up;
+  /// kMove by pointing: the IMU whose body axes `up` names; empty for the station's first.
+  std::string imu;
 
   // kRate: a capture at constant rate.
   std::string axis;       ///< "outer" or "inner"

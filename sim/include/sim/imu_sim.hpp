@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "core/imu_sample.hpp"
 #include "core/site.hpp"
@@ -82,6 +83,12 @@ class ImuSim {
 
   /// The sample at station time `time_s` (the caller steps time at sample_period_s()).
   core::ImuSample sample(double time_s, const TableKinematics& table, double temperature_c);
+
+  /// What a noise-free copy of this IMU reads at `table` and `temperature_c`: the same
+  /// deterministic errors and the turn-on bias in force, without noise, output filter or
+  /// quantization (the simulator's truth, which a real station would not know) [deg/s, m/s^2].
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> noise_free_reading(const TableKinematics& table,
+                                                                 double temperature_c) const;
 
   /// The turn-on bias in force since the last power_on() [deg/s, m/s^2].
   const Eigen::Vector3d& turn_on_gyro_bias() const { return turn_on_gyro_; }

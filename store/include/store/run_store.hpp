@@ -65,6 +65,11 @@ class RunStore {
   void add_table_telemetry(std::int64_t run, std::span<const core::TableState> states);
   void add_chamber_telemetry(std::int64_t run, const core::ChamberState& state);
   void add_chamber_telemetry(std::int64_t run, std::span<const core::ChamberState> states);
+  /// The chamber telemetry of `run` with station time in [from_s, to_s], in time order (time,
+  /// air temperature, setpoint and mode; fault text is not stored).
+  std::vector<core::ChamberState> chamber_telemetry(
+      std::int64_t run, double from_s = -std::numeric_limits<double>::infinity(),
+      double to_s = std::numeric_limits<double>::infinity());
 
   /// Sets the run's status; `started` sets the start time (first call only), `ended` the end
   /// time; `exit_reason` (why a run aborted or failed) replaces the old one when not empty.

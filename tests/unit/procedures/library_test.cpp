@@ -44,13 +44,13 @@ std::vector<Pose> capture_poses(const std::vector<Step>& steps) {
   return poses;
 }
 
-Eigen::Vector3d body_axis_in_level(const Pose& p, char axis) {
-  const core::TableGeometry g = default_station().geometry(0);
+Eigen::Vector3d body_axis_in_level(const Pose& p, char axis, const core::TableGeometry& g) {
   return g.body_to_level(p.outer_deg, p.inner_deg).col(axis - 'x');
 }
 
-void expect_points(const Pose& p, char axis, const Eigen::Vector3d& direction) {
-  const Eigen::Vector3d got = body_axis_in_level(p, axis);
+void expect_points(const Pose& p, char axis, const Eigen::Vector3d& direction,
+                   const core::TableGeometry& g = default_station().geometry(0)) {
+  const Eigen::Vector3d got = body_axis_in_level(p, axis, g);
   EXPECT_NEAR((got - direction).norm(), 0.0, 1e-9)
       << p.label << ": body " << axis << " points " << got.transpose() << " (outer " << p.outer_deg
       << ", inner " << p.inner_deg << ")";
@@ -59,9 +59,9 @@ void expect_points(const Pose& p, char axis, const Eigen::Vector3d& direction) {
 const Eigen::Vector3d kUp(0, 0, 1), kDown(0, 0, -1), kNorth(0, 1, 0), kSouth(0, -1, 0);
 
 TEST(Library, ShipsTheStandardProcedures) {
-  const std::vector<std::string> want{"multi-position",  "rate-ladder",         "six-position",
-                                      "static-allan",    "thermal-calibration", "thermal-ramp",
-                                      "twelve-position", "two-position"};
+  const std::vector<std::string> want{"first-look",   "multi-position",  "rate-ladder",
+                                      "six-position", "static-allan",    "thermal-calibration",
+                                      "thermal-ramp", "twelve-position", "two-position"};
   EXPECT_EQ(library_names(), want);
   EXPECT_FALSE(library_text("no-such-procedure").has_value());
   EXPECT_FALSE(library_text("../six-position").has_value());
@@ -83,25 +83,71 @@ TEST(Library, EveryProcedureLoadsExpandsAndFitsTheDefaultStation) {
   }
 }
 
+// The steps as the plan resolves them for `station`: moves given by pointing get their angles.
+std::vector<Step> planned(const std::string& name,
+                          const core::StationConfig& station = default_station()) {
+  const Plan plan = make_plan(load_procedure(name), station);
+  EXPECT_TRUE(plan.ok()) << test::lines(plan.violations);
+  return plan.steps;
+}
+
 TEST(Library, TwoPositionTurnsBodyZUpThenDown) {
-  const auto poses = capture_poses(expand(load_procedure("two-position")));
+  const auto poses = capture_poses(planned("two-position"));
   ASSERT_EQ(poses.size(), 2u);
   expect_points(poses[0], 'z', kUp);
   expect_points(poses[1], 'z', kDown);
 }
 
-TEST(Library, SixPositionPutsEachBodyAxisUpAndDown) {
-  const auto poses = capture_poses(expand(load_procedure("six-position")));
+// Each capture of a six-position-like procedure points the body axis its label names.
+void expect_six_positions(const std::vector<Step>& steps, const core::TableGeometry& g) {
+  const auto poses = capture_poses(steps);
   ASSERT_EQ(poses.size(), 6u);
   std::set<std::string> seen;
   for (const auto& pose : poses) {
     const char axis = pose.label[0];  // "x up", "y down"...
     const bool up = pose.label.substr(1) == " up";
     ASSERT_TRUE(up || pose.label.substr(1) == " down") << pose.label;
-    expect_points(pose, axis, up ? kUp : kDown);
+    expect_points(pose, axis, up ? kUp : kDown, g);
     seen.insert(pose.label);
   }
   EXPECT_EQ(seen, (std::set<std::string>{"x up", "x down", "y up", "y down", "z up", "z down"}));
+}
+
+TEST(Library, SixPositionPutsEachBodyAxisUpAndDown) {
+  expect_six_positions(planned("six-position"), default_station().geometry(0));
+}
+
+TEST(Library, SixPositionFindsItsAnglesForTheStationsTableAndMount) {
+  // Outer axis East instead of North, and the IMU turned 90 deg on the platform: the default
+  // table's angles would point the wrong axes up.
+  core::StationConfig station = default_station();
+  station.table.outer_axis = Eigen::Vector3d(1, 0, 0);
+  station.imus.at(0).mount_rpy_deg = Eigen::Vector3d(0, 0, 90);
+  const auto steps = planned("six-position", station);
+  expect_six_positions(steps, station.geometry(0));
+  const auto defaults = planned("six-position");
+  bool differs = false;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    differs |=
+        steps[i].outer_deg != defaults[i].outer_deg || steps[i].inner_deg != defaults[i].inner_deg;
+  }
+  EXPECT_TRUE(differs) << "the east table needs other angles than the default one";
+}
+
+TEST(Library, ATableThatCannotPointAnAxisUpRefusesThePlanNamingTheStep) {
+  // Outer axis vertical, inner axis East: body x (East at zero) stays horizontal whatever the
+  // angles, so "x up" does not exist.
+  core::StationConfig station = default_station();
+  station.table.outer_axis = Eigen::Vector3d(0, 0, 1);
+  station.table.inner_axis = Eigen::Vector3d(1, 0, 0);
+  const Plan plan = make_plan(load_procedure("six-position"), station);
+  ASSERT_FALSE(plan.ok());
+  const std::string text = test::lines(plan.violations);
+  EXPECT_NE(text.find("steps[4].up: the table cannot point body axis +x up"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("steps[6].up: the table cannot point body axis -x up"), std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("steps[0].up"), std::string::npos) << "z up exists: " << text;
 }
 
 TEST(Library, SixPositionCapturesAreTheOverriddenLength) {

@@ -201,3 +201,57 @@ TEST(PlanLimits, APlanLongerThanAYearIsRefusedWithTheReason) {
 
 }  // namespace
 }  // namespace calstand::procedures
+
+namespace calstand::procedures {
+namespace {
+
+// The round-figure station with two IMUs: "a" as mounted, "b" turned 90 deg about z.
+core::StationConfig station_with_imus() {
+  core::StationConfig s = station();
+  s.name = "bench";
+  s.imus.resize(2);
+  s.imus[0].name = "a";
+  s.imus[1].name = "b";
+  s.imus[1].mount_rpy_deg = Eigen::Vector3d(0, 0, 90);
+  return s;
+}
+
+TEST(PlanPointing, UpIsResolvedForTheTableAndTheNamedImusMount) {
+  const core::StationConfig s = station_with_imus();
+  const Plan p = make_plan(parse(doc_with(R"([
+    {"kind": "for_each", "var": "d", "values": ["+x", "-y"], "steps": [
+      {"kind": "move", "up": "${d}"},
+      {"kind": "move", "up": "${d}", "imu": "b"}]}])")),
+                           s);
+  ASSERT_TRUE(p.ok()) << test::lines(p.violations);
+  ASSERT_EQ(p.steps.size(), 4u);
+  for (const Step& step : p.steps) {
+    const std::size_t imu = step.imu == "b" ? 1 : 0;
+    const int axis = step.up[1] - 'x';
+    const double sign = step.up[0] == '+' ? 1.0 : -1.0;
+    const Eigen::Vector3d up_in_body =
+        s.geometry(imu).body_to_level(step.outer_deg, step.inner_deg).transpose() *
+        Eigen::Vector3d::UnitZ();
+    EXPECT_NEAR((up_in_body - sign * Eigen::Vector3d::Unit(axis)).norm(), 0.0, 1e-9)
+        << step.label << " imu " << imu;
+    EXPECT_EQ(step.label, "point " + step.up + " up");
+    EXPECT_EQ(step.to_json()["up"], step.up);
+  }
+  // The mounts differ by 90 deg of yaw: body x of "b" is not where body x of "a" is.
+  EXPECT_FALSE(p.steps[0].outer_deg == p.steps[1].outer_deg &&
+               p.steps[0].inner_deg == p.steps[1].inner_deg);
+  EXPECT_EQ(p.steps[0].references.at("up"), "${d}");
+}
+
+TEST(PlanPointing, AnUnknownImuOrAStationWithoutImusIsAViolationOfTheStep) {
+  const Procedure proc = parse(doc_with(R"([{"kind": "wait", "duration_s": 1},
+    {"kind": "move", "up": "+z", "imu": "c"}])"));
+  EXPECT_ONE_VIOLATION(make_plan(proc, station_with_imus()).violations, "steps[1].imu",
+                       "\"c\" is not an IMU of station \"bench\"");
+  const Procedure first = parse(doc_with(R"([{"kind": "move", "up": "+z"}])"));
+  EXPECT_ONE_VIOLATION(make_plan(first, station()).violations, "steps[0].up",
+                       "the station has no IMU to point");
+}
+
+}  // namespace
+}  // namespace calstand::procedures

@@ -209,6 +209,32 @@ TEST(StepRules, RateNeedsDurationOrRevolutionsNotBoth) {
       "steps[0]", "has neither duration_s nor revolutions; give exactly one");
 }
 
+TEST(StepRules, MoveGivesBothAnglesOrUpNotBoth) {
+  EXPECT_ONE_VIOLATION(
+      parse_violations(doc_with(R"([{"kind": "move", "up": "+x", "outer_deg": 0}])")), "steps[0]",
+      "has both up and table angles; give outer_deg and inner_deg, or up");
+  // Without up, the schema asks for the angles (ParseProcedure.ListsEverySchemaViolation...).
+  EXPECT_EQ(parse_violations(doc_with(R"([{"kind": "move"}])")).size(), 2u);
+  EXPECT_ONE_VIOLATION(parse_violations(doc_with(
+                           R"([{"kind": "move", "outer_deg": 0, "inner_deg": 0, "imu": "a"}])")),
+                       "steps[0].imu", "names the IMU whose body axis up points; it needs up");
+}
+
+TEST(StepRules, UpMustBeABodyDirectionOrAStringReference) {
+  EXPECT_ONE_VIOLATION(
+      parse_violations(doc_with(R"([{"kind": "move", "up": "x"}])")), "steps[0].up",
+      R"("x" is not a body direction ("+x", "-x", "+y", "-y", "+z", "-z") or a reference ${name})");
+  EXPECT_ONE_VIOLATION(parse_violations(doc_with(R"([{"kind": "move", "up": "${n}"}])",
+                                                 R"({"n": {"default": 1, "description": "d"}})")),
+                       "steps[0].up", "${n} is a number parameter, not a string");
+  // A loop over directions: each value is checked as the loop expands.
+  const Procedure loop = parse(doc_with(
+      R"([{"kind": "for_each", "var": "d", "values": ["+z", "-z", "+w"], "steps": [
+            {"kind": "move", "up": "${d}"}]}])"));
+  EXPECT_ONE_VIOLATION(test::expand_violations(loop), "steps[0].steps[0].up",
+                       R"(${d} = "+w" is not one of "+x", "-x", "+y", "-y", "+z", "-z")");
+}
+
 TEST(LoopRules, LoopVariableMustNotShadowAParameter) {
   EXPECT_ONE_VIOLATION(
       parse_violations(doc_with(

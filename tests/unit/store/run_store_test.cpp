@@ -194,6 +194,37 @@ TEST_F(RunStoreTest, TelemetryIsStored) {
   EXPECT_EQ(db_.sql().execAndGet("SELECT COUNT(*), MAX(air_c) FROM chamber_telemetry").getInt(), 5);
 }
 
+TEST_F(RunStoreTest, ChamberTelemetryReadsBackInTimeOrderWithinTheWindow) {
+  const auto run = store_.create_run(six_position_run());
+  const auto other = store_.create_run(six_position_run());
+  std::vector<core::ChamberState> rows;
+  for (const double t : {3.0, 1.0, 2.0, 4.0}) {
+    core::ChamberState c;
+    c.time_s = t;
+    c.air_temperature_c = 20.0 + t;
+    c.setpoint_c = 45.0;
+    c.mode = t < 4.0 ? core::ChamberMode::kActive : core::ChamberMode::kFault;
+    rows.push_back(c);
+  }
+  store_.add_chamber_telemetry(run, rows);
+  store_.add_chamber_telemetry(other, rows.front());
+  const auto all = store_.chamber_telemetry(run);
+  ASSERT_EQ(all.size(), 4u);
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(all[i].time_s, 1.0 + static_cast<double>(i));
+    EXPECT_EQ(all[i].air_temperature_c, 21.0 + static_cast<double>(i));
+    EXPECT_EQ(all[i].setpoint_c, 45.0);
+  }
+  EXPECT_EQ(all[0].mode, core::ChamberMode::kActive);
+  EXPECT_EQ(all[3].mode, core::ChamberMode::kFault);
+  EXPECT_TRUE(all[3].fault);
+  const auto window = store_.chamber_telemetry(run, 2.0, 3.0);
+  ASSERT_EQ(window.size(), 2u);
+  EXPECT_EQ(window[0].time_s, 2.0);
+  EXPECT_EQ(window[1].time_s, 3.0);
+  EXPECT_THROW(store_.chamber_telemetry(run + 100), core::InputError);
+}
+
 TEST(TelemetryDecimator, KeepsOneRowPerPeriod) {
   TelemetryDecimator d(0.1);
   int kept = 0;
