@@ -559,6 +559,7 @@ TEST(DaemonApi, EventStreamReplaysWhatAReconnectingReaderMissed) {
   EXPECT_TRUE(saw_station);
   EXPECT_FALSE(saw_gap);
   EXPECT_TRUE(saw_completed);
+  EXPECT_EQ(parser.retry_ms(), std::optional<std::uint64_t>(2000));  // reconnect after 2 s
   ASSERT_FALSE(seqs.empty());
   EXPECT_EQ(seqs.front(), std::stoull(first_id.substr(first_id.find('-') + 1)) + 1);
   for (std::size_t i = 1; i < seqs.size(); ++i) EXPECT_EQ(seqs[i], seqs[i - 1] + 1);

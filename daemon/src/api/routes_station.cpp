@@ -70,6 +70,10 @@ class StreamSlot {
   std::atomic<int>& open_;
 };
 
+// How long a reader waits before it reconnects after the stream broke [ms]: a daemon restart
+// takes about a second, and browsers otherwise choose for themselves (3 s to 5 s).
+constexpr unsigned kReconnectMs = 2000;
+
 // One message; `id` empty for the greeting, which is a snapshot, not one of the hub's messages
 // (a reader that reconnects names the last real message it saw).
 std::string sse_message(const std::string& id, const std::string& type,
@@ -136,7 +140,8 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
         }
         auto last_seq = std::make_shared<std::uint64_t>(after);
         auto greeting = std::make_shared<std::string>(
-            sse_message("", "station", station_json(ctx)) + restart_gap);
+            wire::encode_sse_retry(kReconnectMs) + sse_message("", "station", station_json(ctx)) +
+            restart_gap);
         res.set_header("Cache-Control", "no-cache");
         res.set_chunked_content_provider(
             "text/event-stream",
