@@ -1,5 +1,6 @@
 #include "core/csv_reader.hpp"
 
+#include <fast_float/fast_float.h>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -34,7 +35,7 @@ std::string_view drop_plus(std::string_view t) {
 std::optional<double> parse_csv_number(std::string_view text) {
   const std::string_view t = drop_plus(text);
   double v = 0.0;
-  const auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+  const auto [ptr, ec] = fast_float::from_chars(t.data(), t.data() + t.size(), v);
   if (t.empty() || ec != std::errc() || ptr != t.data() + t.size() || !std::isfinite(v)) {
     return std::nullopt;
   }
@@ -149,7 +150,9 @@ bool CsvReader::next() {
 double CsvReader::number(std::size_t i) const {
   const std::string_view t = fields_[i];
   if (const auto v = parse_csv_number(t)) return *v;
-  // Say why: a value that parses but is not finite (nan, inf) reads differently from junk.
+  // Say why: a value that parses but is not finite (nan, inf) reads differently from junk and
+  // from a value beyond a double's range (std::from_chars tells these apart; fast_float gives
+  // an infinity for the last).
   const std::string_view u = drop_plus(t);
   double v = 0.0;
   const auto [ptr, ec] = std::from_chars(u.data(), u.data() + u.size(), v);
