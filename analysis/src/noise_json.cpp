@@ -72,9 +72,32 @@ Json run_noise_json(const solver::RunNoise& r) {
   return out;
 }
 
+std::optional<DatasheetUnit> datasheet_unit(const std::string& unit) {
+  constexpr double kDegPerRad = 57.29577951308232;
+  constexpr double kG0 = 9.80665;
+  if (unit == "deg/s") return DatasheetUnit{true, 1.0};
+  if (unit == "rad/s") return DatasheetUnit{true, kDegPerRad};
+  if (unit == "m/s^2") return DatasheetUnit{false, 1.0};
+  if (unit == "g") return DatasheetUnit{false, kG0};
+  return std::nullopt;
+}
+
+solver::NoiseTerms scale_noise_terms(const solver::NoiseTerms& terms, double k) {
+  solver::NoiseTerms t = terms;
+  for (solver::NoiseTerm* term :
+       {&t.quantization, &t.random_walk, &t.bias_instability, &t.rate_random_walk, &t.rate_ramp}) {
+    term->value *= k;
+    term->sigma *= k;
+  }
+  t.min_deviation *= k;
+  t.bias_instability_from_min *= k;
+  return t;
+}
+
 Json allan_json(const solver::AllanResult& r, const std::string& source, const std::string& key,
                 const std::string& unit, double rate_hz,
-                const std::optional<solver::NoiseTerms>& terms, std::optional<bool> gyro) {
+                const std::optional<solver::NoiseTerms>& terms,
+                std::optional<DatasheetUnit> datasheet) {
   Json out;
   out["source"] = source;
   out["kind"] = key;
@@ -100,7 +123,10 @@ Json allan_json(const solver::AllanResult& r, const std::string& source, const s
   out["alpha"] = alpha;
   if (terms) {
     Json noise = noise_terms_json(*terms, unit);
-    if (gyro) noise["datasheet"] = datasheet_figures_json(solver::datasheet_figures(*terms, *gyro));
+    if (datasheet) {
+      noise["datasheet"] = datasheet_figures_json(solver::datasheet_figures(
+          scale_noise_terms(*terms, datasheet->to_base), datasheet->gyro));
+    }
     out["noise"] = noise;
   } else {
     out["noise"] = nullptr;

@@ -12,13 +12,13 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "analysis/noise_json.hpp"
 #include "commands.hpp"
+#include "core/csv_reader.hpp"
 #include "core/error.hpp"
 #include "open_database.hpp"
 #include "solver/allan.hpp"
@@ -36,7 +36,7 @@ using Json = nlohmann::ordered_json;
 // Options arrive as text and are converted here, so that every bad value is an InputError
 // naming the option (exit code 2), like the other commands' input.
 struct AllanArgs {
-  std::string db, run, step, channel, device, csv, column, rate;
+  std::string db, run, step, channel, device, csv, column, rate, units;
   std::string taus = "octave";
   std::string kind = "adev";
   std::string confidence = "0.683";
@@ -73,45 +73,35 @@ std::optional<std::size_t> parse_step(const std::string& text) {
   return static_cast<std::size_t>(parse_int(text, "--step", 0));
 }
 
-// Column `column` of a CSV file with a header line; empty lines are skipped.
+// Column `column` of a CSV file with a header line (core::CsvReader: blank lines skipped,
+// quotes dropped, every row as many fields as the header, errors naming FILE:LINE and column).
 std::vector<double> read_csv_column(const std::string& path, const std::string& column) {
-  std::ifstream in(path);
-  if (!in) throw core::InputError(path, "cannot open the CSV file");
-  const auto split = [](const std::string& line) {
-    std::vector<std::string> fields;
-    std::stringstream ss(line);
-    std::string f;
-    while (std::getline(ss, f, ',')) {
-      const auto a = f.find_first_not_of(" \t\r\"");
-      const auto b = f.find_last_not_of(" \t\r\"");
-      fields.push_back(a == std::string::npos ? "" : f.substr(a, b - a + 1));
-    }
-    return fields;
-  };
-  std::string line;
-  if (!std::getline(in, line)) throw core::InputError(path, "the CSV file is empty");
-  const std::vector<std::string> header = split(line);
-  std::size_t index = header.size();
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (header[i] == column) index = i;
+  core::CsvOptions options;
+  options.blank_lines_anywhere = true;
+  options.unquote = true;
+  core::CsvReader csv(path, options);
+  const auto index = csv.column(column);
+  if (!index) {
+    throw core::InputError(path,
+                           fmt::format("no column '{}' in the header ({})", column, csv.header()));
   }
-  if (index == header.size()) {
-    throw core::InputError(path, fmt::format("no column '{}' in the header ({})", column, line));
-  }
+  csv.require_unique_columns();
   std::vector<double> values;
-  for (std::size_t number = 2; std::getline(in, line); ++number) {
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const std::vector<std::string> fields = split(line);
-    const std::string where = fmt::format("{} line {}", path, number);
-    if (index >= fields.size()) throw core::InputError(where, "too few fields");
-    values.push_back(parse_double(fields[index], where.c_str()));
-  }
+  while (csv.next()) values.push_back(csv.number(*index));
   return values;
 }
 
 std::string term_line(const char* label, const solver::NoiseTerm& t, const std::string& unit) {
   if (!t.resolved) return fmt::format("  {:<26} not resolved\n", label);
   return fmt::format("  {:<26} {:.4g} +- {:.2g} {}\n", label, t.value, t.sigma, unit);
+}
+
+// One datasheet figure as `calstand noise` shows it: value +- sigma, the value alone for a
+// figure read off the curve, "-" when not resolved.
+std::string figure_cell(const solver::DatasheetFigure& f) {
+  if (!f.resolved) return "-";
+  return std::isfinite(f.sigma) ? fmt::format("{:.4g} +- {:.2g}", f.value, f.sigma)
+                                : fmt::format("{:.4g}", f.value);
 }
 
 void run_allan(const AllanArgs& a) {
@@ -138,7 +128,11 @@ void run_allan(const AllanArgs& a) {
       throw core::InputError("--rate", fmt::format("must be positive, got {}", rate_hz));
     data = read_csv_column(a.csv, a.column);
     source = fmt::format("{} column {}", a.csv, a.column);
+    if (!a.units.empty()) unit = a.units;
   } else {
+    if (!a.units.empty()) {
+      throw core::InputError("--units", "only with --csv (a run's channels have their units)");
+    }
     if (a.db.empty() || a.run.empty() || a.channel.empty()) {
       throw core::InputError("allan",
                              "give --db FILE --run ID --channel gx|gy|gz|ax|ay|az "
@@ -178,10 +172,13 @@ void run_allan(const AllanArgs& a) {
     }
   }
   const std::string key(solver::to_string(options.kind));
+  // A gyro or accelerometer unit (a run's channel, or --units) also gives datasheet figures.
+  const std::optional<analysis::DatasheetUnit> datasheet =
+      channel ? std::optional(analysis::DatasheetUnit{solver::is_gyro(*channel), 1.0})
+              : analysis::datasheet_unit(unit);
   if (a.json) {
-    std::optional<bool> gyro;
-    if (channel) gyro = solver::is_gyro(*channel);
-    std::cout << analysis::allan_json(r, source, key, unit, rate_hz, terms, gyro).dump(2) << "\n";
+    std::cout << analysis::allan_json(r, source, key, unit, rate_hz, terms, datasheet).dump(2)
+              << "\n";
     return;
   }
   std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals [{}]\n", key,
@@ -194,16 +191,29 @@ void run_allan(const AllanArgs& a) {
   }
   if (terms) {
     const auto& t = *terms;
-    std::cout << fmt::format("\nnoise terms (Allan variance fit, chi2/dof {:.3g}; unit u = {})\n",
-                             t.chi2_dof, unit);
-    std::cout << term_line("quantization Q", t.quantization, "u*s");
-    std::cout << term_line("random walk N", t.random_walk, "u/sqrt(Hz)");
-    std::cout << term_line("bias instability B (fit)", t.bias_instability, "u");
-    std::cout << term_line("rate random walk K", t.rate_random_walk, "u/sqrt(s)");
-    std::cout << term_line("rate ramp R", t.rate_ramp, "u/s");
-    std::cout << fmt::format("  {:<26} {:.4g} u at tau {:.4g} s (B = minimum / 0.664 = {:.4g} u)\n",
-                             "Allan minimum", t.min_deviation, t.min_tau_s,
-                             t.bias_instability_from_min);
+    // Without a unit (a CSV without --units) the terms are in "u", the data's unit.
+    const std::string u = unit == "unit" ? "u" : unit;
+    std::cout << fmt::format("\nnoise terms (Allan variance fit, chi2/dof {:.3g}; unit {})\n",
+                             t.chi2_dof, u == "u" ? "u = unit of the data" : u);
+    std::cout << term_line("quantization Q", t.quantization, u + "*s");
+    std::cout << term_line("random walk N", t.random_walk, u + "/sqrt(Hz)");
+    std::cout << term_line("bias instability B (fit)", t.bias_instability, u);
+    std::cout << term_line("rate random walk K", t.rate_random_walk, u + "/sqrt(s)");
+    std::cout << term_line("rate ramp R", t.rate_ramp, u + "/s");
+    std::cout << fmt::format(
+        "  {:<26} {:.4g} {} at tau {:.4g} s (B = minimum / 0.664 = {:.4g} {})\n", "Allan minimum",
+        t.min_deviation, u, t.min_tau_s, t.bias_instability_from_min, u);
+    if (datasheet) {
+      std::cout << fmt::format("\ndatasheet figures ({}, as calstand noise gives them)\n",
+                               datasheet->gyro ? "gyro" : "accelerometer");
+      for (const auto& f : solver::datasheet_figures(
+               analysis::scale_noise_terms(t, datasheet->to_base), datasheet->gyro)) {
+        std::cout << fmt::format("  {:<40} {:>22} {}\n", f.label, figure_cell(f), f.unit);
+      }
+    } else if (!a.units.empty()) {
+      std::cout << fmt::format("(no datasheet figures: '{}' is none of deg/s, rad/s, m/s^2, g)\n",
+                               unit);
+    }
   }
 }
 
@@ -220,12 +230,7 @@ void print_noise_table(const solver::RunNoise& r, bool gyro) {
     const auto& f0 = chans.front()->figures[i];
     std::cout << fmt::format("{:<40} {:<14}", f0.label, f0.unit);
     for (const auto* c : chans) {
-      const auto& f = c->figures[i];
-      std::string cell = !f.resolved ? "-"
-                         : std::isfinite(f.sigma)
-                             ? fmt::format("{:.4g} +- {:.2g}", f.value, f.sigma)
-                             : fmt::format("{:.4g}", f.value);
-      std::cout << fmt::format(" {:>22}", cell);
+      std::cout << fmt::format(" {:>22}", figure_cell(c->figures[i]));
     }
     std::cout << "\n";
   }
@@ -294,6 +299,11 @@ void register_allan(CLI::App& app) {
       ->type_name("FILE");
   cmd->add_option("--column", a->column, "CSV column")->type_name("NAME");
   cmd->add_option("--rate", a->rate, "CSV sample rate [Hz]")->type_name("HZ");
+  cmd->add_option("--units", a->units,
+                  "unit of the CSV column, labelling the output; deg/s, rad/s (gyro), m/s^2 "
+                  "or g (accelerometer) also give the datasheet figures (ARW, bias instability, "
+                  "...)")
+      ->type_name("UNIT");
   cmd->add_option("--taus", a->taus, "octave, decade, dense or a list of seconds (1,10,100)")
       ->capture_default_str();
   cmd->add_option("--kind", a->kind,

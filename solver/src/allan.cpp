@@ -132,6 +132,46 @@ int alpha_from_slope(double mu, AllanKind kind) {
   return std::clamp(alpha, min_alpha(kind), kMaxAlpha);
 }
 
+// The degrees of freedom of phase noise, bounded by the data length.
+//
+// Phase noise (white or flicker PM, alpha 2 or 1) is the one case in which the EDF of the
+// overlapping estimators grows with the number of samples N and not with the record's length
+// T in units of tau: white PM's phase points are independent, so the overlapping differences
+// at tau are nearly independent at every start sample and EDF ~ N / 2 however long tau is
+// (NIST SP 1065 Table 5, Howe's white-PM form; Greenhall and Riley, PTTI 2003). Frequency
+// noise (alpha <= 0) is correlated over tau instead: the record holds only T / tau = N / m
+// independent spans of tau, and overlapping them gains at most a factor of about 3/2, for
+// white FM (EDF ~ 3 N / (2 m), SP 1065 Table 5), less for flicker and random-walk FM.
+//
+// A curve is rarely pure phase noise at its longer taus: frequency noise takes a growing share
+// q of the variance there (a phase-to-frequency transition). For independent noises a + b the
+// estimate s^2 = mean((a + b)^2) has Var = Var(mean a^2) + Var(mean b^2) + 4 Var(mean ab)
+// (the other covariances vanish), so Var(s^2) >= Var(s_b^2) = 2 (q sigma^2)^2 / edf_b, and with
+// edf = 2 sigma^4 / Var(s^2): edf <= edf_b / q^2 <= edf_whiteFM(m, N) / q^2. That is the
+// bound applied to a phase-noise point: the data length (through white FM's EDF) divided by
+// the squared frequency-noise share. The share comes from the local slope mu, which moves
+// from the phase-noise slope towards white FM's (-1) as frequency noise mixes in:
+// q = (mu - mu_phase) / (-1 - mu_phase), clamped to [0, 1]. Pure phase noise (q near 0) keeps
+// its EDF; a slope window that reaches a tau identified as frequency noise straddles the
+// change, where the slope averages across it and cannot give the share, so q = 1 there (the
+// white-FM EDF itself, as Stable32 gives at such taus). Without the bound a record of
+// 241,000 s gave EDF 117,800 at tau 8192 s (interval +-0.2 %); white FM's is about 42 (+-11 %).
+double frequency_noise_share(const std::vector<AllanPoint>& points,
+                             const std::vector<double>& slopes, std::size_t k, AllanKind kind) {
+  const double centre = std::log(static_cast<double>(points[k].m));
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    const double d = std::abs(std::log(static_cast<double>(points[j].m)) - centre);
+    // Within the slope window (a factor of 2, as local_slope()), or an immediate neighbour
+    // of a sparse (decade) tau set.
+    const bool near = d <= std::log(2.0) + 1e-9 || j + 1 == k || j == k + 1;
+    if (j != k && near && points[j].alpha <= 0) return 1.0;
+  }
+  // The slope of the phase noise named: -2 on the Allan and Hadamard curves (white and
+  // flicker PM alike); on the modified curve -3 for white PM, -2 for flicker PM.
+  const double mu_phase = kind == AllanKind::kModified && points[k].alpha == 2 ? -3.0 : -2.0;
+  return std::clamp((slopes[k] - mu_phase) / (-1.0 - mu_phase), 0.0, 1.0);
+}
+
 // Log-log slope of the variance at point k: least squares over the points within a factor of 2
 // in tau (the immediate neighbours when there are none), skipping zero variances. A single
 // neighbour pair of a dense tau set is a tenth of a decade apart, far too noisy a slope.
@@ -393,6 +433,7 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
     result.points.push_back(p);
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> slopes(ms.size(), nan);
   for (std::size_t k = 0; k < ms.size(); ++k) {
     AllanPoint& p = result.points[k];
     if (!options.intervals) {
@@ -402,13 +443,24 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
     if (options.alpha) {
       p.alpha = *options.alpha;
     } else {
-      p.alpha = alpha_from_slope(local_slope(ms, var, k), options.kind);
+      slopes[k] = local_slope(ms, var, k);
+      p.alpha = alpha_from_slope(slopes[k], options.kind);
       // White PM gives by far the most degrees of freedom, so a noisy slope mistaken for it
       // would give absurdly narrow intervals. In inertial data it can only dominate at the
       // short end (quantization), so it is accepted only in an unbroken run from the first tau.
       if (p.alpha == 2 && k > 0 && result.points[k - 1].alpha != 2) p.alpha = 0;
     }
+  }
+  for (std::size_t k = 0; k < ms.size() && options.intervals; ++k) {
+    AllanPoint& p = result.points[k];
     p.edf = equivalent_dof(options.kind, p.alpha, p.m, rate.size());
+    if (!options.alpha && p.alpha >= 1) {
+      // Phase noise: bounded by the data length and the frequency-noise share (see above).
+      const double q = frequency_noise_share(result.points, slopes, k, options.kind);
+      if (q > 0.0) {
+        p.edf = std::min(p.edf, equivalent_dof(options.kind, 0, p.m, rate.size()) / (q * q));
+      }
+    }
     const DeviationInterval ci = deviation_interval(p.deviation, p.edf, options.confidence);
     p.lo = ci.lo;
     p.hi = ci.hi;

@@ -56,6 +56,16 @@ nlohmann::json meta_from_station(Database& db, std::int64_t run, const nlohmann:
   return nlohmann::json::parse(meta.dump());
 }
 
+// The meta.json of a /2 run's export: the imported one, its samples now in the store's units
+// (counts were converted with the nominal on import, so the nominal goes).
+nlohmann::json meta_2_for_export(const nlohmann::json& imported) {
+  nlohmann::json meta = imported;
+  meta["units"]["gyro"] = "deg/s";
+  meta["units"]["accel"] = "m/s^2";
+  meta.erase("nominal");
+  return meta;
+}
+
 void write_file(const std::filesystem::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(text.data(), static_cast<std::streamsize>(text.size()));
@@ -70,12 +80,25 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
   RunStore runs(db);
   const RunRecord record = runs.load_run(run);
   const std::string device = choose_device(db, run, options.device);
+  const std::string format = record.station_snapshot.value("format", "");
+  const bool v2 = format == detail::kImportFormat2;
   const nlohmann::json meta =
-      record.station_snapshot.value("format", "") == detail::kImportFormat
+      v2 ? meta_2_for_export(record.station_snapshot)
+      : format == detail::kImportFormat
           ? record.station_snapshot
           : detail::guarded("read run for export", [&] {
               return meta_from_station(db, run, record.station_snapshot, device);
             });
+  // A /2 folder has the columns its import had: step when the steps came from one, the table
+  // columns with a table, temp_c with a temperature unit.
+  bool has_step = true;
+  if (v2) {
+    has_step = false;
+    for (const StepRecord& s : record.steps)
+      has_step = has_step || s.commanded.contains("import_step");
+  }
+  const bool has_table = !v2 || meta.contains("table");
+  const bool has_temperature = !v2 || meta["units"].contains("temperature");
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -89,7 +112,13 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
   const std::filesystem::path part_path = out_dir / "samples.csv.part";
   try {
     std::ofstream out(part_path, std::ios::binary | std::ios::trunc);
-    out << detail::kImportCsvHeader << "\n";
+    if (v2) {
+      out << "t" << (has_step ? ",step" : "")
+          << (has_table ? ",outer_deg,inner_deg,outer_rate_dps,inner_rate_dps" : "")
+          << (has_temperature ? ",temp_c" : "") << ",gx,gy,gz,ax,ay,az\n";
+    } else {
+      out << detail::kImportCsvHeader << "\n";
+    }
     fmt::memory_buffer csv;
     for_each_step_data(db, run, device, [&](const StepData& data) {
       const auto& c = data.step.commanded;
@@ -101,6 +130,20 @@ void export_run(Database& db, std::int64_t run, const std::filesystem::path& out
       for (std::size_t i = 0; i < data.samples.size(); ++i) {
         const core::ImuSample& s = data.samples[i];
         const TableSample& t = data.table[i];
+        if (v2) {
+          auto it = std::back_inserter(csv);
+          fmt::format_to(it, "{:.17g}", s.receive_time_s);
+          if (has_step) fmt::format_to(it, ",{}", step_value);
+          if (has_table) {
+            fmt::format_to(it, ",{:.17g},{:.17g},{:.17g},{:.17g}", t.outer_deg, t.inner_deg,
+                           t.outer_rate_dps, t.inner_rate_dps);
+          }
+          if (has_temperature) fmt::format_to(it, ",{:.17g}", s.temperature_c);
+          fmt::format_to(it, ",{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", s.gyro_dps.x(),
+                         s.gyro_dps.y(), s.gyro_dps.z(), s.accel_mps2.x(), s.accel_mps2.y(),
+                         s.accel_mps2.z());
+          continue;
+        }
         fmt::format_to(std::back_inserter(csv),
                        "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},"
                        "{:.17g},{:.17g},{:.17g}\n",

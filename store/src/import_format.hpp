@@ -1,28 +1,58 @@
 #pragma once
-// Private: reading and validating the two files of a calstand-import/1 folder.
+// Private: reading and validating the two files of a calstand-import/1 or /2 folder.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace calstand::store::detail {
 
-/// The exact first line of samples.csv.
+/// The exact first line of a /1 samples.csv, and the column order export writes for /2.
 inline constexpr std::string_view kImportCsvHeader =
     "t,step,outer_deg,inner_deg,outer_rate_dps,inner_rate_dps,temp_c,gx,gy,gz,ax,ay,az";
 inline constexpr std::string_view kImportFormat = "calstand-import/1";
+inline constexpr std::string_view kImportFormat2 = "calstand-import/2";
+/// The four table columns of samples.csv, all or none in /2.
+inline constexpr std::array<std::string_view, 4> kTableColumns = {
+    "outer_deg", "inner_deg", "outer_rate_dps", "inner_rate_dps"};
 
-/// meta.json, validated.
+/// A labelled section of a session without table (meta.json "sections", a calstand extension
+/// of /2).
+struct ImportSection {
+  std::string label;
+  std::string kind;        ///< "static" or "turn"
+  std::string up;          ///< static: the body axis pointing up, "+x" ... "-z"
+  std::string axis;        ///< turn: the body axis turned about, "+x" ... "-z"
+  double angle_deg = 0.0;  ///< turn: the angle turned [deg]
+  nlohmann::json to_json() const;
+};
+
+/// meta.json, validated, with what reading samples.csv needs.
 struct ImportMeta {
   nlohmann::json doc;
   std::string text;  ///< the file's exact text
+  int version = 1;   ///< 1 or 2
+  bool has_table = true;
+  std::string gyro_unit = "deg/s";   ///< deg/s, rad/s or counts
+  std::string accel_unit = "m/s^2";  ///< m/s^2, g or counts
+  bool has_temperature_unit = true;
+  bool has_angle_units = true;  ///< units.angle and units.rate
+  Eigen::Vector3d gyro_offset_counts = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_counts_per_dps = Eigen::Vector3d::Ones();
+  Eigen::Vector3d accel_offset_counts = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel_counts_per_mps2 = Eigen::Vector3d::Ones();
+  std::map<std::int64_t, ImportSection> sections;  ///< by step value
 };
 
-/// One data row of samples.csv, units as in the header.
+/// One data row of samples.csv, converted to the store's units (deg/s, m/s^2). Absent
+/// columns read NaN (table columns, temp_c); without a step column every row has step 0.
 struct ImportRow {
   double t_s = 0.0;
   std::int64_t step = 0;
@@ -36,12 +66,23 @@ struct ImportRow {
   Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();
 };
 
-/// Reads and validates meta.json at `path`. Throws core::InputError (SchemaError for schema
-/// violations, listing all) naming the file and field.
+/// samples.csv, validated against its meta.json.
+struct ImportSamples {
+  std::vector<ImportRow> rows;
+  bool has_step = true;
+  bool has_table = true;
+  bool has_temperature = true;
+};
+
+/// Reads and validates meta.json at `path` (its own rules only; those between meta.json and
+/// samples.csv are checked by read_import_samples()). Throws core::InputError (SchemaError for
+/// schema violations, listing all) naming the file and field.
 ImportMeta read_import_meta(const std::filesystem::path& path);
 
-/// Reads and validates samples.csv at `path`. Throws core::InputError whose where() is
-/// `FILE:LINE` and whose message names the column.
-std::vector<ImportRow> read_import_samples(const std::filesystem::path& path);
+/// Reads and validates samples.csv at `path` against `meta`. Throws core::InputError whose
+/// where() is `FILE:LINE` and whose message names the column, or (a rule between the two
+/// files) names meta.json's field.
+ImportSamples read_import_samples(const std::filesystem::path& path, const ImportMeta& meta,
+                                  const std::filesystem::path& meta_path);
 
 }  // namespace calstand::store::detail

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <tuple>
+#include <utility>
 
 #include "import_format.hpp"
 #include "sql_util.hpp"
@@ -78,6 +80,26 @@ nlohmann::json commanded_state(const StepRows& step) {
   return j;
 }
 
+/// The label and commanded state of one imported step (store/import_export.hpp lists them).
+std::pair<std::string, nlohmann::json> describe_step(const detail::ImportMeta& meta,
+                                                     const detail::ImportSamples& samples,
+                                                     const StepRows& step) {
+  if (samples.has_table && samples.has_step) {
+    return {fmt::format("step {}", step.value), commanded_state(step)};
+  }
+  nlohmann::json j;
+  if (samples.has_step) j["import_step"] = step.value;
+  j["mode"] = "recording";
+  if (!samples.has_table) j["orientation"] = "unknown";
+  std::string label = samples.has_step ? fmt::format("step {}", step.value) : "recording";
+  if (const auto it = meta.sections.find(step.value); it != meta.sections.end()) {
+    j["mode"] = it->second.kind;
+    j["section"] = it->second.to_json();
+    label = it->second.label;
+  }
+  return {label, j};
+}
+
 core::ImuSample to_sample(const ImportRow& r, std::uint32_t sequence) {
   core::ImuSample s;
   s.receive_time_s = r.t_s;
@@ -96,7 +118,7 @@ std::int64_t insert_import_run(SQLite::Database& db, const detail::ImportMeta& m
                        "INSERT INTO runs (procedure_name, procedure_text, procedure_sha256, "
                        "parameters, station_snapshot, status, created_utc, started_clock_s, "
                        "ended_clock_s) VALUES (?, ?, ?, ?, ?, 'imported', ?, ?, ?)");
-  st.bind(1, std::string(detail::kImportFormat));
+  st.bind(1, std::string(meta.version == 2 ? detail::kImportFormat2 : detail::kImportFormat));
   st.bind(2, meta.text);
   st.bind(3, sha256_hex(meta.text));
   st.bind(4, nlohmann::json{{"source", std::filesystem::absolute(dir).string()}}.dump());
@@ -109,11 +131,11 @@ std::int64_t insert_import_run(SQLite::Database& db, const detail::ImportMeta& m
 }
 
 void write_import_step(detail::StepWriter& writer, std::int64_t run, std::size_t index,
+                       const detail::ImportMeta& meta, const detail::ImportSamples& samples_in,
                        const StepRows& s, const std::string& file) {
   detail::StepRow row;
   row.index = index;
-  row.label = fmt::format("step {}", s.value);
-  row.commanded = commanded_state(s);
+  std::tie(row.label, row.commanded) = describe_step(meta, samples_in, s);
   row.origin = fmt::format("{}:{}", file, s.rows.front()->line);
   row.first_s = s.rows.front()->t_s;
   row.last_s = row.first_s;
@@ -124,7 +146,9 @@ void write_import_step(detail::StepWriter& writer, std::int64_t run, std::size_t
     row.first_s = std::min(row.first_s, r->t_s);
     row.last_s = std::max(row.last_s, r->t_s);
     samples.push_back(to_sample(*r, sequence++));
-    table.push_back({r->outer_deg, r->inner_deg, r->outer_rate_dps, r->inner_rate_dps});
+    if (samples_in.has_table) {
+      table.push_back({r->outer_deg, r->inner_deg, r->outer_rate_dps, r->inner_rate_dps});
+    }
   }
   writer.write(run, row, kImportDevice, samples, table);
 }
@@ -134,7 +158,9 @@ void write_import_step(detail::StepWriter& writer, std::int64_t run, std::size_t
 ImportResult import_run(Database& db, const std::filesystem::path& dir) {
   // Validate both files completely before the first write.
   const detail::ImportMeta meta = detail::read_import_meta(dir / "meta.json");
-  const std::vector<ImportRow> rows = detail::read_import_samples(dir / "samples.csv");
+  const detail::ImportSamples samples =
+      detail::read_import_samples(dir / "samples.csv", meta, dir / "meta.json");
+  const std::vector<ImportRow>& rows = samples.rows;
   const std::vector<StepRows> steps = group_by_step(rows);
   double first = rows.front().t_s;
   double last = first;
@@ -150,7 +176,7 @@ ImportResult import_run(Database& db, const std::filesystem::path& dir) {
     result.run = insert_import_run(db.sql(), meta, dir, first, last);
     const std::string csv = (dir / "samples.csv").string();
     for (std::size_t i = 0; i < steps.size(); ++i)
-      write_import_step(writer, result.run, i, steps[i], csv);
+      write_import_step(writer, result.run, i, meta, samples, steps[i], csv);
     tx.commit();
     result.steps = steps.size();
     result.samples = rows.size();

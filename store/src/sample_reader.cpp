@@ -2,6 +2,8 @@
 
 #include <SQLiteCpp/Statement.h>
 
+#include <limits>
+
 #include "core/error.hpp"
 #include "sql_util.hpp"
 
@@ -113,14 +115,19 @@ std::vector<StepMean> read_step_means(Database& db, std::int64_t run) {
       m.count = q.getColumn(3).getInt64();
       m.first_receive_time_s = q.getColumn(4).getDouble();
       m.last_receive_time_s = q.getColumn(5).getDouble();
+      // NULL (SQLite's NaN: a step without temperature, a spread of one sample) reads NaN.
+      const auto real = [&q](int column) {
+        const SQLite::Column c = q.getColumn(column);
+        return c.isNull() ? std::numeric_limits<double>::quiet_NaN() : c.getDouble();
+      };
       for (int i = 0; i < 3; ++i) {
-        m.gyro_dps[i] = q.getColumn(6 + i).getDouble();
-        m.accel_mps2[i] = q.getColumn(9 + i).getDouble();
-        m.gyro_std_dps[i] = q.getColumn(13 + i).getDouble();
-        m.accel_std_mps2[i] = q.getColumn(16 + i).getDouble();
+        m.gyro_dps[i] = real(6 + i);
+        m.accel_mps2[i] = real(9 + i);
+        m.gyro_std_dps[i] = real(13 + i);
+        m.accel_std_mps2[i] = real(16 + i);
       }
-      m.temperature_c = q.getColumn(12).getDouble();
-      m.temperature_std_c = q.getColumn(19).getDouble();
+      m.temperature_c = real(12);
+      m.temperature_std_c = real(19);
       out.push_back(std::move(m));
     }
     return out;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <span>
 
 #include "core/error.hpp"
@@ -98,6 +99,18 @@ TableSample commanded_table(const nlohmann::json& c) {
 
 }  // namespace
 
+bool orientation_known(const StepRecord& step) {
+  const auto it = step.commanded.find("orientation");
+  return it == step.commanded.end() || *it != "unknown";
+}
+
+bool orientation_known(Database& db, std::int64_t run) {
+  RunStore runs(db);
+  const std::vector<StepRecord> steps = runs.load_run(run).steps;  // throws for an unknown run
+  return std::all_of(steps.begin(), steps.end(),
+                     [](const StepRecord& s) { return orientation_known(s); });
+}
+
 std::string choose_device(Database& db, std::int64_t run, const std::string& device) {
   const std::vector<std::string> devices = sample_devices(db, run);
   const std::string where = "run " + std::to_string(run);
@@ -132,7 +145,12 @@ void for_each_step_data(Database& db, std::int64_t run, const std::string& devic
     const bool per_sample = step_table.size() == data.samples.size();
     const std::span<const TimedTable> rows = rows_of_step(run_table, step);
     data.table.reserve(data.samples.size());
-    for (std::size_t i = 0; i < data.samples.size(); ++i) {
+    if (!orientation_known(step)) {
+      // No encoder read anything: NaN, never zeros that would pass for a table at rest at 0.
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      data.table.assign(data.samples.size(), TableSample{nan, nan, nan, nan});
+    }
+    for (std::size_t i = data.table.size(); i < data.samples.size(); ++i) {
       data.table.push_back(per_sample      ? step_table[i].state
                            : !rows.empty() ? interpolate(rows, data.samples[i].receive_time_s)
                                            : commanded_table(step.commanded));

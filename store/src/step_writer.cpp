@@ -1,6 +1,7 @@
 #include "step_writer.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "step_stats.hpp"
 #include "store/sample_codec.hpp"
@@ -30,6 +31,9 @@ StepWriter::StepWriter(SQLite::Database& db)
 std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std::string& device,
                                std::span<const core::ImuSample> samples,
                                std::span<const TableSample> table) {
+  if (!table.empty() && table.size() != samples.size()) {
+    throw std::logic_error("StepWriter::write: one table state per sample, or none");
+  }
   step_.reset();
   step_.bind(1, run);
   step_.bind(2, static_cast<std::int64_t>(step.index));
@@ -64,6 +68,7 @@ std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std:
     }
     enc.append(samples[i]);
     stats.add(samples[i]);
+    if (table.empty()) continue;  // no table state (orientation not known)
     table_.reset();
     table_.bind(1, run);
     table_.bind(2, step_id);

@@ -29,7 +29,8 @@ struct StepRow {
 class StepWriter {
  public:
   explicit StepWriter(SQLite::Database& db);
-  /// Inserts the step and its samples (table[i] belongs to samples[i]); returns the step id.
+  /// Inserts the step and its samples (table[i] belongs to samples[i]; `table` empty: no table
+  /// rows, the step's orientation is not known); returns the step id.
   std::int64_t write(std::int64_t run, const StepRow& step, const std::string& device,
                      std::span<const core::ImuSample> samples, std::span<const TableSample> table);
 

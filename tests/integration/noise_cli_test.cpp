@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,12 @@
 #include "cli_runner.hpp"
 
 namespace {
+
+std::string fmt_double(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
 
 using calstand::testing::read_text;
 using calstand::testing::Result;
@@ -144,6 +151,75 @@ TEST_F(NoiseCli, CsvSource) {
   const Result table = run("allan --csv " + csv + " --column rate --rate 100");
   ASSERT_EQ(table.exit_code, 0) << table.out;
   EXPECT_NE(table.out.find("tau [s]"), std::string::npos) << table.out;
+}
+
+TEST_F(NoiseCli, AllanCsvUnitsLabelTheOutputAndGiveDatasheetFigures) {
+  // The same white noise written in rad/s and in deg/s: the curves differ by 180/pi, the
+  // datasheet figures (deg/sqrt(h)) agree.
+  const double k = 180.0 / 3.14159265358979323846;
+  const std::string rad = dir_ + "/rad.csv";
+  const std::string deg = dir_ + "/deg.csv";
+  {
+    std::ofstream fr(rad), fd(deg);
+    fr << "t,rate\n";
+    fd << "t,rate\n";
+    std::uint64_t s = 777;
+    for (int i = 0; i < 20000; ++i) {
+      double v = -6.0;
+      for (int j = 0; j < 12; ++j) {
+        s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+        v += static_cast<double>(s >> 11U) * 0x1.0p-53;
+      }
+      fr << i * 0.01 << "," << fmt_double(1e-3 * v) << "\n";
+      fd << i * 0.01 << "," << fmt_double(1e-3 * v * k) << "\n";
+    }
+  }
+  const Result r = run("allan --csv " + rad + " --column rate --rate 100 --units rad/s --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["unit"], "rad/s");
+  EXPECT_EQ(j["noise"]["random_walk"]["unit"], "rad/s/sqrt(Hz)");
+  const Result d = run("allan --csv " + deg + " --column rate --rate 100 --units deg/s --json");
+  ASSERT_EQ(d.exit_code, 0) << d.out;
+  const auto jd = nlohmann::json::parse(d.out);
+  ASSERT_TRUE(j["noise"]["datasheet"].is_array());
+  ASSERT_EQ(j["noise"]["datasheet"].size(), jd["noise"]["datasheet"].size());
+  const auto& arw = j["noise"]["datasheet"][0];
+  EXPECT_EQ(arw["name"], "angle_random_walk");
+  EXPECT_EQ(arw["unit"], "deg/sqrt(h)");
+  EXPECT_NEAR(arw["value"].get<double>(), jd["noise"]["datasheet"][0]["value"].get<double>(),
+              1e-6 * arw["value"].get<double>());
+  // 1e-3 rad/s per sample at 100 Hz: N = 1e-4 rad/s/sqrt(Hz) = 0.344 deg/sqrt(h).
+  EXPECT_NEAR(arw["value"].get<double>(), 1e-4 * k * 60.0, 0.1 * 1e-4 * k * 60.0);
+
+  const Result text = run("allan --csv " + rad + " --column rate --rate 100 --units rad/s");
+  ASSERT_EQ(text.exit_code, 0) << text.out;
+  EXPECT_NE(text.out.find("[rad/s]"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("rad/s/sqrt(Hz)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("angle random walk"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("deg/sqrt(h)"), std::string::npos) << text.out;
+  EXPECT_EQ(text.out.find(" u/sqrt(Hz)"), std::string::npos) << text.out;
+  // Another unit only labels.
+  const Result volts = run("allan --csv " + rad + " --column rate --rate 100 --units V");
+  ASSERT_EQ(volts.exit_code, 0) << volts.out;
+  EXPECT_NE(volts.out.find("V/sqrt(Hz)"), std::string::npos) << volts.out;
+  EXPECT_EQ(volts.out.find("angle random walk"), std::string::npos) << volts.out;
+  // A run's channel has its unit already.
+  const Result both = run("allan --db " + db_ + " --run 1 --channel gx --units rad/s");
+  EXPECT_EQ(both.exit_code, 2) << both.out;
+  EXPECT_NE(both.out.find("--units"), std::string::npos) << both.out;
+}
+
+TEST_F(NoiseCli, AllanCsvErrorsNameLineAndColumn) {
+  const std::string csv = dir_ + "/bad_row.csv";
+  {
+    std::ofstream f(csv);
+    f << "t,rate\n0,1\n0.01,2\n0.02,oops\n";
+  }
+  const Result r = run("allan --csv " + csv + " --column rate --rate 100");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find(csv + ":4: column rate: 'oops' is not a number"), std::string::npos)
+      << r.out;
 }
 
 TEST_F(NoiseCli, BadInputExitsWithTwo) {

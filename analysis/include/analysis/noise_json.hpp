@@ -40,14 +40,29 @@ nlohmann::ordered_json datasheet_figures_json(const std::vector<solver::Datashee
 /// sample_rate_hz, duration_s, gaps and per channel its figures and terms.
 nlohmann::ordered_json run_noise_json(const solver::RunNoise& noise);
 
+/// How the noise terms of data in `unit` become datasheet figures (solver::datasheet_figures
+/// works in deg/s and m/s^2): a gyro unit (deg/s, rad/s) or an accelerometer unit (m/s^2, g =
+/// g0 = 9.80665 m/s^2), and the factor from `unit` to deg/s or m/s^2.
+struct DatasheetUnit {
+  bool gyro = true;
+  double to_base = 1.0;
+};
+/// The datasheet unit of `unit`; none for any other unit (the data are then only labelled).
+std::optional<DatasheetUnit> datasheet_unit(const std::string& unit);
+
+/// `terms` of data multiplied by `k` (a change of unit): every coefficient, sigma and the
+/// Allan minimum scale with the data; tau, chi2/dof and the point count do not.
+solver::NoiseTerms scale_noise_terms(const solver::NoiseTerms& terms, double k);
+
 /// `calstand allan --json`: the curve of `source` (kind, unit, rate, samples, confidence, tau,
 /// deviation with its interval, edf, alpha) and the fitted terms (null when there are none);
-/// `gyro` adds the datasheet figures of a gyro (true) or accelerometer (false) channel.
+/// `datasheet` adds the datasheet figures of a gyro or accelerometer channel whose data are in
+/// `unit` (terms scaled by its to_base first).
 nlohmann::ordered_json allan_json(const solver::AllanResult& result, const std::string& source,
                                   const std::string& kind, const std::string& unit,
                                   double sample_rate_hz,
                                   const std::optional<solver::NoiseTerms>& terms,
-                                  std::optional<bool> gyro);
+                                  std::optional<DatasheetUnit> datasheet);
 
 /// The run's noise figures in datasheet units from its longest static capture, for a
 /// calibration record: {"step", "duration_s", "channels": {"gx": [figures...], ...}}, or null

@@ -109,7 +109,12 @@ struct AllanResult {
 /// the Allan or Hadamard curve is taken as white PM (quantization noise), not flicker PM, which
 /// inertial sensors rarely show, and only in an unbroken run from the shortest tau: elsewhere
 /// it is a noisy slope, and white PM's many degrees of freedom would make the interval far too
-/// narrow (white FM is used instead). Give alpha to override.
+/// narrow (white FM is used instead). A phase-noise EDF, which grows with the sample count,
+/// is bounded by the data length: by the white-FM EDF at that tau (about 3 N / (2 m), the
+/// most any frequency noise gives) divided by the squared share of frequency noise in the
+/// variance, read from the local slope, and taken as 1 where frequency noise is identified
+/// within a factor of 2 in tau (a transition; reasoning in allan.cpp). Give alpha to override
+/// (no bound is applied then).
 ///
 /// Throws core::InputError for empty or too short data (fewer than 2 samples, 3 for the
 /// others), a non-finite sample (its index is named), a non-positive or non-finite rate,

@@ -45,7 +45,9 @@ std::vector<core::ImuSample> read_samples(Database& db, std::int64_t run, std::s
 /// Device names with samples in `run`, sorted.
 std::vector<std::string> sample_devices(Database& db, std::int64_t run);
 
-/// A row of table step_means: per step attempt and device, over its samples.
+/// A row of table step_means: per step attempt and device, over its samples. A NULL column
+/// reads NaN: the temperature of samples without one (an import without temp_c), the spread of
+/// a single sample.
 struct StepMean {
   std::size_t step_index = 0;
   int attempt = 0;

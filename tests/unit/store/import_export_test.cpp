@@ -150,7 +150,32 @@ TEST(ImportMetaErrors, UnitOtherThanTheFixedOneNamesTheField) {
 
 TEST(ImportMetaErrors, WrongFormat) {
   EXPECT_CONTAINS(
-      import_error(replace(kMeta, "calstand-import/1", "calstand-import/2"), good_csv()), "format");
+      import_error(replace(kMeta, "calstand-import/1", "calstand-import/3"), good_csv()), "format");
+}
+
+TEST(Import, AVersionOneFolderIsAValidVersionTwoFolder) {
+  // error-model.md: "A /1 folder stays valid" under /2.
+  ImportDir one;
+  ImportDir two(replace(kMeta, "calstand-import/1", "calstand-import/2"));
+  Database db(":memory:");
+  const auto r1 = import_run(db, one.dir.path());
+  const auto r2 = import_run(db, two.dir.path());
+  EXPECT_EQ(r2.steps, r1.steps);
+  RunStore runs(db);
+  const RunRecord a = runs.load_run(r1.run);
+  const RunRecord b = runs.load_run(r2.run);
+  EXPECT_EQ(b.summary.procedure_name, "calstand-import/2");
+  for (std::size_t i = 0; i < a.steps.size(); ++i) {
+    EXPECT_EQ(b.steps[i].commanded, a.steps[i].commanded);
+    EXPECT_EQ(b.steps[i].label, a.steps[i].label);
+    const auto sa = read_samples(db, r1.run, i, kImportDevice);
+    const auto sb = read_samples(db, r2.run, i, kImportDevice);
+    ASSERT_EQ(sa.size(), sb.size());
+    for (std::size_t k = 0; k < sa.size(); ++k) {
+      EXPECT_EQ(sa[k].gyro_dps, sb[k].gyro_dps);
+      EXPECT_EQ(sa[k].temperature_c, sb[k].temperature_c);
+    }
+  }
 }
 
 TEST(ImportMetaErrors, MissingRequiredField) {

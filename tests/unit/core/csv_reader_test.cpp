@@ -1,0 +1,231 @@
+// The CSV reader of `calstand import` and `calstand allan --csv`: line ends, blank lines,
+// number syntax, field counts, long lines and block boundaries, and the FILE:LINE: column
+// messages.
+#include "core/csv_reader.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace calstand::core {
+namespace {
+
+// A file with `text` under the temp folder, removed at scope end.
+class CsvFile {
+ public:
+  explicit CsvFile(const std::string& text) {
+    static std::atomic<int> counter{0};
+    path_ = std::filesystem::temp_directory_path() /
+            ("calstand-csv-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
+             ".csv");
+    std::ofstream(path_, std::ios::binary) << text;
+  }
+  ~CsvFile() {
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+  std::string name() const { return path_.string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Every row's numbers, column by column.
+std::vector<std::vector<double>> numbers(const CsvFile& f, CsvOptions options = {}) {
+  CsvReader csv(f.path(), options);
+  std::vector<std::vector<double>> out;
+  while (csv.next()) {
+    out.emplace_back();
+    for (std::size_t i = 0; i < csv.columns().size(); ++i) out.back().push_back(csv.number(i));
+  }
+  return out;
+}
+
+// The InputError text of reading every number of `text`.
+std::string error_of(const std::string& text, CsvOptions options = {}) {
+  CsvFile f(text);
+  try {
+    numbers(f, options);
+  } catch (const InputError& e) {
+    return std::string(e.what()).replace(0, f.name().size(), "FILE");
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return "";
+}
+
+using Rows = std::vector<std::vector<double>>;
+
+TEST(CsvReader, ReadsHeaderAndRows) {
+  CsvFile f("t, gx ,gy\n0,1.5,-2\n0.01,2.5,3\n");
+  CsvReader csv(f.path());
+  EXPECT_EQ(csv.columns(), (std::vector<std::string>{"t", "gx", "gy"}));
+  EXPECT_EQ(csv.column("gx"), 1u);
+  EXPECT_FALSE(csv.column("gz"));
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.line(), 2u);
+  EXPECT_EQ(csv.number(2), -2.0);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.line(), 3u);
+  EXPECT_EQ(csv.where(), f.name() + ":3");
+  EXPECT_FALSE(csv.next());
+}
+
+TEST(CsvReader, CrLfAndMissingFinalLineEndAndByteOrderMark) {
+  EXPECT_EQ(numbers(CsvFile("\xEF\xBB\xBFt,v\r\n1,2\r\n3,4\r\n")), (Rows{{1, 2}, {3, 4}}));
+  EXPECT_EQ(numbers(CsvFile("t,v\n1,2\n3,4")), (Rows{{1, 2}, {3, 4}}));
+  EXPECT_EQ(numbers(CsvFile("t,v\r\n1,2\r\n3,4")), (Rows{{1, 2}, {3, 4}}));
+  CsvFile bom("\xEF\xBB\xBFt,v\n1,2\n");
+  EXPECT_EQ(CsvReader(bom.path()).columns().front(), "t");
+}
+
+TEST(CsvReader, BlankLinesOnlyAtTheEndUnlessAllowed) {
+  EXPECT_EQ(numbers(CsvFile("t,v\n1,2\n\n  \r\n\t\n")), (Rows{{1, 2}}));
+  EXPECT_EQ(error_of("t,v\n1,2\n\n3,4\n"), "FILE:3: empty line before more data");
+  CsvOptions anywhere;
+  anywhere.blank_lines_anywhere = true;
+  CsvFile f("t,v\n\n1,2\n \r\n3,4\n");
+  EXPECT_EQ(numbers(f, anywhere), (Rows{{1, 2}, {3, 4}}));
+  CsvReader csv(f.path(), anywhere);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.line(), 3u);  // line numbers count the blank lines
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.line(), 5u);
+}
+
+TEST(CsvReader, NumberSyntax) {
+  const Rows rows =
+      numbers(CsvFile("a,b,c,d,e,f,g,h\n+1,-0.5,.5,2.,6.02e23,1E-05,+1.5e+3, 7 "
+                      "\n-0,0.1,1e-320,1.7976931348623157e308,"
+                      "4.9e-324,123456789012345678901234567890,-1e+2,0\n"));
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0], (std::vector<double>{1, -0.5, 0.5, 2, 6.02e23, 1e-5, 1500, 7}));
+  EXPECT_EQ(rows[1][1], 0.1);  // correctly rounded
+  EXPECT_EQ(rows[1][2], 1e-320);
+  EXPECT_EQ(rows[1][3], 1.7976931348623157e308);
+  EXPECT_EQ(rows[1][5], 1.2345678901234568e29);
+  EXPECT_TRUE(std::signbit(rows[1][0]));
+}
+
+TEST(CsvReader, RefusesWhatIsNotAFiniteNumberNamingLineAndColumn) {
+  EXPECT_EQ(error_of("t,gx\n1,2\n1,nan\n"), "FILE:3: column gx: 'nan' is not a finite number");
+  EXPECT_EQ(error_of("t,gx\n1,inf\n"), "FILE:2: column gx: 'inf' is not a finite number");
+  EXPECT_EQ(error_of("t,gx\n1,-Infinity\n"),
+            "FILE:2: column gx: '-Infinity' is not a finite number");
+  EXPECT_EQ(error_of("t,gx\n1,1e999\n"), "FILE:2: column gx: '1e999' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,0x1p3\n"), "FILE:2: column gx: '0x1p3' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,1.5.2\n"), "FILE:2: column gx: '1.5.2' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,1e\n"), "FILE:2: column gx: '1e' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,+-1\n"), "FILE:2: column gx: '+-1' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,++1\n"), "FILE:2: column gx: '++1' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,\n"), "FILE:2: column gx: '' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,1 2\n"), "FILE:2: column gx: '1 2' is not a number");
+  EXPECT_EQ(error_of("t,gx\n1,\"2\"\n"), "FILE:2: column gx: '\"2\"' is not a number");
+}
+
+TEST(CsvReader, MissingOrExtraFieldNamesTheLine) {
+  EXPECT_EQ(error_of("t,gx,gy\n1,2,3\n1,2\n"), "FILE:3: expected 3 columns, got 2");
+  EXPECT_EQ(error_of("t,gx,gy\n1,2,3,4\n"), "FILE:2: expected 3 columns, got 4");
+  EXPECT_EQ(error_of("t,gx,gy\n1,2,3,\n"), "FILE:2: expected 3 columns, got 4");
+}
+
+TEST(CsvReader, Integers) {
+  CsvFile f("step\n+3\n-2\n1.5\n");
+  CsvReader csv(f.path());
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.integer(0), 3);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.integer(0), -2);
+  ASSERT_TRUE(csv.next());
+  try {
+    csv.integer(0);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), f.name() + ":4: column step: '1.5' is not an integer");
+  }
+}
+
+TEST(CsvReader, QuotesOnlyWhenAsked) {
+  CsvOptions unquote;
+  unquote.unquote = true;
+  CsvFile f("\"t\",\"rate\"\n\"1\", \"2.5\" \n");
+  CsvReader csv(f.path(), unquote);
+  EXPECT_EQ(csv.column("rate"), 1u);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.number(1), 2.5);
+}
+
+TEST(CsvReader, VeryLongLinesAndBlockBoundaries) {
+  // A 3 MB line (a header of 400,000 columns) read through 4 kB blocks: the buffer grows.
+  std::string header, row;
+  for (int i = 0; i < 400000; ++i) {
+    header += (i ? ",c" : "c") + std::to_string(i);
+    row += (i ? "," : "") + std::to_string(i % 97) + ".25";
+  }
+  CsvOptions small;
+  small.block_bytes = 4096;
+  CsvFile f(header + "\n" + row + "\n" + row);
+  CsvReader csv(f.path(), small);
+  EXPECT_EQ(csv.columns().size(), 400000u);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.number(399999), 399999 % 97 + 0.25);
+  ASSERT_TRUE(csv.next());
+  EXPECT_EQ(csv.number(12345), 12345 % 97 + 0.25);
+  EXPECT_FALSE(csv.next());
+
+  // Many short rows straddling tiny blocks: every value and line number survives.
+  std::string text = "t,v\r\n";
+  for (int i = 0; i < 5000; ++i) text += std::to_string(i) + "," + std::to_string(i * 0.5) + "\r\n";
+  CsvOptions tiny;
+  tiny.block_bytes = 64;
+  CsvFile g(text);
+  CsvReader rows(g.path(), tiny);
+  int n = 0;
+  while (rows.next()) {
+    ASSERT_EQ(rows.number(0), n);
+    ASSERT_EQ(rows.number(1), n * 0.5);
+    ASSERT_EQ(rows.line(), static_cast<std::size_t>(n) + 2);
+    ++n;
+  }
+  EXPECT_EQ(n, 5000);
+}
+
+TEST(CsvReader, FileErrors) {
+  try {
+    CsvReader("/nonexistent/calstand.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/calstand.csv: cannot open the file");
+  }
+  CsvFile empty("");
+  EXPECT_THROW(CsvReader{empty.path()}, InputError);
+  CsvFile header_only("t,v\n");
+  CsvReader csv(header_only.path());
+  EXPECT_FALSE(csv.next());
+  CsvFile twice("t,v,t\n1,2,3\n");
+  try {
+    CsvReader(twice.path()).require_unique_columns();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), twice.name() + ":1: column 't' appears twice in the header");
+  }
+}
+
+TEST(ParseCsvNumber, SameRulesAsTheReader) {
+  EXPECT_EQ(parse_csv_number("+2.5"), 2.5);
+  EXPECT_EQ(parse_csv_number("-1e3"), -1000.0);
+  EXPECT_FALSE(parse_csv_number("nan"));
+  EXPECT_FALSE(parse_csv_number("+"));
+  EXPECT_FALSE(parse_csv_number(""));
+}
+
+}  // namespace
+}  // namespace calstand::core
