@@ -9,11 +9,13 @@
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/thermal_fit.hpp"
+#include "table_free_printer.hpp"
 
 namespace calstand::cli {
 namespace {
 
 struct FitCommandOptions : RunModelOptions {
+  StaticPoseOptions poses;  ///< runs without a table
   bool as_json = false;
   int per_plateau_order = 0;  ///< > 0: thermal calibration by per-plateau fits
   bool white_noise = false;   ///< weights from the white noise alone (no wandering bias)
@@ -59,6 +61,17 @@ void run_fit(const FitCommandOptions& opt) {
   const bool per_plateau = opt.per_plateau_order > 0;
   const analysis::FitRequest request = fit_request_of(opt, per_plateau ? "" : "fit");
   store::Database db = open_existing_database(opt.db);
+  if (analysis::needs_table_free_fit(db, opt.run)) {
+    // No orientation is known: no model to choose, the table-free methods' parameters.
+    const analysis::TableFreeFit fit =
+        analysis::table_free_fit(db, opt.run, static_pose_request(opt.poses, opt.device));
+    if (opt.as_json) {
+      fmt::print("{}\n", analysis::to_json(fit).dump(2));
+    } else {
+      print_table_free_fit(fit);
+    }
+    return;
+  }
   if (per_plateau) {
     print_per_plateau(opt,
                       analysis::plateau_fit_request(db, opt.run, request, opt.per_plateau_order));
@@ -83,6 +96,7 @@ void register_fit(CLI::App& app) {
       "fit", "Fit an error model to a run by weighted least squares on step means");
   add_run_model_options(cmd, *opt);
   cmd->add_flag("--json", opt->as_json, "Print the fit as JSON");
+  add_static_pose_options(cmd, opt->poses);
   cmd->add_flag("--white-noise", opt->white_noise,
                 "Weigh the steps by the white noise inside them alone (no wandering bias "
                 "between steps): the plain weighted least squares");

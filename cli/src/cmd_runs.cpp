@@ -1,6 +1,7 @@
 // `calstand runs` and `calstand show`: what a database holds, for people and for scripts.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -11,6 +12,8 @@
 #include "store/database.hpp"
 #include "store/run_json.hpp"
 #include "store/run_store.hpp"
+#include "store/step_data.hpp"
+#include "table_free_printer.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -20,6 +23,7 @@ struct RunsOptions {
   std::int64_t run = 0;
   bool as_json = false;
   std::int64_t limit = -1;  ///< runs: the newest this many (-1: not given, every run)
+  StaticPoseOptions poses;  ///< show: a run without a table
 };
 
 void list_runs(const RunsOptions& opt) {
@@ -45,6 +49,15 @@ void list_runs(const RunsOptions& opt) {
   }
 }
 
+// A run without a table whose steps are not labelled sections: its static poses come from the
+// detector (or the operator's intervals), and `show` lists them as a fit would use them.
+bool shows_static_poses(store::Database& db, const store::RunRecord& r) {
+  if (store::orientation_known(db, r.summary.id) || r.steps.empty()) return false;
+  return !std::all_of(r.steps.begin(), r.steps.end(), [](const store::StepRecord& s) {
+    return s.commanded.contains("section");
+  });
+}
+
 void show_run(const RunsOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   store::RunStore runs(db);
@@ -59,6 +72,14 @@ void show_run(const RunsOptions& opt) {
     out["procedure_sha256"] = r.procedure_sha256;
     out["steps"] = steps;
     out["events"] = events;
+    if (shows_static_poses(db, r)) {
+      try {
+        out["static_poses"] = analysis::to_json(
+            analysis::table_free_poses(db, opt.run, static_pose_request(opt.poses, "")));
+      } catch (const core::InputError& e) {
+        out["static_poses"] = {{"error", e.what()}};
+      }
+    }
     fmt::print("{}\n", out.dump(2));
     return;
   }
@@ -82,6 +103,17 @@ void show_run(const RunsOptions& opt) {
     fmt::print("{:>10.1f}  {:<9} {:<15} {}\n", e.time_s, store::to_string(e.kind), e.source,
                e.message);
   }
+  // A recording without a table: the static poses a fit would use (labelled sections are
+  // their own steps, listed above).
+  if (shows_static_poses(db, r)) {
+    fmt::print("\n");
+    try {
+      print_static_poses(
+          analysis::table_free_poses(db, opt.run, static_pose_request(opt.poses, "")));
+    } catch (const core::InputError& e) {
+      fmt::print("static poses: none found: {}\n", e.what());
+    }
+  }
 }
 
 }  // namespace
@@ -98,6 +130,7 @@ void register_runs(CLI::App& app) {
   show->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
   show->add_option("--run", opt->run, "Run id")->required();
   show->add_flag("--json", opt->as_json, "Machine-readable output");
+  add_static_pose_options(show, opt->poses);
   show->callback([opt] { show_run(*opt); });
 }
 

@@ -1,0 +1,224 @@
+// The calibration of a run without a table: Ferraris for labelled sections, else the static
+// detector, the gravity norm and the integration between poses.
+#include "analysis/table_free_fit.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "analysis/run_model.hpp"
+#include "store/run_store.hpp"
+#include "store/step_data.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+// Local g of a table-free run: the import's site.gravity_mps2 (required there without a table).
+double run_gravity(store::Database& db, std::int64_t run) {
+  store::RunStore runs(db);
+  const nlohmann::json snapshot = runs.load_run(run).station_snapshot;
+  const auto site = snapshot.find("site");
+  if (site == snapshot.end() || !site->contains("gravity_mps2") ||
+      !(*site)["gravity_mps2"].is_number()) {
+    throw core::InputError(fmt::format("run {}", run),
+                           "has no site.gravity_mps2: a run without a table is calibrated by "
+                           "the gravity norm, which needs local g");
+  }
+  return (*site)["gravity_mps2"].get<double>();
+}
+
+// Every sample of the run's completed steps, in time order, with the step each came from.
+struct RunSamples {
+  std::vector<core::ImuSample> samples;
+  std::vector<const store::StepData*> step_of;  ///< per sample
+  std::vector<store::StepData> steps;
+};
+
+RunSamples read_samples(store::Database& db, std::int64_t run, const std::string& device) {
+  RunSamples r;
+  r.steps = store::read_step_data(db, run, device);
+  if (r.steps.empty()) {
+    throw NothingToFit(fmt::format("run {}", run), "has no completed steps with samples");
+  }
+  std::vector<std::pair<const core::ImuSample*, const store::StepData*>> all;
+  for (const auto& s : r.steps)
+    for (const auto& sample : s.samples) all.emplace_back(&sample, &s);
+  std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) {
+    return a.first->receive_time_s < b.first->receive_time_s;
+  });
+  r.samples.reserve(all.size());
+  r.step_of.reserve(all.size());
+  for (const auto& [sample, step] : all) {
+    r.samples.push_back(*sample);
+    r.step_of.push_back(step);
+  }
+  return r;
+}
+
+// The operator's intervals as the detector would give them: sample ranges with their means.
+solver::StaticDetection given_intervals(const std::vector<core::ImuSample>& samples,
+                                        const std::vector<std::pair<double, double>>& spans) {
+  solver::StaticDetection d;
+  d.rule_text = "intervals given by the operator";
+  for (std::size_t k = 0; k < spans.size(); ++k) {
+    const auto [from_s, to_s] = spans[k];
+    const std::string where = fmt::format("--static-intervals[{}]", k);
+    if (!(std::isfinite(from_s) && std::isfinite(to_s) && from_s < to_s)) {
+      throw core::InputError(where, fmt::format("{:g} to {:g} s is not an interval", from_s, to_s));
+    }
+    if (k > 0 && from_s < spans[k - 1].second) {
+      throw core::InputError(where, "overlaps or precedes the interval before it");
+    }
+    const auto first = std::lower_bound(
+        samples.begin(), samples.end(), from_s,
+        [](const core::ImuSample& s, double t) { return s.receive_time_s < t; });
+    const auto last = std::upper_bound(
+        samples.begin(), samples.end(), to_s,
+        [](double t, const core::ImuSample& s) { return t < s.receive_time_s; });
+    if (last - first < 2) {
+      throw core::InputError(where, fmt::format("{:g} to {:g} s holds fewer than 2 samples of "
+                                                "the recording ({:g} to {:g} s)",
+                                                from_s, to_s, samples.front().receive_time_s,
+                                                samples.back().receive_time_s));
+    }
+    solver::StaticInterval iv;
+    iv.begin = static_cast<std::size_t>(first - samples.begin());
+    iv.end = static_cast<std::size_t>(last - samples.begin());
+    iv.start_s = first->receive_time_s;
+    iv.end_s = (last - 1)->receive_time_s;
+    iv.initial_rest = k == 0;
+    for (auto it = first; it != last; ++it) {
+      iv.mean_accel_mps2 += it->accel_mps2;
+      iv.mean_gyro_dps += it->gyro_dps;
+    }
+    iv.mean_accel_mps2 /= static_cast<double>(last - first);
+    iv.mean_gyro_dps /= static_cast<double>(last - first);
+    d.intervals.push_back(iv);
+  }
+  d.has_initial_rest = !d.intervals.empty();
+  if (d.has_initial_rest) {
+    d.rest_start_s = d.intervals.front().start_s;
+    d.rest_end_s = d.intervals.front().end_s;
+  }
+  return d;
+}
+
+// The import's section of a step, as the Ferraris method names it ("x_p", "y_rot"...), with
+// the turn's nominal size [deg] (its sign comes from the data); nullopt for a step that is no
+// labelled hold or turn.
+std::optional<solver::FerrarisSection> ferraris_section(const store::StepRecord& step) {
+  const auto it = step.commanded.find("section");
+  if (it == step.commanded.end() || !it->is_object()) return std::nullopt;
+  const nlohmann::json& s = *it;
+  const std::string kind = s.value("kind", "");
+  solver::FerrarisSection section;
+  if (kind == "static" && s.contains("up")) {
+    const std::string up = s["up"].get<std::string>();
+    section.label = fmt::format("{}_{}", up.substr(1), up[0] == '+' ? "p" : "a");
+  } else if (kind == "turn" && s.contains("axis")) {
+    const std::string axis = s["axis"].get<std::string>();
+    section.label = axis.substr(1) + "_rot";
+    section.angle_deg = std::abs(s.value("angle_deg", 360.0));
+  } else {
+    return std::nullopt;
+  }
+  return section;
+}
+
+// Ferraris sections when every step of the run is a labelled hold or turn.
+std::optional<std::vector<solver::FerrarisSection>> labelled_sections(const RunSamples& r) {
+  std::vector<solver::FerrarisSection> sections;
+  for (const auto& step : r.steps) {
+    auto section = ferraris_section(step.step);
+    if (!section) return std::nullopt;
+    // The step's samples are contiguous in time order (sections do not interleave).
+    const auto first = std::find(r.step_of.begin(), r.step_of.end(), &step);
+    const auto last = std::find(r.step_of.rbegin(), r.step_of.rend(), &step);
+    section->begin = static_cast<std::size_t>(first - r.step_of.begin());
+    section->end = static_cast<std::size_t>(r.step_of.rend() - last);
+    sections.push_back(*section);
+  }
+  return sections;
+}
+
+}  // namespace
+
+bool needs_table_free_fit(store::Database& db, std::int64_t run) {
+  choose_fit_device(db, run, "");  // RunNotFound for an unknown run
+  return !store::orientation_known(db, run);
+}
+
+TableFreePoses table_free_poses(store::Database& db, std::int64_t run,
+                                const TableFreeFitRequest& request) {
+  TableFreePoses poses;
+  poses.run = run;
+  poses.device = choose_fit_device(db, run, request.device);
+  if (store::orientation_known(db, run)) {
+    throw core::InputError(fmt::format("run {}", run),
+                           "has a known orientation (a table); its steps are fitted by the "
+                           "classical model, not by static-pose detection");
+  }
+  RunSamples r = read_samples(db, run, poses.device);
+  poses.samples = std::move(r.samples);
+  poses.given = !request.intervals_s.empty();
+  poses.detection = poses.given ? given_intervals(poses.samples, request.intervals_s)
+                                : solver::detect_static_intervals(poses.samples, request.detector);
+  return poses;
+}
+
+TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
+                            const TableFreeFitRequest& request) {
+  TableFreeFit fit;
+  fit.run = run;
+  fit.device = choose_fit_device(db, run, request.device);
+  if (store::orientation_known(db, run)) {
+    throw core::InputError(fmt::format("run {}", run),
+                           "has a known orientation (a table): fitted by the classical model");
+  }
+  fit.gravity_mps2 = run_gravity(db, run);
+  if (request.intervals_s.empty()) {
+    const RunSamples r = read_samples(db, run, fit.device);
+    if (const auto sections = labelled_sections(r)) {
+      fit.method = "ferraris";
+      solver::FerrarisOptions options;
+      options.gravity_mps2 = fit.gravity_mps2;
+      options.turn_sign = solver::TurnSign::kDetect;
+      fit.ferraris = solver::calibrate_ferraris(r.samples, *sections, options);
+      return fit;
+    }
+  }
+  fit.method = "gravity_norm";
+  fit.poses = table_free_poses(db, run, request);
+  solver::GravityNormOptions accel_options;
+  accel_options.gravity_mps2 = fit.gravity_mps2;
+  fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
+                                                   fit.poses->detection.intervals, accel_options);
+  solver::GyroIntegrationOptions gyro_options;
+  gyro_options.fit_g_sensitivity = request.gyro_g_sensitivity;
+  fit.gyro = solver::calibrate_gyro_integration(
+      fit.poses->samples, fit.poses->detection.intervals, *fit.accel, gyro_options);
+  return fit;
+}
+
+nlohmann::json to_json(const TableFreePoses& poses) {
+  return {{"run", poses.run},
+          {"device", poses.device},
+          {"given", poses.given},
+          {"samples", poses.samples.size()},
+          {"detection", solver::static_detection_to_json(poses.detection)}};
+}
+
+nlohmann::json to_json(const TableFreeFit& fit) {
+  nlohmann::json j = {{"run", fit.run},
+                      {"device", fit.device},
+                      {"method", fit.method},
+                      {"gravity_mps2", fit.gravity_mps2}};
+  if (fit.poses) j["poses"] = to_json(*fit.poses);
+  if (fit.accel) j["accel"] = solver::gravity_norm_to_json(*fit.accel);
+  if (fit.gyro) j["gyro"] = solver::gyro_integration_to_json(*fit.gyro);
+  if (fit.ferraris) j["ferraris"] = solver::ferraris_to_json(*fit.ferraris);
+  return j;
+}
+
+}  // namespace calstand::analysis
