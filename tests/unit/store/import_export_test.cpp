@@ -12,6 +12,7 @@
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
 #include "temp_dir.hpp"
+#include "text_files.hpp"
 
 namespace calstand::store {
 namespace {
@@ -31,16 +32,8 @@ const char* kMeta = R"({"format": "calstand-import/1",
 const char* kHeader =
     "t,step,outer_deg,inner_deg,outer_rate_dps,inner_rate_dps,temp_c,gx,gy,gz,ax,ay,az";
 
-void write(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string read(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::read;
+using test::write;
 
 // Three steps with values 5, 2 (a rate step) and 9, numbers with awkward digits; step 5 rows
 // come back after step 2 (steps need not be contiguous).

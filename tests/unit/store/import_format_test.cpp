@@ -18,6 +18,7 @@
 #include "store/sample_reader.hpp"
 #include "store/step_data.hpp"
 #include "temp_dir.hpp"
+#include "text_files.hpp"
 
 namespace calstand::store {
 namespace {
@@ -101,16 +102,8 @@ json nominal() {
                                    "counts_per_mps2": [410, 411, 412]}})");
 }
 
-void write(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string read(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::read;
+using test::write;
 
 struct Folder {
   TempDir dir;
