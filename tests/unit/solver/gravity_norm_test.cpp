@@ -48,10 +48,12 @@ TEST(GravityNorm, RecoversTheTruthWithinItsSigmas) {
       }
       for (const TriadEstimate& e : r.parameters) {
         if (e.status != EstimateStatus::kEstimated) continue;
-        if (e.unit == "ppm")
+        if (e.unit == "ppm") {
           EXPECT_TRUE(e.sigma > 3.0 && e.sigma < 300.0) << e.name << " " << e.sigma;
-        if (e.unit == "rad")
+        }
+        if (e.unit == "rad") {
           EXPECT_TRUE(e.sigma > 3e-6 && e.sigma < 1e-3) << e.name << " " << e.sigma;
+        }
       }
       // The residual in words, in mg, per pose.
       EXPECT_GT(r.rms_residual_mg, 0.005);
