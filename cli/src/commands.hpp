@@ -20,7 +20,8 @@ void register_noise_study(CLI::App& app);
 void register_plan(CLI::App& app);
 void register_report(CLI::App& app);
 void register_run(CLI::App& app);
-void register_runs(CLI::App& app);  // runs and show
+void register_runs(CLI::App& app);         // runs and show
+void register_sim_session(CLI::App& app);  // hand-held / Ferraris sessions, no table
 void register_sim_station(CLI::App& app);
 void register_station(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_report(app);
   calstand::cli::register_run(app);
   calstand::cli::register_runs(app);
+  calstand::cli::register_sim_session(app);
   calstand::cli::register_sim_station(app);
   calstand::cli::register_station(app);
   calstand::cli::register_truth_from_spec(app);

@@ -64,12 +64,27 @@ ImuInputs imu_inputs(const ImuTruth& truth, const core::TableGeometry& geometry,
   return ImuInputModel(truth, geometry, site, table_tilt_rad)(k, temperature_c);
 }
 
-double ImuSim::Channel::noise() {
+double ImuSim::Channel::noise(double& slow) {
+  // The total is summed in the same order as before the slow part was reported, so a seed
+  // gives the same samples bit for bit.
   double n = 0.0;
+  slow = 0.0;
   if (white) n += white->next();
-  if (bias_instability) n += bias_instability->next();
-  if (random_walk) n += random_walk->next();
-  if (gauss_markov) n += gauss_markov->next();
+  if (bias_instability) {
+    const double x = bias_instability->next();
+    n += x;
+    slow += x;
+  }
+  if (random_walk) {
+    const double x = random_walk->next();
+    n += x;
+    slow += x;
+  }
+  if (gauss_markov) {
+    const double x = gauss_markov->next();
+    n += x;
+    slow += x;
+  }
   return n;
 }
 
@@ -141,7 +156,11 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::noise_free_reading(const Tab
 }
 
 core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, double temperature_c) {
-  const ImuInputs in = input_model_(table, temperature_c);
+  return sample(time_s, input_model_(table, temperature_c));
+}
+
+core::ImuSample ImuSim::sample(double time_s, const ImuInputs& in) {
+  const double temperature_c = in.temperature_c;
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
 
   std::array<double, 6> value{};
@@ -151,7 +170,7 @@ core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, doub
   }
   for (std::size_t c = 0; c < 6; ++c) {
     Channel& ch = channels_[c];
-    double v = value[c] + ch.noise();
+    double v = value[c] + ch.noise(last_slow_noise_[c]);
     if (ch.low_pass) {
       // Start the filter settled on the first sample after power-up, not from zero.
       if (!filter_primed_) ch.low_pass->reset(v);

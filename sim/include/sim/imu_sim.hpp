@@ -83,6 +83,17 @@ class ImuSim {
 
   /// The sample at station time `time_s` (the caller steps time at sample_period_s()).
   core::ImuSample sample(double time_s, const TableKinematics& table, double temperature_c);
+  /// The sample at `time_s` for physical inputs the caller has computed itself (a motion that
+  /// no table makes, e.g. an IMU turned by hand: sim/hand_session.hpp). `in.rate_dps` must
+  /// already hold the Earth rate when the world is to have one. Same error terms, noise and
+  /// output chain as the table form.
+  core::ImuSample sample(double time_s, const ImuInputs& in);
+
+  /// The slowly varying noise (bias instability, Gauss-Markov, random walk; not the white
+  /// noise) each channel added to the last sample, before the output filter [deg/s for gyro
+  /// x y z, m/s^2 for accel x y z]. What a calibration of a short session sees as part of the
+  /// bias; a simulator of sessions averages it to state that bias exactly.
+  const std::array<double, 6>& last_slow_noise() const { return last_slow_noise_; }
 
   /// What a noise-free copy of this IMU reads at `table` and `temperature_c`: the same
   /// deterministic errors and the turn-on bias in force, without noise, output filter or
@@ -106,7 +117,8 @@ class ImuSim {
     std::optional<GaussMarkov> gauss_markov;
     std::optional<ButterworthLowPass> low_pass;
     Quantizer quantizer{0.0};
-    double noise();
+    /// The sum of every process; `slow` gets the part without the white noise.
+    double noise(double& slow);
   };
   void build_channels();
 
@@ -124,6 +136,7 @@ class ImuSim {
   int power_cycles_ = 0;
   double power_on_time_s_ = 0.0;
   std::uint32_t sequence_ = 0;
+  std::array<double, 6> last_slow_noise_{};
 };
 
 }  // namespace calstand::sim

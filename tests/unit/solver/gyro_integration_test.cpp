@@ -1,0 +1,141 @@
+#include "solver/gyro_integration.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "core/error.hpp"
+#include "session_truth.hpp"
+#include "sim/hand_session.hpp"
+#include "solver/gravity_norm.hpp"
+#include "solver/static_detector.hpp"
+
+namespace calstand::solver {
+namespace {
+
+struct HandFit {
+  sim::SimSession session;
+  StaticDetection detection;
+  GravityNormResult accel;
+  GyroIntegrationResult gyro;
+};
+
+HandFit hand_fit(sim::HandSessionOptions o, std::uint64_t seed, GyroIntegrationOptions g = {}) {
+  HandFit f;
+  f.session = sim::simulate_hand_session(o, seed);
+  f.detection = detect_static_intervals(f.session.samples, {});
+  GravityNormOptions a;
+  a.gravity_mps2 = f.session.gravity_mps2;
+  f.accel = calibrate_accel_gravity_norm(f.session.samples, f.detection.intervals, a);
+  f.gyro = calibrate_gyro_integration(f.session.samples, f.detection.intervals, f.accel, g);
+  return f;
+}
+
+sim::HandSessionOptions hand_options(const char* spec, int poses = 20) {
+  sim::HandSessionOptions o;
+  o.imu.spec = spec;
+  o.imu.sample_rate_hz = 200.0;
+  o.poses = poses;
+  o.initial_rest_s = 30.0;
+  return o;
+}
+
+// The whole calibration (accelerometer, then gyro) against the truth: each parameter within
+// 4 sigma, and the pulls of all of them together near 1 (the sigmas are honest, not loose).
+TEST(GyroIntegration, RecoversTheTruthWithinItsSigmas) {
+  std::vector<testing::Pull> all;
+  for (const char* spec : {"adis16488", "ln200"}) {
+    for (std::uint64_t seed : {21, 22, 23}) {
+      SCOPED_TRACE(std::string(spec) + " seed " + std::to_string(seed));
+      const HandFit f = hand_fit(hand_options(spec), seed);
+      EXPECT_TRUE(f.gyro.converged);
+      EXPECT_EQ(f.gyro.turns.size(), f.session.turns.size());
+      EXPECT_TRUE(f.gyro.undetermined.empty());
+      std::vector<testing::Pull> p = testing::session_pulls(f.session, f.accel.parameters);
+      const auto gp = testing::session_pulls(f.session, f.gyro.parameters);
+      p.insert(p.end(), gp.begin(), gp.end());
+      EXPECT_EQ(gp.size(), 12U);
+      for (const testing::Pull& x : p) {
+        EXPECT_LT(std::abs(x.pull), 4.0) << x.name;
+        all.push_back(x);
+      }
+      // Turn angles: the calibrated integral matches the simulated turn.
+      for (std::size_t k = 0; k < f.gyro.turns.size(); ++k) {
+        EXPECT_NEAR(f.gyro.turns[k].angle_deg, std::abs(f.session.turns[k].angle_deg), 0.5);
+      }
+    }
+  }
+  ASSERT_EQ(all.size(), 6U * 21U);
+  const double rms = testing::rms_pull(all);
+  EXPECT_GT(rms, 0.6);
+  EXPECT_LT(rms, 1.5);
+}
+
+TEST(GyroIntegration, ResidualAndEarthRateInWords) {
+  const HandFit f = hand_fit(hand_options("ln200"), 24);
+  const GyroIntegrationResult& r = f.gyro;
+  // The LN200's gyro noise is far below what the unmodelled Earth rate does over a turn.
+  EXPECT_GT(r.earth_rate_rms_deg, 0.005);
+  EXPECT_LT(r.earth_rate_rms_deg, 0.05);
+  EXPECT_GT(r.rms_residual_deg, 0.001);
+  EXPECT_LT(r.rms_residual_deg, 0.1);
+  EXPECT_NE(r.summary.find("Earth rate"), std::string::npos);
+  EXPECT_NE(r.summary.find("deg RMS"), std::string::npos);
+  for (const GyroTurn& t : r.turns) {
+    EXPECT_GT(t.earth_rate_bound_deg, 0.0);
+    EXPECT_GT(t.sigma_deg, 0.0);
+  }
+  EXPECT_NEAR(r.rest_duration_s, 30.0, 1.5);
+  const nlohmann::json j = gyro_integration_to_json(r);
+  EXPECT_EQ(j["parameters"].size(), 12U);
+  EXPECT_EQ(j["turns"].size(), r.turns.size());
+  EXPECT_TRUE(j["quality"].contains("earth_rate_rms_deg"));
+}
+
+TEST(GyroIntegration, NamesWhatTurnsAboutOneAxisCannotDetermine) {
+  sim::HandSessionOptions o = hand_options("adis16488");
+  o.single_turn_axis = Eigen::Vector3d::UnitY();
+  const HandFit f = hand_fit(o, 25);
+  std::vector<std::string> u = f.gyro.undetermined;
+  std::sort(u.begin(), u.end());
+  // Rates only about y: the x and z columns of the gyro matrix are never excited, and the
+  // accelerometer cannot fix the frame's rotation about z (accel_misalignment.yx is open), so
+  // gyro_misalignment.xy has nothing to be relative to.
+  EXPECT_EQ(u, (std::vector<std::string>{"gyro_misalignment.xy", "gyro_misalignment.xz",
+                                         "gyro_misalignment.yx", "gyro_misalignment.yz",
+                                         "gyro_misalignment.zx", "gyro_scale.x", "gyro_scale.z"}));
+  EXPECT_EQ(f.gyro.frame_open, (std::vector<std::string>{"gyro_misalignment.xy"}));
+  EXPECT_NE(f.gyro.summary.find("the turns do not determine gyro_scale.x"), std::string::npos);
+  for (const testing::Pull& p : testing::session_pulls(f.session, f.gyro.parameters)) {
+    EXPECT_LT(std::abs(p.pull), 4.0) << p.name;
+  }
+}
+
+TEST(GyroIntegration, FitsTheGSensitivityWhenAsked) {
+  sim::HandSessionOptions o = hand_options("adis16488", 24);
+  o.imu.keep_unmodelled_terms = true;  // the sheet's 0.009 (deg/s)/g g-sensitivity
+  GyroIntegrationOptions g;
+  const HandFit without = hand_fit(o, 26, g);
+  g.fit_g_sensitivity = true;
+  const HandFit with = hand_fit(o, 26, g);
+  ASSERT_EQ(with.gyro.parameters.size(), 21U);
+  EXPECT_LT(with.gyro.chi2_per_dof, without.gyro.chi2_per_dof);
+  const auto pulls = testing::session_pulls(with.session, with.gyro.parameters);
+  EXPECT_EQ(pulls.size(), 21U);
+  for (const testing::Pull& p : pulls) EXPECT_LT(std::abs(p.pull), 4.0) << p.name;
+}
+
+TEST(GyroIntegration, RefusesWithoutRestOrPoses) {
+  const HandFit f = hand_fit(hand_options("ln200", 10), 27);
+  std::vector<StaticInterval> no_rest = f.detection.intervals;
+  no_rest.front().initial_rest = false;
+  EXPECT_THROW(calibrate_gyro_integration(f.session.samples, no_rest, f.accel, {}),
+               core::InputError);
+  const std::vector<StaticInterval> few(f.detection.intervals.begin(),
+                                        f.detection.intervals.begin() + 6);
+  EXPECT_THROW(calibrate_gyro_integration(f.session.samples, few, f.accel, {}), core::InputError);
+}
+
+}  // namespace
+}  // namespace calstand::solver
