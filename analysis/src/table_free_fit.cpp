@@ -126,12 +126,13 @@ std::optional<solver::FerrarisSection> ferraris_section(const store::StepRecord&
   return section;
 }
 
-// Ferraris sections when every step of the run is a labelled hold or turn.
+// Ferraris sections when steps of the run are labelled holds or turns (the moves between them
+// may be steps of their own, unlabelled); nullopt when none is.
 std::optional<std::vector<solver::FerrarisSection>> labelled_sections(const RunSamples& r) {
   std::vector<solver::FerrarisSection> sections;
   for (const auto& step : r.steps) {
     auto section = ferraris_section(step.step);
-    if (!section) return std::nullopt;
+    if (!section) continue;
     // The step's samples are contiguous in time order (sections do not interleave).
     const auto first = std::find(r.step_of.begin(), r.step_of.end(), &step);
     const auto last = std::find(r.step_of.rbegin(), r.step_of.rend(), &step);
@@ -139,6 +140,7 @@ std::optional<std::vector<solver::FerrarisSection>> labelled_sections(const RunS
     section->end = static_cast<std::size_t>(r.step_of.rend() - last);
     sections.push_back(*section);
   }
+  if (sections.empty()) return std::nullopt;
   return sections;
 }
 

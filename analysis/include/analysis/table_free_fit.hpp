@@ -63,7 +63,7 @@ bool needs_table_free_fit(store::Database& db, std::int64_t run);
 TableFreePoses table_free_poses(store::Database& db, std::int64_t run,
                                 const TableFreeFitRequest& request);
 
-/// Calibrates `run`: Ferraris when every step is a labelled section (the import's `sections`),
+/// Calibrates `run`: Ferraris when steps are labelled sections (the import's `sections`),
 /// else the gravity norm and the integration between the poses. Throws as table_free_poses()
 /// and as the solver does (fewer than 9 poses, a missing section), naming why.
 TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
