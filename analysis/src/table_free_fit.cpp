@@ -70,12 +70,12 @@ solver::StaticDetection given_intervals(const std::vector<core::ImuSample>& samp
     if (k > 0 && from_s < spans[k - 1].second) {
       throw core::InputError(where, "overlaps or precedes the interval before it");
     }
-    const auto first = std::lower_bound(
-        samples.begin(), samples.end(), from_s,
-        [](const core::ImuSample& s, double t) { return s.receive_time_s < t; });
-    const auto last = std::upper_bound(
-        samples.begin(), samples.end(), to_s,
-        [](double t, const core::ImuSample& s) { return t < s.receive_time_s; });
+    const auto first =
+        std::lower_bound(samples.begin(), samples.end(), from_s,
+                         [](const core::ImuSample& s, double t) { return s.receive_time_s < t; });
+    const auto last =
+        std::upper_bound(samples.begin(), samples.end(), to_s,
+                         [](double t, const core::ImuSample& s) { return t < s.receive_time_s; });
     if (last - first < 2) {
       throw core::InputError(where, fmt::format("{:g} to {:g} s holds fewer than 2 samples of "
                                                 "the recording ({:g} to {:g} s)",
@@ -198,8 +198,8 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
                                                    fit.poses->detection.intervals, accel_options);
   solver::GyroIntegrationOptions gyro_options;
   gyro_options.fit_g_sensitivity = request.gyro_g_sensitivity;
-  fit.gyro = solver::calibrate_gyro_integration(
-      fit.poses->samples, fit.poses->detection.intervals, *fit.accel, gyro_options);
+  fit.gyro = solver::calibrate_gyro_integration(fit.poses->samples, fit.poses->detection.intervals,
+                                                *fit.accel, gyro_options);
   return fit;
 }
 

@@ -53,9 +53,8 @@ void list_runs(const RunsOptions& opt) {
 // detector (or the operator's intervals), and `show` lists them as a fit would use them.
 bool shows_static_poses(store::Database& db, const store::RunRecord& r) {
   if (store::orientation_known(db, r.summary.id) || r.steps.empty()) return false;
-  return std::none_of(r.steps.begin(), r.steps.end(), [](const store::StepRecord& s) {
-    return s.commanded.contains("section");
-  });
+  return std::none_of(r.steps.begin(), r.steps.end(),
+                      [](const store::StepRecord& s) { return s.commanded.contains("section"); });
 }
 
 void show_run(const RunsOptions& opt) {

@@ -82,12 +82,13 @@ void print_static_poses(const analysis::TableFreePoses& poses) {
     fmt::print("static poses (detector): {} intervals of {:g} s or more; window {:g} s; {}\n",
                d.intervals.size(), d.min_duration_s, d.window_s, d.rule_text);
     if (d.has_initial_rest) {
-      fmt::print("  initial rest {:.2f} to {:.2f} s ({}), threshold {:.3g} (m/s^2)^2 = {:.3g} x "
-                 "its level{}\n",
-                 d.rest_start_s, d.rest_end_s, d.rest_from_data ? "found from the data" : "given",
-                 d.threshold_mps2_sq, d.threshold_multiple,
-                 d.rejected_short > 0 ? fmt::format("; {} shorter runs left out", d.rejected_short)
-                                      : std::string());
+      fmt::print(
+          "  initial rest {:.2f} to {:.2f} s ({}), threshold {:.3g} (m/s^2)^2 = {:.3g} x "
+          "its level{}\n",
+          d.rest_start_s, d.rest_end_s, d.rest_from_data ? "found from the data" : "given",
+          d.threshold_mps2_sq, d.threshold_multiple,
+          d.rejected_short > 0 ? fmt::format("; {} shorter runs left out", d.rejected_short)
+                               : std::string());
     }
   }
   fmt::print("{:>4}  {:>10} {:>10} {:>8}  {:>30}\n", "pose", "start [s]", "end [s]", "length",

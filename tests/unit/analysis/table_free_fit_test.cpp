@@ -83,7 +83,8 @@ TEST(TableFreeFit, OperatorIntervalsReplaceTheDetectorAndAreCheckedAgainstTheRec
   const sim::SimSession session = sim::simulate_hand_session(options, 3);
   const std::int64_t run = import_session(session, db, "given", true);
   TableFreeFitRequest request;
-  for (const auto& h : session.holds) request.intervals_s.emplace_back(h.start_s + 0.3, h.end_s - 0.3);
+  for (const auto& h : session.holds)
+    request.intervals_s.emplace_back(h.start_s + 0.3, h.end_s - 0.3);
   const TableFreePoses poses = table_free_poses(db, run, request);
   EXPECT_TRUE(poses.given);
   ASSERT_EQ(poses.detection.intervals.size(), session.holds.size());
