@@ -46,7 +46,7 @@ void expect_recovered(const sim::SimSession& s, const std::vector<solver::TriadE
     EXPECT_NEAR(e.value, truth, 4.5 * e.sigma) << e.name << " sigma " << e.sigma;
     ++checked;
   }
-  EXPECT_GT(checked, 6) << prefix;
+  EXPECT_GE(checked, counts ? 6 : 9) << prefix;  // accel: 9 estimated, gyro 12
 }
 
 TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
