@@ -144,6 +144,30 @@ std::optional<std::vector<solver::FerrarisSection>> labelled_sections(const RunS
   return sections;
 }
 
+// The device of a table-free run, after the checks of any fit; a run with a table is refused.
+std::string table_free_device(store::Database& db, std::int64_t run, const std::string& device) {
+  std::string chosen = choose_fit_device(db, run, device);
+  if (store::orientation_known(db, run)) {
+    throw core::InputError(fmt::format("run {}", run),
+                           "has a known orientation (a table); its steps are fitted by the "
+                           "classical model, not by static-pose detection");
+  }
+  return chosen;
+}
+
+// The poses in samples already read: the operator's intervals, or the detector's.
+TableFreePoses poses_of(std::int64_t run, std::string device, RunSamples&& r,
+                        const TableFreeFitRequest& request) {
+  TableFreePoses poses;
+  poses.run = run;
+  poses.device = std::move(device);
+  poses.samples = std::move(r.samples);
+  poses.given = !request.intervals_s.empty();
+  poses.detection = poses.given ? given_intervals(poses.samples, request.intervals_s)
+                                : solver::detect_static_intervals(poses.samples, request.detector);
+  return poses;
+}
+
 }  // namespace
 
 bool needs_table_free_fit(store::Database& db, std::int64_t run) {
@@ -153,34 +177,19 @@ bool needs_table_free_fit(store::Database& db, std::int64_t run) {
 
 TableFreePoses table_free_poses(store::Database& db, std::int64_t run,
                                 const TableFreeFitRequest& request) {
-  TableFreePoses poses;
-  poses.run = run;
-  poses.device = choose_fit_device(db, run, request.device);
-  if (store::orientation_known(db, run)) {
-    throw core::InputError(fmt::format("run {}", run),
-                           "has a known orientation (a table); its steps are fitted by the "
-                           "classical model, not by static-pose detection");
-  }
-  RunSamples r = read_samples(db, run, poses.device);
-  poses.samples = std::move(r.samples);
-  poses.given = !request.intervals_s.empty();
-  poses.detection = poses.given ? given_intervals(poses.samples, request.intervals_s)
-                                : solver::detect_static_intervals(poses.samples, request.detector);
-  return poses;
+  std::string device = table_free_device(db, run, request.device);
+  RunSamples r = read_samples(db, run, device);
+  return poses_of(run, std::move(device), std::move(r), request);
 }
 
 TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
                             const TableFreeFitRequest& request) {
   TableFreeFit fit;
   fit.run = run;
-  fit.device = choose_fit_device(db, run, request.device);
-  if (store::orientation_known(db, run)) {
-    throw core::InputError(fmt::format("run {}", run),
-                           "has a known orientation (a table): fitted by the classical model");
-  }
+  fit.device = table_free_device(db, run, request.device);
   fit.gravity_mps2 = run_gravity(db, run);
+  RunSamples r = read_samples(db, run, fit.device);  // once, for whichever method
   if (request.intervals_s.empty()) {
-    const RunSamples r = read_samples(db, run, fit.device);
     if (const auto sections = labelled_sections(r)) {
       fit.method = "ferraris";
       solver::FerrarisOptions options;
@@ -191,7 +200,7 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
     }
   }
   fit.method = "gravity_norm";
-  fit.poses = table_free_poses(db, run, request);
+  fit.poses = poses_of(run, fit.device, std::move(r), request);
   solver::GravityNormOptions accel_options;
   accel_options.gravity_mps2 = fit.gravity_mps2;
   fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,

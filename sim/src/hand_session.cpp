@@ -456,6 +456,23 @@ TriadFrameTruth triad_frame_truth(const ImuTruth& truth, const Eigen::Vector3d& 
   return out;
 }
 
+namespace {
+
+// A session of `kind` before any sample: the IMU's truth drawn for `seed`, its rate, the site.
+SimSession hand_new_session(const char* kind, const SessionImu& imu, std::uint64_t seed) {
+  SimSession s;
+  s.kind = kind;
+  s.seed = seed;
+  s.sim_truth = hand_prepare_truth(imu, seed);
+  s.model_name = s.sim_truth.name;
+  s.sample_rate_hz = s.sim_truth.sample_rate_hz;
+  s.site = hand_site(imu);
+  s.gravity_mps2 = s.site.gravity();
+  return s;
+}
+
+}  // namespace
+
 SimSession simulate_hand_session(const HandSessionOptions& o, std::uint64_t seed) {
   if (o.poses < 1) throw std::invalid_argument("hand session: poses must be at least 1");
   hand_check_range(o.hold_min_s, o.hold_max_s, "hold duration");
@@ -465,14 +482,7 @@ SimSession simulate_hand_session(const HandSessionOptions& o, std::uint64_t seed
   }
   if (!(o.max_rate_dps > 0.0)) throw std::invalid_argument("hand session: max_rate_dps <= 0");
 
-  SimSession s;
-  s.kind = "hand";
-  s.seed = seed;
-  s.sim_truth = hand_prepare_truth(o.imu, seed);
-  s.model_name = s.sim_truth.name;
-  s.sample_rate_hz = s.sim_truth.sample_rate_hz;
-  s.site = hand_site(o.imu);
-  s.gravity_mps2 = s.site.gravity();
+  SimSession s = hand_new_session("hand", o.imu, seed);
   // The frame A depends on the truth only (not on the turn-on biases): known before sampling.
   const Mat3 C_AB = triad_frame_truth(s.sim_truth, Vec3::Zero(), Vec3::Zero()).C_AB;
 
@@ -579,14 +589,7 @@ SimSession simulate_ferraris_session(const FerrarisSessionOptions& o, std::uint6
   if (!(o.turn_s > 0.0) || !(o.turn_pad_s >= 0.0)) {
     throw std::invalid_argument("ferraris session: turn_s must be positive, turn_pad_s >= 0");
   }
-  SimSession s;
-  s.kind = "ferraris";
-  s.seed = seed;
-  s.sim_truth = hand_prepare_truth(o.imu, seed);
-  s.model_name = s.sim_truth.name;
-  s.sample_rate_hz = s.sim_truth.sample_rate_hz;
-  s.site = hand_site(o.imu);
-  s.gravity_mps2 = s.site.gravity();
+  SimSession s = hand_new_session("ferraris", o.imu, seed);
   const Mat3 C_AB = triad_frame_truth(s.sim_truth, Vec3::Zero(), Vec3::Zero()).C_AB;
 
   Uniform u(derive_seed(seed, "ferraris-session-uniform"));
