@@ -182,7 +182,7 @@ export function showLoop(ctx, runId) {
 
   function showResiduals() {
     const fit = state.fit;
-    if (!fit) return;
+    if (!fit || fit.method) return;  // a table-free fit has no steps (showTableFreeFit)
     // The signal choices: the fit's own per-step signals when it has them, else STEP_SIGNALS.
     const own = fit.steps.length && fit.steps[0].signals ? Object.keys(fit.steps[0].signals) : [];
     const choices = own.length ? own.map((n) => ({ name: n, label: n })) : STEP_SIGNALS;
@@ -202,8 +202,36 @@ export function showLoop(ctx, runId) {
     }).catch((e) => { document.getElementById('signal-note').textContent = ` (${e.message})`; });
   }
 
+  // A run recorded without a table (an import without `table`): the table-free fit's JSON
+  // (method gravity_norm or ferraris). No steps to draw: each static pose's |f| - g and each
+  // turn's gravity direction, both over their noise, stand in for the step residuals.
+  function showTableFreeFit(fit) {
+    const q = fit.quality || {};
+    replaceChildren(quality, el('h3', {}, 'Fit quality (no table: orientation unknown)'),
+      el('p', {}, 'chi2/dof ', el('span', { class: 'big', id: 'chi2-dof' }, num(fit.chi2_dof, 4)),
+        ` (dof ${fit.dof}; method ${fit.method})`),
+      el('p', {}, `|f| - g rms ${num(q.rms_norm_residual_mps2 / 9.80665e-3, 3)} mg`,
+        q.rms_turn_residual_deg == null ? '' : `, gravity direction after the turns ${num(q.rms_turn_residual_deg, 3)} deg rms`),
+      el('p', { class: 'muted' }, `model: ${(fit.model || []).join(', ')}`),
+      (fit.notes || []).map((n) => el('p', { class: 'muted' }, n)),
+      el('p', { class: 'muted' }, `frame: ${fit.frame}`));
+    replaceChildren(parametersBox, el('h3', {}, 'Parameters'),
+      table(['parameter', 'value', '1 sigma', 'unit', ''], (fit.parameters || []).map((p) => [p.name, num(p.value, 5),
+        p.status === 'estimated' ? num(p.sigma, 3) : '–', p.unit, p.status === 'estimated' ? '' : p.status])));
+    replaceChildren(familySelect, el('option', { value: 'pose' }, 'pose'));
+    const poses = (fit.accel?.poses || []).map((p) => ({ x: p.interval, y: p.sigma_mg > 0 ? p.residual_mg / p.sigma_mg : 0, group: 'pose |f| - g' }));
+    residualChart.set(poses, ['pose |f| - g']);
+    const turns = (fit.gyro?.turns || []).map((t, i) => ({ x: i + 1, y: t.sigma_deg > 0 ? t.residual_deg / (Math.SQRT2 * t.sigma_deg) : 0, group: 'turn' }));
+    signalChart.set(turns, ['turn'], 'turn');
+    document.getElementById('signal-note').textContent = turns.length ? ' gravity direction after each turn, over its noise' : '';
+  }
+
   function showFit(fit) {
     state.fit = fit;
+    if (fit.method) {
+      showTableFreeFit(fit);
+      return;
+    }
     const bySensor = fit.by_sensor || {};
     const groups = [...(fit.groups || [])].sort((a, b) => b.chi2_dof - a.chi2_dof);
     replaceChildren(quality, el('h3', {}, 'Fit quality'),

@@ -225,3 +225,9 @@ CREATE TABLE run_queue (
   submitted_utc TEXT NOT NULL,
   submitted_by  TEXT NOT NULL
 );
+
+-- migration 4: fit history of runs without a table
+-- A run recorded without a table (calstand-import/2 without `table`) is fitted by the gravity
+-- norm and the integration between static poses: its gyro residual is the gravity direction
+-- after each turn [deg], not a rate. rms_accel_mps2 then holds |calibrated f| - g.
+ALTER TABLE fits ADD COLUMN rms_turn_deg REAL;

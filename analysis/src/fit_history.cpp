@@ -44,6 +44,7 @@ nlohmann::json history_to_json(const std::vector<store::FitRecord>& fits) {
                    {"chi2_dof", or_null(f.chi2_dof)},
                    {"rms_gyro_dps", or_null(f.rms_gyro_dps)},
                    {"rms_accel_mps2", or_null(f.rms_accel_mps2)},
+                   {"rms_turn_deg", or_null(f.rms_turn_deg)},
                    {"time", f.created_utc}});
   }
   return out;

@@ -8,11 +8,15 @@
 #include <cmath>
 
 #include "analysis/run_model.hpp"
+#include "core/site.hpp"
+#include "store/fit_history.hpp"
 #include "store/run_store.hpp"
 #include "store/step_data.hpp"
 
 namespace calstand::analysis {
 namespace {
+
+constexpr double kMg = 1e-3 * core::kStandardGravity;  // m/s^2 per mg
 
 // Local g of a table-free run: the import's site.gravity_mps2 (required there without a table).
 double run_gravity(store::Database& db, std::int64_t run) {
@@ -170,6 +174,13 @@ TableFreePoses poses_of(std::int64_t run, std::string device, RunSamples&& r,
 
 }  // namespace
 
+TableFreeFitRequest table_free_request(const solver::Model& model, TableFreeFitRequest poses) {
+  TableFreeModel read = table_free_model(model);
+  poses.terms = read.terms;
+  poses.notes = std::move(read.notes);
+  return poses;
+}
+
 bool needs_table_free_fit(store::Database& db, std::int64_t run) {
   choose_fit_device(db, run, "");  // RunNotFound for an unknown run
   return !store::orientation_known(db, run);
@@ -188,28 +199,94 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
   fit.run = run;
   fit.device = table_free_device(db, run, request.device);
   fit.gravity_mps2 = run_gravity(db, run);
+  fit.terms = request.terms;
+  fit.notes = request.notes;
   RunSamples r = read_samples(db, run, fit.device);  // once, for whichever method
-  if (request.intervals_s.empty()) {
-    if (const auto sections = labelled_sections(r)) {
-      fit.method = "ferraris";
-      solver::FerrarisOptions options;
-      options.gravity_mps2 = fit.gravity_mps2;
-      options.turn_sign = solver::TurnSign::kDetect;
-      fit.ferraris = solver::calibrate_ferraris(r.samples, *sections, options);
-      return fit;
-    }
+  for (const core::ImuSample& sample : r.samples) {
+    if (!std::isfinite(sample.temperature_c)) continue;
+    fit.min_temperature_c = std::isnan(fit.min_temperature_c)
+                                ? sample.temperature_c
+                                : std::min(fit.min_temperature_c, sample.temperature_c);
+    fit.max_temperature_c = std::isnan(fit.max_temperature_c)
+                                ? sample.temperature_c
+                                : std::max(fit.max_temperature_c, sample.temperature_c);
   }
-  fit.method = "gravity_norm";
-  fit.poses = poses_of(run, fit.device, std::move(r), request);
-  solver::GravityNormOptions accel_options;
-  accel_options.gravity_mps2 = fit.gravity_mps2;
-  fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
-                                                   fit.poses->detection.intervals, accel_options);
-  solver::GyroIntegrationOptions gyro_options;
-  gyro_options.fit_g_sensitivity = request.gyro_g_sensitivity;
-  fit.gyro = solver::calibrate_gyro_integration(fit.poses->samples, fit.poses->detection.intervals,
-                                                *fit.accel, gyro_options);
+  std::optional<std::vector<solver::FerrarisSection>> sections;
+  if (request.intervals_s.empty()) sections = labelled_sections(r);
+  if (sections) {
+    if (fit.terms != TableFreeTerms{}) {
+      throw core::InputError(
+          "model", fmt::format("run {} is a labelled Ferraris session: six holds and three "
+                               "turns leave no redundancy for {} (fit it without; the holds' "
+                               "redundancy is spent on the placement error)",
+                               run, table_free_model_text(fit.terms)));
+    }
+    fit.method = "ferraris";
+    solver::FerrarisOptions options;
+    options.gravity_mps2 = fit.gravity_mps2;
+    options.turn_sign = solver::TurnSign::kDetect;
+    fit.ferraris = solver::calibrate_ferraris(r.samples, *sections, options);
+  } else {
+    fit.method = "gravity_norm";
+    fit.poses = poses_of(run, fit.device, std::move(r), request);
+    solver::GravityNormOptions accel_options;
+    accel_options.gravity_mps2 = fit.gravity_mps2;
+    // TEMP-MERGE accel_options.fit_quadratic = fit.terms.accel_quadratic;
+    fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
+                                                     fit.poses->detection.intervals, accel_options);
+    solver::GyroIntegrationOptions gyro_options;
+    gyro_options.fit_g_sensitivity = fit.terms.gyro_g_sensitivity;
+    fit.gyro = solver::calibrate_gyro_integration(
+        fit.poses->samples, fit.poses->detection.intervals, *fit.accel, gyro_options);
+  }
+  if (!request.history_command.empty()) {
+    fit.history_id = store::record_fit(db, table_free_history_record(fit, request.history_command));
+  }
   return fit;
+}
+
+std::vector<solver::TriadEstimate> table_free_parameters(const TableFreeFit& fit) {
+  if (fit.ferraris) return fit.ferraris->parameters;
+  std::vector<solver::TriadEstimate> all;
+  if (fit.accel) all = fit.accel->parameters;
+  if (fit.gyro) all.insert(all.end(), fit.gyro->parameters.begin(), fit.gyro->parameters.end());
+  return all;
+}
+
+TableFreeQuality table_free_quality(const TableFreeFit& fit) {
+  TableFreeQuality q;
+  for (const auto& e : table_free_parameters(fit)) {
+    if (e.status == solver::EstimateStatus::kEstimated) ++q.parameters;
+  }
+  if (fit.ferraris) {
+    // Six holds against 12 unknowns of the accelerometers leave 6 degrees of freedom; the
+    // turns none (nine readings, nine gyro unknowns besides the bias).
+    q.chi2 = fit.ferraris->accel_chi2;
+    q.dof = fit.ferraris->accel_dof;
+    q.rms_norm_residual_mps2 = fit.ferraris->norm_rms_residual_mg * kMg;
+  } else if (fit.accel && fit.gyro) {
+    q.chi2 = fit.accel->chi2 + fit.gyro->chi2;
+    q.dof = fit.accel->dof + fit.gyro->dof;
+    q.rms_norm_residual_mps2 = fit.accel->rms_residual_mg * kMg;
+    q.rms_turn_residual_deg = fit.gyro->rms_residual_deg;
+  }
+  q.chi2_per_dof = q.dof > 0 ? q.chi2 / q.dof : std::nan("");
+  return q;
+}
+
+store::FitRecord table_free_history_record(const TableFreeFit& fit, const std::string& command) {
+  const TableFreeQuality q = table_free_quality(fit);
+  store::FitRecord r;
+  r.run = fit.run;
+  r.device = fit.device;
+  r.command = command;
+  r.model = table_free_model_text(fit.terms);
+  r.sensors = "both";
+  r.parameters = q.parameters;
+  if (q.dof > 0) r.chi2_dof = q.chi2_per_dof;
+  r.rms_accel_mps2 = q.rms_norm_residual_mps2;
+  r.rms_turn_deg = q.rms_turn_residual_deg;
+  return r;
 }
 
 nlohmann::json to_json(const TableFreePoses& poses) {
@@ -221,10 +298,41 @@ nlohmann::json to_json(const TableFreePoses& poses) {
 }
 
 nlohmann::json to_json(const TableFreeFit& fit) {
+  const TableFreeQuality q = table_free_quality(fit);
+  nlohmann::json terms = nlohmann::json::array();
+  for (const auto& t : table_free_base_terms()) terms.push_back(t);
+  for (const auto& t : table_free_optional_terms()) {
+    if (has_table_free_term(fit.terms, t)) terms.push_back(t);
+  }
+  const nlohmann::json chi2_dof = q.dof > 0 ? nlohmann::json(q.chi2_per_dof) : nlohmann::json();
   nlohmann::json j = {{"run", fit.run},
                       {"device", fit.device},
                       {"method", fit.method},
-                      {"gravity_mps2", fit.gravity_mps2}};
+                      {"model", terms},
+                      {"notes", fit.notes},
+                      {"gravity_mps2", fit.gravity_mps2},
+                      {"frame", solver::kAccelTriadFrameText},
+                      {"chi2_dof", chi2_dof},
+                      {"dof", q.dof}};
+  // Every parameter with its status, and the undetermined ones again as a fit lists them.
+  const std::vector<solver::TriadEstimate> estimates = table_free_parameters(fit);
+  j["parameters"] = solver::triad_estimates_to_json(estimates);
+  nlohmann::json unidentifiable = nlohmann::json::array();
+  for (const auto& e : estimates) {
+    if (e.status != solver::EstimateStatus::kUndetermined) continue;
+    unidentifiable.push_back(
+        {{"name", e.name}, {"reason", "the poses and turns of this run do not determine it"}});
+  }
+  j["unidentifiable"] = unidentifiable;
+  j["quality"] = {
+      {"chi2", q.chi2},
+      {"dof", q.dof},
+      {"chi2_per_dof", chi2_dof},
+      {"parameters", q.parameters},
+      {"rms_norm_residual_mps2", q.rms_norm_residual_mps2},
+      {"rms_turn_residual_deg",
+       q.rms_turn_residual_deg ? nlohmann::json(*q.rms_turn_residual_deg) : nlohmann::json()}};
+  if (fit.history_id) j["history_id"] = *fit.history_id;
   if (fit.poses) j["poses"] = to_json(*fit.poses);
   if (fit.accel) j["accel"] = solver::gravity_norm_to_json(*fit.accel);
   if (fit.gyro) j["gyro"] = solver::gyro_integration_to_json(*fit.gyro);

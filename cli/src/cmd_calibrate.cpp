@@ -13,11 +13,13 @@
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/calibration_record.hpp"
+#include "table_free_printer.hpp"
 
 namespace calstand::cli {
 namespace {
 
 struct CalibrateOptions : RunModelOptions {
+  StaticPoseOptions poses;  ///< runs without a table
   std::string out;
   bool as_json = false;
 };
@@ -32,7 +34,8 @@ void write_text(const std::string& path, const std::string& text) {
 void run_calibrate(const CalibrateOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
-  const analysis::CalibrationOutcome c = analysis::calibrate_run(db, opt.run, model, opt.device);
+  const analysis::CalibrationOutcome c = analysis::calibrate_run(
+      db, opt.run, model, opt.device, static_pose_request(opt.poses, opt.device));
   const std::string out =
       opt.out.empty() ? analysis::default_calibration_file(opt.run, c.device) : opt.out;
   // The file first: a record that cannot be written is not stored either.
@@ -43,8 +46,12 @@ void run_calibrate(const CalibrateOptions& opt) {
                nlohmann::json{{"calibration_id", id}, {"file", out}, {"record", c.record}}.dump(2));
     return;
   }
-  fmt::print("run {} ({}), device {}, {} steps\n", opt.run, c.procedure, c.device, c.steps);
-  print_fit(c.fit);
+  if (c.table_free) {
+    print_table_free_fit(*c.table_free);
+  } else {
+    fmt::print("run {} ({}), device {}, {} steps\n", opt.run, c.procedure, c.device, c.steps);
+    print_fit(c.fit);
+  }
   fmt::print("\ncalibration {} stored in {} and written to {}\n", id, opt.db, out);
 }
 
@@ -78,6 +85,7 @@ void register_calibrate(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "calibrate", "Fit a run, store the calibration record in the database and write its JSON");
   add_run_model_options(cmd, *opt, false);
+  add_static_pose_options(cmd, opt->poses);
   cmd->add_option("--out", opt->out, "Record file (default calibration-run<ID>-<device>.json)");
   cmd->add_flag("--json", opt->as_json, "Print the record id, file and record as JSON");
   cmd->callback([opt] { run_calibrate(*opt); });

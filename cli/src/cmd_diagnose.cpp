@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -10,16 +11,19 @@
 
 #include "analysis/fit_history.hpp"
 #include "analysis/fit_request.hpp"
+#include "analysis/table_free_diagnose.hpp"
 #include "commands.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/diagnose.hpp"
 #include "store/fit_history.hpp"
+#include "table_free_printer.hpp"
 
 namespace calstand::cli {
 namespace {
 
 struct DiagnoseOptions : RunModelOptions {
+  StaticPoseOptions poses;  ///< runs without a table
   bool as_json = false;
   bool suggest = false;
 };
@@ -54,6 +58,20 @@ void run_diagnose(const DiagnoseOptions& opt) {
   request.sensor = opt.sensor;
   request.history_command = opt.suggest ? "" : "diagnose";
   store::Database db = open_existing_database(opt.db);
+  if (analysis::needs_table_free_fit(db, opt.run)) {
+    analysis::TableFreeFitRequest table_free =
+        analysis::table_free_request(request.model, static_pose_request(opt.poses, opt.device));
+    table_free.history_command = request.history_command;
+    const analysis::TableFreeDiagnosis d = analysis::diagnose_table_free(db, opt.run, table_free);
+    if (opt.as_json) {
+      fmt::print("{}\n", analysis::to_json(d).dump(2));
+    } else if (opt.suggest) {
+      if (!d.recommended.empty()) fmt::print("{}\n", d.recommended);
+    } else {
+      print_table_free_diagnosis(d);
+    }
+    return;
+  }
   const analysis::DiagnoseOutcome outcome = analysis::diagnose_request(db, opt.run, request);
   const solver::Diagnosis& d = outcome.diagnosis;
   if (opt.as_json) {
@@ -111,15 +129,20 @@ void run_history(const HistoryOptions& opt) {
                opt.run);
     return;
   }
+  // A run without a table has no rate steps: its gyro figure is the gravity direction after
+  // each turn, and its accel figure |f| - g.
+  const bool table_free = std::any_of(fits.begin(), fits.end(),
+                                      [](const store::FitRecord& f) { return f.rms_turn_deg; });
   fmt::print("{:>4}  {:<24} {:<9} {:>6} {:>10} {:>14} {:>14}  {}\n", "fit", "time", "command",
-             "params", "chi2/dof", "gyro [deg/s]", "accel [m/s^2]", "model");
+             "params", "chi2/dof", table_free ? "turns [deg]" : "gyro [deg/s]",
+             table_free ? "|f|-g [m/s^2]" : "accel [m/s^2]", "model");
   for (const auto& f : fits) {
     std::string model = f.model;
     for (const auto& c : f.custom_terms) model += " (" + c + ")";
     fmt::print("{:>4}  {:<24} {:<9} {:>6} {:>10} {:>14} {:>14}  {}\n", f.id, f.created_utc,
                f.command, f.parameters, optional_text(f.chi2_dof, "{:.3g}"),
-               optional_text(f.rms_gyro_dps, "{:.3g}"), optional_text(f.rms_accel_mps2, "{:.3g}"),
-               model);
+               optional_text(table_free ? f.rms_turn_deg : f.rms_gyro_dps, "{:.3g}"),
+               optional_text(f.rms_accel_mps2, "{:.3g}"), model);
   }
 }
 
@@ -130,6 +153,7 @@ void register_diagnose(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "diagnose", "Find the effect a model misses: candidate terms ranked, residual signals");
   add_run_model_options(cmd, *opt);
+  add_static_pose_options(cmd, opt->poses);
   cmd->add_flag("--json", opt->as_json, "Print the diagnosis as JSON");
   cmd->add_flag("--suggest", opt->suggest,
                 "Print only the term to add (nothing when the model fits or no term explains "

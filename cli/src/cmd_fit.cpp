@@ -6,6 +6,7 @@
 
 #include "analysis/fit_request.hpp"
 #include "commands.hpp"
+#include "core/error.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
 #include "solver/thermal_fit.hpp"
@@ -62,9 +63,17 @@ void run_fit(const FitCommandOptions& opt) {
   const analysis::FitRequest request = fit_request_of(opt, per_plateau ? "" : "fit");
   store::Database db = open_existing_database(opt.db);
   if (analysis::needs_table_free_fit(db, opt.run)) {
-    // No orientation is known: no model to choose, the table-free methods' parameters.
-    const analysis::TableFreeFit fit =
-        analysis::table_free_fit(db, opt.run, static_pose_request(opt.poses, opt.device));
+    // No orientation is known: the table-free methods, with the optional terms of the model.
+    if (per_plateau) {
+      throw core::InputError("--per-plateau", fmt::format("run {} was recorded without a table: "
+                                                          "there are no temperature plateaus "
+                                                          "of known orientation to fit",
+                                                          opt.run));
+    }
+    analysis::TableFreeFitRequest table_free =
+        analysis::table_free_request(request.model, static_pose_request(opt.poses, opt.device));
+    table_free.history_command = request.history_command;
+    const analysis::TableFreeFit fit = analysis::table_free_fit(db, opt.run, table_free);
     if (opt.as_json) {
       fmt::print("{}\n", analysis::to_json(fit).dump(2));
     } else {

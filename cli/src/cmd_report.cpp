@@ -11,6 +11,7 @@
 #include "analysis/gnuplot_svg.hpp"
 #include "analysis/report_data.hpp"
 #include "analysis/report_html.hpp"
+#include "analysis/table_free_report.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "fit_printer.hpp"
@@ -24,15 +25,32 @@ struct ReportOptions {
   std::string out;
 };
 
+void write_page(const std::string& path, const std::string& page) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out || !(out << page) || !out.flush()) {
+    throw core::InputError("--out " + path, "cannot write the report");
+  }
+}
+
 void run_report(const ReportOptions& opt) {
   analysis::find_gnuplot();  // before the work: a missing plotter is the first thing to say
   store::Database db = open_existing_database(opt.request.db);
+  if (analysis::needs_table_free_fit(db, opt.request.run)) {
+    const analysis::TableFreeReportData data = analysis::gather_table_free_report(db, opt.request);
+    const std::string page = analysis::render_table_free_report_html(data);
+    write_page(opt.out, page);
+    fmt::print(
+        "{}: run {} ({}) without a table, method {}, model {}: {}; {} fits in the "
+        "history; {} kB\n",
+        opt.out, data.request.run, data.procedure, data.diagnosis.fit.method,
+        analysis::table_free_model_text(data.diagnosis.fit.terms),
+        data.diagnosis.explained ? "explained" : "not explained", data.history.size(),
+        (page.size() + 512) / 1024);
+    return;
+  }
   const analysis::ReportData data = analysis::gather_report(db, opt.request);
   const std::string page = analysis::render_report_html(data);
-  std::ofstream out(opt.out, std::ios::binary);
-  if (!out || !(out << page) || !out.flush()) {
-    throw core::InputError("--out " + opt.out, "cannot write the report");
-  }
+  write_page(opt.out, page);
   fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}; {} kB\n",
              opt.out, data.request.run, data.procedure, data.diagnosis.fit.model,
              data.diagnosis.fit.chi2_dof, data.history.size(),

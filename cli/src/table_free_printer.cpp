@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/site.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -104,6 +105,8 @@ void print_static_poses(const analysis::TableFreePoses& poses) {
 void print_table_free_fit(const analysis::TableFreeFit& fit) {
   fmt::print("run {}, device {}: no table (orientation unknown); g = {:.5f} m/s^2\n", fit.run,
              fit.device, fit.gravity_mps2);
+  fmt::print("model: {}\n", analysis::table_free_model_text(fit.terms));
+  for (const auto& n : fit.notes) fmt::print("  note: {}\n", n);
   fmt::print("frame: {}\n\n", solver::kAccelTriadFrameText);
   if (fit.ferraris) {
     const auto& f = *fit.ferraris;
@@ -124,6 +127,48 @@ void print_table_free_fit(const analysis::TableFreeFit& fit) {
   print_list("moves with an undetermined accelerometer parameter", fit.gyro->frame_open);
   fmt::print("{}\n", fit.gyro->summary);
   fmt::print("earth_rate is not offered: the heading of the poses is not known.\n");
+  print_table_free_quality(fit);
+}
+
+void print_table_free_quality(const analysis::TableFreeFit& fit) {
+  const analysis::TableFreeQuality q = analysis::table_free_quality(fit);
+  fmt::print(
+      "\nfit quality: chi2/dof {} ({:.1f} over {} degrees of freedom), {} parameters; "
+      "|f| - g rms {:.3g} mg{}\n",
+      q.dof > 0 ? fmt::format("{:.3g}", q.chi2_per_dof) : std::string("-"), q.chi2, q.dof,
+      q.parameters, q.rms_norm_residual_mps2 / (1e-3 * core::kStandardGravity),
+      q.rms_turn_residual_deg ? fmt::format(", gravity direction after the turns {:.3g} deg rms",
+                                            *q.rms_turn_residual_deg)
+                              : std::string());
+}
+
+void print_table_free_diagnosis(const analysis::TableFreeDiagnosis& d) {
+  const analysis::TableFreeFit& fit = d.fit;
+  fmt::print("run {}, device {}: no table (orientation unknown), method {}\n", fit.run, fit.device,
+             fit.method);
+  fmt::print("model: {}\n", analysis::table_free_model_text(fit.terms));
+  for (const auto& n : fit.notes) fmt::print("  note: {}\n", n);
+  print_table_free_quality(fit);
+  if (!d.worst.empty()) {
+    fmt::print("\nwhere the model fails most (residual against its noise):\n");
+    for (const auto& w : d.worst) {
+      fmt::print("  {:<16} {:>9.2f} to {:>9.2f} s  {:>+10.3g} {:<4} z = {:+.1f}\n", w.what,
+                 w.start_s, w.end_s, w.residual, w.unit, w.z);
+    }
+  }
+  fmt::print("\ncandidates (each added in turn, best first):\n");
+  if (d.candidates.empty())
+    fmt::print("  none\n");
+  else
+    fmt::print("  {:<20} {:<6} {:>10} {:>9} {:>18}  {}\n", "term", "sensor", "delta BIC", "p",
+               "chi2/dof before->after", "residual after");
+  for (const auto& c : d.candidates) {
+    fmt::print("  {:<20} {:<6} {:>10.1f} {:>9.2g} {:>10.3g} -> {:<6.3g}  {}\n", c.term, c.sensor,
+               c.delta_bic, c.p_value, c.chi2_per_dof_before, c.chi2_per_dof_after,
+               c.residual_after);
+  }
+  for (const auto& u : d.untestable) fmt::print("  not testable: {}\n", u);
+  fmt::print("\n{}: {}\n", d.explained ? "explained" : "NOT explained", d.advice);
 }
 
 }  // namespace calstand::cli

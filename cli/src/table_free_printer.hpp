@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "analysis/table_free_diagnose.hpp"
 #include "analysis/table_free_fit.hpp"
 
 namespace calstand::cli {
@@ -29,5 +30,11 @@ void print_static_poses(const analysis::TableFreePoses& poses);
 /// The method, the parameters with sigma and status, what the poses do not determine, and the
 /// fit quality in words.
 void print_table_free_fit(const analysis::TableFreeFit& fit);
+
+/// One line: chi2/dof, parameters, |f| - g and the gravity direction after the turns.
+void print_table_free_quality(const analysis::TableFreeFit& fit);
+
+/// The model's quality, where it fails most, the candidate terms ranked and the advice.
+void print_table_free_diagnosis(const analysis::TableFreeDiagnosis& diagnosis);
 
 }  // namespace calstand::cli

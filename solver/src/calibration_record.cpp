@@ -90,9 +90,16 @@ Calibration read_calibration(const nlohmann::json& record, const std::string& fi
     }
     c.values[it - list.begin()] = params[i]["value"].get<double>();
   }
-  c.temperature_ref_c = record["temperature_ref_c"].get<double>();
-  c.valid_min_c = record["valid_temperature_c"]["min"].get<double>();
-  c.valid_max_c = record["valid_temperature_c"]["max"].get<double>();
+  // A record of a recording without temperature has no thermal term and no range: T_ref is
+  // then unused, and every temperature is inside the (unbounded) range.
+  const auto number_or = [](const nlohmann::json& v, double fallback) {
+    return v.is_number() ? v.get<double>() : fallback;
+  };
+  c.temperature_ref_c = number_or(record["temperature_ref_c"], c.temperature_ref_c);
+  c.valid_min_c =
+      number_or(record["valid_temperature_c"]["min"], -std::numeric_limits<double>::infinity());
+  c.valid_max_c =
+      number_or(record["valid_temperature_c"]["max"], std::numeric_limits<double>::infinity());
   return c;
 }
 

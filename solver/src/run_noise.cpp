@@ -12,6 +12,7 @@
 #include "store/records.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
+#include "store/step_data.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -128,6 +129,14 @@ std::vector<DatasheetFigure> datasheet_figures(const NoiseTerms& t, bool gyro) {
   return f;
 }
 
+namespace {
+// Gyro scatter [deg/s, 1 sigma of one sample] above which a step recorded without a table is
+// not static: the white noise of any IMU calstand serves stays well below it at its output rate
+// (a consumer MEMS of 0.01 deg/s/sqrt(Hz) at 1 kHz: 0.3 deg/s), while a unit turned by hand
+// scatters by tens of deg/s.
+constexpr double kMaxStaticGyroScatterDps = 1.0;
+}  // namespace
+
 std::size_t choose_noise_step(store::Database& db, std::int64_t run,
                               std::optional<std::size_t> step) {
   store::RunStore runs(db);
@@ -139,11 +148,23 @@ std::size_t choose_noise_step(store::Database& db, std::int64_t run,
     }
     return *step;
   }
+  // A step recorded without a table (an import without `table`) may be a hand-turned session:
+  // it counts as static only when its gyros scatter like a unit at rest.
+  std::vector<std::size_t> moving;
+  for (const store::StepMean& m : store::read_step_means(db, run)) {
+    if (m.gyro_std_dps.maxCoeff() > kMaxStaticGyroScatterDps) moving.push_back(m.step_index);
+  }
   std::optional<std::size_t> best;
   double best_s = -1.0;
+  std::size_t skipped_moving = 0;
   for (const store::StepRecord& s : steps) {
     // A capture step records with the table at rest; rate steps turn it.
     if (s.kind != "capture" || s.status != store::StepStatus::kCompleted) continue;
+    if (!store::orientation_known(s) &&
+        std::find(moving.begin(), moving.end(), s.index) != moving.end()) {
+      ++skipped_moving;
+      continue;
+    }
     const double length = s.started_clock_s && s.ended_clock_s
                               ? *s.ended_clock_s - *s.started_clock_s
                               : s.commanded.value("duration_s", 0.0);
@@ -153,9 +174,15 @@ std::size_t choose_noise_step(store::Database& db, std::int64_t run,
     }
   }
   if (!best) {
-    throw core::InputError("run", fmt::format("run {} has no completed static capture step; give "
-                                              "the step to analyse",
-                                              run));
+    throw core::InputError(
+        "run", fmt::format("run {} has no completed static capture step{}; give the step to "
+                           "analyse",
+                           run,
+                           skipped_moving > 0
+                               ? fmt::format(" ({} recorded without a table turn: their gyros "
+                                             "scatter by more than {:g} deg/s)",
+                                             skipped_moving, kMaxStaticGyroScatterDps)
+                               : std::string()));
   }
   return *best;
 }

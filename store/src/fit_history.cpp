@@ -33,7 +33,7 @@ std::int64_t record_fit(Database& db, const FitRecord& fit) {
     SQLite::Statement st(db.sql(),
                          "INSERT INTO fits (run_id, device, command, model, custom_terms, "
                          "sensors, parameters, chi2_dof, rms_gyro_dps, rms_accel_mps2, "
-                         "created_utc) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                         "rms_turn_deg, created_utc) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     st.bind(1, fit.run);
     st.bind(2, fit.device);
     st.bind(3, fit.command);
@@ -44,7 +44,8 @@ std::int64_t record_fit(Database& db, const FitRecord& fit) {
     bind_optional(st, 8, fit.chi2_dof);
     bind_optional(st, 9, fit.rms_gyro_dps);
     bind_optional(st, 10, fit.rms_accel_mps2);
-    st.bind(11, fit.created_utc.empty() ? utc_now_iso8601() : fit.created_utc);
+    bind_optional(st, 11, fit.rms_turn_deg);
+    st.bind(12, fit.created_utc.empty() ? utc_now_iso8601() : fit.created_utc);
     st.exec();
     return db.sql().getLastInsertRowid();
   });
@@ -55,7 +56,8 @@ std::vector<FitRecord> fit_history(Database& db, std::int64_t run) {
   return detail::guarded("read fit history", [&] {
     SQLite::Statement q(db.sql(),
                         "SELECT id, run_id, device, command, model, custom_terms, sensors, "
-                        "parameters, chi2_dof, rms_gyro_dps, rms_accel_mps2, created_utc FROM "
+                        "parameters, chi2_dof, rms_gyro_dps, rms_accel_mps2, rms_turn_deg, "
+                        "created_utc FROM "
                         "fits WHERE run_id = ? ORDER BY id");
     q.bind(1, run);
     std::vector<FitRecord> out;
@@ -73,7 +75,8 @@ std::vector<FitRecord> fit_history(Database& db, std::int64_t run) {
       f.chi2_dof = optional_column(q.getColumn(8));
       f.rms_gyro_dps = optional_column(q.getColumn(9));
       f.rms_accel_mps2 = optional_column(q.getColumn(10));
-      f.created_utc = q.getColumn(11).getString();
+      f.rms_turn_deg = optional_column(q.getColumn(11));
+      f.created_utc = q.getColumn(12).getString();
       out.push_back(std::move(f));
     }
     return out;

@@ -13,8 +13,11 @@
 #include "daemon/service/run_service.hpp"
 #include "daemon_test_support.hpp"
 #include "in_process_daemon.hpp"
+#include "sim/hand_session.hpp"
+#include "sim/session_folder.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
+#include "store/import_export.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
 
@@ -202,6 +205,51 @@ TEST_F(AnalysisApi, CatalogueReportAndCalibrationsAreServed) {
   EXPECT_EQ(cals.body[0]["imu"], "imu0");
   EXPECT_TRUE(cals.body[0]["chi2_dof"].is_number());
   EXPECT_EQ(api_->get(cals.body[0]["href"].get<std::string>()).status, 200);
+}
+
+// A run recorded without a table (a hand-held session imported as calstand-import/2): the
+// loop's routes take the table-free methods, the same code as `calstand fit` and `diagnose`.
+TEST(AnalysisApiWithoutTable, FitsDiagnosisAndReportOfAHandHeldSession) {
+  const std::string dir = calstand::testing::fresh_dir("table-free");
+  const std::string db = dir + "/station.db";
+  InProcessDaemon daemon(db);
+  ApiClient api(daemon.port());
+  sim::HandSessionOptions options;
+  options.poses = 12;
+  options.imu.sample_rate_hz = 200.0;
+  sim::write_session_folder(sim::simulate_hand_session(options, 9), dir + "/session", {});
+  std::int64_t run = 0;
+  {
+    store::Database handle(db);
+    run = store::import_run(handle, dir + "/session").run;
+  }
+  const std::string runs = "/runs/" + std::to_string(run);
+
+  const Reply fit = api.post_json(runs + "/fits", {{"model", {"gyro_bias", "gyro_g_sensitivity"}}});
+  ASSERT_EQ(fit.status, 200) << fit.raw;
+  EXPECT_EQ(fit.body.at("method"), "gravity_norm");
+  EXPECT_EQ(fit.body.at("model").back(), "gyro_g_sensitivity");
+  EXPECT_TRUE(fit.body.at("chi2_dof").is_number());
+  EXPECT_TRUE(fit.body.contains("history_id"));
+
+  const Reply refused = api.post_json(runs + "/fits", {{"model", {"accel_lever_arm"}}});
+  EXPECT_EQ(refused.status, 400) << refused.raw;
+  EXPECT_NE(refused.raw.find("body.model"), std::string::npos) << refused.raw;
+  EXPECT_NE(refused.raw.find("accel_lever_arm"), std::string::npos) << refused.raw;
+
+  const Reply diagnosis = api.post_json(runs + "/diagnose", nlohmann::json::object());
+  ASSERT_EQ(diagnosis.status, 200) << diagnosis.raw;
+  EXPECT_EQ(diagnosis.body.at("candidates").size(), 2u);
+  EXPECT_TRUE(diagnosis.body.at("candidates")[0].contains("chi2_dof_after"));
+
+  const Reply history = api.get(runs + "/history");
+  ASSERT_EQ(history.status, 200);
+  ASSERT_EQ(history.body.size(), 2u);  // the fit and the diagnosis; not the refused request
+  EXPECT_TRUE(history.body[1].at("rms_turn_deg").is_number());
+
+  const Reply report = api.get(runs + "/report");
+  ASSERT_EQ(report.status, 200) << report.raw.substr(0, 300);
+  EXPECT_NE(report.raw.find("Recorded without a table"), std::string::npos);
 }
 
 }  // namespace

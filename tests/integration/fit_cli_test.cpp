@@ -151,3 +151,78 @@ TEST_F(FitCli, BadInputIsRefusedWithWhereAndWhy) {
 }
 
 }  // namespace
+
+// A recording made without a table, as a user has one from another tool: `calstand sim-session`
+// writes it (calstand-import/2 without `table`), `import` reads it, and the loop runs on it:
+// fit, diagnose, calibrate, history and the report, each saying what such a run can fit.
+class TableFreeCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = ::testing::TempDir() + "calstand-table-free-cli-" + std::to_string(::getpid()) + "/";
+    std::filesystem::create_directories(dir_);
+    db_ = dir_ + "hand.db";
+    auto r = run("sim-session --kind hand --model adis16488 --seed 5 --poses 16 --rate 200 --out " +
+                 dir_ + "session");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    r = run("import " + dir_ + "session --db " + db_ + " --json");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    run_ = nlohmann::json::parse(r.out).at("run").get<int>();
+  }
+  static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
+  static std::string on_run() { return " --db " + db_ + " --run " + std::to_string(run_); }
+  static inline std::string dir_, db_;
+  static inline int run_ = 0;
+};
+
+TEST_F(TableFreeCli, FitDiagnoseCalibrateAndHistoryRunWithoutATable) {
+  const std::string err = dir_ + "stderr.txt";
+  auto r = run("fit" + on_run() + " --json", err);
+  ASSERT_EQ(r.exit_code, 0) << read_text(err);
+  const auto fit = nlohmann::json::parse(r.out);
+  EXPECT_EQ(fit.at("method"), "gravity_norm");
+  EXPECT_EQ(fit.at("model").size(), 6u);
+  EXPECT_NE(fit.at("notes")[0].get<std::string>().find("earth_rate"), std::string::npos);
+
+  r = run("diagnose" + on_run(), err);
+  ASSERT_EQ(r.exit_code, 0) << read_text(err);
+  EXPECT_NE(r.out.find("gyro_g_sensitivity"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("not testable: earth_rate"), std::string::npos) << r.out;
+
+  r = run("calibrate" + on_run() + " --model gyro_bias,gyro_g_sensitivity --out " + dir_ +
+              "record.json --json",
+          err);
+  ASSERT_EQ(r.exit_code, 0) << read_text(err);
+  const auto record = nlohmann::json::parse(read_text(dir_ + "record.json"));
+  EXPECT_EQ(record.at("method"), "gravity_norm");
+  EXPECT_EQ(record.at("model").back(), "gyro_g_sensitivity");
+
+  r = run("history" + on_run() + " --json", err);
+  ASSERT_EQ(r.exit_code, 0) << read_text(err);
+  const auto history = nlohmann::json::parse(r.out);
+  ASSERT_EQ(history.size(), 3u);
+  EXPECT_EQ(history[2].at("command"), "calibrate");
+  EXPECT_TRUE(history[2].at("rms_turn_deg").is_number());
+  r = run("history" + on_run(), err);
+  EXPECT_NE(r.out.find("turns [deg]"), std::string::npos) << r.out;
+
+  // A term such a run cannot fit is refused by name, with nothing recorded.
+  r = run("fit" + on_run() + " --model gyro_bias,gyro_temp_bias", err);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(read_text(err).find("gyro_temp_bias cannot be fitted on a run without a table"),
+            std::string::npos)
+      << read_text(err);
+  r = run("history" + on_run() + " --json", err);
+  EXPECT_EQ(nlohmann::json::parse(r.out).size(), 3u);
+}
+
+TEST_F(TableFreeCli, TheReportShowsThePosesTurnsAndCandidates) {
+  const std::string err = dir_ + "stderr.txt";
+  const auto r = run("report" + on_run() + " --out " + dir_ + "report.html", err);
+  ASSERT_EQ(r.exit_code, 0) << read_text(err);
+  const std::string page = read_text(dir_ + "report.html");
+  for (const char* part : {"Recorded without a table", "id=\"residuals\"", "|f| - g at each",
+                           "gravity direction after each turn", "id=\"candidates\"",
+                           "gyro_g_sensitivity", "id=\"poses\"", "initial rest"}) {
+    EXPECT_NE(page.find(part), std::string::npos) << part;
+  }
+}

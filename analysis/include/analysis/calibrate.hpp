@@ -4,8 +4,10 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
+#include "analysis/table_free_fit.hpp"
 #include "solver/calibration_record.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
@@ -18,7 +20,9 @@ struct CalibrationOutcome {
   std::int64_t run = 0;
   std::string procedure;
   std::string device;
-  solver::FitResult fit;
+  solver::FitResult fit;  ///< the fit of a run on a table
+  /// The fit of a run without a table (table_free_fit.hpp), instead of `fit`.
+  std::optional<TableFreeFit> table_free;
   std::size_t steps = 0;        ///< steps fitted
   nlohmann::json record;        ///< schemas/calibration.schema.json, checked against it
   std::int64_t history_id = 0;  ///< the fit's row in the run's history (command "calibrate")
@@ -26,11 +30,15 @@ struct CalibrationOutcome {
 
 /// Fits `model` to both sensors of `run` (device "" = its only IMU), records the fit in the
 /// history, and builds the record with the run's noise figures (calibration_noise_figures()).
-/// Throws as fit_request(); std::runtime_error if the record breaks its own schema (a bug).
+/// A run without a table is fitted by table_free_fit() instead (`model` read by
+/// table_free_model(), the static poses as `poses` says) and recorded by
+/// table_free_calibration_record(). Throws as fit_request() or table_free_fit();
+/// std::runtime_error if the record breaks its own schema (a bug).
 CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const solver::Model& model,
-                                 const std::string& device);
+                                 const std::string& device, const TableFreeFitRequest& poses = {});
 
-/// Stores the record in the database's calibrations; returns its id.
+/// Stores the record in the database's calibrations (with the model text of whichever fit);
+/// returns its id.
 std::int64_t store_calibration(store::Database& db, const CalibrationOutcome& calibration);
 
 /// The record file `calstand calibrate` writes when not told: calibration-run<ID>-<device>.json.

@@ -14,7 +14,8 @@ namespace calstand::analysis {
 /// is missing or fails.
 std::string render_report_html(const ReportData& r);
 
-/// gather_report() and render_report_html() in one: the page of `calstand report` for a run.
-/// Checks for gnuplot first (before any fit is recorded). Throws as both.
+/// gather_report() and render_report_html() in one: the page of `calstand report` for a run
+/// (for a run without a table, table_free_report.hpp's page). Checks for gnuplot first (before
+/// any fit is recorded). Throws as both.
 std::string run_report_html(store::Database& db, const ReportRequest& request);
 }  // namespace calstand::analysis

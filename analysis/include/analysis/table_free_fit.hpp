@@ -7,17 +7,20 @@
 // daemon's POST /runs/{id}/fits call these for such a run.
 
 #include <cstdint>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "analysis/table_free_model.hpp"
 #include "solver/ferraris.hpp"
 #include "solver/gravity_norm.hpp"
 #include "solver/gyro_integration.hpp"
 #include "solver/static_detector.hpp"
 #include "store/database.hpp"
+#include "store/fit_history.hpp"
 
 namespace calstand::analysis {
 
@@ -28,8 +31,13 @@ struct TableFreeFitRequest {
   /// Static intervals given by the operator [s of station time], in time order; the first is
   /// the initial rest. Empty: the detector finds them.
   std::vector<std::pair<double, double>> intervals_s;
-  /// Also fit the gyros' g-sensitivity (imucal's K_ga) in the integration method.
-  bool gyro_g_sensitivity = false;
+  /// The optional terms to fit (table_free_model.hpp); the Ferraris method takes none.
+  TableFreeTerms terms;
+  /// What the model as given left out, and why (table_free_model()); copied to the fit.
+  std::vector<std::string> notes;
+  /// The command recorded in the run's fit history ("fit", "diagnose", "calibrate"); empty:
+  /// not recorded.
+  std::string history_command;
 };
 
 /// The static poses of a table-free run: what the detector found, or the operator's intervals.
@@ -48,11 +56,41 @@ struct TableFreeFit {
   std::string device;
   std::string method;
   double gravity_mps2 = 0.0;
+  TableFreeTerms terms;                    ///< the optional terms fitted
+  std::vector<std::string> notes;          ///< what the model as given left out, and why
+  std::optional<std::int64_t> history_id;  ///< the history row written, if any
+  /// Range of the samples' temperatures [degC]; NaN when the recording has none.
+  double min_temperature_c = std::numeric_limits<double>::quiet_NaN();
+  double max_temperature_c = std::numeric_limits<double>::quiet_NaN();
   std::optional<TableFreePoses> poses;  ///< gravity_norm
   std::optional<solver::GravityNormResult> accel;
   std::optional<solver::GyroIntegrationResult> gyro;
   std::optional<solver::FerrarisResult> ferraris;
 };
+
+/// A table-free fit's quality in a few numbers, both sensors together (the fit history's row
+/// and the calibration record's `fit`).
+struct TableFreeQuality {
+  double chi2 = 0.0;  ///< accel and gyro, each against its own noise
+  int dof = 0;
+  double chi2_per_dof = 0.0;
+  int parameters = 0;                           ///< estimated (not held, not fixed by convention)
+  double rms_norm_residual_mps2 = 0.0;          ///< |calibrated f| - g over the poses or holds
+  std::optional<double> rms_turn_residual_deg;  ///< gravity direction after each turn
+};
+TableFreeQuality table_free_quality(const TableFreeFit& fit);
+
+/// The fit history's row of `fit` (model: table_free_model_text(); rms_accel_mps2: |f| - g;
+/// rms_turn_deg: the gravity direction after each turn; no rms_gyro_dps: there are no rate
+/// steps).
+store::FitRecord table_free_history_record(const TableFreeFit& fit, const std::string& command);
+
+/// Every parameter of the fit (accel, then gyro), each with its status.
+std::vector<solver::TriadEstimate> table_free_parameters(const TableFreeFit& fit);
+
+/// `poses` with the terms and notes of `model` read by table_free_model() (which throws
+/// core::InputError naming a term such a run cannot fit).
+TableFreeFitRequest table_free_request(const solver::Model& model, TableFreeFitRequest poses);
 
 /// True when `run` has no known orientation and needs these methods (store::orientation_known).
 bool needs_table_free_fit(store::Database& db, std::int64_t run);
@@ -64,12 +102,18 @@ TableFreePoses table_free_poses(store::Database& db, std::int64_t run,
                                 const TableFreeFitRequest& request);
 
 /// Calibrates `run`: Ferraris when steps are labelled sections (the import's `sections`),
-/// else the gravity norm and the integration between the poses. Throws as table_free_poses()
-/// and as the solver does (fewer than 9 poses, a missing section), naming why.
+/// else the gravity norm and the integration between the poses, and records the fit in the
+/// run's history when `request.history_command` is set. Throws as table_free_poses() and as the
+/// solver does (fewer than 9 poses, a missing section), naming why; core::InputError (where
+/// "model") when the Ferraris method is asked for optional terms.
 TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
                             const TableFreeFitRequest& request);
 
-/// {"run", "device", "method", "gravity_mps2", "frame", "detection": {...} (gravity_norm),
+/// {"run", "device", "method", "model": [terms], "notes", "gravity_mps2", "frame",
+///  "chi2_dof" (null without redundancy), "dof", "parameters": [{"name", "value", "sigma",
+///  "unit", "status"}] (accel then gyro), "unidentifiable": [{"name", "reason"}],
+///  "quality": {"chi2", "dof", "chi2_per_dof", "parameters", "rms_norm_residual_mps2",
+///  "rms_turn_residual_deg"}, "history_id" (when recorded), "poses": {...} (gravity_norm),
 ///  "accel": {...}, "gyro": {...} (the solver's JSON of each) | "ferraris": {...}}.
 nlohmann::json to_json(const TableFreeFit& fit);
 /// {"run", "device", "given", "detection": solver::static_detection_to_json()}.

@@ -15,6 +15,7 @@
 #include "analysis/report_html.hpp"
 #include "analysis/run_model.hpp"
 #include "analysis/run_series.hpp"
+#include "analysis/table_free_diagnose.hpp"
 #include "core/error.hpp"
 #include "http_util.hpp"
 #include "routes.hpp"
@@ -96,6 +97,22 @@ analysis::FitRequest fit_request_of(const httplib::Request& req, const std::stri
   return request;
 }
 
+// The request of a run without a table: the model's optional terms (a term such a run cannot
+// fit is a 400 naming it), the static poses as the detector finds them; `sensor` and
+// `white_noise` do not apply (both sensors are fitted, each against its own noise).
+analysis::TableFreeFitRequest table_free_request_of(const analysis::FitRequest& fit) {
+  analysis::TableFreeFitRequest request;
+  try {
+    request = analysis::table_free_request(fit.model, {});
+  } catch (const core::InputError& e) {
+    const std::string what = e.what();
+    throw BadRequest(400, "body.model", what.substr(std::min(what.size(), e.where().size() + 2)));
+  }
+  request.device = fit.device;
+  request.history_command = fit.history_command;
+  return request;
+}
+
 // Runs `fn` mapping the analysis library's run errors to answers: an unknown run 404, a run
 // with nothing to fit 409 (it is still recording, or recorded no samples).
 template <typename Fn>
@@ -134,23 +151,36 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) 
                send_json(res, 200, catalogue);
              }));
 
-  server.Post(R"(/runs/(\d+)/fits)",
-              guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-                const std::int64_t id = id_from_path(req);
-                const analysis::FitRequest request = fit_request_of(req, "fit");
-                store::Database db(ctx.db_path);
-                const analysis::FitOutcome outcome =
-                    on_run(id, [&] { return analysis::fit_request(db, id, request); });
-                nlohmann::json out = analysis::to_json(outcome);
-                out["history_id"] = *outcome.history_id;
-                send_json(res, 200, out);
-              }));
+  server.Post(
+      R"(/runs/(\d+)/fits)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+        const std::int64_t id = id_from_path(req);
+        const analysis::FitRequest request = fit_request_of(req, "fit");
+        store::Database db(ctx.db_path);
+        if (on_run(id, [&] { return analysis::needs_table_free_fit(db, id); })) {
+          const analysis::TableFreeFit fit = on_run(
+              id, [&] { return analysis::table_free_fit(db, id, table_free_request_of(request)); });
+          send_json(res, 200, analysis::to_json(fit));
+          return;
+        }
+        const analysis::FitOutcome outcome =
+            on_run(id, [&] { return analysis::fit_request(db, id, request); });
+        nlohmann::json out = analysis::to_json(outcome);
+        out["history_id"] = *outcome.history_id;
+        send_json(res, 200, out);
+      }));
 
   server.Post(R"(/runs/(\d+)/diagnose)",
               guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
                 const std::int64_t id = id_from_path(req);
                 const analysis::FitRequest request = fit_request_of(req, "diagnose");
                 store::Database db(ctx.db_path);
+                if (on_run(id, [&] { return analysis::needs_table_free_fit(db, id); })) {
+                  const analysis::TableFreeDiagnosis d = on_run(id, [&] {
+                    return analysis::diagnose_table_free(db, id, table_free_request_of(request));
+                  });
+                  send_json(res, 200, analysis::to_json(d));
+                  return;
+                }
                 const analysis::DiagnoseOutcome outcome =
                     on_run(id, [&] { return analysis::diagnose_request(db, id, request); });
                 send_json(res, 200, analysis::to_json(outcome));

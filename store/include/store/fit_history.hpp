@@ -20,8 +20,10 @@ struct FitRecord {
   std::string sensors;                    ///< both, gyro or accel
   int parameters = 0;                     ///< identified parameters
   std::optional<double> chi2_dof;
-  std::optional<double> rms_gyro_dps;  ///< step-mean residual rms
-  std::optional<double> rms_accel_mps2;
+  std::optional<double> rms_gyro_dps;    ///< step-mean residual rms
+  std::optional<double> rms_accel_mps2;  ///< or |f| - g rms (runs without a table)
+  /// Runs without a table: rms of the gravity direction after each turn [deg].
+  std::optional<double> rms_turn_deg;
   std::string created_utc;  ///< set by the store when empty
 };
 

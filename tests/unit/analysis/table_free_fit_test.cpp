@@ -6,32 +6,18 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
 
 #include "../solver/session_truth.hpp"
 #include "analysis/run_model.hpp"
+#include "imported_session.hpp"
 #include "recorded_run.hpp"
 #include "sim/hand_session.hpp"
-#include "sim/session_folder.hpp"
-#include "store/import_export.hpp"
+#include "solver/run_noise.hpp"
 
 namespace calstand::analysis {
 namespace {
 
-namespace fs = std::filesystem;
-
-// The session written as an import folder and imported into `db`; returns the run id.
-std::int64_t import_session(const sim::SimSession& session, store::Database& db,
-                            const std::string& name, bool counts) {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("calstand-table-free-" + std::to_string(::getpid()) + "-" + name);
-  sim::SessionFolderOptions options;
-  options.counts = counts;
-  sim::write_session_folder(session, dir, options);
-  const auto result = store::import_run(db, dir);
-  fs::remove_all(dir);
-  return result.run;
-}
+using testing::import_session;
 
 // Every estimated parameter of `estimates` within 4.5 sigma of the session's truth (the sigma
 // of a wandering-bias sensor's estimates is honest only to a factor near one).
@@ -135,6 +121,23 @@ TEST(TableFreeFit, ARunWithATableIsNotFittedThisWay) {
   EXPECT_FALSE(needs_table_free_fit(db, run));
   EXPECT_THROW(table_free_fit(db, run, {}), core::InputError);
   EXPECT_THROW(needs_table_free_fit(db, run + 10), RunNotFound);
+}
+
+TEST(TableFreeFit, AHandTurnedRecordingIsNoStaticStepForTheNoiseAnalysis) {
+  testing::TempDatabase file("table-free-noise");
+  store::Database db(file.path());
+  sim::HandSessionOptions options;
+  options.poses = 10;
+  options.imu.sample_rate_hz = 200.0;
+  const std::int64_t run = import_session(sim::simulate_hand_session(options, 2), db, "noise");
+  try {
+    solver::choose_noise_step(db, run, std::nullopt);
+    FAIL() << "a hand-turned recording was taken for a static capture";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("recorded without a table turn"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(solver::choose_noise_step(db, run, 0), 0u) << "the step given is analysed";
 }
 
 }  // namespace

@@ -1,0 +1,81 @@
+// The calibration record of a run without a table.
+#include "analysis/table_free_record.hpp"
+
+#include <cmath>
+
+#include "solver/calibration_record.hpp"
+#include "store/run_store.hpp"
+#include "store/stamp.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+// The IMU's model and serial as the run's snapshot gives them (an import's meta.json may name
+// them under "imu"; a station snapshot under "imus").
+std::pair<std::string, std::string> imu_identity(const nlohmann::json& snapshot,
+                                                 const std::string& device) {
+  for (const auto& imu : snapshot.value("imus", nlohmann::json::array())) {
+    if (imu.value("name", "") == device) return {imu.value("model", ""), imu.value("serial", "")};
+  }
+  const nlohmann::json imu = snapshot.value("imu", nlohmann::json::object());
+  if (imu.is_object()) return {imu.value("model", ""), imu.value("serial", "")};
+  return {"", ""};
+}
+
+}  // namespace
+
+nlohmann::json table_free_calibration_record(store::Database& db, const TableFreeFit& fit) {
+  const store::RunRecord run = store::RunStore(db).load_run(fit.run);
+  const auto [model, serial] = imu_identity(run.station_snapshot, fit.device);
+  const TableFreeQuality q = table_free_quality(fit);
+
+  nlohmann::ordered_json r;
+  r["format"] = solver::kCalibrationFormat;
+  r["device"] = {{"name", fit.device}, {"model", model}, {"serial", serial}};
+  r["station"] = run.station_snapshot.value("name", "");
+  r["runs"] = {fit.run};
+  r["procedure"] = {{"name", run.summary.procedure_name}, {"sha256", run.procedure_sha256}};
+  r["method"] = fit.method;
+  r["frame"] = solver::kAccelTriadFrameText;
+  nlohmann::json terms = nlohmann::json::array();
+  for (const auto& t : table_free_base_terms()) terms.push_back(t);
+  for (const auto& t : table_free_optional_terms()) {
+    if (has_table_free_term(fit.terms, t)) terms.push_back(t);
+  }
+  r["model"] = terms;
+  r["custom_terms"] = nlohmann::json::array();
+  r["parameters"] = nlohmann::json::array();
+  r["unidentifiable"] = nlohmann::json::array();
+  for (const solver::TriadEstimate& e : table_free_parameters(fit)) {
+    if (e.status == solver::EstimateStatus::kUndetermined) {
+      r["unidentifiable"].push_back(
+          {{"name", e.name}, {"reason", "the poses and turns of this run do not determine it"}});
+      continue;
+    }
+    r["parameters"].push_back(
+        {{"name", e.name}, {"value", e.value}, {"sigma", e.sigma}, {"unit", e.unit}});
+  }
+  nlohmann::json quality = {{"chi2_dof", number_or_null(q.chi2_per_dof)},
+                            {"dof", q.dof},
+                            {"rms_norm_residual_mps2", q.rms_norm_residual_mps2}};
+  if (q.rms_turn_residual_deg) quality["rms_turn_residual_deg"] = *q.rms_turn_residual_deg;
+  nlohmann::json summary = nlohmann::json::array();
+  if (fit.accel) summary.push_back(fit.accel->summary);
+  if (fit.gyro) summary.push_back(fit.gyro->summary);
+  if (fit.ferraris) summary.push_back(fit.ferraris->summary);
+  quality["summary"] = summary;
+  r["fit"] = quality;
+  // No thermal term is fitted: the reference temperature is the recording's mean, or unknown.
+  r["temperature_ref_c"] = number_or_null(0.5 * (fit.min_temperature_c + fit.max_temperature_c));
+  r["valid_temperature_c"] = {{"min", number_or_null(fit.min_temperature_c)},
+                              {"max", number_or_null(fit.max_temperature_c)}};
+  r["created_utc"] = store::utc_now_iso8601();
+  r["software"] = solver::kSoftwareVersion;
+  return nlohmann::json::parse(r.dump());
+}
+
+}  // namespace calstand::analysis
