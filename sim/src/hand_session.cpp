@@ -402,6 +402,11 @@ std::vector<std::pair<std::string, double>> TriadFrameTruth::parameters() const 
       }
     }
   }
+  if (!accel_quadratic.isZero()) {
+    for (int i = 0; i < 3; ++i) {
+      out.emplace_back(std::string("accel_quadratic.") + axes[i], accel_quadratic[i]);
+    }
+  }
   if (!gyro_g_sensitivity.isZero()) {
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
@@ -437,6 +442,7 @@ TriadFrameTruth triad_frame_truth(const ImuTruth& truth, const Eigen::Vector3d& 
   TriadFrameTruth out;
   out.C_AB = Q;
   out.accel_bias = truth.accel_bias + turn_on_accel_mps2;
+  out.accel_quadratic = truth.accel_quadratic;
   for (int i = 0; i < 3; ++i) {
     out.accel_scale[i] = (L(i, i) - 1.0) * 1e6;
     for (int j = 0; j < i; ++j) out.accel_misalignment(i, j) = L(i, j);

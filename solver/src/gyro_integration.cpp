@@ -230,7 +230,13 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   const double earth_dps = core::kEarthRateRadPerS * core::kRadToDeg;
   const Eigen::Vector3d rest_accel =
       static_mean(samples, rest->begin, rest->end, TriadSensor::kAccel).mean;
-  const auto make_turns = [&](const TriadModel& a_model, const Eigen::Vector3d& bias) {
+  // The accelerometer model corrects every reading the same way the accel fit does (with its
+  // quadratic when fitted).
+  const auto make_turns = [&](const TriadModel& a_model, const Eigen::Vector3d& a_quadratic,
+                              const Eigen::Vector3d& bias) {
+    const auto correct = [&](const Eigen::Vector3d& m) {
+      return correct_accel(a_model, a_quadratic, m);
+    };
     std::vector<TurnData> turns;
     for (std::size_t k = 0; k + 1 < holds.size(); ++k) {
       const StaticInterval& from = intervals[holds[k].interval];
@@ -243,14 +249,13 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
       d.fit_bias = o.fit_bias;
       if (o.fit_g_sensitivity) {
         d.g_offset = o.fit_bias ? 12 : 9;
-        const Eigen::Vector3d f_rest = a_model.correct(rest_accel);
+        const Eigen::Vector3d f_rest = correct(rest_accel);
         for (std::size_t i = d.first; i <= d.last; ++i) {
-          d.force_g.push_back((a_model.correct(samples[i].accel_mps2) - f_rest) /
-                              core::kStandardGravity);
+          d.force_g.push_back((correct(samples[i].accel_mps2) - f_rest) / core::kStandardGravity);
         }
       }
-      d.u_start = a_model.correct(holds[k].m_end).normalized();
-      const Eigen::Vector3d u_end = a_model.correct(holds[k + 1].m_start).normalized();
+      d.u_start = correct(holds[k].m_end).normalized();
+      const Eigen::Vector3d u_end = correct(holds[k + 1].m_start).normalized();
       across(u_end, d.e1, d.e2);
       const double duration = samples[d.last].receive_time_s - samples[d.first].receive_time_s;
       const double dt = duration / static_cast<double>(std::max<std::size_t>(1, d.last - d.first));
@@ -262,7 +267,8 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
     }
     return turns;
   };
-  std::vector<TurnData> turns = make_turns(accel.accel, out.rest_bias_dps);
+  std::vector<TurnData> turns =
+      make_turns(accel.accel, accel.quadratic_ug_per_g2, out.rest_bias_dps);
 
   const int np = 9 + (o.fit_bias ? 3 : 0) + (o.fit_g_sensitivity ? 9 : 0);
   const int g_offset = o.fit_g_sensitivity ? (o.fit_bias ? 12 : 9) : -1;
@@ -366,15 +372,18 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   }
   Eigen::MatrixXd cov = Hinv * out.sigma_scale * out.sigma_scale;
 
-  // What the accelerometer calibration and the rest bias carry in: q = (accel 9 internal,
-  // bias 3 [deg/s] when not fitted).
-  const int nq = o.fit_bias ? 9 : 12;
+  // What the accelerometer calibration and the rest bias carry in: q = (accel 9, or 12 with
+  // its quadratic, internal; bias 3 [deg/s] when not fitted).
+  const int na = accel.covariance.rows() == 12 ? 12 : 9;
+  const int nq = na + (o.fit_bias ? 0 : 3);
   Eigen::MatrixXd Sq = Eigen::MatrixXd::Zero(nq, nq);
-  if (o.propagate_accel_covariance) {
-    // accel covariance: contract (ppm) -> internal (1) for the scale entries.
-    Eigen::VectorXd to_internal = Eigen::VectorXd::Ones(9);
+  if (o.propagate_accel_covariance && accel.covariance.rows() == na) {
+    // accel covariance: contract (ppm, ug/g^2) -> internal (1) for scale and quadratic.
+    Eigen::VectorXd to_internal = Eigen::VectorXd::Ones(na);
     to_internal.segment<3>(3).setConstant(1e-6);
-    Sq.topLeftCorner(9, 9) = to_internal.asDiagonal() * accel.covariance * to_internal.asDiagonal();
+    if (na == 12) to_internal.segment<3>(9).setConstant(1e-6);
+    Sq.topLeftCorner(na, na) =
+        to_internal.asDiagonal() * accel.covariance * to_internal.asDiagonal();
   }
   if (!o.fit_bias) {
     Sq.bottomRightCorner(3, 3) = out.rest_bias_sigma_dps.cwiseAbs2().asDiagonal();
@@ -383,11 +392,12 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   // with one of them is relative to a frame the poses do not fix (e.g. poses that never tip y
   // leave the frame's rotation about x open, and with it gyro_misalignment.zy).
   std::vector<int> accel_held;
-  for (int j = 0; j < 9; ++j) {
-    if (accel.parameters.empty()) break;
-    static const int est_index[] = {0, 1, 2, 3, 4, 5, 8, 10, 11};  // into the 12 estimates
-    if (accel.parameters[static_cast<std::size_t>(est_index[j])].status ==
-        EstimateStatus::kUndetermined) {
+  for (int j = 0; j < na; ++j) {
+    // into the estimates: 12 of the triad, then the quadratic's 3
+    static const int est_index[] = {0, 1, 2, 3, 4, 5, 8, 10, 11, 12, 13, 14};
+    const auto e = static_cast<std::size_t>(est_index[j]);
+    if (e >= accel.parameters.size()) break;
+    if (accel.parameters[e].status == EstimateStatus::kUndetermined) {
       accel_held.push_back(j);
     }
   }
@@ -400,9 +410,11 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
       a.misalignment(1, 0) += q[6];
       a.misalignment(2, 0) += q[7];
       a.misalignment(2, 1) += q[8];
+      Eigen::Vector3d quadratic = accel.quadratic_ug_per_g2;
+      if (na == 12) quadratic += 1e6 * q.segment<3>(9);
       Eigen::Vector3d b = out.rest_bias_dps;
       if (!o.fit_bias) b += q.tail<3>();
-      const std::vector<TurnData> t = make_turns(a, b);
+      const std::vector<TurnData> t = make_turns(a, quadratic, b);
       Eigen::VectorXd res(static_cast<Eigen::Index>(2 * t.size()));
       for (std::size_t k = 0; k < t.size(); ++k) {
         double rr[2];
@@ -425,7 +437,7 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
     }
     const Eigen::MatrixXd K = -Hinv * Jf.transpose() * A;
     cov += K * Sq * K.transpose();
-    // Natural units of the accel parameters: bias g, scale and misalignment 1.
+    // Natural units of the accel parameters: bias g, scale, misalignment and quadratic 1.
     for (int q : accel_held) {
       const double h = 1e-4 * (q < 3 ? g : 1.0);
       Eigen::VectorXd dq = Eigen::VectorXd::Zero(nq);
@@ -468,7 +480,7 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   if (g_offset >= 0) {
     // The bias parameter is the bias at the rest's orientation, b + G f_rest / g0: the
     // contract's bias is b = that - G f_rest / g0.
-    const Eigen::Vector3d f_rest = accel.accel.correct(rest_accel) / core::kStandardGravity;
+    const Eigen::Vector3d f_rest = correct_accel(accel, rest_accel) / core::kStandardGravity;
     Eigen::MatrixXd L = Eigen::MatrixXd::Identity(n_out, n_out);
     for (int i = 0; i < 3; ++i) {
       for (int k = 0; k < 3; ++k) {

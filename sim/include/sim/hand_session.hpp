@@ -55,13 +55,17 @@ struct TriadFrameTruth {
   Eigen::Vector3d accel_bias = Eigen::Vector3d::Zero();          ///< m/s^2 (incl. turn-on bias)
   Eigen::Vector3d accel_scale = Eigen::Vector3d::Zero();         ///< ppm
   Eigen::Matrix3d accel_misalignment = Eigen::Matrix3d::Zero();  ///< rad, strictly lower
+  /// ug/g^2, as drawn: the contract's f_i are in B, and A differs from B by the milliradians of
+  /// the triad's misalignment, which change k f_i^2 by a part in a thousand of k.
+  Eigen::Vector3d accel_quadratic = Eigen::Vector3d::Zero();
   Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();           ///< deg/s (incl. turn-on bias)
   Eigen::Vector3d gyro_scale = Eigen::Vector3d::Zero();          ///< ppm
   Eigen::Matrix3d gyro_misalignment = Eigen::Matrix3d::Zero();   ///< rad, zero diagonal
   Eigen::Matrix3d gyro_g_sensitivity = Eigen::Matrix3d::Zero();  ///< (deg/s)/g
 
   /// Every parameter by contract name (accel_bias.x ... gyro_misalignment.zy; the three accel
-  /// misalignments fixed at zero by the convention included), in contract units.
+  /// misalignments fixed at zero by the convention included; accel_quadratic and
+  /// gyro_g_sensitivity when non-zero), in contract units.
   std::vector<std::pair<std::string, double>> parameters() const;
 };
 

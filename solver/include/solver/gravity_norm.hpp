@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "solver/pose_noise.hpp"
 #include "solver/static_detector.hpp"
 #include "solver/triad_model.hpp"
 
@@ -23,12 +24,23 @@
 /// estimated. The orientation of the poses is never needed, and the norm cannot see a rotation
 /// of the whole triad: that is what the convention fixes.
 ///
-/// Weights and sigmas: each residual |f_k| - g is divided by the sigma of the pose mean along
-/// the pose's gravity direction (static_mean(): sample scatter over the effective count). The
-/// covariance is (J^T J)^-1 at the solution. That sigma only knows the noise inside a pose;
-/// when the poses scatter more than that (chi2/dof > 1: a wandering bias between poses, a hand
-/// that moves, a missing effect), every sigma is multiplied by sqrt(chi2/dof) (and never scaled
-/// down); `sigmas_scaled` says so and the summary says why.
+/// Weights and sigmas: the pose means share the accelerometer's wandering bias (poses close in
+/// time see nearly the same bias), so their residuals are not independent. The residuals'
+/// covariance is the white noise of each pose mean along its gravity direction (static_mean():
+/// sample scatter over the effective count) plus a wander shared by the three axes (or an
+/// independent extra variance per pose), chosen by restricted maximum likelihood from the
+/// residuals of a first fit weighed by the white noise alone (pose_noise.hpp); the fit is then
+/// repeated by generalised least squares with that covariance Sigma (residuals whitened by its
+/// Cholesky factor), and the covariance of the parameters is (J^T Sigma^-1 J)^-1. chi2/dof is
+/// still reported against the white noise alone (how much more the poses scatter than their
+/// own noise), the noise model beside it in words. When the residuals are too few to estimate
+/// a noise model (fewer than 8 degrees of freedom) or estimate_pose_noise is false, the
+/// weights are the white noise and, with scale_sigmas_by_residual, every sigma is multiplied by
+/// sqrt(chi2/dof) when above 1 (`sigmas_scaled`).
+///
+/// accel_quadratic (fit_quadratic): the contract's measured_i += 1e-6 g0 k_i (f_i / g0)^2 [k in
+/// ug/g^2], f the true specific force in frame A; the calibrated force then solves
+/// f = T_a^-1 (a - b - q(f)) (correct_accel()).
 ///
 /// Identifiability: from the Jacobian in natural units (undetermined_columns()); e.g. poses that
 /// never tip the y axis (gravity always in the x-z plane) cannot give accel_bias.y,
@@ -43,7 +55,12 @@ struct GravityNormOptions {
   double gravity_mps2 = 0.0;     ///< local g [m/s^2]; required (> 0)
   int min_poses = 9;             ///< refuse below this many static poses
   bool use_initial_rest = true;  ///< the initial rest is a pose like the others
+  /// Estimate the pose means' noise (shared wander) from the residuals and weigh by it (GLS).
+  bool estimate_pose_noise = true;
+  /// Without a noise model (too few poses, or estimate_pose_noise false): sigmas times
+  /// sqrt(chi2/dof) when above 1.
   bool scale_sigmas_by_residual = true;
+  bool fit_quadratic = false;    ///< also fit accel_quadratic .x .y .z [ug/g^2]
   double null_tolerance = 1e-5;  ///< see undetermined_columns()
   int max_iterations = 100;
 };
@@ -63,26 +80,42 @@ struct GravityNormPose {
 
 struct GravityNormResult {
   TriadModel accel;  ///< frame A (undetermined parameters at their held values)
+  /// accel_quadratic .x .y .z [ug/g^2]; zero unless fitted (correct_accel() applies it).
+  Eigen::Vector3d quadratic_ug_per_g2 = Eigen::Vector3d::Zero();
+  bool quadratic_fitted = false;
   /// accel_bias.x y z, accel_scale.x y z, accel_misalignment.xy xz yx yz zx zy (the .xy .xz
-  /// .yz "fixed by convention").
+  /// .yz "fixed by convention"), then accel_quadratic.x y z when fitted.
   std::vector<TriadEstimate> parameters;
-  /// Covariance of the nine free parameters in contract units, order bias x y z [m/s^2],
-  /// scale x y z [ppm], misalignment yx zx zy [rad]; rows and columns of undetermined ones 0.
-  Eigen::Matrix<double, 9, 9> covariance = Eigen::Matrix<double, 9, 9>::Zero();
+  /// Covariance of the free parameters in contract units, in the order of `covariance_names`:
+  /// bias x y z [m/s^2], scale x y z [ppm], misalignment yx zx zy [rad] (9), then quadratic
+  /// x y z [ug/g^2] when fitted (12); rows and columns of undetermined ones 0.
+  Eigen::MatrixXd covariance;
+  std::vector<std::string> covariance_names;
   std::vector<std::string> undetermined;  ///< names
   std::vector<GravityNormPose> poses;
   double gravity_mps2 = 0.0;
   double rms_residual_mg = 0.0;
   double max_abs_residual_mg = 0.0;
-  double chi2 = 0.0;  ///< against the pose means' own noise
+  double chi2 = 0.0;  ///< against the pose means' white noise alone
   int dof = 0;        ///< poses - estimated parameters
   double chi2_per_dof = 0.0;
-  double sigma_scale = 1.0;  ///< factor applied to every sigma
+  /// The noise model of the pose means the fit weighs by (white alone when not estimated).
+  PoseNoise noise;
+  /// Factor applied to every sigma by sqrt(chi2/dof): only without a noise model (see above),
+  /// else 1.
+  double sigma_scale = 1.0;
   bool sigmas_scaled = false;
   int iterations = 0;
   bool converged = false;
-  std::string summary;  ///< the fit quality in words
+  std::string summary;  ///< the fit quality and the noise model in words
 };
+
+/// The calibrated specific force [m/s^2] of a raw accel reading: T_a^-1 (measured - b - q(f)),
+/// q the quadratic (zero when not fitted), solved by fixed-point iteration.
+Eigen::Vector3d correct_accel(const GravityNormResult& r, const Eigen::Vector3d& measured);
+/// The same from a model and quadratic coefficients [ug/g^2].
+Eigen::Vector3d correct_accel(const TriadModel& accel, const Eigen::Vector3d& quadratic_ug_per_g2,
+                              const Eigen::Vector3d& measured);
 
 /// Calibrates on the static intervals of a recording (e.g. detect_static_intervals(): the
 /// intervals flagged initial_rest are used when options.use_initial_rest). Accel samples in
@@ -117,9 +150,10 @@ ThresholdSearch detect_and_calibrate_accel(std::span<const core::ImuSample> samp
                                                                                    8, 9, 10});
 
 /// {"method": "gravity_norm", "frame": ..., "gravity_mps2", "parameters": [estimates],
-///  "covariance": {"names": [...9], "matrix": [[...]]}, "undetermined": [names],
+///  "covariance": {"names": [...9 or 12], "matrix": [[...]]}, "undetermined": [names],
 ///  "quality": {"poses", "rms_residual_mg", "max_abs_residual_mg", "chi2", "dof",
 ///  "chi2_per_dof", "sigma_scale", "sigmas_scaled", "summary"},
+///  "noise_model": pose_noise_to_json() (figures in m/s^2),
 ///  "poses": [{"interval", "start_s", "end_s", "samples", "mean_mps2", "up_A", "norm_mps2",
 ///  "residual_mg", "sigma_mg"}], "solver": {"iterations", "converged"}}
 nlohmann::json gravity_norm_to_json(const GravityNormResult& r);

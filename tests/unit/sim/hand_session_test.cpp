@@ -46,6 +46,12 @@ TEST(HandSession, TriadFrameTruthIsTheSameSensorInFrameA) {
   EXPECT_LT((a.accel_bias - (t.accel_bias + on_a)).norm(), 1e-15);
   EXPECT_LT((a.gyro_bias - (t.gyro_bias + on_g)).norm(), 1e-15);
   EXPECT_EQ(a.parameters().size(), 24U + 9U);  // g-sensitivity listed when non-zero
+  // accel_quadratic is carried as drawn, and listed when non-zero.
+  ImuTruth q = t;
+  q.accel_quadratic = Eigen::Vector3d(300.0, -200.0, 100.0);
+  const TriadFrameTruth qa = triad_frame_truth(q, on_g, on_a);
+  EXPECT_EQ(qa.accel_quadratic, q.accel_quadratic);
+  EXPECT_EQ(qa.parameters().size(), 24U + 9U + 3U);
 }
 
 TEST(HandSession, ShapeOfASession) {

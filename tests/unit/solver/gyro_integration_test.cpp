@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "session_truth.hpp"
 #include "sim/hand_session.hpp"
+#include "sim/spec_sheet.hpp"
 #include "solver/gravity_norm.hpp"
 #include "solver/static_detector.hpp"
 
@@ -135,6 +136,34 @@ TEST(GyroIntegration, RefusesWithoutRestOrPoses) {
   const std::vector<StaticInterval> few(f.detection.intervals.begin(),
                                         f.detection.intervals.begin() + 6);
   EXPECT_THROW(calibrate_gyro_integration(f.session.samples, few, f.accel, {}), core::InputError);
+}
+
+// An accelerometer with a quadratic, fitted with it: the gyro integration corrects its
+// samples with the quadratic (correct_accel) and carries the 12 accel parameters' covariance.
+TEST(GyroIntegration, UsesTheAccelQuadratic) {
+  sim::HandSessionOptions o = hand_options("ln200");
+  o.imu.sample_rate_hz = 100.0;
+  sim::ImuTruth t = sim::truth_from_spec(*sim::builtin_spec("ln200"), "ln200", 41);
+  t.gyro_g_sensitivity.setZero();
+  t.gyro_scale_asymmetry.setZero();
+  t.gyro_quadratic.setZero();
+  t.accel_scale_asymmetry.setZero();
+  t.accel_quadratic = Eigen::Vector3d(1500.0, -1000.0, 800.0);  // ug/g^2
+  o.imu.truth = t;
+  o.imu.keep_unmodelled_terms = true;
+  const sim::SimSession s = sim::simulate_hand_session(o, 42);
+  const StaticDetection d = detect_static_intervals(s.samples, {});
+  GravityNormOptions a;
+  a.gravity_mps2 = s.gravity_mps2;
+  a.fit_quadratic = true;
+  const GravityNormResult accel = calibrate_accel_gravity_norm(s.samples, d.intervals, a);
+  ASSERT_EQ(accel.covariance.rows(), 12);
+  const GyroIntegrationResult g = calibrate_gyro_integration(s.samples, d.intervals, accel, {});
+  EXPECT_TRUE(g.converged);
+  EXPECT_TRUE(g.covariance.allFinite());
+  const auto pulls = testing::session_pulls(s, g.parameters);
+  EXPECT_EQ(pulls.size(), 12U);
+  for (const testing::Pull& p : pulls) EXPECT_LT(std::abs(p.pull), 4.0) << p.name;
 }
 
 }  // namespace
