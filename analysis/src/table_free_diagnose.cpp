@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/error_terms.hpp"
+#include "core/site.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -58,20 +59,24 @@ double chi2_per_dof(const SensorFit& s) { return s.dof > 0 ? s.chi2 / s.dof : st
 std::vector<TableFreeOutlier> worst_of(const TableFreeFit& fit) {
   std::vector<TableFreeOutlier> out;
   if (fit.accel) {
+    // Each pose against its white noise and the wander its noise model found (RMS over poses).
+    const double wander_mg = fit.accel->noise.pose_sigma / kMgInMps2;
     for (std::size_t k = 0; k < fit.accel->poses.size(); ++k) {
       const auto& p = fit.accel->poses[k];
-      if (!(p.sigma_mg > 0.0)) continue;
+      const double sigma = std::hypot(p.sigma_mg, wander_mg);
+      if (!(sigma > 0.0)) continue;
       out.push_back({fmt::format("pose {}", p.interval), p.start_s, p.end_s, p.residual_mg, "mg",
-                     p.residual_mg / p.sigma_mg});
+                     p.residual_mg / sigma});
     }
   }
   if (fit.gyro) {
     for (const auto& t : fit.gyro->turns) {
       if (!(t.sigma_deg > 0.0)) continue;
-      // The residual is an angle across gravity with two components of sigma_deg each.
+      // The residual is an angle across gravity with two components of sigma_deg each, scaled
+      // as the fit scaled the gyro sigmas (the turns' own scatter over the white noise).
+      const double sigma = std::sqrt(2.0) * t.sigma_deg * fit.gyro->sigma_scale;
       out.push_back({fmt::format("turn {} -> {}", t.from_interval, t.to_interval), t.start_s,
-                     t.end_s, t.residual_deg, "deg",
-                     t.residual_deg / (std::sqrt(2.0) * t.sigma_deg)});
+                     t.end_s, t.residual_deg, "deg", t.residual_deg / sigma});
     }
   }
   std::stable_sort(out.begin(), out.end(),
@@ -110,8 +115,25 @@ TableFreeCandidate judge(const std::string& term, const TableFreeFit& before,
   return c;
 }
 
+// The accelerometers against their own noise model (chi2/dof, near 1 when the model and the
+// noise model describe the poses), in words.
+std::string accel_noise_text(const solver::GravityNormResult& a) {
+  return fmt::format(
+      "the poses scatter with chi2/dof {:.3g} against their noise model ({}; {:.3g} against the "
+      "white noise alone)",
+      a.dof > 0 ? a.chi2_noise_model / a.dof : 0.0, a.noise.description, a.chi2_per_dof);
+}
+
+// The gyros have no noise model of their own: the turns' scatter over the integrated white
+// noise, which hand turns exceed (time stamps, output filter, sway within a turn), said as such.
+std::string gyro_noise_text(const solver::GyroIntegrationResult& g) {
+  return fmt::format(
+      "the turns scatter {:.3g} times what the gyro white noise alone explains (chi2/dof "
+      "{:.3g}), the gyro sigmas scaled by it",
+      std::sqrt(std::max(g.chi2_per_dof, 0.0)), g.chi2_per_dof);
+}
+
 std::string advice_of(const TableFreeDiagnosis& d) {
-  const auto q = table_free_quality(d.fit);
   if (d.fit.ferraris) {
     return fmt::format(
         "a labelled Ferraris session (six holds, three turns) has no redundancy for further "
@@ -120,6 +142,8 @@ std::string advice_of(const TableFreeDiagnosis& d) {
         "more effects, record a session turned by hand between 20 or more poses.",
         d.fit.ferraris->accel_chi2_per_dof, d.fit.ferraris->accel_chi2_per_dof_naive);
   }
+  const std::string noise =
+      accel_noise_text(*d.fit.accel) + "; " + gyro_noise_text(*d.fit.gyro) + ".";
   if (!d.recommended.empty()) {
     const TableFreeCandidate& c = d.candidates.front();
     return fmt::format(
@@ -132,24 +156,20 @@ std::string advice_of(const TableFreeDiagnosis& d) {
   if (!d.candidates.empty()) {
     const TableFreeCandidate& c = d.candidates.front();
     best = c.p_value < kStrongPValue
-               ? fmt::format(" The best candidate, {}, lowers chi2/dof from {:.3g} to {:.3g} "
-                             "(p = {:.2g}) but not by enough for its {} parameters (delta BIC "
-                             "{:.1f}).",
-                             c.term, c.chi2_per_dof_before, c.chi2_per_dof_after, c.p_value,
-                             c.added_parameters, c.delta_bic)
-               : fmt::format(" The best candidate, {}, is not supported by the data (p = {:.2g}).",
+               ? fmt::format(
+                     " The best candidate, {}, lowers chi2/dof from {:.3g} to {:.3g} "
+                     "(p = {:.2g}) but not by enough for its {} parameters (delta BIC "
+                     "{:.1f}).",
+                     c.term, c.chi2_per_dof_before, c.chi2_per_dof_after, c.p_value,
+                     c.added_parameters, c.delta_bic)
+               : fmt::format(" No candidate is supported by the data (best: {}, p = {:.2g}).",
                              c.term, c.p_value);
   }
-  if (d.explained) {
-    return fmt::format("the model fits the poses and turns to their noise (chi2/dof {:.3g}).{}",
-                       q.chi2_per_dof, best);
-  }
-  return fmt::format(
-      "the residual exceeds the noise (chi2/dof {:.3g}) and no term a run without a table can "
-      "fit explains it.{} Look at the worst poses and turns below: a pose held while moving, a "
-      "turn whose grip slipped or that starts before the pose settled; effects that need a "
-      "table or a chamber (thermal terms, lever arm) cannot be told apart here.",
-      q.chi2_per_dof, best);
+  if (d.explained) return "the model fits: " + noise + best;
+  return "the poses scatter more than their noise model allows: " + noise + best +
+         " Look at the worst poses and turns: a pose held while moving, a turn whose grip "
+         "slipped or that starts before the pose settled; effects that need a table or a "
+         "chamber (thermal terms, lever arm) cannot be told apart here.";
 }
 
 }  // namespace
@@ -189,20 +209,15 @@ TableFreeDiagnosis diagnose_table_free(store::Database& db, std::int64_t run,
   if (d.fit.ferraris) {
     d.explained = d.fit.ferraris->accel_chi2_per_dof <= kExplainedChi2Dof;
   } else {
-    const double accel = chi2_per_dof(sensor_fit(d.fit, "accel"));
-    const double gyro = chi2_per_dof(sensor_fit(d.fit, "gyro"));
-    const bool model_fits = accel <= kExplainedChi2Dof && gyro <= kExplainedChi2Dof;
-    bool best_fits = false;
-    if (!d.candidates.empty()) {
-      const TableFreeCandidate& c = d.candidates.front();
-      const double other = c.sensor == "accel" ? gyro : accel;
-      best_fits = c.chi2_per_dof_after <= kExplainedChi2Dof && other <= kExplainedChi2Dof;
-    }
-    d.explained = model_fits || best_fits;
     if (!d.candidates.empty() && d.candidates.front().delta_bic < kStrongDeltaBic &&
         d.candidates.front().p_value < kStrongPValue) {
       d.recommended = d.candidates.front().term;
     }
+    // The accelerometers are judged against their noise model (a wandering bias is noise, not
+    // a missing effect); the gyros have none, only the candidates speak for them.
+    const solver::GravityNormResult& a = *d.fit.accel;
+    d.explained =
+        d.recommended.empty() && a.dof > 0 && a.chi2_noise_model / a.dof <= kExplainedChi2Dof;
   }
   d.advice = advice_of(d);
   return d;

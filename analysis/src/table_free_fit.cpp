@@ -16,8 +16,6 @@
 namespace calstand::analysis {
 namespace {
 
-constexpr double kMg = 1e-3 * core::kStandardGravity;  // m/s^2 per mg
-
 // Local g of a table-free run: the import's site.gravity_mps2 (required there without a table).
 double run_gravity(store::Database& db, std::int64_t run) {
   store::RunStore runs(db);
@@ -231,7 +229,7 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
     fit.poses = poses_of(run, fit.device, std::move(r), request);
     solver::GravityNormOptions accel_options;
     accel_options.gravity_mps2 = fit.gravity_mps2;
-    // TEMP-MERGE accel_options.fit_quadratic = fit.terms.accel_quadratic;
+    accel_options.fit_quadratic = fit.terms.accel_quadratic;
     fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
                                                      fit.poses->detection.intervals, accel_options);
     solver::GyroIntegrationOptions gyro_options;
@@ -263,12 +261,14 @@ TableFreeQuality table_free_quality(const TableFreeFit& fit) {
     // turns none (nine readings, nine gyro unknowns besides the bias).
     q.chi2 = fit.ferraris->accel_chi2;
     q.dof = fit.ferraris->accel_dof;
-    q.rms_norm_residual_mps2 = fit.ferraris->norm_rms_residual_mg * kMg;
+    q.rms_norm_residual_mps2 = fit.ferraris->norm_rms_residual_mg * kMgInMps2;
   } else if (fit.accel && fit.gyro) {
     q.chi2 = fit.accel->chi2 + fit.gyro->chi2;
     q.dof = fit.accel->dof + fit.gyro->dof;
-    q.rms_norm_residual_mps2 = fit.accel->rms_residual_mg * kMg;
+    q.rms_norm_residual_mps2 = fit.accel->rms_residual_mg * kMgInMps2;
     q.rms_turn_residual_deg = fit.gyro->rms_residual_deg;
+    if (fit.accel->dof > 0)
+      q.accel_chi2_per_dof_noise_model = fit.accel->chi2_noise_model / fit.accel->dof;
   }
   q.chi2_per_dof = q.dof > 0 ? q.chi2 / q.dof : std::nan("");
   return q;

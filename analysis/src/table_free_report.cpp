@@ -72,7 +72,7 @@ std::string header(const TableFreeReportData& r) {
       html_escape(table_free_model_text(fit.terms)),
       q.dof > 0 ? fmt::format("{:.3g}", q.chi2_per_dof) : std::string("-"), q.dof,
       good ? "good" : "bad", good ? "explained" : "not explained",
-      q.rms_norm_residual_mps2 / (1e-3 * core::kStandardGravity),
+      q.rms_norm_residual_mps2 / kMgInMps2,
       q.rms_turn_residual_deg
           ? fmt::format(" &middot; gravity direction after the turns {:.3g} deg rms",
                         *q.rms_turn_residual_deg)
@@ -88,10 +88,9 @@ std::string history_section(const TableFreeReportData& r) {
         "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>\n",
         f.id, html_escape(f.created_utc), html_escape(f.command), html_escape(f.model),
         optional_number(f.chi2_dof, "{:.3g}"),
-        optional_number(f.rms_accel_mps2 ? std::optional<double>(*f.rms_accel_mps2 /
-                                                                 (1e-3 * core::kStandardGravity))
-                                         : std::nullopt,
-                        "{:.3g}"),
+        optional_number(
+            f.rms_accel_mps2 ? std::optional<double>(*f.rms_accel_mps2 / kMgInMps2) : std::nullopt,
+            "{:.3g}"),
         optional_number(f.rms_turn_deg, "{:.3g}"));
   }
   return "<section id=\"history\"><h2>How the error fell</h2>\n"

@@ -133,10 +133,13 @@ void print_table_free_fit(const analysis::TableFreeFit& fit) {
 void print_table_free_quality(const analysis::TableFreeFit& fit) {
   const analysis::TableFreeQuality q = analysis::table_free_quality(fit);
   fmt::print(
-      "\nfit quality: chi2/dof {} ({:.1f} over {} degrees of freedom), {} parameters; "
-      "|f| - g rms {:.3g} mg{}\n",
+      "\nfit quality: chi2/dof {} against the white noise ({:.1f} over {} degrees of "
+      "freedom){}, {} parameters; |f| - g rms {:.3g} mg{}\n",
       q.dof > 0 ? fmt::format("{:.3g}", q.chi2_per_dof) : std::string("-"), q.chi2, q.dof,
-      q.parameters, q.rms_norm_residual_mps2 / (1e-3 * core::kStandardGravity),
+      q.accel_chi2_per_dof_noise_model
+          ? fmt::format("; accel {:.3g} against its noise model", *q.accel_chi2_per_dof_noise_model)
+          : std::string(),
+      q.parameters, q.rms_norm_residual_mps2 / analysis::kMgInMps2,
       q.rms_turn_residual_deg ? fmt::format(", gravity direction after the turns {:.3g} deg rms",
                                             *q.rms_turn_residual_deg)
                               : std::string());

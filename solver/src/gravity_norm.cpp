@@ -324,6 +324,8 @@ GravityNormResult calibrate_accel_gravity_norm(std::span<const core::ImuSample> 
   out.chi2 = L_white.diagonal().cwiseInverse().cwiseProduct(s.r_raw).squaredNorm();
   out.dof = static_cast<int>(n) - static_cast<int>(nf);
   out.chi2_per_dof = out.dof > 0 ? out.chi2 / out.dof : 0.0;
+  // ... and against the noise model the weights came from (white alone when there is none).
+  out.chi2_noise_model = s.r.squaredNorm();
   if (!out.noise.estimated && o.scale_sigmas_by_residual && out.dof > 0 && out.chi2_per_dof > 1.0) {
     out.sigma_scale = std::sqrt(out.chi2_per_dof);
     out.sigmas_scaled = true;
@@ -476,6 +478,7 @@ nlohmann::json gravity_norm_to_json(const GravityNormResult& r) {
                   {"chi2", r.chi2},
                   {"dof", r.dof},
                   {"chi2_per_dof", r.chi2_per_dof},
+                  {"chi2_noise_model", r.chi2_noise_model},
                   {"sigma_scale", r.sigma_scale},
                   {"sigmas_scaled", r.sigmas_scaled},
                   {"summary", r.summary}};

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "analysis/table_free_model.hpp"
+#include "core/site.hpp"
 #include "solver/ferraris.hpp"
 #include "solver/gravity_norm.hpp"
 #include "solver/gyro_integration.hpp"
@@ -23,6 +24,9 @@
 #include "store/fit_history.hpp"
 
 namespace calstand::analysis {
+
+/// One mg in m/s^2: |f| - g is reported in mg, with 1 mg = 1e-3 standard gravity.
+inline constexpr double kMgInMps2 = 1e-3 * core::kStandardGravity;
 
 /// How to find the static poses and what to fit.
 struct TableFreeFitRequest {
@@ -71,12 +75,17 @@ struct TableFreeFit {
 /// A table-free fit's quality in a few numbers, both sensors together (the fit history's row
 /// and the calibration record's `fit`).
 struct TableFreeQuality {
-  double chi2 = 0.0;  ///< accel and gyro, each against its own noise
+  /// Accel and gyro, each against its white noise alone: the one yardstick that compares fits
+  /// of one run (each fit estimates its own noise model, against which it is near 1).
+  double chi2 = 0.0;
   int dof = 0;
   double chi2_per_dof = 0.0;
   int parameters = 0;                           ///< estimated (not held, not fixed by convention)
   double rms_norm_residual_mps2 = 0.0;          ///< |calibrated f| - g over the poses or holds
   std::optional<double> rms_turn_residual_deg;  ///< gravity direction after each turn
+  /// The accelerometers' chi2/dof against the noise model they were weighed with (gravity
+  /// norm: a wandering bias shared by the pose means, estimated by REML).
+  std::optional<double> accel_chi2_per_dof_noise_model;
 };
 TableFreeQuality table_free_quality(const TableFreeFit& fit);
 

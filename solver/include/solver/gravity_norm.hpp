@@ -97,7 +97,10 @@ struct GravityNormResult {
   double rms_residual_mg = 0.0;
   double max_abs_residual_mg = 0.0;
   double chi2 = 0.0;  ///< against the pose means' white noise alone
-  int dof = 0;        ///< poses - estimated parameters
+  /// Against the noise model the fit was weighed with (`noise`; the white noise when there is
+  /// none): about `dof` when the model and the noise model describe the poses.
+  double chi2_noise_model = 0.0;
+  int dof = 0;  ///< poses - estimated parameters
   double chi2_per_dof = 0.0;
   /// The noise model of the pose means the fit weighs by (white alone when not estimated).
   PoseNoise noise;
@@ -152,7 +155,7 @@ ThresholdSearch detect_and_calibrate_accel(std::span<const core::ImuSample> samp
 /// {"method": "gravity_norm", "frame": ..., "gravity_mps2", "parameters": [estimates],
 ///  "covariance": {"names": [...9 or 12], "matrix": [[...]]}, "undetermined": [names],
 ///  "quality": {"poses", "rms_residual_mg", "max_abs_residual_mg", "chi2", "dof",
-///  "chi2_per_dof", "sigma_scale", "sigmas_scaled", "summary"},
+///  "chi2_per_dof", "chi2_noise_model", "sigma_scale", "sigmas_scaled", "summary"},
 ///  "noise_model": pose_noise_to_json() (figures in m/s^2),
 ///  "poses": [{"interval", "start_s", "end_s", "samples", "mean_mps2", "up_A", "norm_mps2",
 ///  "residual_mg", "sigma_mg"}], "solver": {"iterations", "converged"}}
