@@ -8,7 +8,10 @@ Checks, in one daemon's life (it takes seconds: the simulated station runs faste
   3. on the loop page of a thermal calibration run, fit, diagnose, and the recommended term
      added with one click lowers the displayed chi2/dof to the value the API returns for the
      same model;
-  4. a mutating click without the token (the daemon has one) is refused with a message shown.
+  4. a mutating click without the token (the daemon has one) is refused with a message shown;
+  5. on the loop page of a run recorded without a table (a simulated hand-held session imported
+     with `calstand import`), fit and diagnose show the table-free fit: its method, the frame
+     convention's parameters, and the candidates such a run can fit.
 Screenshots and the page's HTML are saved into --out when a check fails.
 
 Exit codes: 0 passed, 1 failed, 77 skipped (no chromium, chromedriver or selenium; a failure
@@ -275,6 +278,27 @@ class ConsoleTest:
         # The history shows the fits as a falling curve (one row per fit).
         self.wait("the history rows", lambda: len(self.driver.find_elements(By.CSS_SELECTOR, "#history tbody tr")) >= 2)
 
+    def table_free_run_in_the_loop(self):
+        workdir = os.path.dirname(self.daemon.db)
+        session = os.path.join(workdir, "hand-session")
+        subprocess.run([self.calstand, "sim-session", "--kind", "hand", "--poses", "12", "--rate", "200",
+                        "--seed", "3", "--out", session], check=True, capture_output=True)
+        imported = subprocess.run([self.calstand, "import", session, "--db", self.daemon.db, "--json"],
+                                  check=True, capture_output=True, text=True)
+        run = json.loads(imported.stdout)["run"]
+        self.open(f"#/loop/{run}")
+        self.set_token(TOKEN)
+        self.wait("the catalogue", lambda: self.find("#term-gyro_bias").is_selected())
+        self.find("#fit").click()
+        self.wait("the table-free fit", lambda: "no table" in self.text("#quality"), timeout_s=60)
+        quality = self.text("#quality")
+        assert "gravity_norm" in quality and "earth_rate left out" in quality, quality
+        self.wait("the frame convention's parameters", lambda: "fixed by convention" in self.text("#parameters"))
+        self.find("#diagnose").click()
+        self.wait("the candidates", lambda: self.find("#candidates"), timeout_s=60)
+        candidates = self.text("#candidates")
+        assert "gyro_g_sensitivity" in candidates and "accel_quadratic" in candidates, candidates
+
     def action_without_token_refused(self):
         status, answer = self.daemon.request("POST", "/runs", {"procedure": "six-position",
                                                                 "parameters": {"capture_s": 30000}})
@@ -294,6 +318,7 @@ class ConsoleTest:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calstandd", required=True)
+    parser.add_argument("--calstand", required=True, help="the command line (sim-session, import)")
     parser.add_argument("--station", required=True, help="station file (the demo station)")
     parser.add_argument("--out", required=True, help="directory for screenshots on failure")
     args = parser.parse_args()
@@ -314,11 +339,13 @@ def main():
         try:
             driver = make_driver()
             test = ConsoleTest(driver, daemon, args.out)
+            test.calstand = args.calstand
             test.check("static files served", test.static_files_served)
             test.check("station shows live telemetry", test.station_shows_live_telemetry)
             test.check("submitted run completes", test.submitted_run_completes)
             test.check("recommended term lowers chi2", test.recommended_term_lowers_chi2)
             test.check("action without token refused", test.action_without_token_refused)
+            test.check("table-free run in the loop", test.table_free_run_in_the_loop)
             for entry in driver.get_log("browser"):
                 if entry.get("level") == "SEVERE":
                     print(f"browser console: {entry.get('message')}")
