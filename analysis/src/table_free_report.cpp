@@ -28,15 +28,20 @@ std::string optional_number(const std::optional<double>& v, const char* format) 
 // |f| - g of every static pose with its 2-sigma noise band: a pose far outside it was not
 // still, or the model lacks an effect of the accelerometers.
 std::string pose_plot(const TableFreeFit& fit) {
+  // The wander the pose means share (their noise model), RMS over the poses [mg].
+  const double wander_mg = fit.accel->noise.pose_sigma / kMgInMps2;
   std::vector<std::string> rows;
   for (const auto& p : fit.accel->poses) {
-    rows.push_back(
-        fmt::format("{} {} {}", p.interval, gp_number(p.residual_mg), gp_number(2.0 * p.sigma_mg)));
+    rows.push_back(fmt::format("{} {} {} {}", p.interval, gp_number(p.residual_mg),
+                               gp_number(2.0 * p.sigma_mg),
+                               gp_number(2.0 * std::hypot(p.sigma_mg, wander_mg))));
   }
   std::string s = terminal(1000, 360) + data_block("p", rows);
   s += "set xlabel 'static pose'\nset ylabel '|f| - g [mg]'\nset offsets 0.5, 0.5, 0, 0\n";
-  s += "plot $p using 1:(0):3 with yerrorbars pt -1 lw 1.2 lc rgb '#9aa5b1' "
-       "title 'noise of the pose mean (2 sigma)', "
+  s += "plot $p using 1:(0):4 with yerrorbars pt -1 lw 1.2 lc rgb '#c7d3df' "
+       "title 'with the wander the poses share (2 sigma)', "
+       "$p using 1:(0):3 with yerrorbars pt -1 lw 1.6 lc rgb '#7f8a96' "
+       "title 'white noise of the pose mean (2 sigma)', "
        "$p using 1:2 with points pt 7 ps 1.1 lc rgb '#1f77b4' title '|f| - g'\n";
   return gnuplot_svg(s, "poses", "|f| - g at each static pose");
 }
@@ -46,15 +51,18 @@ std::string turn_plot(const TableFreeFit& fit) {
   std::vector<std::string> rows;
   for (std::size_t k = 0; k < fit.gyro->turns.size(); ++k) {
     const auto& t = fit.gyro->turns[k];
-    // The residual is an angle with two components of sigma_deg each.
-    rows.push_back(fmt::format("{} {} {}", k + 1, gp_number(t.residual_deg),
-                               gp_number(2.0 * std::sqrt(2.0) * t.sigma_deg)));
+    // The residual is an angle with two components of sigma_deg each, scaled by the turns'
+    // own scatter over the white noise as the fit's sigmas are.
+    rows.push_back(
+        fmt::format("{} {} {}", k + 1, gp_number(t.residual_deg),
+                    gp_number(2.0 * std::sqrt(2.0) * t.sigma_deg * fit.gyro->sigma_scale)));
   }
   std::string s = terminal(1000, 360) + data_block("t", rows);
   s += "set xlabel 'turn'\nset ylabel 'gravity direction off by [deg]'\nset yrange [0:*]\n";
   s += "set offsets 0.5, 0.5, 0, 0\n";
-  s += "plot $t using 1:3 with steps lw 1.2 lc rgb '#9aa5b1' title 'noise (about 2 sigma)', "
-       "$t using 1:2 with points pt 7 ps 1.1 lc rgb '#d62728' title 'after the turn'\n";
+  s +=
+      "plot $t using 1:3 with steps lw 1.2 lc rgb '#9aa5b1' title 'their scatter (about 2 sigma)', "
+      "$t using 1:2 with points pt 7 ps 1.1 lc rgb '#d62728' title 'after the turn'\n";
   return gnuplot_svg(s, "turns", "gravity direction after each turn");
 }
 
