@@ -23,6 +23,7 @@
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/database_lock.hpp"
+#include "store/run_lock.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::cli {
@@ -38,8 +39,10 @@ struct RunOptions {
 };
 
 // Operator signals, seen by the engine thread at its next tick (a handler may only set flags):
-// SIGINT/SIGTERM abort to the safe state, SIGUSR1 pauses at the next step boundary, SIGUSR2
-// pauses at once (the capture in progress is repeated), SIGCONT resumes.
+// SIGINT/SIGTERM/SIGHUP abort to the safe state (SIGHUP: the terminal went away, a closed SSH
+// session or a killed tmux; the progress bar falls silent, nobody reads it), SIGUSR1 pauses at
+// the next step boundary, SIGUSR2 pauses at once (the capture in progress is repeated), SIGCONT
+// resumes.
 std::atomic<int> g_stop_signal{0};
 std::atomic<int> g_pause_signal{0};
 std::atomic<bool> g_resume_signal{false};
@@ -52,8 +55,10 @@ int execute_plan(const core::StationConfig& station_config, const procedures::Pl
                  const std::string& db_path, std::int64_t run_id,
                  const daemon::CampaignStart& start, bool quiet) {
   ProgressBar bar;
+  bool hung_up = false;  // engine thread only, until the run ends
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
+  std::signal(SIGHUP, on_stop_signal);
   std::signal(SIGUSR1, on_pause_signal);
   std::signal(SIGUSR2, on_pause_signal);
   std::signal(SIGCONT, on_resume_signal);
@@ -61,7 +66,11 @@ int execute_plan(const core::StationConfig& station_config, const procedures::Pl
       station_config, plan, db_path, run_id, start,
       [&](daemon::RunEngine& engine, const daemon::Progress& p) {
         if (const int sig = g_stop_signal.exchange(0); sig != 0) {
-          engine.abort(sig == SIGINT ? "interrupted (SIGINT)" : "terminated (SIGTERM)", "signal");
+          if (sig == SIGHUP) hung_up = true;
+          engine.abort(sig == SIGINT    ? "interrupted (SIGINT)"
+                       : sig == SIGHUP ? "hangup (SIGHUP: the terminal went away)"
+                                       : "terminated (SIGTERM)",
+                       "signal");
         }
         if (const int sig = g_pause_signal.exchange(0); sig != 0) {
           engine.pause(sig == SIGUSR2, sig == SIGUSR2 ? "signal SIGUSR2" : "signal SIGUSR1");
@@ -69,18 +78,20 @@ int execute_plan(const core::StationConfig& station_config, const procedures::Pl
         if (g_resume_signal.exchange(false) && p.state == daemon::RunState::kPaused) {
           engine.resume("signal SIGCONT");
         }
-        if (!quiet) bar.update(p);
+        if (!quiet && !hung_up) bar.update(p);
       });
-  for (int sig : {SIGINT, SIGTERM, SIGUSR1, SIGUSR2, SIGCONT}) std::signal(sig, SIG_DFL);
-  bar.finish();
+  for (int sig : {SIGINT, SIGTERM, SIGHUP, SIGUSR1, SIGUSR2, SIGCONT}) std::signal(sig, SIG_DFL);
+  if (!hung_up) bar.finish();
 
+  const int exit_code = result.state == daemon::RunState::kCompleted ? 0 : 1;
+  if (hung_up) return exit_code;  // no terminal to tell: the run and its reason are stored
   store::Database db(db_path);
   store::RunStore run_store(db);
   const auto summary = run_store.load_run(run_id).summary;
   fmt::print("run {} {}: {}/{} steps, station time {}{}\n", run_id, to_string(result.state),
              summary.steps_done, summary.steps_total, format_duration(result.station_time_s),
              result.exit_reason.empty() ? "" : " (" + result.exit_reason + ")");
-  return result.state == daemon::RunState::kCompleted ? 0 : 1;
+  return exit_code;
 }
 
 int run_new(const RunOptions& opt) {
@@ -117,6 +128,12 @@ int run_resume(const RunOptions& opt) {
                            fmt::format("run {} is queued for calstandd and never started; "
                                        "start the daemon or abort the run",
                                        opt.resume_run));
+  }
+  if (store::RunLock::held(opt.db, opt.resume_run)) {
+    throw store::DatabaseBusy(fmt::format(
+        "{}: run {} is being run by another process (a foreground `calstand run`); it needs no "
+        "resume",
+        opt.db, opt.resume_run));
   }
   const daemon::StoredRun stored = daemon::prepare_stored_run(run_store, opt.resume_run);
   store::EventRecord e;

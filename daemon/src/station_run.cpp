@@ -13,7 +13,8 @@ constexpr double kTelemetryPeriodS = 0.1;
 
 StationRun::StationRun(const core::StationConfig& station, const std::string& db_path,
                        std::int64_t run_id, double start_time_s)
-    : config_(station),
+    : run_lock_(db_path, run_id),
+      config_(station),
       db_(db_path),
       runs_(db_),
       writer_(db_path),

@@ -1,5 +1,8 @@
 #include "store/run_store.hpp"
 
+#include "store/run_lock.hpp"
+#include "store/run_queue.hpp"
+
 #include <SQLiteCpp/Statement.h>
 #include <SQLiteCpp/Transaction.h>
 
@@ -55,6 +58,15 @@ RunSummary read_summary(SQLite::Statement& q) {
   r.ended_utc = detail::text_or_empty(q.getColumn(7));
   r.exit_reason = detail::text_or_empty(q.getColumn(8));
   return r;
+}
+
+// A run whose row says it is being driven (running, paused) while no process holds its run lock
+// was cut off: it reads `interrupted` (the row is left as it is; a resume or a daemon's
+// recovery takes it from there).
+void show_cut_off_as_interrupted(RunSummary& r, const std::string& db_path) {
+  if ((r.status == "running" || r.status == "paused") && !RunLock::held(db_path, r.id)) {
+    r.status = kInterruptedStatus;
+  }
 }
 
 constexpr const char* kSummaryQuery =
@@ -409,7 +421,10 @@ std::vector<RunSummary> RunStore::list_runs(std::optional<std::size_t> limit,
                            *limit, std::numeric_limits<std::int64_t>::max())));
     }
     std::vector<RunSummary> out;
-    while (q.executeStep()) out.push_back(read_summary(q));
+    while (q.executeStep()) {
+      out.push_back(read_summary(q));
+      show_cut_off_as_interrupted(out.back(), db_.path());
+    }
     return out;
   });
 }
@@ -443,6 +458,7 @@ RunRecord RunStore::load_run(std::int64_t run) {
     s.bind(1, run);
     s.executeStep();
     rec.summary = read_summary(s);
+    show_cut_off_as_interrupted(rec.summary, db_.path());
     SQLite::Statement q(db_.sql(),
                         "SELECT station_id, procedure_text, procedure_sha256, parameters, "
                         "station_snapshot, started_clock_s, ended_clock_s FROM runs WHERE id = ?");

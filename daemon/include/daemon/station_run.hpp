@@ -14,6 +14,7 @@
 #include "procedures/plan.hpp"
 #include "store/capture_writer.hpp"
 #include "store/database.hpp"
+#include "store/run_lock.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::daemon {
@@ -28,8 +29,9 @@ class StationRun {
   /// Opens the database at `db_path` and a capture writer on it, and makes the station's
   /// devices (no device I/O: the engine brings them up). `run_id` is recorded with its steps;
   /// `start_time_s` is where the station clock starts [s] (the last recorded time of a resumed
-  /// run). Throws store::StoreError for the database, and what drivers::make_station() throws
-  /// for a station it cannot make.
+  /// run). Throws store::DatabaseBusy when another process drives the run already,
+  /// store::StoreError for the database, and what drivers::make_station() throws for a station
+  /// it cannot make.
   StationRun(const core::StationConfig& station, const std::string& db_path, std::int64_t run_id,
              double start_time_s);
 
@@ -50,6 +52,9 @@ class StationRun {
                      std::shared_ptr<EngineCommandQueue> commands = nullptr);
 
  private:
+  /// Taken first: a run is driven by one process at a time, and one that is driven reads
+  /// `running` to others (store/run_lock.hpp); released when the run object goes.
+  store::RunLock run_lock_;
   core::StationConfig config_;
   store::Database db_;
   store::RunStore runs_;

@@ -80,11 +80,14 @@ class RunStore {
 
   /// Runs newest first: at most `limit` (every one when none) with ids below `before_id` (any
   /// when none). A page of a long history; the next page starts before the last id of this one.
+  /// Here and in load_run(), a run stored `running` or `paused` whose process is gone (nobody
+  /// holds its RunLock) reads `interrupted`.
   std::vector<RunSummary> list_runs(std::optional<std::size_t> limit = std::nullopt,
                                     std::optional<std::int64_t> before_id = std::nullopt);
   /// One run with its steps (by index) and events (in order).
   RunRecord load_run(std::int64_t run);
-  /// The stored status of `run` alone (one row; the daemon asks it on every operator action).
+  /// The stored status of `run` alone, as stored (one row; the daemon asks it on every operator
+  /// action).
   std::string run_status(std::int64_t run);
   /// The steps of `run` by index.
   std::vector<StepRecord> load_steps(std::int64_t run);
