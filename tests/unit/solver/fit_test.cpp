@@ -12,13 +12,10 @@
 namespace calstand::solver {
 namespace {
 
-using testing::rate_steps;
+using testing::kBaseModel;
 using testing::simulate_run;
 using testing::six_positions;
 using testing::white_noise_truth;
-
-const char* kBaseModel =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 
 /// A unit with bias, scale and misalignment drawn per seed (LN200-class magnitudes).
 sim::ImuTruth random_unit(std::uint64_t seed) {
@@ -30,7 +27,7 @@ sim::ImuTruth random_unit(std::uint64_t seed) {
 
 std::vector<testing::SimStep> base_campaign() {
   std::vector<testing::SimStep> steps = six_positions();
-  for (const auto& r : rate_steps({20.0, 100.0})) steps.push_back(r);
+  for (const auto& r : testing::rate_steps({20.0, 100.0})) steps.push_back(r);
   return steps;
 }
 
@@ -102,7 +99,7 @@ TEST(Fit, AMissingTermShowsInChiSquare) {
 
 TEST(Fit, AsymmetryWithoutBothDirectionsIsReportedNotFitted) {
   std::vector<testing::SimStep> steps = six_positions();
-  for (const auto& r : rate_steps({20.0, 100.0})) {
+  for (const auto& r : testing::rate_steps({20.0, 100.0})) {
     if (r.inner_rate_dps >= 0.0 && r.outer_rate_dps >= 0.0) steps.push_back(r);  // CW only
   }
   const FitResult fit =
