@@ -21,8 +21,9 @@ using testing::import_session;
 
 // Every estimated parameter of `estimates` within 4.5 sigma of the session's truth (the sigma
 // of a wandering-bias sensor's estimates is honest only to a factor near one).
-void expect_recovered(const sim::SimSession& s, const std::vector<solver::TriadEstimate>& estimates,
-                      const char* prefix, bool counts) {
+void expect_session_truth(const sim::SimSession& s,
+                          const std::vector<solver::TriadEstimate>& estimates, const char* prefix,
+                          bool counts) {
   int checked = 0;
   for (const auto& e : estimates) {
     if (e.status != solver::EstimateStatus::kEstimated || e.name.rfind(prefix, 0) != 0) continue;
@@ -50,8 +51,8 @@ TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
   // The detector finds the rest and every pose the session held.
   EXPECT_EQ(fit.poses->detection.intervals.size(), session.holds.size());
   EXPECT_TRUE(fit.poses->detection.intervals.front().initial_rest);
-  expect_recovered(session, fit.accel->parameters, "accel_", false);
-  expect_recovered(session, fit.gyro->parameters, "gyro_", false);
+  expect_session_truth(session, fit.accel->parameters, "accel_", false);
+  expect_session_truth(session, fit.gyro->parameters, "gyro_", false);
   EXPECT_LT(fit.accel->rms_residual_mg, 1.0);
 
   const nlohmann::json j = to_json(fit);
@@ -76,7 +77,7 @@ TEST(TableFreeFit, OperatorIntervalsReplaceTheDetectorAndAreCheckedAgainstTheRec
   ASSERT_EQ(poses.detection.intervals.size(), session.holds.size());
   EXPECT_TRUE(poses.detection.intervals.front().initial_rest);
   const TableFreeFit fit = table_free_fit(db, run, request);
-  expect_recovered(session, fit.accel->parameters, "accel_", true);
+  expect_session_truth(session, fit.accel->parameters, "accel_", true);
 
   request.intervals_s = {{1e6, 1e6 + 5}};
   try {

@@ -18,7 +18,7 @@ void expect_rel(double actual, double expected, double rel = 1e-12) {
 
 // The message a call throws, or "" if it does not throw InputError.
 template <class F>
-std::string error_of(F&& f) {
+std::string thrown_message(F&& f) {
   try {
     f();
   } catch (const InputError& e) {
@@ -190,77 +190,80 @@ TEST(Units, SiUnitReadsBackWithScaleOne) {
 }
 
 TEST(UnitsErrors, MismatchedDimensionsNameBothUnits) {
-  EXPECT_EQ(error_of([] { convert(1.0, "deg/sqrt(h)", "m/s"); }),
+  EXPECT_EQ(thrown_message([] { convert(1.0, "deg/sqrt(h)", "m/s"); }),
             "cannot convert deg/sqrt(h) [angle time^-1/2] to m/s [length time^-1]: dimensions "
             "differ");
   // Angle is a dimension: deg/s is not 1/s, and the message says that is the only difference.
-  EXPECT_EQ(error_of([] { convert(1.0, "deg/s", "1/s"); }),
+  EXPECT_EQ(thrown_message([] { convert(1.0, "deg/s", "1/s"); }),
             "cannot convert deg/s [angle time^-1] to 1/s [time^-1]: dimensions differ (only in "
             "angle, which counts as a dimension here)");
-  EXPECT_NE(error_of([] { convert(1.0, "deg/s", "Hz"); }), "");
+  EXPECT_NE(thrown_message([] { convert(1.0, "deg/s", "Hz"); }), "");
   // A ratio converts to ratios only, not to an angle (nor the reverse).
-  EXPECT_EQ(error_of([] { convert(100.0, "ppm", "rad"); }),
+  EXPECT_EQ(thrown_message([] { convert(100.0, "ppm", "rad"); }),
             "cannot convert ppm [dimensionless] to rad [angle]: dimensions differ (only in angle, "
             "which counts as a dimension here)");
-  EXPECT_EQ(error_of([] { convert(1.0, "", "g"); }),
+  EXPECT_EQ(thrown_message([] { convert(1.0, "", "g"); }),
             "cannot convert 1 [dimensionless] to g [length time^-2]: dimensions differ");
   // The Unit overload names the SI units, having no text.
-  EXPECT_EQ(error_of([] { convert(1.0, parse_unit("deg/h"), parse_unit("g")); }),
+  EXPECT_EQ(thrown_message([] { convert(1.0, parse_unit("deg/h"), parse_unit("g")); }),
             "cannot convert rad/s [angle time^-1] to m/s^2 [length time^-2]: dimensions differ");
-  // Sanity: error_of reports "" when nothing is thrown, so the checks above can fail.
-  EXPECT_EQ(error_of([] { convert(1.0, "deg/s", "rad/s"); }), "");
+  // Sanity: thrown_message reports "" when nothing is thrown, so the checks above can fail.
+  EXPECT_EQ(thrown_message([] { convert(1.0, "deg/s", "rad/s"); }), "");
 }
 
 TEST(UnitsErrors, UnknownNamesArePointedAt) {
-  EXPECT_EQ(error_of([] { parse_unit("deg/hz"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("deg/hz"); }),
             "unit \"deg/hz\" at column 5: unknown unit \"hz\" (did you mean \"Hz\"?)");
-  EXPECT_EQ(error_of([] { parse_unit("furlong/s"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("furlong/s"); }),
             "unit \"furlong/s\" at column 1: unknown unit \"furlong\"");
   // Nanogram-or-nano-g is ambiguous enough that it is left out on purpose.
-  EXPECT_EQ(error_of([] { parse_quantity("5 ng"); }),
+  EXPECT_EQ(thrown_message([] { parse_quantity("5 ng"); }),
             "quantity \"5 ng\" at column 3: unknown unit \"ng\"");
   // Columns count characters: µ and √ are two and three bytes but one column each.
-  EXPECT_EQ(error_of([] { parse_unit("\xC2\xB5g/\xE2\x88\x9Ahz"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("\xC2\xB5g/\xE2\x88\x9Ahz"); }),
             "unit \"\xC2\xB5g/\xE2\x88\x9Ahz\" at column 5: unknown unit \"hz\" (did you mean "
             "\"Hz\"?)");
 }
 
 TEST(UnitsErrors, MalformedSyntaxIsPointedAt) {
-  EXPECT_EQ(error_of([] { parse_unit("deg/sqrt(hr"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("deg/sqrt(hr"); }),
             "unit \"deg/sqrt(hr\" at column 12: expected ')'");
-  EXPECT_EQ(error_of([] { parse_unit("deg/"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("deg/"); }),
             "unit \"deg/\" at column 5: expected a unit name, '(' or 'sqrt('");
-  EXPECT_EQ(error_of([] { parse_unit("deg//s"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("deg//s"); }),
             "unit \"deg//s\" at column 5: expected a unit name, '(' or 'sqrt('");
-  EXPECT_EQ(error_of([] { parse_unit("sqrt h"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("sqrt h"); }),
             "unit \"sqrt h\" at column 6: expected '(' after sqrt");
-  EXPECT_EQ(error_of([] { parse_unit("m s"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("m s"); }),
             "unit \"m s\" at column 3: expected '*' or '/' between units");
-  EXPECT_EQ(error_of([] { parse_unit("deg)"); }), "unit \"deg)\" at column 4: unmatched ')'");
-  EXPECT_EQ(error_of([] { parse_unit("s^"); }), "unit \"s^\" at column 3: expected an exponent");
-  EXPECT_EQ(error_of([] { parse_unit("s^(1/3)"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("deg)"); }), "unit \"deg)\" at column 4: unmatched ')'");
+  EXPECT_EQ(thrown_message([] { parse_unit("s^"); }),
+            "unit \"s^\" at column 3: expected an exponent");
+  EXPECT_EQ(thrown_message([] { parse_unit("s^(1/3)"); }),
             "unit \"s^(1/3)\" at column 3: exponent must be a multiple of 1/2");
-  EXPECT_EQ(error_of([] { parse_unit("sqrt(sqrt(Hz))"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("sqrt(sqrt(Hz))"); }),
             "unit \"sqrt(sqrt(Hz))\" at column 1: sqrt leaves a dimension off multiples of 1/2");
-  EXPECT_EQ(error_of([] { parse_unit("s^-1/2"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("s^-1/2"); }),
             "unit \"s^-1/2\" at column 6: a number here reads as a unit; write a fractional "
             "exponent as ^(1/2)");
-  EXPECT_EQ(error_of([] { parse_unit("2/s"); }),
+  EXPECT_EQ(thrown_message([] { parse_unit("2/s"); }),
             "unit \"2/s\" at column 1: the only number allowed in a unit is 1, as in 1/s");
-  EXPECT_NE(error_of([] { parse_unit(std::string(1000, '(') + "s" + std::string(1000, ')')); }),
-            "");
+  EXPECT_NE(
+      thrown_message([] { parse_unit(std::string(1000, '(') + "s" + std::string(1000, ')')); }),
+      "");
 }
 
 TEST(UnitsErrors, QuantityNeedsAFiniteNumber) {
-  EXPECT_EQ(error_of([] { parse_quantity("deg/s"); }),
+  EXPECT_EQ(thrown_message([] { parse_quantity("deg/s"); }),
             "quantity \"deg/s\" at column 1: expected a number");
-  EXPECT_EQ(error_of([] { parse_quantity(""); }), "quantity \"\" at column 1: expected a number");
-  EXPECT_EQ(error_of([] { parse_quantity("inf deg"); }),
+  EXPECT_EQ(thrown_message([] { parse_quantity(""); }),
+            "quantity \"\" at column 1: expected a number");
+  EXPECT_EQ(thrown_message([] { parse_quantity("inf deg"); }),
             "quantity \"inf deg\" at column 1: expected a number");
-  EXPECT_EQ(error_of([] { parse_quantity("1e999 deg"); }),
+  EXPECT_EQ(thrown_message([] { parse_quantity("1e999 deg"); }),
             "quantity \"1e999 deg\" at column 1: number is out of range");
   // Unit errors inside a quantity count columns in the whole text.
-  EXPECT_EQ(error_of([] { parse_quantity("0.15 deg/sqrt(hr"); }),
+  EXPECT_EQ(thrown_message([] { parse_quantity("0.15 deg/sqrt(hr"); }),
             "quantity \"0.15 deg/sqrt(hr\" at column 17: expected ')'");
 }
 

@@ -9,7 +9,6 @@
 namespace calstand::solver {
 namespace {
 
-using testing::rate_steps;
 using testing::simulate_run;
 using testing::six_positions;
 using testing::white_noise_truth;
@@ -33,7 +32,7 @@ sim::ImuTruth unit_under_test() {
 
 std::vector<testing::SimStep> campaign() {
   auto steps = six_positions();
-  for (const auto& r : rate_steps({30.0, 90.0})) steps.push_back(r);
+  for (const auto& r : testing::rate_steps({30.0, 90.0})) steps.push_back(r);
   return steps;
 }
 

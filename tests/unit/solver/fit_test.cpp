@@ -12,13 +12,10 @@
 namespace calstand::solver {
 namespace {
 
-using testing::rate_steps;
+using testing::kBaseModel;
 using testing::simulate_run;
 using testing::six_positions;
 using testing::white_noise_truth;
-
-const char* kBaseModel =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 
 /// A unit with bias, scale and misalignment drawn per seed (LN200-class magnitudes).
 sim::ImuTruth random_unit(std::uint64_t seed) {
@@ -30,11 +27,12 @@ sim::ImuTruth random_unit(std::uint64_t seed) {
 
 std::vector<testing::SimStep> base_campaign() {
   std::vector<testing::SimStep> steps = six_positions();
-  for (const auto& r : rate_steps({20.0, 100.0})) steps.push_back(r);
+  for (const auto& r : testing::rate_steps({20.0, 100.0})) steps.push_back(r);
   return steps;
 }
 
-FitResult fit_run(const RunData& data, const Model& model, const FitOptions& options = {}) {
+FitResult fit_at_noise_floor(const RunData& data, const Model& model,
+                             const FitOptions& options = {}) {
   const auto summaries = summarize_steps(data, model);
   return fit_model(summaries, model, measure_noise_floor(summaries), options);
 }
@@ -50,7 +48,7 @@ double value_of(const FitResult& fit, const std::string& name) {
 TEST(Fit, RecoversTheTruthWithinThreeSigma) {
   const sim::ImuTruth truth = random_unit(1);
   const Model model = Model::parse(kBaseModel);
-  const FitResult fit = fit_run(simulate_run(truth, base_campaign(), 1), model);
+  const FitResult fit = fit_at_noise_floor(simulate_run(truth, base_campaign(), 1), model);
   EXPECT_TRUE(fit.unidentifiable.empty()) << fit.unidentifiable.front().name;
   ASSERT_EQ(fit.parameters.size(), model.size());
   for (const auto& p : fit.parameters) {
@@ -70,8 +68,8 @@ TEST(Fit, SigmasAreHonestOverSeeds) {
   std::vector<double> pulls;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
     const sim::ImuTruth truth = random_unit(seed);
-    const FitResult fit = fit_run(simulate_run(truth, base_campaign(), 100 + seed), model,
-                                  {.inflate_sigma_by_chi2 = false});
+    const FitResult fit = fit_at_noise_floor(simulate_run(truth, base_campaign(), 100 + seed),
+                                             model, {.inflate_sigma_by_chi2 = false});
     for (const auto& p : fit.parameters)
       pulls.push_back((p.value - truth.parameter(p.name)) / p.sigma);
   }
@@ -92,23 +90,24 @@ TEST(Fit, AMissingTermShowsInChiSquare) {
   sim::ImuTruth truth = random_unit(3);
   truth.gyro_g_sensitivity(0, 2) = 5e-3;  // (deg/s)/g: far above the step-mean noise
   const FitResult without =
-      fit_run(simulate_run(truth, base_campaign(), 3), Model::parse(kBaseModel));
+      fit_at_noise_floor(simulate_run(truth, base_campaign(), 3), Model::parse(kBaseModel));
   EXPECT_GT(without.chi2_dof, 5.0);
-  const FitResult with = fit_run(simulate_run(truth, base_campaign(), 3),
-                                 Model::parse(std::string(kBaseModel) + ",gyro_g_sensitivity"));
+  const FitResult with =
+      fit_at_noise_floor(simulate_run(truth, base_campaign(), 3),
+                         Model::parse(std::string(kBaseModel) + ",gyro_g_sensitivity"));
   EXPECT_LT(with.chi2_dof, 1.6);
   EXPECT_NEAR(value_of(with, "gyro_g_sensitivity.xz"), 5e-3, 5e-4);
 }
 
 TEST(Fit, AsymmetryWithoutBothDirectionsIsReportedNotFitted) {
   std::vector<testing::SimStep> steps = six_positions();
-  for (const auto& r : rate_steps({20.0, 100.0})) {
+  for (const auto& r : testing::rate_steps({20.0, 100.0})) {
     if (r.inner_rate_dps >= 0.0 && r.outer_rate_dps >= 0.0) steps.push_back(r);  // CW only
   }
   const FitResult fit =
-      fit_run(simulate_run(random_unit(4), steps, 4),
-              Model::parse("gyro_bias,gyro_scale,gyro_scale_asymmetry,earth_rate"),
-              {.rows = SensorRows::kGyro});
+      fit_at_noise_floor(simulate_run(random_unit(4), steps, 4),
+                         Model::parse("gyro_bias,gyro_scale,gyro_scale_asymmetry,earth_rate"),
+                         {.rows = SensorRows::kGyro});
   std::map<std::string, Unidentifiable> flagged;
   for (const auto& u : fit.unidentifiable) flagged[u.name] = u;
   for (const char* axis : {"x", "y", "z"}) {
@@ -126,9 +125,9 @@ TEST(Fit, QuadraticWithOnlyPlusAndMinusOneGIsReported) {
   // Two positions: z up and z down. f_z^2 is g^2 in both, the same as a bias.
   std::vector<testing::SimStep> steps = six_positions();
   steps.resize(2);
-  const FitResult fit =
-      fit_run(simulate_run(random_unit(5), steps, 5),
-              Model::parse("accel_bias,accel_scale,accel_quadratic"), {.rows = SensorRows::kAccel});
+  const FitResult fit = fit_at_noise_floor(simulate_run(random_unit(5), steps, 5),
+                                           Model::parse("accel_bias,accel_scale,accel_quadratic"),
+                                           {.rows = SensorRows::kAccel});
   bool flagged = false;
   for (const auto& u : fit.unidentifiable) {
     if (u.name == "accel_quadratic.z") {
@@ -144,9 +143,9 @@ TEST(Fit, TemperatureOrderAtOrAbovePlateausIsReported) {
   for (double temp : {-10.0, 25.0}) {
     for (auto s : six_positions(temp)) steps.push_back(s);
   }
-  const FitResult fit =
-      fit_run(simulate_run(random_unit(6), steps, 6), Model::parse("accel_bias,accel_temp_bias:2"),
-              {.rows = SensorRows::kAccel});
+  const FitResult fit = fit_at_noise_floor(simulate_run(random_unit(6), steps, 6),
+                                           Model::parse("accel_bias,accel_temp_bias:2"),
+                                           {.rows = SensorRows::kAccel});
   std::vector<std::string> names;
   for (const auto& u : fit.unidentifiable) names.push_back(u.name);
   EXPECT_EQ(names, (std::vector<std::string>{"accel_temp_bias.x2", "accel_temp_bias.y2",
@@ -172,11 +171,11 @@ TEST(Fit, CustomTermFollowingTemperatureRate) {
       step.samples[i].gyro_dps.x() += 1e-3 * rates[i];
   }
   const FitResult base =
-      fit_run(data, Model::parse("gyro_bias,earth_rate"), {.rows = SensorRows::kGyro});
+      fit_at_noise_floor(data, Model::parse("gyro_bias,earth_rate"), {.rows = SensorRows::kGyro});
   EXPECT_GT(base.chi2_dof, 5.0);
   const FitResult custom =
-      fit_run(data, Model::parse("gyro_bias,earth_rate", {"grad=gyro:temperature_rate"}),
-              {.rows = SensorRows::kGyro});
+      fit_at_noise_floor(data, Model::parse("gyro_bias,earth_rate", {"grad=gyro:temperature_rate"}),
+                         {.rows = SensorRows::kGyro});
   EXPECT_LT(custom.chi2_dof, 1.6);
   EXPECT_NEAR(value_of(custom, "grad.x"), 1e-3, 2e-4);
 }
@@ -184,14 +183,15 @@ TEST(Fit, CustomTermFollowingTemperatureRate) {
 TEST(Fit, TooFewRowsIsAnInputError) {
   std::vector<testing::SimStep> steps = six_positions();
   steps.resize(1);
-  EXPECT_THROW((void)fit_run(simulate_run(random_unit(9), steps, 9),
-                             Model::parse("accel_bias,accel_scale"), {.rows = SensorRows::kAccel}),
+  EXPECT_THROW((void)fit_at_noise_floor(simulate_run(random_unit(9), steps, 9),
+                                        Model::parse("accel_bias,accel_scale"),
+                                        {.rows = SensorRows::kAccel}),
                core::InputError);
 }
 
 TEST(Fit, JsonHasTheDocumentedFields) {
-  const FitResult fit =
-      fit_run(simulate_run(random_unit(10), base_campaign(), 10), Model::parse(kBaseModel));
+  const FitResult fit = fit_at_noise_floor(simulate_run(random_unit(10), base_campaign(), 10),
+                                           Model::parse(kBaseModel));
   const nlohmann::json j = fit_to_json(fit);
   for (const char* key :
        {"model", "chi2_dof", "residual_rms", "noise_floor", "parameters", "unidentifiable"}) {

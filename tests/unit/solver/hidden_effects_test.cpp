@@ -15,10 +15,8 @@
 namespace calstand::solver {
 namespace {
 
+using testing::kBaseModel;
 using testing::SimStep;
-
-constexpr const char* kBase =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 
 /// Three plateaus; at each the six positions and turns about every body axis at three rates in
 /// both directions, each over a whole revolution.
@@ -80,7 +78,7 @@ void set_effect(sim::ImuTruth& truth, Eigen::Vector2d& tilt, const std::string& 
 }
 
 double base_chi2_dof(const RunData& data) {
-  const Model base = Model::parse(kBase);
+  const Model base = Model::parse(kBaseModel);
   const auto steps = summarize_steps(data, base);
   return fit_model(steps, base, measure_noise_floor(steps)).chi2_dof;
 }
@@ -108,7 +106,7 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndTheRefitReachesTheNoise) {
   tilt.setZero();
   set_effect(truth, tilt, term, strength);
   const RunData data = testing::simulate_run(truth, hidden_effects_campaign(), 6, tilt);
-  const Diagnosis d = diagnose(data, Model::parse(kBase));
+  const Diagnosis d = diagnose(data, Model::parse(kBaseModel));
   EXPECT_GT(d.fit.chi2_dof, 5.0) << term;
   EXPECT_LT(d.fit.chi2_dof, 30.0) << term;
   ASSERT_FALSE(d.candidates.empty());
@@ -122,7 +120,7 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndTheRefitReachesTheNoise) {
 
 std::vector<std::string> hidden_terms() {
   std::vector<std::string> out;
-  const Model base = Model::parse(kBase);
+  const Model base = Model::parse(kBaseModel);
   for (const auto& t : core::error_term_catalogue()) {
     if (!base.find(t.name)) out.push_back(std::string(t.name));
   }
@@ -138,7 +136,7 @@ TEST(HiddenEffects, TwoEffectsAreFoundInTwoRounds) {
   truth.gyro_g_sensitivity(1, 0) = -2e-3;
   truth.accel_temp_bias = {Eigen::Vector3d(2e-5, -1.5e-5, 1e-5)};
   const RunData data = testing::simulate_run(truth, hidden_effects_campaign(), 7);
-  Model model = Model::parse(kBase);
+  Model model = Model::parse(kBaseModel);
   std::vector<std::string> found;
   for (int round = 0; round < 2; ++round) {
     const Diagnosis d = diagnose(data, model);
@@ -164,14 +162,14 @@ TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
       step.samples[i].gyro_dps.y() -= 1.5e-3 * rates[i];
     }
   }
-  const Diagnosis d = diagnose(data, Model::parse(kBase));
+  const Diagnosis d = diagnose(data, Model::parse(kBaseModel));
   EXPECT_GT(d.fit.chi2_dof, 5.0);
   EXPECT_FALSE(d.explained) << d.advice << " best " << d.candidates.front().term << " "
                             << d.candidates.front().chi2_dof_after << " from " << d.fit.chi2_dof;
   ASSERT_FALSE(d.signals.empty());
   EXPECT_EQ(d.signals.front().signal, "temperature_rate");
   EXPECT_NE(d.advice.find("temperature_rate"), std::string::npos) << d.advice;
-  const Diagnosis fixed = diagnose(data, Model::parse(kBase, {"grad=gyro:temperature_rate"}));
+  const Diagnosis fixed = diagnose(data, Model::parse(kBaseModel, {"grad=gyro:temperature_rate"}));
   EXPECT_LT(fixed.fit.chi2_dof, 1.3);
   EXPECT_TRUE(fixed.explained);
   // The diagnosis found that term itself, on the two axes that have it, and its figure is the
@@ -181,7 +179,7 @@ TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
   EXPECT_EQ(top.custom.substr(top.custom.find('=') + 1), "gyro.xy:temperature_rate") << top.custom;
   EXPECT_NE(d.advice.find("--custom '" + top.custom + "'"), std::string::npos) << d.advice;
   const FitResult with =
-      fit_run(data, Model::parse(kBase).with_custom(parse_custom_term(top.custom, "test")));
+      fit_run(data, Model::parse(kBaseModel).with_custom(parse_custom_term(top.custom, "test")));
   EXPECT_NEAR(with.chi2_dof, top.chi2_dof_after, 1e-6 * top.chi2_dof_after);
   EXPECT_LT(with.chi2_dof, 1.3);
 }

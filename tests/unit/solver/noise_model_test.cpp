@@ -112,7 +112,7 @@ TEST(WanderModel, EachProcessHasItsAllanVariance) {
 /// A thermal calibration as a station records it: per plateau a soak (unrecorded), six static
 /// positions and turns about every body axis at three rates in both directions (two whole
 /// revolutions each), with the moves between steps unrecorded.
-std::vector<SimStep> station_campaign(const std::vector<double>& temperatures,
+std::vector<SimStep> thermal_campaign(const std::vector<double>& temperatures,
                                       double static_s = 30.0) {
   std::vector<SimStep> steps;
   for (double temp : temperatures) {
@@ -153,7 +153,7 @@ struct Honesty {
 };
 
 Honesty fit_true_model(const sim::ImuTruth& truth, std::uint64_t seed) {
-  const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
+  const RunData data = testing::simulate_run(truth, thermal_campaign({-20.0, 25.0, 70.0}), seed);
   const Model model = Model::parse(true_terms(truth));
   const Diagnosis d = diagnose(data, model);
   Honesty h;
@@ -241,7 +241,7 @@ std::string without(const std::string& terms, const std::string& hidden) {
 /// recommend it first, and with it the fit must reach the floor with nothing more recommended.
 void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidden,
                   std::uint64_t seed) {
-  const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
+  const RunData data = testing::simulate_run(truth, thermal_campaign({-20.0, 25.0, 70.0}), seed);
   const std::string all = true_terms(truth);
   const Diagnosis before = diagnose(data, Model::parse(without(all, hidden)));
   ASSERT_FALSE(before.candidates.empty()) << what;
@@ -283,7 +283,7 @@ TEST(StepNoiseEstimate, AWhiteNoiseUnitHasNoWander) {
     sim::ImuTruth truth = testing::white_noise_truth(2e-3, 5e-4, 100.0);
     sim::NormalSource n(seed);
     testing::draw_classical_errors(truth, n);
-    const RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), seed);
+    const RunData data = testing::simulate_run(truth, thermal_campaign({-20.0, 25.0, 70.0}), seed);
     const StepNoise noise =
         estimate_run_noise(data, Model::parse(true_terms(truth)), SensorRows::kBoth);
     int wanders = 0;
@@ -315,7 +315,7 @@ TEST(StepNoiseEstimate, AnExcessNeighbouringStepsDoNotShareIsNotCalledNoise) {
   // time the table moves): the step means scatter far beyond the white noise, but no two
   // steps share it. That is an effect, and the weights must not absorb it as a wander.
   sim::ImuTruth truth = testing::white_noise_truth(2e-3, 5e-4, 100.0);
-  RunData data = testing::simulate_run(truth, station_campaign({-20.0, 25.0, 70.0}), 21);
+  RunData data = testing::simulate_run(truth, thermal_campaign({-20.0, 25.0, 70.0}), 21);
   sim::NormalSource n(22);
   for (auto& step : data.steps) {
     const double offset = 3e-4 * n.next();

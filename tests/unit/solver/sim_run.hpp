@@ -31,6 +31,10 @@ struct SimStep {
   double gap_before_s = 0.0;
 };
 
+/// The classical model of both triads (bias, scale factor, misalignment) with the Earth rate.
+inline constexpr const char* kBaseModel =
+    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
+
 inline core::Site wuhan_site() {
   core::Site site;
   site.latitude_deg = 30.5288;

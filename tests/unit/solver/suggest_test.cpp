@@ -26,11 +26,9 @@
 namespace calstand::solver {
 namespace {
 
+using testing::kBaseModel;
 using testing::SimStep;
 using testing::true_terms;
-
-constexpr const char* kBase =
-    "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,accel_misalignment";
 
 /// A thermal calibration as a station records it (the library's order): per plateau a soak
 /// (unrecorded), six static positions and turns about every body axis at three rates in both
@@ -147,7 +145,7 @@ Vector6d gz_on_force_z_squared(const Signals& s) {
 TEST(Suggest, OneChannelFollowingAForceSquaredGetsAOneAxisTerm) {
   RunData data = testing::simulate_run(white_unit(1), station_campaign(), 11);
   add_effect(data, gz_on_force_z_squared);
-  expect_suggestion(data, Model::parse(kBase), "gyro.z:force_z^2");
+  expect_suggestion(data, Model::parse(kBaseModel), "gyro.z:force_z^2");
 }
 
 TEST(Suggest, OneChannelFollowingAForceSquaredUnderDatasheetNoise) {
@@ -164,7 +162,8 @@ TEST(Suggest, WithOnePlateauTheHeldOutCheckIsByFoldsOfSteps) {
   }
   RunData data = testing::simulate_run(white_unit(3), steps, 13);
   add_effect(data, gz_on_force_z_squared);
-  expect_suggestion(data, Model::parse(kBase), "gyro.z:force_z^2", "folds of interleaved steps");
+  expect_suggestion(data, Model::parse(kBaseModel), "gyro.z:force_z^2",
+                    "folds of interleaved steps");
 }
 
 // --- (b) Each channel follows its own axis's signal: the {axis} form --------------------------
@@ -178,7 +177,7 @@ Vector6d gyro_on_own_force_squared(const Signals& s) {
 TEST(Suggest, EachAxisFollowingItsOwnForceSquaredGetsTheAxisForm) {
   RunData data = testing::simulate_run(white_unit(4), station_campaign(), 14);
   add_effect(data, gyro_on_own_force_squared);
-  expect_suggestion(data, Model::parse(kBase), "gyro:force_{axis}^2");
+  expect_suggestion(data, Model::parse(kBaseModel), "gyro:force_{axis}^2");
 }
 
 TEST(Suggest, EachAxisFollowingItsOwnForceSquaredUnderDatasheetNoise) {
@@ -221,7 +220,7 @@ void expect_transient(const RunData& data, const Model& model) {
 TEST(Suggest, AWarmUpTransientGetsExpOfElapsedWithItsTimeConstant) {
   RunData data = testing::simulate_run(white_unit(6), station_campaign(0.0, 600.0), 16);
   add_effect(data, accel_warm_up);
-  expect_transient(data, Model::parse(kBase));
+  expect_transient(data, Model::parse(kBaseModel));
 }
 
 TEST(Suggest, AWarmUpTransientUnderDatasheetNoise) {
@@ -236,11 +235,11 @@ TEST(Suggest, AWarmUpTransientUnderDatasheetNoise) {
 TEST(Suggest, NothingIsSuggestedWhenTheModelFits) {
   for (std::uint64_t seed : {7, 8}) {
     const RunData data = testing::simulate_run(white_unit(seed), station_campaign(), 10 + seed);
-    const Diagnosis d = diagnose(data, Model::parse(kBase));
+    const Diagnosis d = diagnose(data, Model::parse(kBaseModel));
     EXPECT_TRUE(d.explained) << d.advice;
     EXPECT_TRUE(d.suggestions.empty());
     // Forced, the search finds nothing either: every guard holds on noise alone.
-    const Diagnosis forced = diagnose(data, Model::parse(kBase), {}, search_forced());
+    const Diagnosis forced = diagnose(data, Model::parse(kBaseModel), {}, search_forced());
     print(forced);
     EXPECT_TRUE(forced.custom_searched);
     EXPECT_GT(forced.custom_forms_tried, 200);
@@ -266,7 +265,7 @@ TEST(Suggest, ACatalogueEffectIsNotDisguisedAsACustomTerm) {
   truth.gyro_g_sensitivity(0, 2) = 3e-3;
   truth.gyro_g_sensitivity(2, 1) = -2e-3;
   const RunData data = testing::simulate_run(truth, station_campaign(), 19);
-  const Diagnosis d = diagnose(data, Model::parse(kBase), {}, search_forced());
+  const Diagnosis d = diagnose(data, Model::parse(kBaseModel), {}, search_forced());
   print(d);
   ASSERT_FALSE(d.candidates.empty());
   EXPECT_EQ(d.candidates.front().term, "gyro_g_sensitivity");
@@ -278,7 +277,7 @@ TEST(Suggest, ACatalogueEffectIsNotDisguisedAsACustomTerm) {
 TEST(Suggest, JsonListsTheSuggestionsBestFirst) {
   RunData data = testing::simulate_run(white_unit(1), station_campaign(), 11);
   add_effect(data, gz_on_force_z_squared);
-  const nlohmann::json j = diagnosis_to_json(diagnose(data, Model::parse(kBase)));
+  const nlohmann::json j = diagnosis_to_json(diagnose(data, Model::parse(kBaseModel)));
   ASSERT_TRUE(j.contains("suggestions"));
   ASSERT_FALSE(j["suggestions"].empty());
   double previous = -1e300;

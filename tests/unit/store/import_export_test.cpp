@@ -95,9 +95,6 @@ std::string with_line(int n, const std::string& text) {
   return out;
 }
 
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
-
 TEST(Import, CreatesOneCompletedStepPerStepValue) {
   ImportDir d;
   TempDir out;

@@ -118,7 +118,7 @@ int count(Database& db, const char* table) {
 }
 
 // The error text of importing (meta, csv); checks that nothing was written.
-std::string import_error(const json& meta, const std::string& csv) {
+std::string import_error_text(const json& meta, const std::string& csv) {
   Folder f(meta, csv);
   Database db(":memory:");
   try {
@@ -141,9 +141,6 @@ std::string import_error(const json& meta, const std::string& csv) {
   ADD_FAILURE() << "import succeeded";
   return "";
 }
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 std::vector<Column> with(std::vector<Column> c, const std::vector<Column>& more) {
   c.insert(c.end(), more.begin(), more.end());
@@ -365,111 +362,115 @@ TEST(Import2, ExportIsAVersionTwoFolderThatReimportsBitExactly) {
 
 // ---- errors: file, line and field named, nothing written ----
 
-std::string good_csv() { return csv_of(sensor_columns(), 20); }
+std::string sensor_csv() { return csv_of(sensor_columns(), 20); }
 
 TEST(Import2MetaErrors, CountsNeedTheirNominalAndOnlyCounts) {
   json m = base_meta();
   m["units"]["gyro"] = "counts";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: nominal.gyro: required when units.gyro");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()),
+                  "meta.json: nominal.gyro: required when units.gyro");
   m = base_meta();
   m["units"]["accel"] = "counts";
   m["nominal"]["gyro"] = nominal()["gyro"];
-  EXPECT_CONTAINS(import_error(m, good_csv()),
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()),
                   "meta.json: nominal.gyro: only for units.gyro 'counts', but units.gyro is "
                   "'deg/s'");
   m = base_meta();
   m["units"]["accel"] = "counts";
   m["nominal"]["accel"] = {{"offset_counts", {0, 0, 0}}};
-  EXPECT_CONTAINS(import_error(m, good_csv()), "nominal.accel");
-  EXPECT_CONTAINS(import_error(m, good_csv()), "counts_per_mps2");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "nominal.accel");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "counts_per_mps2");
   m["nominal"]["accel"]["counts_per_mps2"] = {410, 0, 410};
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: nominal.accel.counts_per_mps2[1]");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()),
+                  "meta.json: nominal.accel.counts_per_mps2[1]");
 }
 
 TEST(Import2MetaErrors, UnitsNameTheField) {
   json m = base_meta();
   m["units"]["gyro"] = "deg/h";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: units.gyro");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "meta.json: units.gyro");
   m = base_meta();
   m["units"]["accel"] = "mg";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: units.accel");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "meta.json: units.accel");
   m = base_meta();
   m["units"].erase("time");
-  EXPECT_CONTAINS(import_error(m, good_csv()), "time");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "time");
   m = base_meta();
   m["units"]["angle"] = "deg";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: units.angle: only with table");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "meta.json: units.angle: only with table");
   m = table_meta();
   m["units"].erase("rate");
-  EXPECT_CONTAINS(import_error(m, csv_of(with(sensor_columns(), table_columns()), 5)),
+  EXPECT_CONTAINS(import_error_text(m, csv_of(with(sensor_columns(), table_columns()), 5)),
                   "meta.json: units.rate: required with table");
 }
 
 TEST(Import2MetaErrors, GravityRequiredWithoutTable) {
   json m = base_meta();
   m["site"].erase("gravity_mps2");
-  EXPECT_CONTAINS(import_error(m, good_csv()),
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()),
                   "meta.json: site.gravity_mps2: required without table");
 }
 
 TEST(Import2MetaErrors, UnknownFieldsAreErrors) {
   json m = base_meta();
   m["colour"] = "red";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "unknown property \"colour\"");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "unknown property \"colour\"");
   m = base_meta();
   m["units"]["magnetometer"] = "uT";
-  EXPECT_CONTAINS(import_error(m, good_csv()), "magnetometer");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "magnetometer");
   m = base_meta();
   m["mount_rpy_deg"] = {0, 0, 0};
-  EXPECT_CONTAINS(import_error(m, good_csv()), "meta.json: mount_rpy_deg: only with table");
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()), "meta.json: mount_rpy_deg: only with table");
 }
 
 TEST(Import2MetaErrors, SectionsAreChecked) {
   const std::string csv = csv_of(with(sensor_columns(), {step_column(10)}), 30);
   json m = ferraris_meta();
   m["sections"]["10"]["colour"] = "red";
-  EXPECT_CONTAINS(import_error(m, csv), "sections[\"10\"]");
-  EXPECT_CONTAINS(import_error(m, csv), "colour");
+  EXPECT_CONTAINS(import_error_text(m, csv), "sections[\"10\"]");
+  EXPECT_CONTAINS(import_error_text(m, csv), "colour");
   m = ferraris_meta();
   m["sections"]["10"].erase("up");
-  EXPECT_CONTAINS(import_error(m, csv), "up");
+  EXPECT_CONTAINS(import_error_text(m, csv), "up");
   m = ferraris_meta();
   m["sections"]["10"]["up"] = "x";
-  EXPECT_CONTAINS(import_error(m, csv), "up");
+  EXPECT_CONTAINS(import_error_text(m, csv), "up");
   m = ferraris_meta();
   m["sections"]["11"]["up"] = "+z";  // a turn has no up
-  EXPECT_CONTAINS(import_error(m, csv), "up");
+  EXPECT_CONTAINS(import_error_text(m, csv), "up");
   m = ferraris_meta();
   m["sections"]["11"]["label"] = "x_p";
-  EXPECT_CONTAINS(import_error(m, csv),
+  EXPECT_CONTAINS(import_error_text(m, csv),
                   "meta.json: sections[\"11\"].label: 'x_p' is also the label of section 10");
   m = ferraris_meta();
   m["sections"]["99"] = {{"label", "z_m"}, {"kind", "static"}, {"up", "-z"}};
   EXPECT_CONTAINS(
-      import_error(m, csv),
+      import_error_text(m, csv),
       "meta.json: sections[\"99\"]: no sample of samples.csv has step 99 (label 'z_m')");
   m = ferraris_meta();
   m["sections"]["ten"] = {{"label", "z_m"}, {"kind", "static"}, {"up", "-z"}};
-  EXPECT_CONTAINS(import_error(m, csv), "ten");
-  EXPECT_CONTAINS(import_error(ferraris_meta(), good_csv()),
+  EXPECT_CONTAINS(import_error_text(m, csv), "ten");
+  EXPECT_CONTAINS(import_error_text(ferraris_meta(), sensor_csv()),
                   "meta.json: sections: need the step column in samples.csv");
   m = ferraris_meta();
   m["table"] = table_meta()["table"];
   m["units"] = table_meta()["units"];
   EXPECT_CONTAINS(
-      import_error(m, csv_of(with(sensor_columns(), with({step_column(10)}, table_columns())), 30)),
+      import_error_text(
+          m, csv_of(with(sensor_columns(), with({step_column(10)}, table_columns())), 30)),
       "meta.json: sections: only without table");
 }
 
 TEST(Import2CsvErrors, TableAndItsColumnsComeTogether) {
-  EXPECT_CONTAINS(import_error(table_meta(), good_csv()),
+  EXPECT_CONTAINS(import_error_text(table_meta(), sensor_csv()),
                   "samples.csv:1: no table columns (outer_deg, inner_deg, outer_rate_dps, "
                   "inner_rate_dps), but meta.json has a table");
-  EXPECT_CONTAINS(import_error(base_meta(), csv_of(with(sensor_columns(), table_columns()), 5)),
-                  "samples.csv:1: column outer_deg: the table columns need meta.json's table");
+  EXPECT_CONTAINS(
+      import_error_text(base_meta(), csv_of(with(sensor_columns(), table_columns()), 5)),
+      "samples.csv:1: column outer_deg: the table columns need meta.json's table");
   std::vector<Column> three = table_columns();
   three.pop_back();
-  EXPECT_CONTAINS(import_error(table_meta(), csv_of(with(sensor_columns(), three), 5)),
+  EXPECT_CONTAINS(import_error_text(table_meta(), csv_of(with(sensor_columns(), three), 5)),
                   "samples.csv:1: column outer_deg: the four table columns come all or none; "
                   "missing inner_rate_dps");
 }
@@ -477,24 +478,25 @@ TEST(Import2CsvErrors, TableAndItsColumnsComeTogether) {
 TEST(Import2CsvErrors, TemperatureUnitAndColumnComeTogether) {
   json m = base_meta();
   m["units"]["temperature"] = "degC";
-  EXPECT_CONTAINS(import_error(m, good_csv()),
+  EXPECT_CONTAINS(import_error_text(m, sensor_csv()),
                   "meta.json: units.temperature: given, but samples.csv has no temp_c column");
-  EXPECT_CONTAINS(import_error(base_meta(), csv_of(with(sensor_columns(), {temp_column()}), 5)),
-                  "meta.json: units.temperature: required with the temp_c column of samples.csv");
+  EXPECT_CONTAINS(
+      import_error_text(base_meta(), csv_of(with(sensor_columns(), {temp_column()}), 5)),
+      "meta.json: units.temperature: required with the temp_c column of samples.csv");
 }
 
 TEST(Import2CsvErrors, HeaderNamesTheColumn) {
   EXPECT_CONTAINS(
-      import_error(base_meta(),
-                   csv_of(with(sensor_columns(), {{"mx", [](int) { return "1"; }}}), 5)),
+      import_error_text(base_meta(),
+                        csv_of(with(sensor_columns(), {{"mx", [](int) { return "1"; }}}), 5)),
       "samples.csv:1: column 'mx' is not a column of calstand-import/2");
   EXPECT_CONTAINS(
-      import_error(base_meta(),
-                   csv_of(with(sensor_columns(), {{"gx", [](int) { return "1"; }}}), 5)),
+      import_error_text(base_meta(),
+                        csv_of(with(sensor_columns(), {{"gx", [](int) { return "1"; }}}), 5)),
       "samples.csv:1: column 'gx' appears twice in the header");
   std::vector<Column> no_gz = sensor_columns();
   no_gz.erase(no_gz.begin() + 3);
-  EXPECT_CONTAINS(import_error(base_meta(), csv_of(no_gz, 5)),
+  EXPECT_CONTAINS(import_error_text(base_meta(), csv_of(no_gz, 5)),
                   "samples.csv:1: column gz is missing");
 }
 
@@ -504,15 +506,16 @@ TEST(Import2CsvErrors, RowsNameLineAndColumn) {
   json m = base_meta();
   m["units"]["gyro"] = "counts";
   m["nominal"]["gyro"] = nominal()["gyro"];
-  EXPECT_CONTAINS(import_error(m, csv_of(c, 10)), "samples.csv:5: column gy: 'x' is not a number");
+  EXPECT_CONTAINS(import_error_text(m, csv_of(c, 10)),
+                  "samples.csv:5: column gy: 'x' is not a number");
   std::vector<Column> s = with(sensor_columns(), {step_column(2)});
   s.back().value = [](int i) { return i == 4 ? std::string("2.5") : std::string("1"); };
-  EXPECT_CONTAINS(import_error(base_meta(), csv_of(s, 10)),
+  EXPECT_CONTAINS(import_error_text(base_meta(), csv_of(s, 10)),
                   "samples.csv:6: column step: '2.5' is not an integer");
-  std::string short_row = good_csv() + "1,2,3\n";
-  EXPECT_CONTAINS(import_error(base_meta(), short_row),
+  std::string short_row = sensor_csv() + "1,2,3\n";
+  EXPECT_CONTAINS(import_error_text(base_meta(), short_row),
                   "samples.csv:22: expected 7 columns, got 3");
-  EXPECT_CONTAINS(import_error(base_meta(), "t,gx,gy,gz,ax,ay,az\n"), "no samples");
+  EXPECT_CONTAINS(import_error_text(base_meta(), "t,gx,gy,gz,ax,ay,az\n"), "no samples");
 }
 
 }  // namespace

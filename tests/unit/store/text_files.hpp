@@ -1,5 +1,8 @@
 #pragma once
-// Whole files as text, for the store tests that write import folders and read exports back.
+// Whole files as text, for the store tests that write import folders and read exports back, and
+// EXPECT_CONTAINS for the messages about them.
+
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -20,3 +23,7 @@ inline std::string read(const std::filesystem::path& path) {
 }
 
 }  // namespace calstand::store::test
+
+/// Expects `needle` in `haystack` (a string), printing the haystack when it is not.
+#define EXPECT_CONTAINS(haystack, needle) \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)

@@ -5,24 +5,13 @@
 #include <string>
 #include <vector>
 
+#include "sse_events.hpp"
+
 namespace {
 
 using calstand::wire::SseDecoder;
 using calstand::wire::SseEvent;
-
-// Every event a whole stream gives, fed in pieces of `piece` bytes.
-std::vector<SseEvent> decode(std::string_view stream, std::size_t piece = 0) {
-  std::vector<SseEvent> events;
-  SseDecoder decoder([&](const SseEvent& e) {
-    events.push_back(e);
-    return true;
-  });
-  if (piece == 0) piece = stream.size() + 1;
-  for (std::size_t at = 0; at < stream.size(); at += piece) {
-    EXPECT_TRUE(decoder.feed(stream.substr(at, piece)));
-  }
-  return events;
-}
+using calstand::wire::test::decode;
 
 TEST(SseDecoder, OneLeadingSpaceOfAValueIsDropped) {
   const auto events = decode("data:a\n\ndata: b\n\ndata:  c\n\nevent:x\ndata\n\n");

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "sse_events.hpp"
 #include "wire/sse_decoder.hpp"
 
 namespace {
@@ -14,16 +15,7 @@ using calstand::wire::encode_sse_event;
 using calstand::wire::encode_sse_retry;
 using calstand::wire::SseDecoder;
 using calstand::wire::SseEvent;
-
-std::vector<SseEvent> decode(const std::string& stream) {
-  std::vector<SseEvent> events;
-  SseDecoder d([&](const SseEvent& e) {
-    events.push_back(e);
-    return true;
-  });
-  EXPECT_TRUE(d.feed(stream));
-  return events;
-}
+using calstand::wire::test::decode;
 
 TEST(SseEncoder, WritesIdTypeAndDataThenABlankLine) {
   EXPECT_EQ(encode_sse_event({"step", "{\"step\":1}", "17-3"}),
