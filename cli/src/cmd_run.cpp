@@ -67,7 +67,7 @@ int execute_plan(const core::StationConfig& station_config, const procedures::Pl
       [&](daemon::RunEngine& engine, const daemon::Progress& p) {
         if (const int sig = g_stop_signal.exchange(0); sig != 0) {
           if (sig == SIGHUP) hung_up = true;
-          engine.abort(sig == SIGINT    ? "interrupted (SIGINT)"
+          engine.abort(sig == SIGINT   ? "interrupted (SIGINT)"
                        : sig == SIGHUP ? "hangup (SIGHUP: the terminal went away)"
                                        : "terminated (SIGTERM)",
                        "signal");

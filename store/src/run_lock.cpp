@@ -46,14 +46,13 @@ RunLock::RunLock(const std::string& db_path, std::int64_t run) {
     ::close(fd_);
     fd_ = -1;
     if (error == EAGAIN || error == EACCES) {
-      throw DatabaseBusy(fmt::format(
-          "{}: run {} is being run by another process (a foreground `calstand run` or "
-          "calstandd); one process drives a run at a time",
-          db_path, run));
+      throw DatabaseBusy(
+          fmt::format("{}: run {} is being run by another process (a foreground `calstand run` or "
+                      "calstandd); one process drives a run at a time",
+                      db_path, run));
     }
-    throw std::runtime_error(fmt::format("{}: cannot lock run {}: {}",
-                                         DatabaseLock::lock_path(db_path), run,
-                                         std::strerror(error)));
+    throw std::runtime_error(fmt::format(
+        "{}: cannot lock run {}: {}", DatabaseLock::lock_path(db_path), run, std::strerror(error)));
   }
 }
 

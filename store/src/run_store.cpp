@@ -1,8 +1,5 @@
 #include "store/run_store.hpp"
 
-#include "store/run_lock.hpp"
-#include "store/run_queue.hpp"
-
 #include <SQLiteCpp/Statement.h>
 #include <SQLiteCpp/Transaction.h>
 
@@ -12,6 +9,8 @@
 #include "core/error.hpp"
 #include "sql_util.hpp"
 #include "store/hash.hpp"
+#include "store/run_lock.hpp"
+#include "store/run_queue.hpp"
 
 namespace calstand::store {
 

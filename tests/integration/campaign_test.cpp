@@ -178,7 +178,8 @@ TEST_P(KilledCampaign, ResumesToTheSameStepsWithNoLostOrDuplicatedSamples) {
   ASSERT_TRUE(run_and_kill(db, kill_after)) << "the run finished before it could be killed";
   std::string out;
   ASSERT_EQ(run_command("runs --json --db " + db, &out), 0) << out;
-  EXPECT_EQ(nlohmann::json::parse(out)[0]["status"], "running");  // cut off, not ended
+  // Cut off, not ended: the row says running, but nobody drives it any more.
+  EXPECT_EQ(nlohmann::json::parse(out)[0]["status"], "interrupted");
   ASSERT_EQ(run_command("run --quiet --resume 1 --db " + db, &out), 0) << out;
   const auto resumed = check_run(db);
   ASSERT_EQ(resumed.size(), reference_->size());
@@ -260,6 +261,39 @@ TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
     }
   }
   EXPECT_TRUE(repeated) << "the interrupted capture was not repeated";
+}
+
+// A foreground run whose terminal goes away (SIGHUP: a closed SSH session, a killed tmux) ends
+// safe with the reason, like SIGINT and SIGTERM; while it runs, it reads `running` and a second
+// process cannot resume it (one process drives a run).
+TEST(CampaignSignals, AHangupEndsTheRunWithItsReasonAndALiveRunIsNotResumedTwice) {
+  const std::string db = db_path("campaign_hangup.db");
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string cmd = std::string(CALSTAND_BIN) + " run static-allan --quiet --db " + db +
+                            " --set duration_s=20000 > /dev/null 2>&1";
+    execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (completed_steps(db) < 1 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  std::string out;
+  ASSERT_EQ(run_command("runs --json --db " + db, &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)[0]["status"], "running") << "driven, and so not cut off";
+  EXPECT_EQ(run_command("run --quiet --resume 1 --db " + db, &out), 1) << out;
+  EXPECT_NE(out.find("run 1 is being run by another process"), std::string::npos) << out;
+
+  kill(pid, SIGHUP);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the hangup instead of ending the run";
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  calstand::store::Database handle(db);
+  const auto run = calstand::store::RunStore(handle).load_run(1);
+  EXPECT_EQ(run.summary.status, "aborted");
+  EXPECT_NE(run.summary.exit_reason.find("SIGHUP"), std::string::npos) << run.summary.exit_reason;
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ namespace {
 
 using testing::import_session;
 
-const nlohmann::json* parameter(const nlohmann::json& record, const std::string& name) {
+const nlohmann::json* record_parameter(const nlohmann::json& record, const std::string& name) {
   for (const auto& p : record.at("parameters")) {
     if (p.at("name") == name) return &p;
   }
@@ -52,14 +52,14 @@ TEST(TableFreeRecord, AHandHeldSessionCalibratesIntoARecordHoldingItsTruth) {
   EXPECT_GT(r.at("fit").at("rms_turn_residual_deg").get<double>(), 0.0);
   EXPECT_EQ(r.at("fit").at("dof").get<int>(), c.table_free->accel->dof + c.table_free->gyro->dof);
   // The convention's three are given as exactly zero; every estimated one holds the truth.
-  const nlohmann::json* xy = parameter(r, "accel_misalignment.xy");
+  const nlohmann::json* xy = record_parameter(r, "accel_misalignment.xy");
   ASSERT_NE(xy, nullptr);
   EXPECT_EQ(xy->at("value").get<double>(), 0.0);
   int checked = 0;
   for (const char* name :
        {"accel_scale.x", "accel_scale.y", "accel_scale.z", "accel_misalignment.zy", "gyro_scale.x",
         "gyro_scale.z", "gyro_misalignment.xy", "gyro_misalignment.zx"}) {
-    const nlohmann::json* p = parameter(r, name);
+    const nlohmann::json* p = record_parameter(r, name);
     ASSERT_NE(p, nullptr) << name;
     EXPECT_NEAR(p->at("value").get<double>(), solver::testing::session_truth(session, name),
                 4.5 * p->at("sigma").get<double>())
