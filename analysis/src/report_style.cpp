@@ -1,6 +1,10 @@
 // The style sheet of calstand's HTML reports.
 #include "analysis/report_style.hpp"
 
+#include <fmt/format.h>
+
+#include "analysis/markup_escape.hpp"
+
 namespace calstand::analysis {
 namespace {
 
@@ -47,5 +51,16 @@ footer { color: var(--dim); font-size: 12px; margin-top: 18px; text-align: cente
 }  // namespace
 
 const char* report_css() { return kStyle; }
+
+std::string report_page(std::int64_t run, const std::string& procedure, const std::string& body,
+                        const std::string& stamp) {
+  return fmt::format(
+      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+      "<title>calstand report: run {0} ({1})</title>\n<style>{2}</style>\n</head>\n<body>\n<main>\n"
+      "{3}<footer>calstand report &middot; run {0} &middot; {4}</footer>\n"
+      "</main>\n</body>\n</html>\n",
+      run, html_escape(procedure), kStyle, body, html_escape(stamp));
+}
 
 }  // namespace calstand::analysis

@@ -233,21 +233,15 @@ TableFreeReportData gather_table_free_report(store::Database& db, const ReportRe
 }
 
 std::string render_table_free_report_html(const TableFreeReportData& r) {
-  std::string page = fmt::format(
-      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
-      "<title>calstand report: run {} ({})</title>\n<style>{}</style>\n</head>\n<body>\n<main>\n",
-      r.request.run, html_escape(r.procedure), report_css());
-  page += header(r);
-  page += history_section(r);
-  page += failure_section(r);
-  page += parameters_section(r);
-  page += candidates_section(r);
-  page += poses_section(r);
-  page +=
-      fmt::format("<footer>calstand report &middot; run {} &middot; {}</footer>\n", r.request.run,
-                  r.history.empty() ? std::string() : html_escape(r.history.back().created_utc));
-  return page + "</main>\n</body>\n</html>\n";
+  std::string body;
+  body += header(r);
+  body += history_section(r);
+  body += failure_section(r);
+  body += parameters_section(r);
+  body += candidates_section(r);
+  body += poses_section(r);
+  return report_page(r.request.run, r.procedure, body,
+                     r.history.empty() ? std::string() : r.history.back().created_utc);
 }
 
 }  // namespace calstand::analysis

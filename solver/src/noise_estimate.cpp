@@ -2,29 +2,21 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
-#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <limits>
 
 #include "core/error.hpp"
+#include "variance_component.hpp"
 
 namespace calstand::solver {
 namespace {
 
 // The wander's size is searched as the ratio r of its variance (mean over the steps' means) to
-// a typical step mean's white variance, over 10^-3 .. 10^4: below, it changes no weight; above,
-// the white noise would not matter and the run would be a random walk with samples attached.
-constexpr double kLog10RatioLo = -3.0;
-constexpr double kLog10RatioHi = 4.0;
-constexpr int kRatioGrid = 15;
-// Brent's method: bits of precision in log r (a ratio known to 0.1 % changes no weight) and
-// the most evaluations it may take.
-constexpr int kBrentBits = 12;
-constexpr int kBrentIterations = 40;
+// a typical step mean's white variance (variance_component.hpp: 10^-3 .. 10^4; below, it
+// changes no weight; above, the white noise would not matter and the run would be a random
+// walk with samples attached).
 // Gauss-Markov correlation times tried per decade: the likelihood is flat in log tau at this
 // resolution (a factor 1.8), far finer than a run of tens of steps can tell.
 constexpr double kGaussMarkovTausPerDecade = 4.0;
@@ -71,9 +63,9 @@ Kernel make_kernel(const WanderModel& unit, const std::vector<StepSummary>& step
   out.unit = unit;
   out.parameters = parameters;
   out.mean_variance = diag / static_cast<double>(S);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
-  out.lambda = eig.eigenvalues().cwiseMax(0.0);  // a covariance: rounding can leave -1e-17
-  out.U = eig.eigenvectors();
+  detail::KernelBasis basis = detail::kernel_basis(G);
+  out.lambda = std::move(basis.lambda);
+  out.U = std::move(basis.U);
   return out;
 }
 
@@ -85,27 +77,6 @@ struct ChannelProblem {
   double white = 1.0;
   int parameters = 0;
 };
-
-/// Restricted log likelihood (up to a constant shared by every trial of the channel) of the
-/// step means with covariance white * N^-1 + amplitude * K, for rho = amplitude / white.
-/// Xh, yh: the problem projected on the kernel's eigenvectors.
-double restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
-                                 const Eigen::VectorXd& yh, double white, double rho) {
-  const Eigen::ArrayXd one_plus = 1.0 + rho * lambda.array();
-  const Eigen::VectorXd w = one_plus.inverse().matrix();
-  const double log_det_c = one_plus.log().sum();
-  const Eigen::MatrixXd M = Xh.transpose() * w.asDiagonal() * Xh;
-  const Eigen::VectorXd b = Xh.transpose() * w.cwiseProduct(yh);
-  double log_det_m = 0.0, fitted = 0.0;
-  if (M.rows() > 0) {
-    const Eigen::LLT<Eigen::MatrixXd> llt(M);
-    if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
-    log_det_m = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
-    fitted = b.dot(llt.solve(b));
-  }
-  const double quadratic = (yh.dot(w.cwiseProduct(yh)) - fitted) / white;
-  return -0.5 * (log_det_c + log_det_m + quadratic);
-}
 
 struct Trial {
   double log_likelihood = -std::numeric_limits<double>::infinity();
@@ -121,30 +92,12 @@ Trial best_amplitude(const Kernel& kernel, const ChannelProblem& p, double typic
   const auto rho_of = [&](double r) {
     return std::pow(10.0, r) / (typical_count * kernel.mean_variance);
   };
-  const auto value = [&](double r) {
-    return restricted_log_likelihood(kernel.lambda, Xh, yh, p.white, rho_of(r));
-  };
-  double best_r = kLog10RatioLo, best_value = -std::numeric_limits<double>::infinity();
-  const auto evaluate = [&](double r) {
-    const double v = value(r);
-    if (v > best_value) {
-      best_value = v;
-      best_r = r;
-    }
-    return v;
-  };
-  const double step = (kLog10RatioHi - kLog10RatioLo) / (kRatioGrid - 1);
-  for (int i = 0; i < kRatioGrid; ++i) evaluate(kLog10RatioLo + step * i);
-  // Brent's method between the best grid point's neighbours (the likelihood is unimodal in
-  // log r there); `evaluate` keeps the best point seen, grid included.
-  const double lo = std::max(kLog10RatioLo, best_r - step);
-  const double hi = std::min(kLog10RatioHi, best_r + step);
-  boost::uintmax_t iterations = kBrentIterations;
-  boost::math::tools::brent_find_minima([&](double r) { return -evaluate(r); }, lo, hi, kBrentBits,
-                                        iterations);
+  const detail::RatioFit best = detail::best_log10_ratio([&](double r) {
+    return detail::restricted_log_likelihood(kernel.lambda, Xh, yh, p.white, rho_of(r));
+  });
   Trial t;
-  t.log_likelihood = best_value;
-  t.amplitude = rho_of(best_r) * p.white;
+  t.log_likelihood = best.log_likelihood;
+  t.amplitude = rho_of(best.log10_ratio) * p.white;
   return t;
 }
 
@@ -346,7 +299,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
       continue;
     }
-    const double white_ll = restricted_log_likelihood(
+    const double white_ll = detail::restricted_log_likelihood(
         Eigen::VectorXd::Zero(static_cast<Eigen::Index>(steps.size())), p.Xs, p.ys, p.white, 0.0);
     const double penalty_per_parameter = 0.5 * std::log(static_cast<double>(dof));
     double best_score = white_ll;

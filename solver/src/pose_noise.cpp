@@ -2,25 +2,19 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
-#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <limits>
+
+#include "variance_component.hpp"
 
 namespace calstand::solver {
 namespace {
 
 // The amplitude is searched as the ratio of a pose mean's wander variance to a typical pose
-// mean's white variance, 10^-3 .. 10^4 (below it changes no weight; above, white noise would
-// not matter), on a grid, then by Brent's method between the best point's neighbours.
-constexpr double kPoseLog10RatioLo = -3.0;
-constexpr double kPoseLog10RatioHi = 4.0;
-constexpr int kPoseRatioGrid = 15;
-constexpr int kPoseBrentBits = 12;
-constexpr int kPoseBrentIterations = 40;
+// mean's white variance (variance_component.hpp: 10^-3 .. 10^4; below it changes no weight;
+// above, white noise would not matter).
 // Gauss-Markov correlation times per decade: thirty residuals cannot tell a factor of 1.8.
 constexpr double kPoseTausPerDecade = 4.0;
 // Penalised log likelihood within which flicker is preferred to the best candidate (see there).
@@ -68,29 +62,10 @@ PoseKernel make_pose_kernel(const WanderModel& unit, const std::vector<PoseSpan>
   out.unit = unit;
   out.parameters = parameters;
   out.mean_variance = diag / static_cast<double>(n);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(G);
-  out.lambda = eig.eigenvalues().cwiseMax(0.0);  // a covariance: rounding can leave -1e-17
-  out.U = eig.eigenvectors();
+  detail::KernelBasis basis = detail::kernel_basis(G);
+  out.lambda = std::move(basis.lambda);
+  out.U = std::move(basis.U);
   return out;
-}
-
-/// Restricted log likelihood (up to a constant) of whitened residuals yh with covariance
-/// I + rho diag(lambda) in the kernel's eigenbasis; Xh the whitened design there.
-double pose_restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
-                                      const Eigen::VectorXd& yh, double rho) {
-  const Eigen::ArrayXd one_plus = 1.0 + rho * lambda.array();
-  const Eigen::VectorXd w = one_plus.inverse().matrix();
-  const double log_det_c = one_plus.log().sum();
-  const Eigen::MatrixXd M = Xh.transpose() * w.asDiagonal() * Xh;
-  const Eigen::VectorXd b = Xh.transpose() * w.cwiseProduct(yh);
-  double log_det_m = 0.0, fitted = 0.0;
-  if (M.rows() > 0) {
-    const Eigen::LLT<Eigen::MatrixXd> llt(M);
-    if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
-    log_det_m = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
-    fitted = b.dot(llt.solve(b));
-  }
-  return -0.5 * (log_det_c + log_det_m + yh.dot(w.cwiseProduct(yh)) - fitted);
 }
 
 struct PoseTrial {
@@ -105,23 +80,10 @@ PoseTrial best_pose_amplitude(const PoseKernel& kernel, const Eigen::MatrixXd& X
   const auto rho_of = [&](double r) {
     return std::pow(10.0, r) * typical_white / kernel.mean_variance;
   };
-  double best_r = kPoseLog10RatioLo, best_value = -std::numeric_limits<double>::infinity();
-  const auto evaluate = [&](double r) {
-    const double v = pose_restricted_log_likelihood(kernel.lambda, Xh, yh, rho_of(r));
-    if (v > best_value) {
-      best_value = v;
-      best_r = r;
-    }
-    return v;
-  };
-  const double step = (kPoseLog10RatioHi - kPoseLog10RatioLo) / (kPoseRatioGrid - 1);
-  for (int i = 0; i < kPoseRatioGrid; ++i) evaluate(kPoseLog10RatioLo + step * i);
-  const double lo = std::max(kPoseLog10RatioLo, best_r - step);
-  const double hi = std::min(kPoseLog10RatioHi, best_r + step);
-  boost::uintmax_t iterations = kPoseBrentIterations;
-  boost::math::tools::brent_find_minima([&](double r) { return -evaluate(r); }, lo, hi,
-                                        kPoseBrentBits, iterations);
-  return {best_value, rho_of(best_r)};
+  const detail::RatioFit best = detail::best_log10_ratio([&](double r) {
+    return detail::restricted_log_likelihood(kernel.lambda, Xh, yh, 1.0, rho_of(r));
+  });
+  return {best.log_likelihood, rho_of(best.log10_ratio)};
 }
 
 double median_of(std::vector<double> v) {
@@ -262,7 +224,8 @@ PoseNoise estimate_pose_noise(const std::vector<PoseSpan>& poses, const Eigen::V
   kernels.push_back(make_pose_kernel(flicker, poses, 1));
   kernels.push_back(make_pose_kernel(WanderModel{}, poses, 1));  // independent extra variance
 
-  const double white_ll = pose_restricted_log_likelihood(Eigen::VectorXd::Zero(n), Xw, yw, 0.0);
+  const double white_ll =
+      detail::restricted_log_likelihood(Eigen::VectorXd::Zero(n), Xw, yw, 1.0, 0.0);
   const double penalty_per_parameter = 0.5 * std::log(static_cast<double>(out.dof));
   double best_score = white_ll;
   const auto take = [&](const PoseKernel& k, const PoseTrial& t, double score) {

@@ -200,10 +200,9 @@ INSTANTIATE_TEST_SUITE_P(AtSeveralPoints, KilledCampaign, ::testing::Values(1, 5
 
 namespace {
 
-// The foreground run obeys the operator's signals: pause at once mid-capture, resume, and the
-// interrupted capture is repeated whole.
-TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
-  const std::string db = db_path("campaign_signals.db");
+// `calstand run static-allan` of 20000 s (minutes of wall time on the simulator) in a child
+// process; its pid.
+pid_t start_long_static_run(const std::string& db) {
   const pid_t pid = fork();
   if (pid == 0) {
     const std::string cmd = std::string(CALSTAND_BIN) + " run static-allan --quiet --db " + db +
@@ -211,6 +210,14 @@ TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
     execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
+  return pid;
+}
+
+// The foreground run obeys the operator's signals: pause at once mid-capture, resume, and the
+// interrupted capture is repeated whole.
+TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
+  const std::string db = db_path("campaign_signals.db");
+  const pid_t pid = start_long_static_run(db);
   // Wait until the capture is under way, then pause at once.
   auto query = [&](const char* sql) {
     sqlite3* h = nullptr;
@@ -268,13 +275,7 @@ TEST(CampaignSignals, PauseAtOnceAndResumeRepeatsTheCapture) {
 // process cannot resume it (one process drives a run).
 TEST(CampaignSignals, AHangupEndsTheRunWithItsReasonAndALiveRunIsNotResumedTwice) {
   const std::string db = db_path("campaign_hangup.db");
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const std::string cmd = std::string(CALSTAND_BIN) + " run static-allan --quiet --db " + db +
-                            " --set duration_s=20000 > /dev/null 2>&1";
-    execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
+  const pid_t pid = start_long_static_run(db);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   while (completed_steps(db) < 1 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
