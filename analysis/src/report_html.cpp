@@ -86,11 +86,7 @@ std::string parameters_section(const ReportData& r) {
 
 std::string candidates_section(const ReportData& r) {
   const auto& d = r.diagnosis;
-  std::string out = fmt::format(
-      "<section id=\"candidates\"><h2>Which effect is missing</h2>\n"
-      "<div class=\"advice {}\"><b>{}</b> {}</div>\n",
-      d.explained ? "good" : "bad", d.explained ? "Explained." : "Not explained.",
-      html_escape(d.advice));
+  std::string out = advice_section_start(d.explained, d.advice);
   if (!d.candidates.empty()) {
     out +=
         "<p class=\"lead\">Each catalogue term the model lacks, added in turn and refitted, "

@@ -52,6 +52,13 @@ footer { color: var(--dim); font-size: 12px; margin-top: 18px; text-align: cente
 
 const char* report_css() { return kStyle; }
 
+std::string advice_section_start(bool explained, const std::string& advice) {
+  return fmt::format(
+      "<section id=\"candidates\"><h2>Which effect is missing</h2>\n"
+      "<div class=\"advice {}\"><b>{}</b> {}</div>\n",
+      explained ? "good" : "bad", explained ? "Explained." : "Not explained.", html_escape(advice));
+}
+
 std::string report_page(std::int64_t run, const std::string& procedure, const std::string& body,
                         const std::string& stamp) {
   return fmt::format(

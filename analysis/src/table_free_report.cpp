@@ -172,11 +172,7 @@ std::string parameters_section(const TableFreeReportData& r) {
 
 std::string candidates_section(const TableFreeReportData& r) {
   const TableFreeDiagnosis& d = r.diagnosis;
-  std::string out = fmt::format(
-      "<section id=\"candidates\"><h2>Which effect is missing</h2>\n"
-      "<div class=\"advice {}\"><b>{}</b> {}</div>\n",
-      d.explained ? "good" : "bad", d.explained ? "Explained." : "Not explained.",
-      html_escape(d.advice));
+  std::string out = advice_section_start(d.explained, d.advice);
   if (!d.candidates.empty()) {
     out +=
         "<table><thead><tr><th>term</th><th>sensor</th><th>delta BIC</th><th>p</th>"
