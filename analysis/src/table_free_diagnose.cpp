@@ -180,18 +180,17 @@ TableFreeDiagnosis diagnose_table_free(store::Database& db, std::int64_t run,
   d.fit = table_free_fit(db, run, request);
   d.worst = worst_of(d.fit);
   d.untestable.push_back("earth_rate: the heading of the poses is not known");
-  TableFreeFitRequest quiet = request;
-  quiet.history_command.clear();  // the candidates are tries, not fits the user asked for
   for (const std::string& term : table_free_optional_terms()) {
     if (has_table_free_term(request.terms, term)) continue;
     if (d.fit.ferraris) {
       d.untestable.push_back(term + ": a Ferraris session has no redundancy for it");
       continue;
     }
-    quiet.terms = with_table_free_term(request.terms, term);
+    // The candidates are tries on the samples and poses already read, not fits the user asked
+    // for: nothing is recorded.
     TableFreeFit after;
     try {
-      after = table_free_fit(db, run, quiet);
+      after = refit_table_free(d.fit, with_table_free_term(request.terms, term));
     } catch (const core::InputError& e) {
       d.untestable.push_back(fmt::format("{}: {}", term, e.what()));
       continue;

@@ -170,6 +170,19 @@ TableFreePoses poses_of(std::int64_t run, std::string device, RunSamples&& r,
   return poses;
 }
 
+// The gravity norm and the integration between `fit.poses` with `fit.terms`.
+void calibrate_poses(TableFreeFit& fit) {
+  solver::GravityNormOptions accel_options;
+  accel_options.gravity_mps2 = fit.gravity_mps2;
+  accel_options.fit_quadratic = fit.terms.accel_quadratic;
+  fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
+                                                   fit.poses->detection.intervals, accel_options);
+  solver::GyroIntegrationOptions gyro_options;
+  gyro_options.fit_g_sensitivity = fit.terms.gyro_g_sensitivity;
+  fit.gyro = solver::calibrate_gyro_integration(fit.poses->samples, fit.poses->detection.intervals,
+                                                *fit.accel, gyro_options);
+}
+
 }  // namespace
 
 TableFreeFitRequest table_free_request(const solver::Model& model, TableFreeFitRequest poses) {
@@ -177,6 +190,19 @@ TableFreeFitRequest table_free_request(const solver::Model& model, TableFreeFitR
   poses.terms = read.terms;
   poses.notes = std::move(read.notes);
   return poses;
+}
+
+TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& terms) {
+  if (!fit.poses) {
+    throw core::InputError("model", fmt::format("run {} is a labelled Ferraris session: it takes "
+                                                "no optional term",
+                                                fit.run));
+  }
+  TableFreeFit out = fit;
+  out.terms = terms;
+  out.history_id.reset();
+  calibrate_poses(out);
+  return out;
 }
 
 bool needs_table_free_fit(store::Database& db, std::int64_t run) {
@@ -227,15 +253,7 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
   } else {
     fit.method = "gravity_norm";
     fit.poses = poses_of(run, fit.device, std::move(r), request);
-    solver::GravityNormOptions accel_options;
-    accel_options.gravity_mps2 = fit.gravity_mps2;
-    accel_options.fit_quadratic = fit.terms.accel_quadratic;
-    fit.accel = solver::calibrate_accel_gravity_norm(fit.poses->samples,
-                                                     fit.poses->detection.intervals, accel_options);
-    solver::GyroIntegrationOptions gyro_options;
-    gyro_options.fit_g_sensitivity = fit.terms.gyro_g_sensitivity;
-    fit.gyro = solver::calibrate_gyro_integration(
-        fit.poses->samples, fit.poses->detection.intervals, *fit.accel, gyro_options);
+    calibrate_poses(fit);
   }
   if (!request.history_command.empty()) {
     fit.history_id = store::record_fit(db, table_free_history_record(fit, request.history_command));
@@ -299,11 +317,7 @@ nlohmann::json to_json(const TableFreePoses& poses) {
 
 nlohmann::json to_json(const TableFreeFit& fit) {
   const TableFreeQuality q = table_free_quality(fit);
-  nlohmann::json terms = nlohmann::json::array();
-  for (const auto& t : table_free_base_terms()) terms.push_back(t);
-  for (const auto& t : table_free_optional_terms()) {
-    if (has_table_free_term(fit.terms, t)) terms.push_back(t);
-  }
+  const nlohmann::json terms = table_free_model_terms(fit.terms);
   const nlohmann::json chi2_dof = q.dof > 0 ? nlohmann::json(q.chi2_per_dof) : nlohmann::json();
   nlohmann::json j = {{"run", fit.run},
                       {"device", fit.device},

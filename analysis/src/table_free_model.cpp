@@ -86,12 +86,16 @@ TableFreeModel table_free_model(const solver::Model& model) {
   return out;
 }
 
-std::string table_free_model_text(const TableFreeTerms& terms) {
-  std::string text = fmt::format("{}", fmt::join(table_free_base_terms(), ","));
+std::vector<std::string> table_free_model_terms(const TableFreeTerms& terms) {
+  std::vector<std::string> out = table_free_base_terms();
   for (const auto& name : table_free_optional_terms()) {
-    if (has_table_free_term(terms, name)) text += "," + name;
+    if (has_table_free_term(terms, name)) out.push_back(name);
   }
-  return text;
+  return out;
+}
+
+std::string table_free_model_text(const TableFreeTerms& terms) {
+  return fmt::format("{}", fmt::join(table_free_model_terms(terms), ","));
 }
 
 }  // namespace calstand::analysis

@@ -41,11 +41,7 @@ nlohmann::json table_free_calibration_record(store::Database& db, const TableFre
   r["procedure"] = {{"name", run.summary.procedure_name}, {"sha256", run.procedure_sha256}};
   r["method"] = fit.method;
   r["frame"] = solver::kAccelTriadFrameText;
-  nlohmann::json terms = nlohmann::json::array();
-  for (const auto& t : table_free_base_terms()) terms.push_back(t);
-  for (const auto& t : table_free_optional_terms()) {
-    if (has_table_free_term(fit.terms, t)) terms.push_back(t);
-  }
+  const nlohmann::json terms = table_free_model_terms(fit.terms);
   r["model"] = terms;
   r["custom_terms"] = nlohmann::json::array();
   r["parameters"] = nlohmann::json::array();

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 
+#include "ceres_solve.hpp"
 #include "core/error.hpp"
 #include "core/site.hpp"
 
@@ -137,23 +138,10 @@ NormSolve norm_solve(const std::vector<std::unique_ptr<ceres::CostFunction>>& co
     po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(po);
     problem.AddResidualBlock(&whitened, nullptr, s.p.data());
-    if (static_cast<int>(fixed.size()) == np) {
-      problem.SetParameterBlockConstant(s.p.data());
-    } else if (!fixed.empty()) {
-      problem.SetManifold(s.p.data(), new ceres::SubsetManifold(np, fixed));
-    }
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = max_iterations;
-    so.function_tolerance = 1e-14;
-    so.gradient_tolerance = 1e-14;
-    so.parameter_tolerance = 1e-12;
-    so.logging_type = ceres::SILENT;
-    so.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &problem, &summary);
-    s.iterations = static_cast<int>(summary.iterations.size());
-    s.converged = summary.termination_type == ceres::CONVERGENCE;
+    const detail::CeresOutcome solved =
+        detail::solve_holding(problem, s.p.data(), np, fixed, max_iterations);
+    s.iterations = solved.iterations;
+    s.converged = solved.converged;
   }
 
   const auto n = static_cast<Eigen::Index>(costs.size());

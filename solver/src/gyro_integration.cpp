@@ -11,6 +11,7 @@
 #include <cmath>
 #include <memory>
 
+#include "ceres_solve.hpp"
 #include "core/error.hpp"
 #include "core/rotation.hpp"
 #include "core/site.hpp"
@@ -305,23 +306,10 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
       po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
       ceres::Problem problem(po);
       for (const auto& c : costs) problem.AddResidualBlock(c.get(), nullptr, p.data());
-      if (static_cast<int>(fixed.size()) == np) {
-        problem.SetParameterBlockConstant(p.data());
-      } else if (!fixed.empty()) {
-        problem.SetManifold(p.data(), new ceres::SubsetManifold(np, fixed));
-      }
-      ceres::Solver::Options so;
-      so.linear_solver_type = ceres::DENSE_QR;
-      so.max_num_iterations = max_iterations;
-      so.function_tolerance = 1e-14;
-      so.gradient_tolerance = 1e-14;
-      so.parameter_tolerance = 1e-12;
-      so.logging_type = ceres::SILENT;
-      so.num_threads = 1;
-      ceres::Solver::Summary summary;
-      ceres::Solve(so, &problem, &summary);
-      out.iterations = static_cast<int>(summary.iterations.size());
-      out.converged = summary.termination_type == ceres::CONVERGENCE;
+      const detail::CeresOutcome solved =
+          detail::solve_holding(problem, p.data(), np, fixed, max_iterations);
+      out.iterations = solved.iterations;
+      out.converged = solved.converged;
     }
     const auto rows = static_cast<Eigen::Index>(2 * costs.size());
     J.resize(rows, np);

@@ -72,6 +72,11 @@ struct TableFreeFit {
   std::optional<solver::FerrarisResult> ferraris;
 };
 
+/// `fit` (gravity norm) again with other optional terms, on the same samples and static poses:
+/// no database read, no detection, nothing recorded (a diagnosis tries each candidate so).
+/// Throws core::InputError (where "model") for a Ferraris fit, which takes no optional term.
+TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& terms);
+
 /// A table-free fit's quality in a few numbers, both sensors together (the fit history's row
 /// and the calibration record's `fit`).
 struct TableFreeQuality {

@@ -45,6 +45,9 @@ struct TableFreeModel {
 /// run lacks, and for custom terms (their signals are table signals).
 TableFreeModel table_free_model(const solver::Model& model);
 
+/// The terms of a table-free fit with `terms`: base terms, then the optional ones fitted.
+std::vector<std::string> table_free_model_terms(const TableFreeTerms& terms);
+
 /// The comma-separated terms of a table-free fit with `terms` (base terms, then the optional
 /// ones fitted), as `--model` reads them back.
 std::string table_free_model_text(const TableFreeTerms& terms);

@@ -15,15 +15,6 @@
 namespace calstand::solver {
 namespace {
 
-sim::SimSession norm_session(const char* spec, std::uint64_t seed, int poses = 20) {
-  sim::HandSessionOptions o;
-  o.imu.spec = spec;
-  o.imu.sample_rate_hz = 200.0;
-  o.poses = poses;
-  o.initial_rest_s = 30.0;
-  return sim::simulate_hand_session(o, seed);
-}
-
 GravityNormResult norm_fit(const sim::SimSession& s) {
   GravityNormOptions o;
   o.gravity_mps2 = s.gravity_mps2;
@@ -38,7 +29,7 @@ TEST(GravityNorm, RecoversTheTruthWithinItsSigmas) {
   for (const char* spec : {"adis16488", "ln200"}) {
     for (std::uint64_t seed : {11, 12, 13}) {
       SCOPED_TRACE(std::string(spec) + " seed " + std::to_string(seed));
-      const sim::SimSession s = norm_session(spec, seed);
+      const sim::SimSession s = testing::hand_session_200hz(spec, seed);
       const GravityNormResult r = norm_fit(s);
       EXPECT_TRUE(r.converged);
       EXPECT_EQ(r.poses.size(), s.holds.size());
@@ -203,7 +194,7 @@ TEST(GravityNorm, FitsAccelQuadratic) {
 }
 
 TEST(GravityNorm, ConventionFixesTheUpperMisalignments) {
-  const GravityNormResult r = norm_fit(norm_session("ln200", 14));
+  const GravityNormResult r = norm_fit(testing::hand_session_200hz("ln200", 14));
   ASSERT_EQ(r.parameters.size(), 12U);
   for (const TriadEstimate& e : r.parameters) {
     const bool upper = e.name == "accel_misalignment.xy" || e.name == "accel_misalignment.xz" ||
@@ -219,7 +210,8 @@ TEST(GravityNorm, ConventionFixesTheUpperMisalignments) {
 }
 
 TEST(GravityNorm, RefusesFewerThanNinePoses) {
-  const sim::SimSession s = norm_session("adis16488", 15, 7);  // the rest and 7 poses
+  const sim::SimSession s =
+      testing::hand_session_200hz("adis16488", 15, 7);  // the rest and 7 poses
   try {
     norm_fit(s);
     FAIL() << "8 poses were accepted";
@@ -269,7 +261,7 @@ TEST(GravityNorm, NamesWhatPosesThatNeverTipYCannotDetermine) {
 }
 
 TEST(GravityNorm, ThresholdChosenByTheResidual) {
-  const sim::SimSession s = norm_session("ln200", 17, 12);
+  const sim::SimSession s = testing::hand_session_200hz("ln200", 17, 12);
   GravityNormOptions o;
   o.gravity_mps2 = s.gravity_mps2;
   const ThresholdSearch t = detect_and_calibrate_accel(s.samples, {}, o, {2, 4, 8});
@@ -286,7 +278,7 @@ TEST(GravityNorm, ThresholdChosenByTheResidual) {
 }
 
 TEST(GravityNorm, Json) {
-  const GravityNormResult r = norm_fit(norm_session("ln200", 18, 10));
+  const GravityNormResult r = norm_fit(testing::hand_session_200hz("ln200", 18, 10));
   const nlohmann::json j = gravity_norm_to_json(r);
   EXPECT_EQ(j["method"], "gravity_norm");
   EXPECT_EQ(j["parameters"].size(), 12U);

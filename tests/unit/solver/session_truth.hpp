@@ -1,8 +1,9 @@
 #pragma once
-// The truth a calibration of a simulated session (sim/hand_session.hpp) should find, by
-// contract parameter name, and pulls of estimates against it.
+// Simulated sessions (sim/hand_session.hpp) for the tests, the truth a calibration of one
+// should find, by contract parameter name, and pulls of estimates against it.
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,17 @@
 #include "solver/triad_model.hpp"
 
 namespace calstand::solver::testing {
+
+/// A hand-held session of `spec` at a decimated 200 Hz output with a 30 s initial rest and
+/// `poses` spread poses: what the detector and gravity-norm tests calibrate.
+inline sim::SimSession hand_session_200hz(const char* spec, std::uint64_t seed, int poses = 20) {
+  sim::HandSessionOptions o;
+  o.imu.spec = spec;
+  o.imu.sample_rate_hz = 200.0;
+  o.poses = poses;
+  o.initial_rest_s = 30.0;
+  return sim::simulate_hand_session(o, seed);
+}
 
 /// The truth of `name` in frame A for this session: the fixed value, plus for biases what the
 /// session itself adds to them: the slow noise averaged over the holds (accel; gyro in a

@@ -6,19 +6,11 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "session_truth.hpp"
 #include "sim/hand_session.hpp"
 
 namespace calstand::solver {
 namespace {
-
-sim::SimSession detector_session(const char* spec, std::uint64_t seed, int poses = 20) {
-  sim::HandSessionOptions o;
-  o.imu.spec = spec;
-  o.imu.sample_rate_hz = 200.0;
-  o.poses = poses;
-  o.initial_rest_s = 30.0;
-  return sim::simulate_hand_session(o, seed);
-}
 
 // Every simulated hold is found once, inside the hold and at most a window (plus a sample)
 // short of each end; nothing else is found.
@@ -41,7 +33,7 @@ TEST(StaticDetector, FindsTheSimulatedHoldsAndTheRest) {
   for (const char* spec : {"adis16488", "ln200"}) {
     for (std::uint64_t seed : {3, 4}) {
       SCOPED_TRACE(std::string(spec) + " seed " + std::to_string(seed));
-      const sim::SimSession s = detector_session(spec, seed);
+      const sim::SimSession s = testing::hand_session_200hz(spec, seed);
       const StaticDetection d = detect_static_intervals(s.samples, {});
       expect_holds_found(s, d);
       EXPECT_TRUE(d.has_initial_rest);
@@ -56,7 +48,7 @@ TEST(StaticDetector, FindsTheSimulatedHoldsAndTheRest) {
 }
 
 TEST(StaticDetector, OptionsOverrideEveryChoice) {
-  const sim::SimSession s = detector_session("adis16488", 5, 12);
+  const sim::SimSession s = testing::hand_session_200hz("adis16488", 5, 12);
   StaticDetectorOptions o;
   o.initial_rest_s = 20.0;
   o.rule = ThresholdRule::kMultiple;
@@ -82,7 +74,7 @@ TEST(StaticDetector, OptionsOverrideEveryChoice) {
 }
 
 TEST(StaticDetector, RefusesWhatItCannotUse) {
-  const sim::SimSession s = detector_session("ln200", 6, 10);
+  const sim::SimSession s = testing::hand_session_200hz("ln200", 6, 10);
   // Starting in the middle of a turn: no quiet start.
   const std::size_t turn = s.turns[0].begin + 20;
   const std::span<const core::ImuSample> moving(s.samples.data() + turn, s.samples.size() - turn);
@@ -101,7 +93,7 @@ TEST(StaticDetector, RefusesWhatItCannotUse) {
 }
 
 TEST(StaticDetector, JsonForShow) {
-  const sim::SimSession s = detector_session("ln200", 7, 10);
+  const sim::SimSession s = testing::hand_session_200hz("ln200", 7, 10);
   const nlohmann::json j = static_detection_to_json(detect_static_intervals(s.samples, {}));
   EXPECT_EQ(j["rule"], "rest_quantile");
   ASSERT_EQ(j["intervals"].size(), s.holds.size());
