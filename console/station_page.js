@@ -64,8 +64,11 @@ export function showStation({ root, showMessage }) {
       ? el('p', {}, `Run ${doc.run}: step ${doc.progress.step + 1} of ${doc.progress.steps} (${doc.progress.label}), `,
         `${doc.progress.phase}, `, stateCell(doc.progress.state))
       : el('p', { class: 'muted' }, doc.held ? `Run ${doc.held} is held: resume or abort it on the Runs page.` : 'No run on the station.');
+    // Why the next run waits (a full disk, a latched interlock): it starts by itself once the
+    // cause is gone.
+    const waiting = doc.waiting ? el('p', { class: 'field-error', id: 'station-waiting' }, `Next run waiting: ${doc.waiting}`) : null;
     replaceChildren(summary, el('div', {}, el('b', {}, doc.name), ` · queue: ${doc.queue.length} run(s)`),
-      progress, devicesTable(doc.devices));
+      progress, waiting, devicesTable(doc.devices));
     if (doc.telemetry) showNow(doc.telemetry);
   }
 

@@ -3,12 +3,14 @@
 //   calstand device --station lab.json status
 //   calstand device --station lab.json chamber get|set TEMP [--ramp R] [--wait]|standby
 //   calstand device --station lab.json table get|move --outer D --inner D|rate --axis A --dps
-//   R|stop calstand device --station lab.json imu stream --count N [--imu NAME]
+//   R|stop|close-interlock [--by NAME]
+//   calstand device --station lab.json imu stream --count N [--imu NAME]
 // Output is JSON (one object, or JSON lines for `imu stream`), so scripts can read it.
 #include <fmt/format.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -20,6 +22,7 @@
 #include "core/state_json.hpp"
 #include "drivers/station.hpp"
 #include "sim/sim_world.hpp"
+#include "store/stamp.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -43,6 +46,8 @@ struct DeviceOptions {
   // imu
   std::size_t count = 10;
   std::string imu_name;
+  // close-interlock
+  std::string by;
 };
 
 std::unique_ptr<drivers::Station> open_station(const DeviceOptions& opt) {
@@ -212,6 +217,27 @@ void table_stop(const DeviceOptions& opt) {
   print(core::to_json(table.read_state()));
 }
 
+/// Who closes an interlock, for the record: --by, else the login name.
+std::string operator_name(const DeviceOptions& opt) {
+  if (!opt.by.empty()) return opt.by;
+  for (const char* var : {"LOGNAME", "USER"}) {
+    if (const char* v = std::getenv(var); v != nullptr && *v != '\0') return v;
+  }
+  return "operator";
+}
+
+void table_close_interlock(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  auto& table = station->table();
+  configure(table);  // the link only: activation refuses while an interlock is latched
+  const auto closure = table.close_interlocks();
+  check(closure.result, "table");
+  print({{"closed", closure.closed},
+         {"by", operator_name(opt)},
+         {"wall_utc", store::utc_now_iso8601()},
+         {"table", core::to_json(table.read_state())}});
+}
+
 void imu_stream(const DeviceOptions& opt) {
   auto station = open_station(opt);
   std::size_t index = 0;
@@ -306,6 +332,12 @@ void register_device(CLI::App& app) {
   table->add_subcommand("stop", "both axes to rest (safe state)")->callback([opt] {
     table_stop(*opt);
   });
+  auto* close = table->add_subcommand(
+      "close-interlock",
+      "close latched axis interlocks (refused while their cause is present); nothing else "
+      "closes them");
+  close->add_option("--by", opt->by, "who closes them, for the record (default: login name)");
+  close->callback([opt] { table_close_interlock(*opt); });
 
   auto* imu = cmd->add_subcommand("imu", "IMU streams");
   imu->require_subcommand(1);

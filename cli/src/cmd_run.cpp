@@ -23,6 +23,7 @@
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/database_lock.hpp"
+#include "store/disk_space.hpp"
 #include "store/run_lock.hpp"
 #include "store/run_store.hpp"
 
@@ -101,6 +102,9 @@ int run_new(const RunOptions& opt) {
       procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));
   procedures::require_valid(plan);  // every violation, before anything is written or moves
   const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared, "calstand run");
+  if (const auto why = store::disk_space_shortfall(opt.db, station.policy.min_free_disk_mb)) {
+    throw core::InputError(opt.db, *why);  // before the run is recorded or anything moves
+  }
 
   std::int64_t run_id = 0;
   {
@@ -136,6 +140,10 @@ int run_resume(const RunOptions& opt) {
         opt.db, opt.resume_run));
   }
   const daemon::StoredRun stored = daemon::prepare_stored_run(run_store, opt.resume_run);
+  if (const auto why =
+          store::disk_space_shortfall(opt.db, stored.station.policy.min_free_disk_mb)) {
+    throw core::InputError(opt.db, *why);
+  }
   store::EventRecord e;
   e.run_id = opt.resume_run;
   e.time_s = stored.start.start_time_s;

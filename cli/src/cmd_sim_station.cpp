@@ -6,13 +6,15 @@
 // While it runs, lines on stdin rehearse faults (one JSON line answers each):
 //   interlock open outer|inner [WHY...]   interlock clear outer|inner
 //   modbus stop | modbus start            imu silent NAME | imu talk NAME
-//   imu garbage NAME N                    status | quit
+//   imu garbage NAME N                    imu hold NAME | imu release NAME (a burst)
+//   imu clock-jump NAME SECONDS           status | quit
 #include <fmt/format.h>
 #include <poll.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <fstream>
 #include <iostream>
@@ -90,9 +92,23 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
     sim.inject_imu_bytes(index, std::move(bytes));
     return {{"ok", true}};
   }
+  if (verb == "imu" && (what == "hold" || what == "release")) {
+    sim.set_imu_held(sim.imu_index(arg), what == "hold");
+    return {{"ok", true}};
+  }
+  if (verb == "imu" && what == "clock-jump") {
+    const auto index = sim.imu_index(arg);
+    char* end = nullptr;
+    const double seconds = std::strtod(rest.c_str(), &end);
+    if (rest.empty() || end == rest.c_str() || !std::isfinite(seconds)) {
+      throw core::InputError("seconds", "must be a number of seconds");
+    }
+    sim.jump_imu_clock(index, seconds);
+    return {{"ok", true}};
+  }
   throw core::InputError("command", fmt::format("\"{}\" is not understood (interlock open|clear "
-                                                "AXIS, modbus stop|start, imu silent|talk|garbage "
-                                                "NAME, status, quit)",
+                                                "AXIS, modbus stop|start, imu silent|talk|garbage|"
+                                                "hold|release|clock-jump NAME, status, quit)",
                                                 line));
 }
 

@@ -184,6 +184,9 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.policy.stale_after_s = p.value("stale_after_s", c.policy.stale_after_s);
     c.policy.capture_band_factor = p.value("capture_band_factor", c.policy.capture_band_factor);
     c.policy.max_capture_attempts = p.value("max_capture_attempts", c.policy.max_capture_attempts);
+    c.policy.link_outage_s = p.value("link_outage_s", c.policy.link_outage_s);
+    c.policy.min_free_disk_mb = p.value("min_free_disk_mb", c.policy.min_free_disk_mb);
+    c.policy.disk_reserve_mb = p.value("disk_reserve_mb", c.policy.disk_reserve_mb);
   }
   if (doc.contains("sim")) {
     c.sim_max_step_s = doc.at("sim").value("max_step_s", c.sim_max_step_s);
@@ -250,7 +253,10 @@ json StationConfig::to_json() const {
                 {"on_stale_stream", policy.on_stale_stream},
                 {"stale_after_s", policy.stale_after_s},
                 {"capture_band_factor", policy.capture_band_factor},
-                {"max_capture_attempts", policy.max_capture_attempts}}},
+                {"max_capture_attempts", policy.max_capture_attempts},
+                {"link_outage_s", policy.link_outage_s},
+                {"min_free_disk_mb", policy.min_free_disk_mb},
+                {"disk_reserve_mb", policy.disk_reserve_mb}}},
               {"sim", {{"max_step_s", sim_max_step_s}, {"thermal_step_s", sim_thermal_step_s}}}};
   if (!description.empty()) doc["description"] = description;
   if (time_scale != 1.0) doc["time_scale"] = time_scale;

@@ -26,6 +26,7 @@ EngineOptions EngineOptions::from_policy(const core::FaultPolicy& policy) {
   o.gap_policy = parse_gap_policy(policy.on_sequence_gap);
   o.stale_policy = parse_gap_policy(policy.on_stale_stream);
   o.imu_stale_s = policy.stale_after_s;
+  o.link_outage_s = policy.link_outage_s;
   o.capture_band_factor = policy.capture_band_factor;
   o.max_capture_attempts = policy.max_capture_attempts;
   return o;
@@ -415,11 +416,29 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
   for (int tries = 0; tries < options_.max_capture_attempts; ++tries, ++attempt) {
     if (tries > 0) journal_.step_started(index, attempt, station_.clock().now_s());
     poll_imus();  // samples from before the capture belong to no step
-    capturing_ = Capturing{index, attempt, std::nullopt, station_.clock().now_s()};
+    // The capture is the window [start, start + duration) of sample times, not a number of
+    // control ticks: ticks land wherever the clock's phase puts them (after a resume, say),
+    // and a rate capture asked for whole revolutions must hold whole revolutions.
+    const double start = station_.clock().now_s();
+    capturing_ = Capturing{index,
+                           attempt,
+                           std::nullopt,
+                           start,
+                           start + duration_s,
+                           std::vector<bool>(station_.imu_count(), false)};
     set_phase("capturing");
-    const double end = station_.clock().now_s() + duration_s;
+    auto window_filled = [&] {
+      const double now = station_.clock().now_s();
+      if (now < capturing_->end_s) return false;
+      // A silent stream whose staleness the policy only records must not hold the run.
+      if (now >= capturing_->end_s + options_.imu_stale_s) return true;
+      return std::all_of(capturing_->reached_end.begin(), capturing_->reached_end.end(),
+                         [](bool b) { return b; });
+    };
     try {
-      while (station_.clock().now_s() < end - 1e-9 && !capturing_->invalid_reason) tick();
+      // A link delivers late: past the window's end, wait for each stream's first sample
+      // beyond it (a stream that stays silent goes stale, and its policy decides).
+      while (!window_filled() && !capturing_->invalid_reason) tick();
     } catch (...) {
       // Interrupted, aborted or failed mid-capture: the partial attempt is worthless.
       journal_.discard_attempt(index, attempt, "capture interrupted");
@@ -591,15 +610,20 @@ void RunEngine::poll_imus() {
       }
     }
     if (capturing_ && !capturing_->invalid_reason) {
-      // A real link delivers late: samples taken before the capture began (stamped so by the
-      // driver) can arrive in its first poll. They belong to no step.
-      std::vector<core::ImuSample> late_trimmed;
+      // Only the samples stamped inside the window belong to the capture. A real link
+      // delivers late, so samples from before the window can arrive in its first poll; the
+      // last poll brings samples from after it. Neither belongs to any step.
+      std::vector<core::ImuSample> in_window;
       const std::vector<core::ImuSample>* in_capture = &samples;
-      if (samples.front().receive_time_s < capturing_->start_s) {
+      if (samples.back().receive_time_s >= capturing_->end_s) capturing_->reached_end[i] = true;
+      if (samples.front().receive_time_s < capturing_->start_s ||
+          samples.back().receive_time_s >= capturing_->end_s) {
         for (const auto& s : samples) {
-          if (s.receive_time_s >= capturing_->start_s) late_trimmed.push_back(s);
+          if (s.receive_time_s >= capturing_->start_s && s.receive_time_s < capturing_->end_s) {
+            in_window.push_back(s);
+          }
         }
-        in_capture = &late_trimmed;
+        in_capture = &in_window;
       }
       if (in_capture->empty()) continue;
       bool queued =
@@ -632,19 +656,79 @@ void RunEngine::record_device_events() {
   for (std::size_t i = 0; i < station_.imu_count(); ++i) drain(station_.imu(i));
 }
 
+namespace {
+
+// The parts of a driver's fault text that say only that the controller could not be read (its
+// link), as opposed to a fault the controller reports (interlock, alarm, axis fault).
+bool is_link_outage(const std::string& fault_text) {
+  if (fault_text.empty()) return false;
+  std::size_t start = 0;
+  while (start <= fault_text.size()) {
+    const std::size_t end = std::min(fault_text.find("; ", start), fault_text.size());
+    const std::string part = fault_text.substr(start, end - start);
+    const bool link = part.rfind("table state unreadable", 0) == 0 ||
+                      part.rfind("link down", 0) == 0 ||
+                      part.rfind("no valid process value", 0) == 0;
+    if (!link) return false;
+    start = end + 2;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool RunEngine::ride_out_link_outage(const std::string& device, const std::string& fault_text,
+                                     std::optional<double>& down_since_s) {
+  if (!is_link_outage(fault_text)) return false;
+  const double now = station_.clock().now_s();
+  if (!down_since_s) {
+    down_since_s = now;
+    // The controllers keep their setpoint, rate or position on their own: a short outage
+    // costs readings, not the run.
+    record_event(EventKind::kFault, device,
+                 fmt::format("link lost ({}); riding it out for up to {:.0f} s", fault_text,
+                             options_.link_outage_s));
+  }
+  if (now - *down_since_s > options_.link_outage_s) {
+    const std::string why = fmt::format(
+        "{} link down for {:.1f} s (more than the policy's {:.0f} "
+        "s): {}",
+        device, now - *down_since_s, options_.link_outage_s, fault_text);
+    record_event(EventKind::kInterlock, device, why);
+    throw Aborted{why};
+  }
+  return true;
+}
+
+void RunEngine::note_link_back(const std::string& device, std::optional<double>& down_since_s) {
+  if (!down_since_s) return;
+  record_event(EventKind::kInfo, device,
+               fmt::format("link back after {:.1f} s", station_.clock().now_s() - *down_since_s));
+  down_since_s.reset();
+}
+
 void RunEngine::check_interlocks() {
   const auto table = station_.table().read_state();
   if (table.outer.fault || table.inner.fault) {
-    const std::string why = table.outer.fault ? "outer axis: " + table.outer.fault_text
-                                              : "inner axis: " + table.inner.fault_text;
-    record_event(EventKind::kInterlock, "table", "table fault: " + why);
-    throw Aborted{"table fault: " + why};
+    const std::string& text = table.outer.fault ? table.outer.fault_text : table.inner.fault_text;
+    if (!ride_out_link_outage("table", text, table_link_down_since_s_)) {
+      const std::string why = table.outer.fault ? "outer axis: " + table.outer.fault_text
+                                                : "inner axis: " + table.inner.fault_text;
+      record_event(EventKind::kInterlock, "table", "table fault: " + why);
+      throw Aborted{"table fault: " + why};
+    }
+  } else {
+    note_link_back("table", table_link_down_since_s_);
   }
   const auto chamber = station_.chamber().read_state();
   if (chamber.fault) {
-    record_event(EventKind::kInterlock, "chamber", "chamber fault: " + chamber.fault_text);
-    throw Aborted{"chamber fault: " + chamber.fault_text};
+    if (!ride_out_link_outage("chamber", chamber.fault_text, chamber_link_down_since_s_)) {
+      record_event(EventKind::kInterlock, "chamber", "chamber fault: " + chamber.fault_text);
+      throw Aborted{"chamber fault: " + chamber.fault_text};
+    }
+    return;  // no air temperature to hold the capture's band to while the link is down
   }
+  note_link_back("chamber", chamber_link_down_since_s_);
   if (capturing_ && setpoint_c_ && !capturing_->invalid_reason &&
       std::abs(chamber.air_temperature_c - *setpoint_c_) > band_c_) {
     capturing_->invalid_reason =

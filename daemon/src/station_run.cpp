@@ -1,6 +1,11 @@
 #include "daemon/station_run.hpp"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include <utility>
+
+#include "store/error.hpp"
 
 namespace calstand::daemon {
 namespace {
@@ -15,6 +20,9 @@ StationRun::StationRun(const core::StationConfig& station, const std::string& db
                        std::int64_t run_id, double start_time_s)
     : run_lock_(db_path, run_id),
       config_(station),
+      run_id_(run_id),
+      reserve_(db_path, run_id,
+               static_cast<std::uint64_t>(station.policy.disk_reserve_mb * 1024.0 * 1024.0)),
       db_(db_path),
       runs_(db_),
       writer_(db_path),
@@ -37,6 +45,14 @@ CampaignResult StationRun::run(const procedures::Plan& plan, const CampaignStart
   CampaignResult result;
   try {
     result.state = engine.run(start.first_step, start.first_attempt, start.skipped_steps);
+  } catch (const std::exception& e) {
+    if (store::is_storage_error(e)) return end_after_storage_failure(e.what());
+    try {
+      writer_.flush();  // what was captured before the failure is kept
+    } catch (...) {
+      // The first failure is the one to report.
+    }
+    throw;
   } catch (...) {
     try {
       writer_.flush();  // what was captured before the failure is kept
@@ -48,6 +64,38 @@ CampaignResult StationRun::run(const procedures::Plan& plan, const CampaignStart
   writer_.flush();
   result.exit_reason = engine.exit_reason();
   result.station_time_s = station_->clock().now_s();
+  return result;
+}
+
+StationRun::~StationRun() = default;
+
+CampaignResult StationRun::end_after_storage_failure(const std::string& what) {
+  // The engine made the station safe before the failure reached here. The capture writer has
+  // stopped: what it committed stays, the attempt it was writing is discarded on resume.
+  const bool full = store::says_disk_full(what);
+  // The reserve's blocks let SQLite write the run's end even on a full disk.
+  reserve_.release();
+  CampaignResult result;
+  result.state = RunState::kInterrupted;
+  result.exit_reason =
+      fmt::format("storage failed: {}{}", what,
+                  full ? "; free space on the database's filesystem, then resume the run" : "");
+  result.station_time_s = station_->clock().now_s();
+  try {
+    store::EventRecord e;
+    e.run_id = run_id_;
+    e.time_s = result.station_time_s;
+    e.kind = store::EventKind::kFault;
+    e.source = "store";
+    e.message = result.exit_reason;
+    runs_.add_event(e);
+    runs_.set_run_status(run_id_, std::string(to_string(RunState::kInterrupted)), std::nullopt,
+                         std::nullopt, result.exit_reason);
+  } catch (const std::exception& e) {
+    // Not even the reserve was enough: the run reads `interrupted` anyway once this process
+    // has gone (nobody holds its run lock), only without the reason.
+    spdlog::error("run {}: recording the storage failure: {}", run_id_, e.what());
+  }
   return result;
 }
 

@@ -492,6 +492,27 @@ RunRecord RunStore::load_run(std::int64_t run) {
   return r;
 }
 
+std::vector<EventRecord> RunStore::station_events(std::size_t limit) {
+  SQLite::Statement ev(db_.sql(),
+                       "SELECT id, time_s, wall_utc, kind, source, message, detail FROM events "
+                       "WHERE run_id IS NULL ORDER BY id DESC LIMIT ?");
+  ev.bind(1, static_cast<std::int64_t>(limit));
+  std::vector<EventRecord> out;
+  while (ev.executeStep()) {
+    EventRecord e;
+    e.id = ev.getColumn(0).getInt64();
+    e.time_s = ev.getColumn(1).getDouble();
+    e.wall_utc = ev.getColumn(2).getString();
+    e.kind = parse_event_kind(ev.getColumn(3).getString());
+    e.source = ev.getColumn(4).getString();
+    e.message = ev.getColumn(5).getString();
+    if (!ev.getColumn(6).isNull()) e.detail = nlohmann::json::parse(ev.getColumn(6).getString());
+    out.push_back(std::move(e));
+  }
+  std::reverse(out.begin(), out.end());
+  return out;
+}
+
 std::optional<std::size_t> RunStore::first_unfinished_step(std::int64_t run) {
   require_run(run);
   return guarded("find first unfinished step", [&]() -> std::optional<std::size_t> {

@@ -152,10 +152,16 @@ class EventStreamReader {
 // from its first stdout line.
 class DaemonProcess {
  public:
+  /// `extra_args` follow the database and listen address; `env` is set in the daemon's
+  /// environment only.
   DaemonProcess(const std::string& db, const std::string& log,
-                const std::string& listen = "127.0.0.1:0") {
+                const std::string& listen = "127.0.0.1:0",
+                const std::vector<std::string>& extra_args = {},
+                const std::vector<std::pair<std::string, std::string>>& env = {}) {
     int out[2];
     if (pipe(out) != 0) return;
+    std::vector<std::string> args{CALSTANDD_BIN, "--db", db, "--listen", listen};
+    args.insert(args.end(), extra_args.begin(), extra_args.end());
     pid_ = fork();
     if (pid_ == 0) {
       dup2(out[1], STDOUT_FILENO);
@@ -163,7 +169,11 @@ class DaemonProcess {
       dup2(err, STDERR_FILENO);
       close(out[0]);
       setenv("CALSTAND_TOKEN", kTestToken, 1);
-      execl(CALSTANDD_BIN, CALSTANDD_BIN, "--db", db.c_str(), "--listen", listen.c_str(), nullptr);
+      for (const auto& [name, value] : env) setenv(name.c_str(), value.c_str(), 1);
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(a.data());
+      argv.push_back(nullptr);
+      execv(CALSTANDD_BIN, argv.data());
       _exit(127);
     }
     close(out[1]);

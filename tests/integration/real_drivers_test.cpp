@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -249,6 +250,96 @@ TEST_F(RealDrivers, InterlockOpeningMidRunStopsTheTableAndSaysWhy) {
   EXPECT_NEAR(t["outer"]["rate_dps"].get<double>(), 0.0, 1e-3) << t.dump();
   EXPECT_NEAR(t["inner"]["rate_dps"].get<double>(), 0.0, 1e-3) << t.dump();
   EXPECT_TRUE(t["outer"]["fault"].get<bool>()) << "the interlock stays open until closed";
+
+  // The cause gone, the interlock stays latched: a manual move does not close it on its way.
+  ASSERT_TRUE(f.station->command("interlock clear outer").value("ok", false));
+  auto moved =
+      run("device --station " + f.lab + " table move --outer 10 --inner 0", dir_ + "stderr.txt");
+  EXPECT_NE(moved.exit_code, 0) << moved.out;
+  const std::string refusal = read_text(dir_ + "stderr.txt");
+  EXPECT_NE(refusal.find("interlock latched open (door opened)"), std::string::npos) << refusal;
+  EXPECT_TRUE(table_state(f.lab)["outer"]["fault"].get<bool>());
+  // Only the operator's explicit act closes it, and says who did.
+  const auto closed =
+      run("device --station " + f.lab + " table close-interlock --by alice", dir_ + "stderr.txt");
+  ASSERT_EQ(closed.exit_code, 0) << read_text(dir_ + "stderr.txt");
+  const auto record = json::parse(closed.out);
+  EXPECT_EQ(record["by"], "alice");
+  ASSERT_EQ(record["closed"].size(), 1u) << closed.out;
+  EXPECT_EQ(record["closed"][0], "outer axis interlock (door opened)");
+  EXPECT_FALSE(record["wall_utc"].get<std::string>().empty());
+  moved =
+      run("device --station " + f.lab + " table move --outer 10 --inner 0", dir_ + "stderr.txt");
+  EXPECT_EQ(moved.exit_code, 0) << read_text(dir_ + "stderr.txt");
+}
+
+// The chamber's Modbus controller coming and going every few station seconds: each outage is
+// recorded and ridden out (the controller keeps its setpoint by itself), the run completes.
+TEST_F(RealDrivers, ModbusControllerFlappingIsRiddenOutAndRecorded) {
+  const std::string lab = dir_ + "flap-lab.json";
+  auto station = serve(lab);
+  json lab_file = json::parse(read_text(lab));
+  // Outages of a few station seconds each; the driver's reconnect backoff is in wall time, so
+  // at this time scale an outage may stretch: the limit is generous on purpose here.
+  lab_file["policy"]["link_outage_s"] = 600;
+  write_text(lab, lab_file.dump(2));
+  std::atomic<bool> done{false};
+  int flaps = 0;
+  std::thread flapper([&] {
+    bool down = false;
+    while (!done) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      if (done) break;
+      station->command(down ? "modbus start" : "modbus stop");
+      down = !down;
+      if (down) ++flaps;
+    }
+    if (down) station->command("modbus start");
+  });
+  const std::string db = dir_ + "flap.db";
+  const auto r =
+      run("run six-position --set capture_s=4 --station " + lab + " --db " + db + " --quiet",
+          dir_ + "stderr.txt");
+  done = true;
+  flapper.join();
+  EXPECT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "stderr.txt");
+  EXPECT_GE(flaps, 2) << "the run ended before the controller flapped";
+  const auto shown = show_json(db);
+  EXPECT_EQ(shown["status"], "completed") << shown.value("exit_reason", "");
+  const std::string events = events_text(shown);
+  EXPECT_NE(events.find("link lost"), std::string::npos) << events;
+  EXPECT_NE(events.find("link back after"), std::string::npos) << events;
+}
+
+// An IMU that delivers a burst (frames held back, then all at once), garbage on the line and a
+// jump of its own clock, all during captures: each is recorded and ridden out, the run ends
+// completed with whole captures (policy on_sequence_gap: record).
+TEST_F(RealDrivers, ImuBurstsGarbageAndAClockJumpAreRiddenOut) {
+  const std::string lab = dir_ + "imu-faults-lab.json";
+  auto station = serve(lab);
+  const std::string db = dir_ + "imu-faults.db";
+  auto running = std::async(std::launch::async, [&] {
+    return run("run six-position --set capture_s=8 --station " + lab + " --db " + db + " --quiet");
+  });
+  ASSERT_TRUE(wait_until_capturing(db, running));
+  // Held 20 ms of wall time (0.4 s of station time, less than the 1 s that makes a stream
+  // stale), then delivered at once.
+  ASSERT_TRUE(station->command("imu hold imu0").value("ok", false));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ASSERT_TRUE(station->command("imu release imu0").value("ok", false));
+  ASSERT_TRUE(station->command("imu garbage imu0 300").value("ok", false));
+  ASSERT_TRUE(station->command("imu clock-jump imu0 1000").value("ok", false));
+  const auto r = running.get();
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  const auto shown = show_json(db);
+  EXPECT_EQ(shown["status"], "completed") << shown.value("exit_reason", "");
+  const std::string events = events_text(shown);
+  EXPECT_NE(events.find("device clock jumped"), std::string::npos) << events;
+  EXPECT_NE(events.find("frame errors"), std::string::npos) << events;
+  for (const auto& step : shown["steps"]) {
+    if (step["kind"] != "capture") continue;
+    EXPECT_EQ(step["status"], "completed") << step.dump();
+  }
 }
 
 TEST_F(RealDrivers, ImuStreamStoppingFailsTheCaptureAndRecordsWhy) {

@@ -69,6 +69,15 @@ struct FaultPolicy {
   double stale_after_s = 1.0;        ///< silence that makes a stream stale [s]
   double capture_band_factor = 2.0;  ///< band = factor * soak tolerance around the setpoint
   int max_capture_attempts = 3;
+  /// A table or chamber link that drops (the controller unreadable, not faulted) is ridden
+  /// out for this long, recorded; longer, the run aborts to the safe state [s].
+  double link_outage_s = 5.0;
+  /// A run starts (or resumes) only with this much free on the database's filesystem; the
+  /// daemon keeps queued runs waiting until there is [MB].
+  double min_free_disk_mb = 64.0;
+  /// Kept in a reserve file beside the database while a run goes, and given back when the disk
+  /// fills, so that the run's end (interrupted, and why) can still be written [MB].
+  double disk_reserve_mb = 4.0;
 };
 
 /// A whole station: site, table, chamber, IMUs and the simulator's settings.

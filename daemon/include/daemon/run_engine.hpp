@@ -50,6 +50,8 @@ struct EngineOptions {
   double capture_band_factor = 2.0;      ///< capture invalid when |air - setpoint| exceeds this
                                          ///< times the soak tolerance
   double imu_stale_s = 1.0;              ///< no sample for this long is a stale stream [s]
+  /// A table or chamber link down (unreadable, not faulted) is ridden out this long [s].
+  double link_outage_s = 5.0;
   GapPolicy gap_policy = GapPolicy::kRecord;
   GapPolicy stale_policy = GapPolicy::kRepeatCapture;
   int max_capture_attempts = 3;  ///< repeats of an invalidated capture before failing
@@ -188,6 +190,10 @@ class RunEngine {
     int attempt;
     std::optional<std::string> invalid_reason;
     double start_s = 0.0;  // samples taken before this (station time) belong to no step
+    double end_s = 0.0;    // ... and samples taken at or after this
+    /// Per IMU: a sample at or after end_s has arrived, so every sample of the window has
+    /// (streams deliver in order).
+    std::vector<bool> reached_end;
   };
   std::optional<Capturing> capturing_;
   int attempt_ = 1;              // attempt number of the current step
@@ -197,6 +203,16 @@ class RunEngine {
   std::optional<double> setpoint_c_;
   procedures::SoakCriterion soak_;
   double band_c_ = 0.0;
+
+  // Table and chamber links that dropped: since when (station time), while they are down.
+  std::optional<double> table_link_down_since_s_;
+  std::optional<double> chamber_link_down_since_s_;
+  /// Rides out a link outage of `device` (records it, aborts past the policy's limit); false
+  /// when `fault_text` is not a link outage alone (a real fault).
+  bool ride_out_link_outage(const std::string& device, const std::string& fault_text,
+                            std::optional<double>& down_since_s);
+  /// Records that `device`'s link is back after an outage.
+  void note_link_back(const std::string& device, std::optional<double>& down_since_s);
 
   // IMU stream health, per device.
   struct ImuHealth {

@@ -14,6 +14,7 @@
 #include "procedures/plan.hpp"
 #include "store/capture_writer.hpp"
 #include "store/database.hpp"
+#include "store/disk_space.hpp"
 #include "store/run_lock.hpp"
 #include "store/run_store.hpp"
 
@@ -34,6 +35,7 @@ class StationRun {
   /// it cannot make.
   StationRun(const core::StationConfig& station, const std::string& db_path, std::int64_t run_id,
              double start_time_s);
+  ~StationRun();
 
   drivers::Station& station() { return *station_; }
   /// This run's database connection and run store on it (the engine thread's).
@@ -46,7 +48,9 @@ class StationRun {
   /// it). `on_progress` is called on the engine thread at every progress update, with the
   /// engine; operator requests arrive through `commands` (the engine's own queue when null) or
   /// the engine's methods. Blocks until the run ends; the capture writer is flushed however it
-  /// ends. Storage errors propagate, after the engine made the station safe.
+  /// ends. A storage failure (the disk full, an I/O error) ends the run `interrupted` with the
+  /// reason, after the engine made the station safe: what was committed is intact, the step
+  /// that was cut off is redone on resume. Other errors propagate.
   CampaignResult run(const procedures::Plan& plan, const CampaignStart& start, RunJournal& journal,
                      std::function<void(RunEngine&, const Progress&)> on_progress = {},
                      std::shared_ptr<EngineCommandQueue> commands = nullptr);
@@ -54,8 +58,14 @@ class StationRun {
  private:
   /// Taken first: a run is driven by one process at a time, and one that is driven reads
   /// `running` to others (store/run_lock.hpp); released when the run object goes.
+  /// Records the end of a run cut off by a storage failure (`what`), with the reserve's space.
+  CampaignResult end_after_storage_failure(const std::string& what);
+
   store::RunLock run_lock_;
   core::StationConfig config_;
+  std::int64_t run_id_;
+  /// Space to record the run's end with when the disk fills (station policy disk_reserve_mb).
+  store::DiskReserve reserve_;
   store::Database db_;
   store::RunStore runs_;
   store::CaptureWriter writer_;

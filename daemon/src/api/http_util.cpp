@@ -97,6 +97,8 @@ httplib::Server::Handler guarded(
                 {{"error", "invalid procedure"}, {"where", e.where()}, {"violations", violations}});
     } catch (const service::ActionRefused& e) {
       send_error(res, 409, req.path, e.what());
+    } catch (const service::OutOfSpace& e) {
+      send_error(res, 507, req.path, e.what());  // Insufficient Storage
     } catch (const core::InputError& e) {
       send_error(res, 400, e.where(), e.what());
     } catch (const std::exception& e) {

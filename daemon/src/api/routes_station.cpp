@@ -6,16 +6,22 @@
 
 #include "core/error.hpp"
 #include "core/state_json.hpp"
+#include "daemon/api/access.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "http_util.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
+#include "store/run_json.hpp"
 #include "store/run_queue.hpp"
+#include "store/run_store.hpp"
 #include "wire/sse_encoder.hpp"
 
 namespace calstand::daemon::api {
 namespace {
+
+// Station-wide events (an interlock closed between runs, ...) that GET /station shows.
+constexpr std::size_t kStationEventsShown = 20;
 
 // How long a stream waits for a message before sending a keep-alive comment: also how soon a
 // closed client connection is noticed.
@@ -37,8 +43,14 @@ nlohmann::json station_json(const RouteContext& ctx) {
     queue.push_back(
         {{"run", q.run}, {"submitted_utc", q.submitted_utc}, {"submitted_by", q.submitted_by}});
   }
+  nlohmann::json events = nlohmann::json::array();
+  for (const auto& e : store::RunStore(db).station_events(kStationEventsShown)) {
+    events.push_back(store::to_json(e));
+  }
   nlohmann::json j = {
       {"name", ctx.service.options().station.name},
+      {"waiting", live.waiting ? nlohmann::json(*live.waiting) : nlohmann::json()},
+      {"events", events},
       {"devices", devices},
       {"run", live.run ? nlohmann::json(*live.run) : nlohmann::json()},
       {"held", live.held ? nlohmann::json(*live.held) : nlohmann::json()},
@@ -88,6 +100,17 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Get("/station", guarded([&ctx](const httplib::Request&, httplib::Response& res) {
                send_json(res, 200, station_json(ctx));
              }));
+
+  // The operator's deliberate close of latched table interlocks, between runs (409 while a
+  // run is on the station or when the controller refuses: the cause is still present).
+  server.Post("/station/interlock/close",
+              guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+                const std::string who =
+                    operator_name(req.get_header_value("X-Calstand-Operator"), req.remote_addr);
+                const auto closure = ctx.service.close_interlocks(who);
+                if (!closure.result) throw BadRequest(409, req.path, closure.result.message);
+                send_json(res, 200, {{"closed", closure.closed}, {"by", who}});
+              }));
 
   server.Get(R"(/calibrations/(\d+))",
              guarded([&ctx](const httplib::Request& req, httplib::Response& res) {

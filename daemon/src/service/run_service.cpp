@@ -1,6 +1,7 @@
 #include "daemon/service/run_service.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "procedures/plan.hpp"
 #include "store/capture_writer.hpp"
 #include "store/database.hpp"
+#include "store/disk_space.hpp"
 #include "store/error.hpp"
 #include "store/run_queue.hpp"
 #include "store/run_store.hpp"
@@ -31,6 +33,8 @@ namespace {
 constexpr auto kDeviceReadPeriod = std::chrono::milliseconds(250);
 // Between runs the table and the chamber are read this often (and the queue looked at).
 constexpr auto kIdleReadPeriod = std::chrono::seconds(1);
+
+constexpr double kBytesPerMb = 1024.0 * 1024.0;
 
 // The latest station time a run recorded [s] (where a stopped run's clock stands).
 double last_station_time_s(const store::RunRecord& record) {
@@ -89,6 +93,7 @@ void RunService::run_thread() {
     }
     bool failed = false;
     try {
+      serve_interlock_request();
       if (const auto next = next_run()) {
         execute(next->first, next->second);
         continue;
@@ -143,20 +148,144 @@ std::optional<std::pair<std::int64_t, bool>> RunService::next_run() {
       return std::make_pair(run, true);
     }
   }
-  store::Database db(options_.db_path);
-  const auto interrupted = store::interrupted_runs(db);
-  if (!interrupted.empty()) {
-    // A run already held (paused by an operator when the daemon stopped, or held before a
-    // crash) waits for an operator whatever the policy.
-    const bool held = store::RunStore(db).run_status(interrupted.front()) == store::kHeldStatus;
-    if (options_.recovery == RecoveryPolicy::kAuto && !held)
-      return std::make_pair(interrupted.front(), true);
-    hold(interrupted.front());
+  std::optional<std::pair<std::int64_t, bool>> candidate;
+  {
+    store::Database db(options_.db_path);
+    const auto interrupted = store::interrupted_runs(db);
+    if (!interrupted.empty()) {
+      // A run already held (paused by an operator when the daemon stopped, or held before a
+      // crash) waits for an operator whatever the policy.
+      const bool held = store::RunStore(db).run_status(interrupted.front()) == store::kHeldStatus;
+      if (options_.recovery != RecoveryPolicy::kAuto || held) {
+        hold(interrupted.front());
+        return std::nullopt;
+      }
+      candidate = std::make_pair(interrupted.front(), true);
+    } else if (const auto queued = store::queued_runs(db); !queued.empty()) {
+      candidate = std::make_pair(queued.front().run, false);
+    }
+  }
+  if (!candidate) {
+    note_waiting(0, std::nullopt);
     return std::nullopt;
   }
-  const auto queued = store::queued_runs(db);
-  if (!queued.empty()) return std::make_pair(queued.front().run, false);
+  // A run that cannot start now waits, with the reason shown, and starts by itself once the
+  // cause is gone: nobody has to submit it again.
+  const auto why = start_blocker();
+  note_waiting(candidate->first, why);
+  if (why) return std::nullopt;
+  return candidate;
+}
+
+std::optional<std::string> RunService::disk_shortfall() {
+  if (auto why =
+          store::disk_space_shortfall(options_.db_path, options_.station.policy.min_free_disk_mb)) {
+    return why;
+  }
+  if (measure_after_full_.exchange(false)) {
+    free_bytes_needed_after_full_ =
+        store::free_bytes_beside(options_.db_path) +
+        static_cast<std::uint64_t>(options_.station.policy.min_free_disk_mb * kBytesPerMb);
+  }
+  if (const std::uint64_t needed = free_bytes_needed_after_full_; needed > 0) {
+    const std::uint64_t free = store::free_bytes_beside(options_.db_path);
+    if (free < needed) {
+      return fmt::format(
+          "disk full: the last run stopped on a full disk; {:.1f} MB free now, waiting for "
+          "{:.1f} MB (what was free then plus the station policy's min_free_disk_mb)",
+          static_cast<double>(free) / kBytesPerMb, static_cast<double>(needed) / kBytesPerMb);
+    }
+    free_bytes_needed_after_full_ = 0;
+  }
   return std::nullopt;
+}
+
+std::optional<std::string> RunService::start_blocker() {
+  if (auto why = disk_shortfall()) return why;
+  // Read now, not the last idle reading: an interlock may have opened a moment ago.
+  const auto reading = idle_watch_.read();
+  if (!reading.table) return std::nullopt;  // a link that is down fails the run's bring-up
+  for (const auto* axis : {&reading.table->outer, &reading.table->inner}) {
+    if (axis->fault && axis->fault_text.rfind("interlock open", 0) == 0) {
+      return fmt::format(
+          "table {} axis {} (latched): an operator must close it (calstand device table "
+          "close-interlock, or POST /station/interlock/close)",
+          axis == &reading.table->outer ? "outer" : "inner", axis->fault_text);
+    }
+  }
+  return std::nullopt;
+}
+
+void RunService::note_waiting(std::int64_t run, const std::optional<std::string>& why) {
+  if (why == waiting_reason_) return;
+  waiting_reason_ = why;
+  live_.update([&](LiveSnapshot& s) { s.waiting = why; });
+  if (!why) return;
+  spdlog::warn("run {}: waiting to start: {}", run, *why);
+  try {
+    record_event(run, "daemon", "waiting to start: " + *why, false);
+  } catch (const std::exception& e) {
+    // A full disk may refuse even this line; the live status still says why.
+    spdlog::error("run {}: recording the wait: {}", run, e.what());
+  }
+}
+
+void RunService::serve_interlock_request() {
+  std::shared_ptr<InterlockRequest> request;
+  {
+    std::lock_guard lock(mutex_);
+    request = std::move(interlock_request_);
+  }
+  if (!request) return;
+  try {
+    const drivers::InterlockClosure closure = idle_watch_.close_interlocks();
+    store::EventRecord e;  // station-wide: no run
+    e.kind = store::EventKind::kOperator;
+    e.source = request->who;
+    e.message = !closure.result ? "interlock close refused: " + closure.result.message
+                : closure.closed.empty()
+                    ? std::string("interlock close: none was latched")
+                    : "interlock closed: " + fmt::format("{}", fmt::join(closure.closed, ", "));
+    {
+      store::Database db(options_.db_path);
+      store::RunStore(db).add_event(e);
+    }
+    spdlog::info("{} ({})", e.message, request->who);
+    hub_.publish("event", {{"run", nullptr},
+                           {"kind", std::string(to_string(e.kind))},
+                           {"source", e.source},
+                           {"message", e.message}});
+    request->done.set_value(closure);
+  } catch (...) {
+    request->done.set_exception(std::current_exception());
+  }
+}
+
+drivers::InterlockClosure RunService::close_interlocks(const std::string& who) {
+  auto request = std::make_shared<InterlockRequest>();
+  request->who = who;
+  auto done = request->done.get_future();
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) throw ActionRefused("the daemon is stopping");
+    if (current_) {
+      throw ActionRefused(fmt::format(
+          "run {} is on the station: interlocks are closed between runs (pause and abort it, "
+          "or wait for its end)",
+          *current_));
+    }
+    if (interlock_request_) throw ActionRefused("another interlock close is under way");
+    interlock_request_ = request;
+    ++generation_;
+  }
+  wake_.notify_all();
+  // The run thread serves it at the top of its loop: within a second or two of idle reading.
+  if (done.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
+    std::lock_guard lock(mutex_);
+    if (interlock_request_ == request) interlock_request_.reset();
+    throw ActionRefused("the station did not take the interlock close within 60 s");
+  }
+  return done.get();
 }
 
 void RunService::hold(std::int64_t run) {
@@ -213,6 +342,14 @@ void RunService::execute(std::int64_t run, bool resuming) {
     if (has_ended(status_of(run))) return;
     current_ = run;
     commands_->clear();
+    if (interlock_request_) {
+      // Asked for while this run was being picked: the devices are the run's now.
+      drivers::InterlockClosure refused;
+      refused.result = drivers::Result::failure(
+          fmt::format("run {} started on the station first; close interlocks between runs", run));
+      interlock_request_->done.set_value(refused);
+      interlock_request_.reset();
+    }
   }
   // However execute() ends (a storage error included), the station is free afterwards.
   struct ClearCurrent {
@@ -296,6 +433,9 @@ void RunService::execute(std::int64_t run, bool resuming) {
     }
   }
 
+  if (final_state == RunState::kInterrupted && store::says_disk_full(reason)) {
+    measure_after_full_ = true;
+  }
   if (final_state == RunState::kInterrupted || final_state == RunState::kHeld) {
     // The engine recorded the run as interrupted (or held) in the same write that ended it: a
     // crash from here on still leaves it resumable.
@@ -339,6 +479,7 @@ std::int64_t RunService::submit(const procedures::Procedure& procedure,
                                 const procedures::Overrides& overrides, const std::string& who) {
   const procedures::Plan plan = procedures::make_plan(procedure, options_.station, overrides);
   procedures::require_valid(plan);  // every violation, before anything is written
+  if (auto why = disk_shortfall()) throw OutOfSpace(*why + "; free space, then submit again");
   std::int64_t run = 0;
   {
     store::Database db(options_.db_path);

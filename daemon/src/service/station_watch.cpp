@@ -62,4 +62,15 @@ IdleStationWatch::Reading IdleStationWatch::read() {
   return out;
 }
 
+drivers::InterlockClosure IdleStationWatch::close_interlocks() {
+  next_open_ = {};  // an operator is waiting: open the links now if they are down
+  read();
+  if (!station_ || station_->table().state() == drivers::DeviceState::kError) {
+    drivers::InterlockClosure out;
+    out.result = drivers::Result::failure("the table's link is not up");
+    return out;
+  }
+  return station_->table().close_interlocks();
+}
+
 }  // namespace calstand::daemon::service

@@ -40,9 +40,12 @@ struct AcutrolConnection {
 ///
 /// - configure(): opens the link, checks the controller answers `*idn?`, sends each axis's rate
 ///   and acceleration limits from the TableConfig (`:limit`), reads the interlocks (an open one
-///   is reported as an event; activate() then tries to close it).
-/// - activate(): closes open interlocks (`:interlock:close`); refused while a cause is present,
-///   which fails activate() with the controller's text and leaves the table inactive.
+///   is reported as an event).
+/// - activate(): refused while an axis interlock is latched open: closing it is an operator's
+///   decision (close_interlocks(), `calstand device table close-interlock`, the daemon's
+///   `POST /station/interlock/close`), never a side effect of a run starting.
+/// - close_interlocks(): `:interlock:close` on each axis whose interlock is open; refused
+///   while a cause is present, with the controller's text.
 /// - move_to()/set_rate(): mode then demand per axis; a refusal returns the controller's text.
 ///   Rates beyond the configured limit are refused before anything is sent.
 /// - stop(): both axes to rest; allowed in every state, and tries both axes even when the link
@@ -83,6 +86,7 @@ class AcutrolTable final : public Turntable {
   Result set_rate(TableAxis axis, double rate_dps) override;
   Result stop() override;
   core::TableState read_state() override;
+  InterlockClosure close_interlocks() override;
 
  private:
   /// One command and its reply line, or why there is none.

@@ -33,6 +33,15 @@ class ImuFrameStreamer {
   void set_silent(bool silent) { silent_ = silent; }
   /// Writes `bytes` on the line as they are (fault rehearsal: garbage, corrupted frames).
   void inject(std::vector<std::uint8_t> bytes);
+  /// Holds the frames back (they queue, up to the queue's limit) or lets them go, all at once:
+  /// a burst, as from a USB adapter or a gateway that buffers (fault rehearsal).
+  void set_held(bool held) {
+    held_ = held;
+    wake_.notify_all();
+  }
+  /// Moves the IMU's own clock by `seconds` from now on (a restart, a wrap, a time set: fault
+  /// rehearsal); the frames' device time stamps jump, the samples do not.
+  void jump_clock(double seconds) { clock_offset_s_ = clock_offset_s_.load() + seconds; }
   std::uint64_t frames_sent() const { return sent_.load(); }
   std::uint64_t frames_dropped() const { return dropped_.load(); }
 
@@ -45,6 +54,8 @@ class ImuFrameStreamer {
   std::condition_variable wake_;
   std::deque<std::vector<std::uint8_t>> queue_;
   std::atomic<bool> silent_{false};
+  std::atomic<bool> held_{false};
+  std::atomic<double> clock_offset_s_{0.0};  ///< added to the device time stamps [s]
   std::atomic<bool> running_{true};
   std::atomic<std::uint64_t> sent_{0};
   std::atomic<std::uint64_t> dropped_{0};

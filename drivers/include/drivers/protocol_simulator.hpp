@@ -56,6 +56,10 @@ class ProtocolSimulator {
   void set_imu_silent(std::size_t index, bool silent);
   /// Writes raw bytes on IMU `index`'s line (garbage, corrupted frames).
   void inject_imu_bytes(std::size_t index, std::vector<std::uint8_t> bytes);
+  /// IMU `index`'s frames held back, or let go at once (a burst).
+  void set_imu_held(std::size_t index, bool held);
+  /// IMU `index`'s own clock jumps by `seconds`.
+  void jump_imu_clock(std::size_t index, double seconds);
   std::size_t imu_index(const std::string& name) const;  ///< throws core::InputError
 
   /// Frames sent and dropped per IMU, world lag: for `status`.

@@ -74,6 +74,10 @@ class StreamingImu : public Imu {
   /// Appends samples for poll(); beyond 120 s of stream nobody polled, the oldest are dropped
   /// and counted (buffer_overflows). Reader thread.
   void deliver(const std::vector<core::ImuSample>& samples);
+  /// Stamps `samples` with station time (sample_clock()) as they arrived at `arrival_s`; a
+  /// device clock that jumped is counted (clock_restarts) and reported as an event. Reader
+  /// thread.
+  void stamp(std::vector<core::ImuSample>& samples, double arrival_s);
   /// Publishes the protocol decoder's counters for fault_counters() (they replace the last).
   void publish_protocol_counters(std::map<std::string, std::uint64_t> counters);
   /// Calls `attempt` until it returns true (true) or the reader is stopped (false), waiting
@@ -100,6 +104,7 @@ class StreamingImu : public Imu {
   Lifecycle life_;
   FaultCounters faults_;
   EventQueue events_;
+  unsigned long clock_restarts_seen_ = 0;  // reader thread
 
   std::thread reader_;
   std::atomic<bool> running_{false};

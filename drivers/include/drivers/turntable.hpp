@@ -1,11 +1,20 @@
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "core/table_state.hpp"
 #include "drivers/device.hpp"
 
 namespace calstand::drivers {
 
 enum class TableAxis { kOuter, kInner };
+
+/// What Turntable::close_interlocks() did.
+struct InterlockClosure {
+  Result result;                    ///< failure: why an interlock could not be closed
+  std::vector<std::string> closed;  ///< e.g. "outer axis interlock (door open)"
+};
 
 /// A dual-axis rate table. Angles and rates follow error-model.md (right-handed about each
 /// axis, deg and deg/s). Commands return at once; read_state() tells when motion has settled.
@@ -18,6 +27,11 @@ class Turntable : public Device {
   /// Both axes to rest at their acceleration limits and hold: the safe state.
   virtual Result stop() = 0;
   virtual core::TableState read_state() = 0;
+  /// Closes the axis interlocks that latched open: an operator's deliberate act, never a side
+  /// effect of activate() (which refuses while one is latched). Needs the link (configured);
+  /// refused while a cause is still present. A table without interlocks (the in-process
+  /// simulator) has none to close.
+  virtual InterlockClosure close_interlocks() { return {}; }
 };
 
 }  // namespace calstand::drivers

@@ -284,15 +284,50 @@ Result AcutrolTable::activate() {
       note_bad_reply(il.error);
       return Result::failure(il.error);
     }
+    interlock_open_[index_of(axis)] = il.value->open;
     if (!il.value->open) continue;
-    // Closing is the operator's decision, made by activating: refused while the cause is there.
-    if (auto r = command_ok(axis_command(CommandKind::kInterlockClose, axis)); !r) {
-      return Result::failure(fmt::format("{} axis interlock: {}", axis_name(axis), r.message));
-    }
-    interlock_open_[index_of(axis)] = false;
-    events_.push(clock_.now_s(), false, fmt::format("{} axis interlock closed", axis_name(axis)));
+    // A latched interlock stays latched until someone decides to close it: a queued run
+    // starting, a resume after a crash or a manual move must not close it on their way.
+    return Result::failure(fmt::format(
+        "{} axis interlock latched open{}: an operator must close it first (calstand device "
+        "table close-interlock, or POST /station/interlock/close on the daemon)",
+        axis_name(axis), il.value->why.empty() ? "" : " (" + il.value->why + ")"));
   }
   return life_.activate();
+}
+
+InterlockClosure AcutrolTable::close_interlocks() {
+  std::lock_guard lock(mutex_);
+  InterlockClosure out;
+  const auto s = life_.state();
+  if (s == DeviceState::kUnconfigured || s == DeviceState::kError) {
+    out.result = Result::failure(fmt::format("{} is {}: configure it first", name_, to_string(s)));
+    return out;
+  }
+  for (const int axis : kWireAxes) {
+    const Exchange ex = exchange(axis_command(CommandKind::kInterlockQuery, axis));
+    if (!ex.ok()) {
+      out.result = Result::failure(ex.message);
+      return out;
+    }
+    const auto il = acutrol::parse_interlock(ex.reply.payload);
+    if (!il) {
+      note_bad_reply(il.error);
+      out.result = Result::failure(il.error);
+      return out;
+    }
+    if (!il.value->open) continue;
+    if (auto r = command_ok(axis_command(CommandKind::kInterlockClose, axis)); !r) {
+      out.result =
+          Result::failure(fmt::format("{} axis interlock: {}", axis_name(axis), r.message));
+      return out;
+    }
+    interlock_open_[index_of(axis)] = false;
+    out.closed.push_back(fmt::format("{} axis interlock{}", axis_name(axis),
+                                     il.value->why.empty() ? "" : " (" + il.value->why + ")"));
+    events_.push(clock_.now_s(), false, fmt::format("{} axis interlock closed", axis_name(axis)));
+  }
+  return out;
 }
 
 Result AcutrolTable::deactivate() {

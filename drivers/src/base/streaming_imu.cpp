@@ -23,7 +23,9 @@ constexpr auto kStopCheck = 10ms;
 
 StreamingImu::StreamingImu(std::string name, core::Clock& clock,
                            std::initializer_list<std::string_view> extra_faults)
-    : name_(std::move(name)), clock_(clock), faults_{"read_errors", "reopens", "buffer_overflows"} {
+    : name_(std::move(name)),
+      clock_(clock),
+      faults_{"read_errors", "reopens", "buffer_overflows", "clock_restarts"} {
   for (auto n : extra_faults) faults_.set(n, 0);
 }
 
@@ -85,6 +87,16 @@ std::map<std::string, std::uint64_t> StreamingImu::fault_counters() const {
   std::lock_guard lock(mutex_);
   for (const auto& [k, v] : protocol_counters_) out[k] = v;
   return out;
+}
+
+void StreamingImu::stamp(std::vector<core::ImuSample>& samples, double arrival_s) {
+  for (auto& s : samples) s.receive_time_s = sample_clock_.stamp(s.device_time_s, arrival_s);
+  if (const auto restarts = sample_clock_.restarts(); restarts != clock_restarts_seen_) {
+    clock_restarts_seen_ = restarts;
+    faults_.set("clock_restarts", restarts);
+    events_.push(arrival_s, true,
+                 "device clock jumped: time stamps re-anchored to the arrival times");
+  }
 }
 
 void StreamingImu::deliver(const std::vector<core::ImuSample>& samples) {

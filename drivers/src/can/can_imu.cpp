@@ -103,8 +103,7 @@ Result CanImu::read_step() {
   // A sample is stamped with the arrival of the frame that completed it.
   decoded_.clear();
   assembler_.feed(r.frame.frame, decoded_);
-  for (auto& s : decoded_) s.receive_time_s = sample_clock().stamp(s.device_time_s, arrival_s);
-  faults().set("clock_restarts", sample_clock().restarts());
+  stamp(decoded_, arrival_s);
   deliver(decoded_);
   publish_protocol_counters(assembler_.counters());
   return Result::success();

@@ -78,7 +78,7 @@ Result SerialImu::read_step() {
   if (!r.ok()) return Result::failure(r.error);
   decoded_.clear();
   decoder_->feed(std::span(chunk_.data(), r.bytes), decoded_);
-  for (auto& s : decoded_) s.receive_time_s = sample_clock().stamp(s.device_time_s, arrival_s);
+  stamp(decoded_, arrival_s);
   deliver(decoded_);
   publish_protocol_counters(decoder_->counters());
   return Result::success();

@@ -20,6 +20,12 @@ void ImuFrameStreamer::push(const core::ImuSample& sample) {
     ++dropped_;
     return;
   }
+  if (const double offset = clock_offset_s_.load(); offset != 0.0) {
+    core::ImuSample shifted = sample;
+    shifted.device_time_s += offset;
+    inject(encode_imu_frame(shifted));
+    return;
+  }
   inject(encode_imu_frame(sample));
 }
 
@@ -42,7 +48,8 @@ void ImuFrameStreamer::loop() {
     std::size_t frames = 0;
     {
       std::unique_lock lock(mutex_);
-      wake_.wait_for(lock, 50ms, [&] { return !queue_.empty() || !running_; });
+      wake_.wait_for(lock, 50ms, [&] { return (!queue_.empty() && !held_) || !running_; });
+      if (held_) continue;
       // Batch what is queued into one write: a few syscalls per millisecond, not per frame.
       batch.clear();
       while (!queue_.empty() && batch.size() < 64 * 1024) {

@@ -220,6 +220,14 @@ void ProtocolSimulator::inject_imu_bytes(std::size_t index, std::vector<std::uin
   impl_->imu_lines.at(index)->inject(std::move(bytes));
 }
 
+void ProtocolSimulator::set_imu_held(std::size_t index, bool held) {
+  impl_->imu_lines.at(index)->set_held(held);
+}
+
+void ProtocolSimulator::jump_imu_clock(std::size_t index, double seconds) {
+  impl_->imu_lines.at(index)->jump_clock(seconds);
+}
+
 std::size_t ProtocolSimulator::imu_index(const std::string& name) const {
   auto& world = impl_->runner.world();
   for (std::size_t i = 0; i < world.imu_count(); ++i) {

@@ -21,3 +21,11 @@ class StoreError : public std::runtime_error {
 };
 
 }  // namespace calstand::store
+
+namespace calstand::store {
+
+/// True for a failure of the storage itself (StoreError, or an SQLite error from a store
+/// call): the database said no, not the caller's input or a bug.
+bool is_storage_error(const std::exception& e);
+
+}  // namespace calstand::store

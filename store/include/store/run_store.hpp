@@ -58,6 +58,9 @@ class RunStore {
 
   /// Records an event; returns its id. An empty wall_utc is stamped now.
   std::int64_t add_event(const EventRecord& event);
+  /// The newest `limit` station-wide events (no run: an interlock closed between runs, ...),
+  /// oldest first.
+  std::vector<EventRecord> station_events(std::size_t limit);
 
   /// Telemetry rows (the caller decimates, e.g. with TelemetryDecimator); batches are one
   /// transaction.

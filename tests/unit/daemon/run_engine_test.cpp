@@ -148,9 +148,9 @@ TEST(RunEngine, RunsEveryStepAndEndsSafe) {
   EXPECT_EQ(engine.run(), RunState::kCompleted);
   ASSERT_EQ(f.journal.completed.size(), 5u);
   for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(f.journal.completed[i].first, i);
-  // 400 Hz IMU: a 5 s capture holds 2000 samples (one tick of slack at each end).
-  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 2)), 2000.0, 40.0);
-  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 3)), 1600.0, 40.0);
+  // 400 Hz IMU: a 5 s capture holds 2000 samples (the window's edges: one sample).
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 2)), 2000.0, 1.0);
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 3)), 1600.0, 1.0);
   EXPECT_EQ(samples_of(f.journal, 0), 0u);  // only recording steps keep samples
   EXPECT_EQ(f.journal.states.front(), RunState::kRunning);
   EXPECT_EQ(f.journal.states.back(), RunState::kCompleted);
@@ -161,6 +161,27 @@ TEST(RunEngine, RunsEveryStepAndEndsSafe) {
   EXPECT_EQ(f.station.chamber().read_state().mode, core::ChamberMode::kStandby);
   // Capture at outer 180: the IMU is upside down.
   EXPECT_EQ(engine.progress().state, RunState::kCompleted);
+}
+
+// A resumed run's clock starts wherever the crash left it, so the control ticks fall at any
+// phase of the IMU's sample grid. Two revolutions at 10 deg/s are 72 s: 28,800 samples at
+// 400 Hz covering 720 deg, to within one sample, at every phase.
+TEST(RunEngine, WholeRevolutionCaptureHoldsWholeRevolutionsWhateverTheClockPhase) {
+  for (const double start_s : {0.0, 0.0371, 1234567.0613, 86400.00013, 3.3e6 + 0.0999}) {
+    drivers::SimStation station{sim::default_station(), start_s};
+    MemoryJournal journal;
+    RunEngine engine(station, journal, plan_of({rate("inner", 10.0, 72.0), capture(4.0)}));
+    ASSERT_EQ(engine.run(), RunState::kCompleted) << "start " << start_s;
+    EXPECT_NEAR(static_cast<double>(samples_of(journal, 0)), 28800.0, 1.0) << "start " << start_s;
+    EXPECT_NEAR(static_cast<double>(samples_of(journal, 1)), 1600.0, 1.0) << "start " << start_s;
+    for (const auto& [key, a] : journal.attempts) {
+      if (std::get<0>(key) != 0) continue;
+      // First to last sample spans the window less one sample period: 720 deg, to within one
+      // sample (0.025 deg; a little more for the rounding of the time stamps).
+      const double covered_deg = 10.0 * (a.last_time_s - a.first_time_s + 1.0 / 400.0);
+      EXPECT_NEAR(covered_deg, 720.0, 1.001 * 10.0 / 400.0) << "start " << start_s;
+    }
+  }
 }
 
 TEST(RunEngine, PauseAtBoundaryThenResume) {
@@ -206,7 +227,7 @@ TEST(RunEngine, ImmediatePauseDiscardsAndRepeatsTheCapture) {
   EXPECT_EQ(f.journal.discarded[0], std::make_pair(std::size_t{1}, 1));
   EXPECT_EQ(f.journal.completed.back(), std::make_pair(std::size_t{1}, 2));
   // The repeated capture is whole: 3 s at 400 Hz.
-  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 1)), 1200.0, 40.0);
+  EXPECT_NEAR(static_cast<double>(samples_of(f.journal, 1)), 1200.0, 1.0);
 }
 
 TEST(RunEngine, AbortTakesTheStationSafeAndRecordsWhy) {

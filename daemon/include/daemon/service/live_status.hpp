@@ -26,7 +26,10 @@ struct DeviceStatus {
 struct LiveSnapshot {
   std::optional<std::int64_t> run;   ///< the run on the station (none when idle)
   std::optional<std::int64_t> held;  ///< an interrupted run waiting for resume or abort
-  Progress progress;                 ///< of `run`
+  /// Why the next run (queued, or interrupted and due to resume) cannot start now: the disk
+  /// full, a table interlock latched. It waits and starts by itself once the cause is gone.
+  std::optional<std::string> waiting;
+  Progress progress;  ///< of `run`
   std::vector<DeviceStatus> devices;
   std::optional<core::TableState> table;
   std::optional<core::ChamberState> chamber;

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -15,6 +17,7 @@
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/live_status.hpp"
 #include "daemon/service/station_watch.hpp"
+#include "drivers/turntable.hpp"
 #include "procedures/procedure.hpp"
 
 namespace calstand::daemon::service {
@@ -36,6 +39,13 @@ struct ServiceOptions {
 /// An operator request that does not apply to the run as it is (e.g. pause a queued run,
 /// resume a run that is not paused). what() says why.
 class ActionRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A new run refused because the database's filesystem has too little space for it (station
+/// policy min_free_disk_mb). what() says how much is free and how much is needed.
+class OutOfSpace : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
@@ -65,7 +75,7 @@ class RunService {
 
   /// Plans `procedure` with `overrides` on the station and queues it as a new run; returns the
   /// run id. Throws procedures::ProcedureError listing every violation when the plan breaks a
-  /// rule (nothing is written then).
+  /// rule, OutOfSpace when the disk is too full to start it (nothing is written then).
   std::int64_t submit(const procedures::Procedure& procedure,
                       const procedures::Overrides& overrides, const std::string& who);
 
@@ -83,6 +93,12 @@ class RunService {
   void skip(std::int64_t run, std::optional<std::size_t> step, const std::string& why,
             const std::string& who);
 
+  /// The operator's close of latched table interlocks, between runs only (ActionRefused while
+  /// a run is on the station). Done on the run thread, which owns the devices between runs;
+  /// recorded as a station event with `who` and the time. A queued run held by the interlock
+  /// starts afterwards by itself.
+  drivers::InterlockClosure close_interlocks(const std::string& who);
+
   LiveSnapshot snapshot() const { return live_.snapshot(); }
   const ServiceOptions& options() const { return options_; }
 
@@ -94,6 +110,12 @@ class RunService {
   /// nothing to do now (or a run is held).
   std::optional<std::pair<std::int64_t, bool>> next_run();
   void hold(std::int64_t run);
+  /// Why no run may start now (disk space, a latched interlock); none when one may.
+  std::optional<std::string> start_blocker();
+  /// Shows `why` in the live status and records it once on `run`, the run that waits.
+  void note_waiting(std::int64_t run, const std::optional<std::string>& why);
+  /// Serves an operator's interlock close waiting for the run thread.
+  void serve_interlock_request();
   void execute(std::int64_t run, bool resuming);
   void fail_before_start(std::int64_t run, const std::string& why);
   void record_event(std::int64_t run, const std::string& who, const std::string& message,
@@ -114,6 +136,22 @@ class RunService {
   std::optional<std::int64_t> current_;  // the run on the station
   std::optional<std::int64_t> held_;     // the interrupted run waiting for an operator
   bool resume_held_ = false;
+  // An operator's interlock close, served by the run thread between runs.
+  struct InterlockRequest {
+    std::string who;
+    std::promise<drivers::InterlockClosure> done;
+  };
+  std::shared_ptr<InterlockRequest> interlock_request_;
+  std::optional<std::string> waiting_reason_;  // run thread only: last recorded wait
+  // After a run stopped on a full disk, the free bytes needed before runs start again (what
+  // was free then plus the policy's minimum; 0: none): space must really be back, or the run
+  // would resume, fill the disk and stop again in a loop. Set by the run thread, read by submit.
+  std::atomic<std::uint64_t> free_bytes_needed_after_full_{0};
+  // A run stopped on a full disk and the space then free is not measured yet: measured once the
+  // run's connections are closed (its write-ahead log gone), at the next look.
+  std::atomic<bool> measure_after_full_{false};
+  /// Why no run may start for lack of space; none when there is enough.
+  std::optional<std::string> disk_shortfall();
   // Requests for the run on the station, taken by its engine on the engine thread; pushed under
   // mutex_ (so only while `current_` is the run meant), taken without it.
   std::shared_ptr<EngineCommandQueue> commands_ = std::make_shared<EngineCommandQueue>();

@@ -42,6 +42,9 @@ class IdleStationWatch {
   Reading read();
   /// Closes the links: before a run (or a hold) opens the devices for itself.
   void release() { station_.reset(); }
+  /// The operator's close of latched table interlocks (Turntable::close_interlocks()), over the
+  /// links this watch holds (opened now when they are not up).
+  drivers::InterlockClosure close_interlocks();
 
   /// How long after a failed open the links are tried again.
   static constexpr std::chrono::seconds kRetry{30};

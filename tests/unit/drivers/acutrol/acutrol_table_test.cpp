@@ -338,19 +338,41 @@ TEST_F(AcutrolTableOnServer, OpenInterlockIsAFaultWithAnEventAndRefusesMotion) {
   EXPECT_FALSE(table_->set_rate(TableAxis::kOuter, 1.0));
   EXPECT_TRUE(table_->stop());  // the safe state is always reachable
 
-  // Closing (by activating) is refused while the cause is there ...
-  const auto early = table_->activate();
-  EXPECT_FALSE(early);
-  EXPECT_TRUE(contains(early.message, "ERR 301")) << early.message;
-  // ... and works once it is gone.
+  // Closing is refused while the cause is there ...
+  const auto early = table_->close_interlocks();
+  EXPECT_FALSE(early.result);
+  EXPECT_TRUE(contains(early.result.message, "ERR 301")) << early.result.message;
+  EXPECT_TRUE(early.closed.empty());
+  // ... and works once it is gone, and only when asked.
   backend_.clear_interlock_cause(1);
-  const auto closed = table_->activate();
-  ASSERT_TRUE(closed) << closed.message;
+  const auto closed = table_->close_interlocks();
+  ASSERT_TRUE(closed.result) << closed.result.message;
+  ASSERT_EQ(closed.closed.size(), 1u);
+  EXPECT_EQ(closed.closed[0], "outer axis interlock (door open)");
   const auto after = table_->read_state();
   EXPECT_FALSE(after.outer.fault) << after.outer.fault_text;
   events = table_->take_events();
   EXPECT_TRUE(has_event(events, false, "outer axis interlock closed"));
   EXPECT_TRUE(table_->move_to(10.0, 10.0));
+  // Nothing latched: nothing to close, and that is not a failure.
+  const auto again = table_->close_interlocks();
+  EXPECT_TRUE(again.result) << again.result.message;
+  EXPECT_TRUE(again.closed.empty());
+}
+
+TEST_F(AcutrolTableOnServer, ActivationRefusesWhileAnInterlockIsLatchedAndNeverClosesIt) {
+  bring_up();
+  table_->deactivate();
+  backend_.open_interlock(2, "light curtain");
+  backend_.clear_interlock_cause(2);  // the cause is gone, but nobody has decided to close it
+  const auto r = table_->activate();
+  EXPECT_FALSE(r);
+  EXPECT_TRUE(contains(r.message, "inner axis interlock latched open (light curtain)"))
+      << r.message;
+  EXPECT_TRUE(contains(r.message, "close-interlock")) << r.message;
+  EXPECT_TRUE(table_->read_state().inner.fault) << "activation must leave the interlock open";
+  ASSERT_TRUE(table_->close_interlocks().result);
+  EXPECT_TRUE(table_->activate());
 }
 
 TEST_F(AcutrolTableOnServer, AxisFaultIsReportedWithItsTextAndRefusesMotion) {
