@@ -129,11 +129,26 @@ void DaemonClient::stream_events(
       stopped = true;
       return false;
     });
-    const auto res = c.Get("/events", headers, [&](const char* data, std::size_t n) {
-      received = true;
-      return parser.feed({data, n});
-    });
+    int status = 0;
+    const auto res = c.Get(
+        "/events", headers,
+        [&](const httplib::Response& r) {
+          status = r.status;
+          return r.status == 200;  // a refusal's body is not a stream
+        },
+        [&](const char* data, std::size_t n) {
+          received = true;
+          return parser.feed({data, n});
+        });
     if (stopped) return;
+    // A refused token stays refused: say so at once rather than retry for the whole window.
+    if (status == 401 || status == 403) {
+      throw core::InputError(
+          "", fmt::format("GET /events (HTTP {}): calstandd at {} refused the token ({})", status,
+                          endpoint_.url(),
+                          token_.empty() ? "none given: --token-file or CALSTAND_TOKEN"
+                                         : "--token-file or CALSTAND_TOKEN"));
+    }
     // A stream that broke mid-body gives no response, only the bytes it delivered.
     const bool connected = received || (res && res->status == 200);
     if (connected) {

@@ -244,6 +244,27 @@ TEST(DaemonSecurity, HttpsWithTheCertificateAndNothingInPlaintext) {
   const auto plain =
       calstand::testing::run("status --daemon 127.0.0.1:" + std::to_string(d.port()));
   EXPECT_NE(plain.exit_code, 0) << plain.out;
+  // A read token cannot submit; an operator token submits and watches, recorded by its name.
+  const std::string tls_options = " --daemon " + url + " --ca-file " + certificate.cert;
+  const auto refused =
+      calstand::testing::run("submit six-position --set capture_s=5" + tls_options);
+  EXPECT_EQ(refused.exit_code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("HTTP 403"), std::string::npos) << refused.out;
+  setenv("CALSTAND_TOKEN", kLabOpSecret, 1);
+  const auto submitted =
+      calstand::testing::run("submit six-position --set capture_s=5 --operator bob" + tls_options);
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out;
+  const auto watched = calstand::testing::run("watch 1" + tls_options);
+  EXPECT_EQ(watched.exit_code, 0) << watched.out;
+  EXPECT_NE(watched.out.find("run 1 completed"), std::string::npos) << watched.out;
+  tls.set_bearer_token_auth(kViewerSecret);
+  const Answer events = answer_of(tls.Get("/runs/1/events"));
+  EXPECT_TRUE(any_event_by(events.body, "bob@127.0.0.1 (token lab-op)", "submitted")) << events.raw;
+  // A token the daemon does not know: refused at once, not retried.
+  setenv("CALSTAND_TOKEN", "not-a-token-of-this-daemon", 1);
+  const auto unknown = calstand::testing::run("watch 1 --reconnect 600" + tls_options);
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.out;
+  EXPECT_NE(unknown.out.find("HTTP 401"), std::string::npos) << unknown.out;
   unsetenv("CALSTAND_TOKEN");
 }
 
