@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <memory>
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -153,6 +154,55 @@ TEST(DaemonSecurity, BeyondLoopbackReadsNeedATokenAndActionsAnOperatorToken) {
       call(port, "GET", "/runs/" + std::to_string(run) + "/events", kViewerSecret);
   EXPECT_TRUE(any_event_by(events.body, "(token lab-op)", "submitted six-position")) << events.raw;
   EXPECT_FALSE(any_event_by(events.body, "(token viewer)", "")) << events.raw;
+}
+
+// Mangled credentials (the operator's secret with bytes flipped, cut, extended; other schemes;
+// junk) are refused with 401, never taken for a token and never a failure inside.
+TEST(DaemonSecurity, MangledTokensAreRefused) {
+  InProcessDaemon d(calstand::testing::fresh_dir("sec-mangled") + "/station.db", beyond_loopback());
+  std::mt19937 rng(16);
+  auto pick = [&](std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  };
+  const std::string secret = kLabOpSecret;
+  const std::string plan = R"({"procedure": "two-position"})";
+  for (int i = 0; i < 200; ++i) {
+    std::string header;
+    switch (pick(5)) {
+      case 0: {  // a byte flipped (never to itself)
+        std::string t = secret;
+        const std::size_t at = pick(t.size());
+        t[at] = static_cast<char>(t[at] ^ static_cast<char>(1 + pick(127)));
+        header = "Bearer " + t;
+        break;
+      }
+      case 1:  // cut short, or longer
+        header = "Bearer " + (pick(2) == 0 ? secret.substr(0, pick(secret.size()))
+                                           : secret + std::string(1 + pick(8), 'x'));
+        break;
+      case 2:  // another scheme, or the scheme spelt otherwise
+        header = std::vector<std::string>{"Basic ", "bearer ", "Bearer  ", "Token ", ""}[pick(5)] +
+                 secret;
+        break;
+      case 3:  // the read token where an action needs an operator one (403, counted apart)
+        header = std::string("Bearer ") + kViewerSecret;
+        break;
+      default: {  // junk
+        header = "Bearer ";
+        for (std::size_t k = 0, n = pick(64); k < n; ++k)
+          header += static_cast<char>(0x20 + pick(0x5f));
+      }
+    }
+    httplib::Client c("127.0.0.1", d.port());
+    c.set_read_timeout(30, 0);
+    const Answer a =
+        answer_of(c.Post("/plan", {{"Authorization", header}}, plan, "application/json"));
+    const bool viewer = header == std::string("Bearer ") + kViewerSecret;
+    EXPECT_EQ(a.status, viewer ? 403 : 401) << header << ": " << a.raw;
+    const Answer r = answer_of(c.Get("/station", {{"Authorization", header}}));
+    EXPECT_EQ(r.status, viewer ? 200 : 401) << header << ": " << r.raw;
+  }
+  EXPECT_EQ(call(d.port(), "POST", "/plan", kLabOpSecret, plan).status, 200);
 }
 
 TEST(DaemonSecurity, OnLoopbackReadsStayOpenAndActionsNeedTheOperatorToken) {
