@@ -1,5 +1,6 @@
 // The daemon's HTTP API (schemas/api.md) as the console uses it: JSON in and out, the bearer
-// token on every POST, and errors turned into messages an operator can act on.
+// token on every request (a daemon beyond loopback wants it for reads too), and errors turned
+// into messages an operator can act on.
 
 const TOKEN_KEY = 'calstand.token';
 
@@ -14,6 +15,15 @@ export function setToken(value) {
   else sessionStorage.removeItem(TOKEN_KEY);
 }
 
+/** `path` carrying the token as ?access_token= (GET only): for what the browser fetches by
+ *  itself, which cannot carry an Authorization header: the live stream's EventSource, and the
+ *  links to reports, records and exports opened in a tab. */
+export function withToken(path) {
+  const t = token();
+  if (!t) return path;
+  return `${path}${path.includes('?') ? '&' : '?'}access_token=${encodeURIComponent(t)}`;
+}
+
 /** An answer other than 2xx: `status`, the daemon's `{"error", "where", "violations"?}` body. */
 export class ApiError extends Error {
   constructor(status, body) {
@@ -25,7 +35,10 @@ export class ApiError extends Error {
   static describe(status, body) {
     const why = (body && body.error) || `HTTP ${status}`;
     if (status === 401) {
-      return 'Refused (401): this action needs the station token. Enter it in the Token field at the top and try again.';
+      return 'Refused (401): this needs the station token. Enter it in the Token field at the top and try again.';
+    }
+    if (status === 403) {
+      return 'Refused (403): the token entered may only read; this action needs an operator token.';
     }
     const where = body && body.where ? ` (${body.where})` : '';
     return `${why}${where}`;
@@ -39,13 +52,17 @@ async function answer(response) {
   return body;
 }
 
+function authorized(headers) {
+  const t = token();
+  if (t) headers.Authorization = `Bearer ${t}`;
+  return headers;
+}
+
 export async function get(path) {
-  return answer(await fetch(path, { headers: { Accept: 'application/json' } }));
+  return answer(await fetch(path, { headers: authorized({ Accept: 'application/json' }) }));
 }
 
 export async function post(path, body = {}) {
-  const headers = { 'Content-Type': 'application/json', 'X-Calstand-Operator': 'console' };
-  const t = token();
-  if (t) headers.Authorization = `Bearer ${t}`;
+  const headers = authorized({ 'Content-Type': 'application/json', 'X-Calstand-Operator': 'console' });
   return answer(await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) }));
 }

@@ -2,7 +2,7 @@
 // and the router that shows one page per location hash (#/station, #/runs, #/runs/ID,
 // #/loop/ID).
 import { setToken, token } from './api.js';
-import { connect, onStreamState } from './live.js';
+import { connect, onStreamState, reconnect } from './live.js';
 import { showLoop } from './loop_page.js';
 import { showRuns } from './runs_page.js';
 import { showStation } from './station_page.js';
@@ -43,9 +43,19 @@ function route() {
 const tokenField = document.getElementById('token');
 tokenField.value = token();
 tokenField.addEventListener('input', () => setToken(tokenField.value.trim()));
+// Beyond loopback reads need the token too: while the stream is refused, a token entered (the
+// field left) reopens it and reads the page again. A live stream means reads work already, and
+// reading the page again would lose what it shows (a fit) and the click that left the field.
+let streamState = 'connecting';
+tokenField.addEventListener('change', () => {
+  if (streamState === 'live') return;
+  reconnect();
+  route();
+});
 
 const streamBadge = document.getElementById('stream-state');
 onStreamState((state) => {
+  streamState = state;
   streamBadge.textContent = state === 'live' ? 'live' : state;
   streamBadge.className = `stream-state ${state}`;
 });

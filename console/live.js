@@ -3,6 +3,8 @@
 // EventSource reconnects by itself and sends Last-Event-ID, so nothing is lost across a short
 // outage; a `gap` message says when something was, and pages re-read what they show.
 
+import { withToken } from './api.js';
+
 const TYPES = ['station', 'run', 'step', 'telemetry', 'fault', 'event', 'gap'];
 const listeners = new Map(TYPES.map((t) => [t, new Set()]));
 const stateListeners = new Set();
@@ -12,10 +14,11 @@ function setState(state) {
   for (const fn of stateListeners) fn(state);
 }
 
-/** Opens the stream (once). */
+/** Opens the stream (once). EventSource cannot send an Authorization header: the token goes
+ *  in the query (api.js withToken). */
 export function connect() {
   if (source) return;
-  source = new EventSource('/events');
+  source = new EventSource(withToken('/events'));
   source.addEventListener('open', () => setState('live'));
   source.addEventListener('error', () => setState(source.readyState === EventSource.CLOSED ? 'closed' : 'reconnecting'));
   for (const type of TYPES) {
@@ -29,6 +32,14 @@ export function connect() {
       for (const fn of listeners.get(type)) fn(data, e.lastEventId);
     });
   }
+}
+
+/** Opens the stream again, e.g. with the token just entered (a stream refused without one
+ *  stays closed). Listeners stay subscribed. */
+export function reconnect() {
+  if (source) source.close();
+  source = null;
+  connect();
 }
 
 /** Calls fn(data, id) for each message of `type`; returns the function that unsubscribes. */

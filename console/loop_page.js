@@ -2,7 +2,7 @@
 // server, see chi2/dof overall and per group of steps, the step residuals coloured by group and
 // against the signals, diagnose and add a candidate with one click, and follow the history of
 // fits as the falling curve. Every number comes from the daemon (the CLI's code path).
-import { get, post } from './api.js';
+import { get, post, withToken } from './api.js';
 import { groupedPoints, logCurve } from './charts.js';
 import { el, num, replaceChildren, table } from './dom.js';
 
@@ -317,7 +317,7 @@ export function showLoop(ctx, runId) {
     if (report) {
       const query = new URLSearchParams({ model: body.model.join(','), sensor: body.sensor });
       body.custom.forEach((c) => query.append('custom', c));
-      report.href = `/runs/${runId}/report?${query}`;
+      report.href = withToken(`/runs/${runId}/report?${query}`);
       report.textContent = 'HTML report of this model';
     }
     // A diagnosis of another model no longer describes this fit: say so rather than hide it.
@@ -350,11 +350,11 @@ export function showLoop(ctx, runId) {
   get(`/runs/${runId}`).then((run) => {
     const records = el('span', { id: 'calibrations' }, 'calibration records: …');
     replaceChildren(links, `${run.procedure} · ${run.status} · `, el('a', { href: `#/runs/${runId}` }, 'steps and events'), ' · ',
-      el('a', { href: `/runs/${runId}/report`, target: '_blank', id: 'report-link' }, 'HTML report'), ' · ', records);
+      el('a', { href: withToken(`/runs/${runId}/report`), target: '_blank', id: 'report-link' }, 'HTML report'), ' · ', records);
     return get(`/runs/${runId}/calibrations`).then((answer) => {
       const list = Array.isArray(answer) ? answer : answer.calibrations || [];
       replaceChildren(records, 'calibration records: ', list.length
-        ? list.map((r, i) => [i ? ', ' : '', el('a', { href: `/calibrations/${r.id}`, target: '_blank' }, `#${r.id} ${r.imu || ''}`)])
+        ? list.map((r, i) => [i ? ', ' : '', el('a', { href: withToken(`/calibrations/${r.id}`), target: '_blank' }, `#${r.id} ${r.imu || ''}`)])
         : 'none');
     }).catch(() => replaceChildren(records, 'calibration records: unavailable'));
   }).catch((e) => ctx.showMessage(e.message));

@@ -1,7 +1,7 @@
 // Runs page: the queue and history, a submission form (plan preview first, violations shown
 // at their field), and one run's steps, events, progress and ETA, live, with the operator
 // actions (pause, resume, abort, skip).
-import { get, post } from './api.js';
+import { get, post, withToken } from './api.js';
 import { duration, el, num, replaceChildren, table } from './dom.js';
 import { subscribe } from './live.js';
 
@@ -201,8 +201,8 @@ function showRun(ctx, id) {
   let refresh = null;
   const actions = actionButtons(ctx, id, () => lastRun, () => refresh());
   const runLinks = el('p', {}, el('a', { href: `#/loop/${id}` }, 'Fit and diagnose this run'), ' · ',
-    el('a', { href: `/runs/${id}/report`, target: '_blank' }, 'report'), ' · ',
-    el('a', { href: `/runs/${id}/export` }, 'export (tar)'));
+    el('a', { href: withToken(`/runs/${id}/report`), target: '_blank' }, 'report'), ' · ',
+    el('a', { href: withToken(`/runs/${id}/export`) }, 'export (tar)'));
   replaceChildren(head, headBody, actions.box, runLinks);
   const stepsBox = el('section', { class: 'panel' }, el('h3', {}, 'Steps'), el('div', { id: 'run-steps' }));
   const eventsBox = el('section', { class: 'panel' }, el('h3', {}, 'Events'), el('div', { id: 'run-events' }));

@@ -21,6 +21,7 @@
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "daemon/api/api_server.hpp"
+#include "daemon/api/tokens_file.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 #include "sim/sim_world.hpp"
@@ -37,10 +38,23 @@ struct Options {
   std::string db;
   std::string listen = "127.0.0.1:8765";
   std::string token_file;
+  std::string tokens_file;
+  std::string tls_cert;
+  std::string tls_key;
+  bool allow_plaintext = false;
   std::string log_dir;
   std::string recovery = "auto";
   std::string log_level = "info";
 };
+
+// A secret anyone on the machine can read is no secret; warned rather than refused, since a
+// group-readable file can be meant (a service group).
+void warn_if_others_read(const std::string& file) {
+  struct stat st {};
+  if (::stat(file.c_str(), &st) == 0 && (st.st_mode & 077) != 0) {
+    spdlog::warn("{}: readable by others than its owner (chmod 600)", file);
+  }
+}
 
 std::string read_token(const Options& opt) {
   if (opt.token_file.empty()) {
@@ -54,10 +68,7 @@ std::string read_token(const Options& opt) {
   while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
   if (token.size() < 16)
     throw InputError(opt.token_file, "the token must have at least 16 characters");
-  struct stat st {};
-  if (::stat(opt.token_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0) {
-    spdlog::warn("{}: readable by others than its owner (chmod 600)", opt.token_file);
-  }
+  warn_if_others_read(opt.token_file);
   return token;
 }
 
@@ -86,7 +97,22 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   api::ApiOptions api_options;
   std::tie(api_options.host, api_options.port) = calstand::wire::parse_listen_address(opt.listen);
   api_options.token = read_token(opt);
-  api_options.validate();  // before anything is opened: refuses an open port without a token
+  if (!opt.tokens_file.empty()) {
+    api_options.tokens = api::load_tokens_file(opt.tokens_file);
+    warn_if_others_read(opt.tokens_file);
+  }
+  api_options.tls_cert_file = opt.tls_cert;
+  api_options.tls_key_file = opt.tls_key;
+  api_options.allow_plaintext = opt.allow_plaintext;
+  // Before anything is opened: refuses an open port without a token, or without TLS.
+  api_options.validate();
+  if (api_options.allow_plaintext && !api_options.uses_tls() &&
+      !calstand::daemon::api::is_loopback_address(api_options.host)) {
+    spdlog::warn(
+        "{}: plaintext beyond loopback (--allow-plaintext): tokens and data cross the "
+        "network readable by anyone on it",
+        opt.listen);
+  }
   // This daemon alone drives the database's station (released by the kernel if it dies).
   const calstand::store::DatabaseLock owner(
       opt.db, calstand::store::DatabaseLock::Mode::kExclusive,
@@ -98,7 +124,8 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   api::ApiServer server(service, hub, api_options);
   const int port = server.start();
   // One line on stdout that scripts and tests read (the port when --listen asked for 0).
-  fmt::print("calstandd: listening on http://{}:{}\n", api_options.host, port);
+  fmt::print("calstandd: listening on {}://{}:{}\n", server.uses_tls() ? "https" : "http",
+             api_options.host, port);
   std::fflush(stdout);
   spdlog::info("station {} ({} IMUs), database {}, recovery {}", service_options.station.name,
                service_options.station.imus.size(), opt.db, opt.recovery);
@@ -132,7 +159,13 @@ int main(int argc, char** argv) {
   app.add_option("--listen", opt.listen, "Address and port of the control API")
       ->capture_default_str();
   app.add_option("--token-file", opt.token_file,
-                 "File holding the bearer token (else env CALSTAND_TOKEN)");
+                 "File holding one operator token, named 'operator' (else env CALSTAND_TOKEN)");
+  app.add_option("--tokens", opt.tokens_file,
+                 "Named tokens with their role, read or operator (schemas/tokens.schema.json)");
+  app.add_option("--tls-cert", opt.tls_cert, "TLS certificate chain (PEM): serve https");
+  app.add_option("--tls-key", opt.tls_key, "Private key of --tls-cert (PEM)");
+  app.add_flag("--allow-plaintext", opt.allow_plaintext,
+               "Serve plain http beyond loopback (a network you trust; else TLS is required)");
   app.add_option("--log-dir", opt.log_dir, "Directory of the rotating log file calstandd.log");
   app.add_option("--recovery", opt.recovery, "Interrupted run on start: auto (resume) or hold")
       ->capture_default_str();

@@ -118,6 +118,13 @@ std::string gnuplot_svg(const std::string& script, const std::string& id_prefix,
 std::string gnuplot_quote(std::string_view text) {
   std::string out = "\"";
   for (char c : text) {
+    // gnuplot runs `text in backquotes` through the shell even inside double quotes, before
+    // it reads escapes: a step label or device name must never get there, so a backquote is
+    // written as its octal escape, which gnuplot turns back into the character afterwards.
+    if (c == '`') {
+      out += "\\140";
+      continue;
+    }
     if (c == '"' || c == '\\') out += '\\';
     if (c == '\n') {
       out += "\\n";

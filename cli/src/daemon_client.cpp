@@ -57,14 +57,30 @@ nlohmann::json answer(const httplib::Result& res, const std::string& what,
 }  // namespace
 
 void add_daemon_options(CLI::App& cmd, DaemonAddress& address) {
-  cmd.add_option("--daemon", address.daemon, "calstandd address HOST:PORT")->capture_default_str();
+  cmd.add_option("--daemon", address.daemon,
+                 "calstandd address HOST:PORT, or https://HOST:PORT for a daemon serving TLS")
+      ->capture_default_str();
   cmd.add_option("--token-file", address.token_file, "Bearer token file (else env CALSTAND_TOKEN)");
+  cmd.add_option("--ca-file", address.ca_file,
+                 "CA certificate (PEM) an https daemon's certificate is checked against (else "
+                 "env CALSTAND_CA_FILE, else the system's); --ca-file implies https");
   cmd.add_option("--operator", address.operator_name,
                  "Name recorded with the action (default $USER)");
 }
 
 DaemonClient::DaemonClient(const DaemonAddress& address) {
-  std::tie(host_, port_) = wire::parse_listen_address(address.daemon, "--daemon");
+  ca_file_ = address.ca_file;
+  if (ca_file_.empty()) {
+    const char* env = std::getenv("CALSTAND_CA_FILE");
+    ca_file_ = env ? env : "";
+  }
+  if (!ca_file_.empty() && !std::ifstream(ca_file_)) {
+    throw core::InputError(address.ca_file.empty() ? "CALSTAND_CA_FILE" : "--ca-file",
+                           fmt::format("cannot read {}", ca_file_));
+  }
+  // An explicit --ca-file means https; the environment's CA file only serves an https address
+  // (a shell that exports it still reaches a plain loopback daemon).
+  endpoint_ = wire::parse_daemon_address(address.daemon, "--daemon", !address.ca_file.empty());
   token_ = read_token(address.token_file);
   operator_ = address.operator_name;
   if (operator_.empty()) {
@@ -73,20 +89,26 @@ DaemonClient::DaemonClient(const DaemonAddress& address) {
   }
 }
 
+std::unique_ptr<httplib::Client> DaemonClient::connect(int read_timeout_s) const {
+  auto c = std::make_unique<httplib::Client>(endpoint_.url());
+  c->set_read_timeout(read_timeout_s, 0);
+  if (endpoint_.tls) {
+    if (!ca_file_.empty()) c->set_ca_cert_path(ca_file_.c_str());
+    c->enable_server_certificate_verification(true);
+  }
+  if (!token_.empty()) c->set_bearer_token_auth(token_.c_str());
+  return c;
+}
+
 nlohmann::json DaemonClient::get(const std::string& path) const {
-  httplib::Client c(host_, port_);
-  c.set_read_timeout(30, 0);
-  return answer(c.Get(path.c_str()), "GET " + path, fmt::format("{}:{}", host_, port_));
+  return answer(connect(30)->Get(path.c_str()), "GET " + path, endpoint_.url());
 }
 
 nlohmann::json DaemonClient::post(const std::string& path, const nlohmann::json& body) const {
-  httplib::Client c(host_, port_);
-  c.set_read_timeout(30, 0);
   httplib::Headers headers;
-  if (!token_.empty()) headers.emplace("Authorization", "Bearer " + token_);
   if (!operator_.empty()) headers.emplace("X-Calstand-Operator", operator_);
-  return answer(c.Post(path.c_str(), headers, body.dump(), "application/json"), "POST " + path,
-                fmt::format("{}:{}", host_, port_));
+  return answer(connect(30)->Post(path.c_str(), headers, body.dump(), "application/json"),
+                "POST " + path, endpoint_.url());
 }
 
 void DaemonClient::stream_events(
@@ -95,8 +117,8 @@ void DaemonClient::stream_events(
   std::string last_id;  // of the last message with an id: where a reconnection resumes
   auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(reconnect_s);
   for (;;) {
-    httplib::Client c(host_, port_);
-    c.set_read_timeout(10, 0);  // the daemon sends a keep-alive every second
+    const auto client = connect(10);  // the daemon sends a keep-alive every second
+    httplib::Client& c = *client;
     httplib::Headers headers;
     if (!last_id.empty()) headers.emplace("Last-Event-ID", last_id);
     bool stopped = false;
@@ -107,11 +129,26 @@ void DaemonClient::stream_events(
       stopped = true;
       return false;
     });
-    const auto res = c.Get("/events", headers, [&](const char* data, std::size_t n) {
-      received = true;
-      return parser.feed({data, n});
-    });
+    int status = 0;
+    const auto res = c.Get(
+        "/events", headers,
+        [&](const httplib::Response& r) {
+          status = r.status;
+          return r.status == 200;  // a refusal's body is not a stream
+        },
+        [&](const char* data, std::size_t n) {
+          received = true;
+          return parser.feed({data, n});
+        });
     if (stopped) return;
+    // A refused token stays refused: say so at once rather than retry for the whole window.
+    if (status == 401 || status == 403) {
+      throw core::InputError(
+          "", fmt::format("GET /events (HTTP {}): calstandd at {} refused the token ({})", status,
+                          endpoint_.url(),
+                          token_.empty() ? "none given: --token-file or CALSTAND_TOKEN"
+                                         : "--token-file or CALSTAND_TOKEN"));
+    }
     // A stream that broke mid-body gives no response, only the bytes it delivered.
     const bool connected = received || (res && res->status == 200);
     if (connected) {
@@ -120,9 +157,10 @@ void DaemonClient::stream_events(
     }
     if (std::chrono::steady_clock::now() >= give_up) {
       throw std::runtime_error(fmt::format(
-          "GET /events: the stream from calstandd at {}:{} ended ({}) and did not come back within "
+          "GET /events: the stream from calstandd at {} ended ({}) and did not come back within "
           "{:.0f} s",
-          host_, port_, res ? fmt::format("HTTP {}", res->status) : httplib::to_string(res.error()),
+          endpoint_.url(),
+          res ? fmt::format("HTTP {}", res->status) : httplib::to_string(res.error()),
           reconnect_s));
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));

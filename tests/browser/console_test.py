@@ -9,6 +9,9 @@ Checks, in one daemon's life (it takes seconds: the simulated station runs faste
      added with one click lowers the displayed chi2/dof to the value the API returns for the
      same model;
   4. a mutating click without the token (the daemon has one) is refused with a message shown;
+  6. a daemon beyond loopback (0.0.0.0, plaintext allowed, named tokens): without a token the
+     live stream is refused; with a read token entered the station page goes live, and an
+     action is refused (403) with a message shown.
   5. on the loop page of a run recorded without a table (a simulated hand-held session imported
      with `calstand import`), fit and diagnose show the table-free fit: its method, the frame
      convention's parameters, and the candidates such a run can fit.
@@ -31,6 +34,7 @@ import urllib.request
 
 SKIP = 77
 TOKEN = "console-test-token-0123456789"
+VIEWER_TOKEN = "console-test-viewer-0123456789"
 
 
 def browser_missing():
@@ -46,22 +50,23 @@ def browser_missing():
 class Daemon:
     """calstandd on 127.0.0.1:0; the port is read from its first stdout line."""
 
-    def __init__(self, binary, workdir, station):
-        self.db = os.path.join(workdir, "console.db")
-        token_file = os.path.join(workdir, "token")
+    def __init__(self, binary, workdir, station, name="console", listen="127.0.0.1:0", extra=()):
+        self.db = os.path.join(workdir, f"{name}.db")
+        token_file = os.path.join(workdir, f"{name}-token")
         with open(token_file, "w") as f:
             f.write(TOKEN + "\n")
         os.chmod(token_file, 0o600)
-        self.log_path = os.path.join(workdir, "calstandd.log")
+        self.log_path = os.path.join(workdir, f"{name}-calstandd.log")
         self.log = open(self.log_path, "w")
         self.proc = subprocess.Popen(
-            [binary, "--db", self.db, "--listen", "127.0.0.1:0", "--token-file", token_file,
-             "--station", station],
+            [binary, "--db", self.db, "--listen", listen, "--token-file", token_file,
+             "--station", station, *extra],
             stdout=subprocess.PIPE, stderr=self.log, text=True)
         line = self.proc.stdout.readline()
         if "listening on http://" not in line:
             raise RuntimeError(f"calstandd did not start: {line!r} (log {self.log_path})")
-        self.url = line.strip().split("listening on ", 1)[1]
+        # A daemon on every address is reached on loopback.
+        self.url = line.strip().split("listening on ", 1)[1].replace("//0.0.0.0:", "//127.0.0.1:")
 
     def request(self, method, path, body=None, token=TOKEN):
         data = None if body is None else json.dumps(body).encode()
@@ -137,15 +142,17 @@ class ConsoleTest:
     def open(self, hash_route):
         self.driver.get(f"{self.daemon.url}/{hash_route}")
 
-    def set_token(self, value):
+    def set_token(self, value, leave=False):
         field = self.find("#token")
         field.clear()
         if value:
             field.send_keys(value)
-        # The field is read on 'input'; clear() alone fires none.
+        # The field is read on 'input'; clear() alone fires none. Leaving it ('change') reads the
+        # page and the stream again with the token.
         self.driver.execute_script(
             "const f = document.getElementById('token'); f.value = arguments[0];"
-            "f.dispatchEvent(new Event('input'));", value)
+            "f.dispatchEvent(new Event('input'));"
+            "if (arguments[1]) f.dispatchEvent(new Event('change'));", value, leave)
 
     def check(self, name, fn):
         started = time.time()
@@ -314,6 +321,27 @@ class ConsoleTest:
         assert doc["status"] not in ("aborted",), f"the run was aborted without the token: {doc['status']}"
         self.daemon.request("POST", f"/runs/{run}/abort", {"reason": "test over"})
 
+    def read_token_beyond_loopback(self):
+        self.open("#/station")
+        self.set_token("", leave=True)
+        self.wait("the stream refused without a token", lambda: self.text("#stream-state") == "closed")
+        self.set_token(VIEWER_TOKEN, leave=True)
+        self.wait("the stream live with the read token", lambda: self.text("#stream-state") == "live")
+        self.wait("two telemetry messages on the station page",
+                  lambda: int(self.text("#telemetry-count")) >= 2, timeout_s=15)
+        status, answer = self.daemon.request("POST", "/runs", {"procedure": "six-position",
+                                                                "parameters": {"capture_s": 30000}})
+        assert status == 201, answer
+        run = answer["id"]
+        self.open(f"#/runs/{run}")
+        self.wait("the abort button enabled", lambda: self.find("#abort").is_enabled())
+        self.find("#abort").click()
+        message = self.wait("the refusal message", lambda: self.find("#message").is_displayed() and self.text("#message"))
+        assert "403" in message and "only read" in message, message
+        _, doc = self.daemon.request("GET", f"/runs/{run}")
+        assert doc["status"] != "aborted", "a read token aborted the run"
+        self.daemon.request("POST", f"/runs/{run}/abort", {"reason": "test over"})
+
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -346,6 +374,18 @@ def main():
             test.check("recommended term lowers chi2", test.recommended_term_lowers_chi2)
             test.check("action without token refused", test.action_without_token_refused)
             test.check("table-free run in the loop", test.table_free_run_in_the_loop)
+            with open(os.path.join(workdir, "tokens.json"), "w") as f:
+                json.dump({"format": "calstand-tokens/1",
+                           "tokens": [{"name": "screen", "role": "read", "token": VIEWER_TOKEN}]}, f)
+            os.chmod(os.path.join(workdir, "tokens.json"), 0o600)
+            lan = Daemon(args.calstandd, workdir, args.station, name="lan", listen="0.0.0.0:0",
+                         extra=("--allow-plaintext", "--tokens", os.path.join(workdir, "tokens.json")))
+            try:
+                lan_test = ConsoleTest(driver, lan, args.out)
+                lan_test.check("read token beyond loopback", lan_test.read_token_beyond_loopback)
+                test.failures += lan_test.failures
+            finally:
+                lan.stop()
             for entry in driver.get_log("browser"):
                 if entry.get("level") == "SEVERE":
                     print(f"browser console: {entry.get('message')}")

@@ -30,6 +30,9 @@ using daemon::service::RecoveryPolicy;
 // enough to act on mid-run without racing the run's end.
 const nlohmann::json kShort = {{"capture_s", 5}};
 const nlohmann::json kLong = {{"capture_s", 300}};
+// Who the test client is in the records: its X-Calstand-Operator header and address, and the
+// name of the token it sends (the daemon's CALSTAND_TOKEN-style single token).
+const char* const kTester = "tester@127.0.0.1 (token operator)";
 
 using calstand::testing::InProcessDaemon;
 
@@ -81,7 +84,7 @@ TEST(DaemonApi, SubmitsAndWatchesARunToCompletion) {
   for (const auto& s : steps.body) EXPECT_EQ(s["status"], "completed") << s.dump();
 
   const Reply events = api.get("/runs/" + std::to_string(run) + "/events");
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "submitted six-position")) << events.raw;
+  EXPECT_TRUE(has_event(events, kTester, "submitted six-position")) << events.raw;
 
   // The live stream told the story: the run starting and ending, every step completing, and
   // telemetry on the way.
@@ -147,7 +150,7 @@ TEST(DaemonApi, QueuedRunsRunOneAtATimeInOrder) {
   EXPECT_EQ(station.body["run"], first);
   ASSERT_EQ(station.body["queue"].size(), 1u);
   EXPECT_EQ(station.body["queue"][0]["run"], second);
-  EXPECT_EQ(station.body["queue"][0]["submitted_by"], "tester@127.0.0.1");
+  EXPECT_EQ(station.body["queue"][0]["submitted_by"], kTester);
   // Once the first ends, the second goes.
   ASSERT_EQ(api.post("/runs/" + std::to_string(first) + "/abort", "").status, 202);
   ASSERT_TRUE(wait_for_status(api, second, "completed"));
@@ -245,8 +248,8 @@ TEST(DaemonApi, PausesAndResumesARun) {
   ASSERT_EQ(resumed.status, 202) << resumed.raw;
   ASSERT_TRUE(wait_for_status(api, run, "completed"));
   const Reply events = api.get(path + "/events");
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "pause requested (at once)")) << events.raw;
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "resume requested")) << events.raw;
+  EXPECT_TRUE(has_event(events, kTester, "pause requested (at once)")) << events.raw;
+  EXPECT_TRUE(has_event(events, kTester, "resume requested")) << events.raw;
   EXPECT_EQ(api.post(path + "/resume", "").status, 409);  // completed: nothing to resume
 }
 
@@ -430,7 +433,7 @@ TEST(DaemonApi, HoldPolicyKeepsAnInterruptedRunUntilAnOperatorResumesIt) {
   EXPECT_TRUE(wait_for_status(api, queued, "completed"));
   const Reply events = api.get("/runs/" + std::to_string(run) + "/events");
   EXPECT_TRUE(has_event(events, "daemon", "held after an interruption")) << events.raw;
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "resume requested")) << events.raw;
+  EXPECT_TRUE(has_event(events, kTester, "resume requested")) << events.raw;
 }
 
 TEST(DaemonApi, HoldPolicyLetsAnOperatorAbortTheInterruptedRun) {
@@ -474,7 +477,7 @@ TEST(DaemonApi, SkipsTheStepInProgressAndRecordsWhoAndWhy) {
   for (const auto& s : steps.body) {
     if (s["status"] == "skipped") {
       skipped_steps.push_back(s["index"].get<int>());
-      EXPECT_EQ(s["reason"], "skipped by tester@127.0.0.1: connector re-seated");
+      EXPECT_EQ(s["reason"], std::string("skipped by ") + kTester + ": connector re-seated");
       EXPECT_TRUE(s["good_attempt"].is_null());
     } else {
       EXPECT_EQ(s["status"], "completed") << s.dump();
@@ -487,8 +490,7 @@ TEST(DaemonApi, SkipsTheStepInProgressAndRecordsWhoAndWhy) {
   }));
   EXPECT_EQ(api.get(path).body["steps_done"], 11);  // the skipped step is not done
   const Reply events = api.get(path + "/events");
-  EXPECT_TRUE(has_event(events, "tester@127.0.0.1", "skip requested: connector re-seated"))
-      << events.raw;
+  EXPECT_TRUE(has_event(events, kTester, "skip requested: connector re-seated")) << events.raw;
   // Refusals: a run that has ended, a bad body, an unknown run.
   EXPECT_EQ(api.post(path + "/skip", "").status, 409);
   EXPECT_EQ(api.post(path + "/skip", "{\"step\": -1}").status, 400);

@@ -27,6 +27,15 @@ class InProcessDaemon {
     port_ = server_.start();
     service_.start();
   }
+  /// With the API options as given (tokens, TLS, listen host; the port is always a free one).
+  InProcessDaemon(const std::string& db, daemon::api::ApiOptions api_options)
+      : hub_(4096),
+        service_({sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto},
+                 hub_),
+        server_(service_, hub_, with_free_port(std::move(api_options))) {
+    port_ = server_.start();
+    service_.start();
+  }
   ~InProcessDaemon() {
     service_.stop("test over");
     server_.stop();
@@ -36,6 +45,10 @@ class InProcessDaemon {
   int port() const { return port_; }
 
  private:
+  static daemon::api::ApiOptions with_free_port(daemon::api::ApiOptions o) {
+    o.port = 0;
+    return o;
+  }
   static daemon::api::ApiOptions options(std::size_t max_body_bytes) {
     daemon::api::ApiOptions o;
     o.port = 0;

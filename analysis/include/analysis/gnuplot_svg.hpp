@@ -20,6 +20,8 @@ std::string gnuplot_svg(const std::string& script, const std::string& id_prefix,
                         const std::string& title);
 
 /// `text` as a gnuplot double-quoted string, quotes included (also usable as a data column).
+/// Safe for any text: a backquote, which gnuplot would run as a shell command even inside
+/// double quotes, is written as an escape.
 std::string gnuplot_quote(std::string_view text);
 
 /// `text` as a text column of a data block: double-quoted, its own double quotes made single

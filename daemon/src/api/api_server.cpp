@@ -4,11 +4,14 @@
 #include <spdlog/spdlog.h>
 #include <sys/socket.h>
 
+#include <fstream>
 #include <thread>
 
 #include "core/error.hpp"
 #include "daemon/api/access.hpp"
+#include "daemon/api/tokens_file.hpp"
 #include "http_util.hpp"
+#include "request_context.hpp"
 #include "routes.hpp"
 
 namespace calstand::daemon::api {
@@ -17,13 +20,54 @@ namespace {
 // Connections waiting to be accepted: room for every client of a busy lab connecting at once.
 constexpr int kListenBacklog = 128;
 
+void require_readable(const std::string& file, const char* option) {
+  if (!std::ifstream(file)) {
+    throw core::InputError(option, fmt::format("cannot read {}", file));
+  }
+}
+
+// The server: with TLS when a certificate is given (the files are checked first so that the
+// error names the one at fault; OpenSSL then checks that they are PEM and belong together).
+std::unique_ptr<httplib::Server> make_server(const ApiOptions& o) {
+  if (!o.uses_tls()) return std::make_unique<httplib::Server>();
+  require_readable(o.tls_cert_file, "--tls-cert");
+  require_readable(o.tls_key_file, "--tls-key");
+  auto server =
+      std::make_unique<httplib::SSLServer>(o.tls_cert_file.c_str(), o.tls_key_file.c_str());
+  if (!server->is_valid()) {
+    throw core::InputError("--tls-cert", fmt::format("{} and {} are not a PEM certificate chain "
+                                                     "and its private key",
+                                                     o.tls_cert_file, o.tls_key_file));
+  }
+  return server;
+}
+
 }  // namespace
 
+std::vector<NamedToken> ApiOptions::all_tokens() const {
+  std::vector<NamedToken> all = tokens;
+  if (!token.empty()) all.push_back({kLegacyTokenName, Role::kOperator, token});
+  return all;
+}
+
 void ApiOptions::validate() const {
-  if (!is_loopback_address(host) && token.empty()) {
+  const bool loopback = is_loopback_address(host);
+  const auto all = all_tokens();
+  if (!loopback && all.empty()) {
     throw core::InputError("--listen", fmt::format("{} is beyond loopback: a token is required "
-                                                   "(--token-file or CALSTAND_TOKEN)",
+                                                   "(--tokens, --token-file or CALSTAND_TOKEN)",
                                                    host));
+  }
+  check_unique_tokens(all, "--tokens");
+  if (tls_cert_file.empty() != tls_key_file.empty()) {
+    throw core::InputError(tls_cert_file.empty() ? "--tls-cert" : "--tls-key",
+                           "TLS needs both the certificate (--tls-cert) and its key (--tls-key)");
+  }
+  if (!loopback && !uses_tls() && !allow_plaintext) {
+    throw core::InputError("--listen",
+                           fmt::format("{} is beyond loopback: TLS is required (--tls-cert and "
+                                       "--tls-key), or --allow-plaintext on a network you trust",
+                                       host));
   }
   if (port < 0 || port > 65535)
     throw core::InputError("--listen", fmt::format("port {} is not 0..65535", port));
@@ -39,11 +83,17 @@ void ApiOptions::validate() const {
 struct ApiServer::Impl {
   Impl(service::RunService& service, service::EventHub& hub, ApiOptions opts)
       : options(std::move(opts)),
-        ctx{service, hub, service.options().db_path, options.max_streams} {}
+        ctx{service, hub, service.options().db_path, options.max_streams},
+        server_ptr(make_server(options)),
+        server(*server_ptr) {
+    ctx.access.tokens = options.all_tokens();
+    ctx.access.reads_need_token = !is_loopback_address(options.host);
+  }
 
   ApiOptions options;
   RouteContext ctx;
-  httplib::Server server;
+  std::unique_ptr<httplib::Server> server_ptr;  // an httplib::SSLServer with TLS
+  httplib::Server& server;
   std::thread listener;
   socket_t listen_socket = -1;  // set while binding (set_socket_options)
 };
@@ -57,10 +107,19 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
     return new httplib::ThreadPool(static_cast<std::size_t>(threads));
   };
   server.set_payload_max_length(impl_->options.max_body_bytes);
+  // A slow client (one trickling its request a byte at a time, or idling on a kept-alive
+  // connection) holds a connection thread only while it keeps sending within the read
+  // timeout; `threads` bounds how many such clients it takes to crowd out the others
+  // (schemas/api.md, "Limits").
+  server.set_read_timeout(impl_->options.read_timeout_s, 0);
+  server.set_keep_alive_timeout(impl_->options.keep_alive_timeout_s);
   // Small JSON answers on kept-alive connections: without TCP_NODELAY each waits for the
   // client's delayed ACK (~40 ms). httplib closes a connection after 5 requests by default,
   // and its listen backlog is 5: pollers reconnecting together would see dropped SYNs (1 s).
   server.set_tcp_nodelay(true);
+  // A token may ride in an address (?access_token=, for the console's stream and links): no
+  // page the daemon serves hands its address on to another site.
+  server.set_default_headers({{"Referrer-Policy", "no-referrer"}});
   server.set_keep_alive_max_count(1000);
   // The listening socket is remembered so start() can lengthen its accept queue (httplib's is
   // compiled in at 5, and a burst of clients connecting at once would wait 1 s for a SYN retry).
@@ -73,16 +132,16 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
     impl_->listen_socket = sock;
   });
 
-  // Every mutating request carries the token when one is configured; reads stay open so a
-  // status display needs no secret (they reveal no more than the lab's station screen).
+  // Every request is checked here, before any route runs (AccessPolicy: what each needs).
+  // On loopback, reads stay open so a status display there needs no secret; beyond it they
+  // need a token too.
   server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (req.method == "GET" || req.method == "HEAD")
-      return httplib::Server::HandlerResponse::Unhandled;
-    if (bearer_token_accepted(req.get_header_value("Authorization"), impl_->options.token)) {
-      return httplib::Server::HandlerResponse::Unhandled;
-    }
-    res.set_header("WWW-Authenticate", "Bearer");
-    send_error(res, 401, "Authorization", "a valid bearer token is required for this request");
+    const AccessDecision d =
+        check_access(impl_->ctx.access, req.method, req.path, presented_token(req));
+    if (d.status == 0) return httplib::Server::HandlerResponse::Unhandled;
+    res.set_header("WWW-Authenticate",
+                   d.status == 403 ? R"(Bearer error="insufficient_scope")" : "Bearer");
+    send_error(res, d.status, "Authorization", d.why);
     return httplib::Server::HandlerResponse::Handled;
   });
   // Answers httplib produced without a body (unknown route, body too large, ...) get a JSON
@@ -123,6 +182,8 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
 
 ApiServer::~ApiServer() { stop(); }
 
+bool ApiServer::uses_tls() const { return impl_->options.uses_tls(); }
+
 int ApiServer::start() {
   auto& server = impl_->server;
   const auto& o = impl_->options;
@@ -137,8 +198,10 @@ int ApiServer::start() {
   }
   if (impl_->listen_socket >= 0) ::listen(impl_->listen_socket, kListenBacklog);  // best effort
   impl_->listener = std::thread([&server] { server.listen_after_bind(); });
-  spdlog::info("control API on http://{}:{} ({})", o.host, port,
-               o.token.empty() ? "no token: loopback only" : "bearer token required for changes");
+  spdlog::info("control API on {}://{}:{} ({})", o.uses_tls() ? "https" : "http", o.host, port,
+               impl_->ctx.access.tokens.empty()     ? "no token: loopback only"
+               : impl_->ctx.access.reads_need_token ? "bearer token required for every request"
+                                                    : "bearer token required for changes");
   return port;
 }
 

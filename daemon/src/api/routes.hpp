@@ -9,6 +9,7 @@
 #include <atomic>
 #include <string>
 
+#include "daemon/api/access.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
 
@@ -26,6 +27,9 @@ struct RouteContext {
   mutable std::atomic<int> open_streams{0};
   /// An export is being written (one at a time: each writes the run's CSV to disk first).
   mutable std::atomic<bool> exporting{false};
+  /// Who may do what (set before the server starts; read-only afterwards). Handlers learn who
+  /// asked from request_context.hpp, never from the request's headers themselves.
+  AccessPolicy access{};
 };
 
 /// /runs, /runs/{id}, /runs/{id}/steps|events|export, /runs/{id}/pause|resume|abort|skip.

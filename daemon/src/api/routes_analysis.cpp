@@ -18,6 +18,7 @@
 #include "analysis/table_free_diagnose.hpp"
 #include "core/error.hpp"
 #include "http_util.hpp"
+#include "request_context.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
@@ -138,6 +139,23 @@ std::optional<double> double_param(const httplib::Request& req, const std::strin
   return v;
 }
 
+// A fit or a diagnosis asked for through the API is an operator action (it writes the run's
+// history): recorded in the run's events with who asked and the model of the answer.
+void record_fit_action(const RouteContext& ctx, const httplib::Request& req, std::int64_t id,
+                       const std::string& command, const nlohmann::json& answer) {
+  const nlohmann::json* model = nullptr;
+  if (answer.contains("model")) {
+    model = &answer["model"];
+  } else if (answer.contains("fit") && answer["fit"].contains("model")) {
+    model = &answer["fit"]["model"];
+  }
+  ctx.service.record_action(
+      id, who_of(ctx, req),
+      fmt::format("{} requested; model {}", command,
+                  model ? model->dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+                        : std::string("(none)")));
+}
+
 std::string text_param(const httplib::Request& req, const std::string& name,
                        const std::string& fallback) {
   return req.has_param(name) ? req.get_param_value(name) : fallback;
@@ -159,13 +177,16 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) 
         if (on_run(id, [&] { return analysis::needs_table_free_fit(db, id); })) {
           const analysis::TableFreeFit fit = on_run(
               id, [&] { return analysis::table_free_fit(db, id, table_free_request_of(request)); });
-          send_json(res, 200, analysis::to_json(fit));
+          const nlohmann::json out = analysis::to_json(fit);
+          record_fit_action(ctx, req, id, "fit", out);
+          send_json(res, 200, out);
           return;
         }
         const analysis::FitOutcome outcome =
             on_run(id, [&] { return analysis::fit_request(db, id, request); });
         nlohmann::json out = analysis::to_json(outcome);
         out["history_id"] = *outcome.history_id;
+        record_fit_action(ctx, req, id, "fit", out);
         send_json(res, 200, out);
       }));
 
@@ -178,12 +199,16 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) 
                   const analysis::TableFreeDiagnosis d = on_run(id, [&] {
                     return analysis::diagnose_table_free(db, id, table_free_request_of(request));
                   });
-                  send_json(res, 200, analysis::to_json(d));
+                  const nlohmann::json out = analysis::to_json(d);
+                  record_fit_action(ctx, req, id, "diagnose", out);
+                  send_json(res, 200, out);
                   return;
                 }
                 const analysis::DiagnoseOutcome outcome =
                     on_run(id, [&] { return analysis::diagnose_request(db, id, request); });
-                send_json(res, 200, analysis::to_json(outcome));
+                const nlohmann::json out = analysis::to_json(outcome);
+                record_fit_action(ctx, req, id, "diagnose", out);
+                send_json(res, 200, out);
               }));
 
   server.Get(R"(/runs/(\d+)/history)",

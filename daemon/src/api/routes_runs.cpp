@@ -7,10 +7,10 @@
 #include <limits>
 
 #include "core/error.hpp"
-#include "daemon/api/access.hpp"
 #include "daemon/api/export_archive.hpp"
 #include "daemon/api/run_request.hpp"
 #include "http_util.hpp"
+#include "request_context.hpp"
 #include "routes.hpp"
 #include "store/database.hpp"
 #include "store/run_json.hpp"
@@ -22,10 +22,6 @@ namespace {
 // GET /runs pages: the default and the most one answer holds.
 constexpr std::int64_t kDefaultRunsPage = 100;
 constexpr std::int64_t kMaxRunsPage = 1000;
-
-std::string who_of(const httplib::Request& req) {
-  return operator_name(req.get_header_value("X-Calstand-Operator"), req.remote_addr);
-}
 
 store::RunRecord load_run_or_404(store::RunStore& runs, std::int64_t id) {
   try {
@@ -92,7 +88,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Post("/runs", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
                 const RunRequest request = parse_run_request(parse_json_body(req));
                 const std::int64_t id =
-                    ctx.service.submit(request.procedure, request.overrides, who_of(req));
+                    ctx.service.submit(request.procedure, request.overrides, who_of(ctx, req));
                 res.set_header("Location", fmt::format("/runs/{}", id));
                 send_json(res, 201, {{"id", id}});
               }));
@@ -185,7 +181,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
             throw BadRequest(400, "body.immediate", "must be true or false");
           immediate = body["immediate"].get<bool>();
         }
-        ctx.service.pause(id, immediate, who_of(req));
+        ctx.service.pause(id, immediate, who_of(ctx, req));
         send_json(
             res, 202,
             {{"id", id}, {"requested", immediate ? "pause at once" : "pause at step boundary"}});
@@ -195,7 +191,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
               guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
                 const std::int64_t id = id_from_path(req);
                 require_run(ctx, id);
-                ctx.service.resume(id, who_of(req));
+                ctx.service.resume(id, who_of(ctx, req));
                 send_json(res, 202, {{"id", id}, {"requested", "resume"}});
               }));
 
@@ -204,7 +200,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
                 const std::int64_t id = id_from_path(req);
                 require_run(ctx, id);
                 const auto body = parse_json_body(req, nlohmann::json::object());
-                ctx.service.abort(id, reason_field(body), who_of(req));
+                ctx.service.abort(id, reason_field(body), who_of(ctx, req));
                 send_json(res, 202, {{"id", id}, {"requested", "abort"}});
               }));
 
@@ -220,7 +216,7 @@ void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
                     throw BadRequest(400, "body.step", "must be a step index (0, 1, ...)");
                   step = body["step"].get<std::size_t>();
                 }
-                ctx.service.skip(id, step, reason, who_of(req));
+                ctx.service.skip(id, step, reason, who_of(ctx, req));
                 nlohmann::json answer = {{"id", id}, {"requested", "skip"}};
                 if (step) answer["step"] = *step;
                 send_json(res, 202, answer);

@@ -475,6 +475,11 @@ void RunService::record_event(std::int64_t run, const std::string& who, const st
                          {"message", message}});
 }
 
+void RunService::record_action(std::int64_t run, const std::string& who,
+                               const std::string& message) {
+  record_event(run, who, message);
+}
+
 std::int64_t RunService::submit(const procedures::Procedure& procedure,
                                 const procedures::Overrides& overrides, const std::string& who) {
   const procedures::Plan plan = procedures::make_plan(procedure, options_.station, overrides);

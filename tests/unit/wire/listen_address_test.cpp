@@ -42,4 +42,21 @@ TEST(ListenAddress, TheErrorNamesTheOptionAndTheText) {
   }
 }
 
+TEST(DaemonAddress, SchemeChoosesTls) {
+  using calstand::wire::parse_daemon_address;
+  const auto plain = parse_daemon_address("10.0.0.5:8765", "--daemon");
+  EXPECT_FALSE(plain.tls);
+  EXPECT_EQ(plain.url(), "http://10.0.0.5:8765");
+  const auto tls = parse_daemon_address("https://station.lab:8443/", "--daemon");
+  EXPECT_TRUE(tls.tls);
+  EXPECT_EQ(tls.host, "station.lab");
+  EXPECT_EQ(tls.port, 8443);
+  EXPECT_EQ(tls.url(), "https://station.lab:8443");
+  EXPECT_EQ(parse_daemon_address("https://[::1]:9", "--daemon").url(), "https://[::1]:9");
+  EXPECT_TRUE(parse_daemon_address("h:1", "--daemon", true).tls);          // a CA file was given
+  EXPECT_FALSE(parse_daemon_address("http://h:1", "--daemon", true).tls);  // said so
+  EXPECT_THROW(parse_daemon_address("ftp://h:1", "--daemon"), InputError);
+  EXPECT_THROW(parse_daemon_address("https://h", "--daemon"), InputError);
+}
+
 }  // namespace

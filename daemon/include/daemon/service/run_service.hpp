@@ -78,6 +78,10 @@ class RunService {
   /// rule, OutOfSpace when the disk is too full to start it (nothing is written then).
   std::int64_t submit(const procedures::Procedure& procedure,
                       const procedures::Overrides& overrides, const std::string& who);
+  /// Records an operator action taken on run `run` outside the engine (a fit, a diagnosis) as
+  /// an operator event with who asked, in the run's events and on the live stream. Throws
+  /// core::InputError when there is no such run.
+  void record_action(std::int64_t run, const std::string& who, const std::string& message);
 
   /// Operator actions on run `run`. Throw core::InputError when there is no such run,
   /// ActionRefused when the action does not apply to its state.
