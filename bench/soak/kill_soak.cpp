@@ -171,8 +171,8 @@ std::vector<std::string> compare(const std::vector<StepData>& got,
     if (got[i].status != "completed") {
       problems.push_back(fmt::format("step {} ({}) {}", i, got[i].label, got[i].status));
     }
-    const auto diff = static_cast<long long>(got[i].samples) -
-                      static_cast<long long>(reference[i].samples);
+    const auto diff =
+        static_cast<long long>(got[i].samples) - static_cast<long long>(reference[i].samples);
     if (diff < -1 || diff > 1) {
       problems.push_back(fmt::format("step {} ({}): {} samples, reference {}", i, got[i].label,
                                      got[i].samples, reference[i].samples));
@@ -201,8 +201,8 @@ class Soak {
     reference_seconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
     std::vector<std::string> problems;
     reference_ = read_run(db, problems);
-    fmt::print("reference: {} steps in {:.1f} s (exit {})\n", reference_.size(),
-               reference_seconds_, code);
+    fmt::print("reference: {} steps in {:.1f} s (exit {})\n", reference_.size(), reference_seconds_,
+               code);
     return code == 0 && problems.empty() && !reference_.empty();
   }
 
@@ -233,8 +233,8 @@ class Soak {
     pid_t pid = -1;
     int port = 0;
     if (mode == "cli") {
-      std::vector<std::string> argv{calstand(), "run", "thermal-calibration", "--quiet", "--db",
-                                    db};
+      std::vector<std::string> argv{calstand(), "run",  "thermal-calibration",
+                                    "--quiet",  "--db", db};
       for (const auto& [key, v] : params_.items()) {
         argv.push_back("--set");
         argv.push_back(key + "=" + v.dump());
@@ -244,11 +244,10 @@ class Soak {
       pid = start_daemon(db, log, port);
       if (pid < 0) return report(mode, k, step, "", {"calstandd did not start"});
       httplib::Client c("127.0.0.1", port);
-      const auto r = c.Post("/runs", {{"Authorization", "Bearer " + token()}},
-                            nlohmann::json{{"procedure", "thermal-calibration"},
-                                           {"parameters", params_}}
-                                .dump(),
-                            "application/json");
+      const auto r = c.Post(
+          "/runs", {{"Authorization", "Bearer " + token()}},
+          nlohmann::json{{"procedure", "thermal-calibration"}, {"parameters", params_}}.dump(),
+          "application/json");
       if (!r || r->status != 201) {
         kill(pid, SIGKILL);
         wait_exit(pid);
@@ -278,7 +277,7 @@ class Soak {
       wait_exit(pid);
     }
     const auto at_kill = peek(db);
-    killed_in = !at_kill ? "before the database"
+    killed_in = !at_kill                         ? "before the database"
                 : at_kill->status == "completed" ? "after the run ended"
                 : at_kill->running >= 0          ? at_kill->kind
                                                  : "between steps";

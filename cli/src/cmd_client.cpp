@@ -111,6 +111,9 @@ int client_status(const ClientOptions& opt) {
     fmt::print("queued: run {} (by {} at {})\n", q["run"].get<std::int64_t>(),
                q["submitted_by"].get<std::string>(), q["submitted_utc"].get<std::string>());
   }
+  if (station.contains("waiting") && station["waiting"].is_string()) {
+    fmt::print("waiting: {}\n", station["waiting"].get<std::string>());
+  }
   if (station["run"].is_null() && station["queue"].empty() && station["held"].is_null())
     fmt::print("idle\n");
   return 0;

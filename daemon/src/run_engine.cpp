@@ -415,11 +415,16 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
   std::string last_invalid_reason;
   for (int tries = 0; tries < options_.max_capture_attempts; ++tries, ++attempt) {
     if (tries > 0) journal_.step_started(index, attempt, station_.clock().now_s());
-    poll_imus();  // samples from before the capture belong to no step
     // The capture is the window [start, start + duration) of sample times, not a number of
     // control ticks: ticks land wherever the clock's phase puts them (after a resume, say),
-    // and a rate capture asked for whole revolutions must hold whole revolutions.
-    const double start = station_.clock().now_s();
+    // and a rate capture asked for whole revolutions must hold whole revolutions. Samples from
+    // before the window arrive in its first poll and are left out there (not drained by a poll
+    // now, which would take the sample stamped at the window's first instant with them).
+    // Both edges a microsecond early: a sample that falls on an edge (the clock and the
+    // sample grid in step, as on a simulated station) belongs to the window it starts, however
+    // the time stamps round, so the window holds duration x rate samples, not one fewer.
+    constexpr double kEdgeS = 1e-6;
+    const double start = station_.clock().now_s() - kEdgeS;
     capturing_ = Capturing{index,
                            attempt,
                            std::nullopt,

@@ -18,6 +18,24 @@ using detail::guarded;
 
 namespace {
 
+// The columns event_of_row() reads, in its order.
+constexpr const char* kEventColumns =
+    "SELECT id, run_id, time_s, wall_utc, kind, source, message, detail";
+
+// One row of `kEventColumns`; a station-wide event (run_id NULL) has no run.
+EventRecord event_of_row(SQLite::Statement& ev) {
+  EventRecord e;
+  e.id = ev.getColumn(0).getInt64();
+  if (!ev.getColumn(1).isNull()) e.run_id = ev.getColumn(1).getInt64();
+  e.time_s = ev.getColumn(2).getDouble();
+  e.wall_utc = ev.getColumn(3).getString();
+  e.kind = parse_event_kind(ev.getColumn(4).getString());
+  e.source = ev.getColumn(5).getString();
+  e.message = ev.getColumn(6).getString();
+  if (!ev.getColumn(7).isNull()) e.detail = nlohmann::json::parse(ev.getColumn(7).getString());
+  return e;
+}
+
 std::string dump(const nlohmann::json& j) { return j.is_null() ? "null" : j.dump(); }
 
 StepRecord read_step(SQLite::Statement& q) {
@@ -471,21 +489,9 @@ RunRecord RunStore::load_run(std::int64_t run) {
     rec.started_clock_s = detail::optional_double(q.getColumn(5));
     rec.ended_clock_s = detail::optional_double(q.getColumn(6));
     SQLite::Statement ev(db_.sql(),
-                         "SELECT id, run_id, time_s, wall_utc, kind, source, message, detail "
-                         "FROM events WHERE run_id = ? ORDER BY id");
+                         std::string(kEventColumns) + " FROM events WHERE run_id = ? ORDER BY id");
     ev.bind(1, run);
-    while (ev.executeStep()) {
-      EventRecord e;
-      e.id = ev.getColumn(0).getInt64();
-      e.run_id = ev.getColumn(1).getInt64();
-      e.time_s = ev.getColumn(2).getDouble();
-      e.wall_utc = ev.getColumn(3).getString();
-      e.kind = parse_event_kind(ev.getColumn(4).getString());
-      e.source = ev.getColumn(5).getString();
-      e.message = ev.getColumn(6).getString();
-      if (!ev.getColumn(7).isNull()) e.detail = nlohmann::json::parse(ev.getColumn(7).getString());
-      rec.events.push_back(std::move(e));
-    }
+    while (ev.executeStep()) rec.events.push_back(event_of_row(ev));
     return rec;
   });
   r.steps = load_steps(run);
@@ -493,22 +499,11 @@ RunRecord RunStore::load_run(std::int64_t run) {
 }
 
 std::vector<EventRecord> RunStore::station_events(std::size_t limit) {
-  SQLite::Statement ev(db_.sql(),
-                       "SELECT id, time_s, wall_utc, kind, source, message, detail FROM events "
-                       "WHERE run_id IS NULL ORDER BY id DESC LIMIT ?");
+  SQLite::Statement ev(db_.sql(), std::string(kEventColumns) +
+                                      " FROM events WHERE run_id IS NULL ORDER BY id DESC LIMIT ?");
   ev.bind(1, static_cast<std::int64_t>(limit));
   std::vector<EventRecord> out;
-  while (ev.executeStep()) {
-    EventRecord e;
-    e.id = ev.getColumn(0).getInt64();
-    e.time_s = ev.getColumn(1).getDouble();
-    e.wall_utc = ev.getColumn(2).getString();
-    e.kind = parse_event_kind(ev.getColumn(3).getString());
-    e.source = ev.getColumn(4).getString();
-    e.message = ev.getColumn(5).getString();
-    if (!ev.getColumn(6).isNull()) e.detail = nlohmann::json::parse(ev.getColumn(6).getString());
-    out.push_back(std::move(e));
-  }
+  while (ev.executeStep()) out.push_back(event_of_row(ev));
   std::reverse(out.begin(), out.end());
   return out;
 }

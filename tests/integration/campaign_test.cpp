@@ -41,8 +41,10 @@ std::string db_path(const std::string& name) {
   return p.string();
 }
 
-int run_command(const std::string& args, std::string* out = nullptr) {
-  const std::string command = std::string(CALSTAND_BIN) + " " + args + " 2>&1";
+// `calstand ARGS` with `env` (NAME=VALUE ...) before it; its exit code and, in `out`, what
+// it printed.
+int run_command(const std::string& args, std::string* out = nullptr, const std::string& env = "") {
+  const std::string command = env + std::string(CALSTAND_BIN) + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return -1;
   std::string text;
@@ -233,15 +235,7 @@ class FullDisk : public Campaign {
                             " CALSTAND_SMALL_FS_CAPACITY_FILE=" + capacity_file_.string() +
                             // An ASan build wants its runtime first; the preload comes first here.
                             " ASAN_OPTIONS=verify_asan_link_order=0 ";
-    const std::string command = env + CALSTAND_BIN + " " + args + " 2>&1";
-    FILE* pipe = popen(command.c_str(), "r");
-    if (!pipe) return -1;
-    std::string text;
-    std::array<char, 4096> buf{};
-    while (std::size_t n = fread(buf.data(), 1, buf.size(), pipe)) text.append(buf.data(), n);
-    const int status = pclose(pipe);
-    *out = text;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return run_command(args, out, env);
   }
   fs::path disk_, capacity_file_;
   std::string db_, station_file_;

@@ -297,7 +297,9 @@ TEST(DaemonProcess, FullDiskInterruptsTheRunRefusesNewRunsAndResumesOnceSpaceIsB
   EXPECT_TRUE(api.get("/station").body["waiting"].is_null());
   for (const auto& s : read_steps(db, run)) {
     EXPECT_EQ(s.status, "completed");
-    if (s.kind == "capture") EXPECT_NEAR(static_cast<double>(s.count), 300.0 * 400.0, 1.0);
+    if (s.kind == "capture") {
+      EXPECT_NEAR(static_cast<double>(s.count), 300.0 * 400.0, 1.0);
+    }
   }
 }
 
@@ -340,6 +342,7 @@ TEST(DaemonProcess, LatchedInterlockHoldsQueuedRunsUntilAnOperatorClosesIt) {
   for (const auto& e : station_now.body["events"]) {
     recorded |= e["message"] == "interlock closed: outer axis interlock (door opened)" &&
                 e["source"].get<std::string>().rfind("tester", 0) == 0 &&
+                e["source"].get<std::string>().find("(token operator)") != std::string::npos &&
                 !e["wall_utc"].get<std::string>().empty();
   }
   EXPECT_TRUE(recorded) << station_now.raw;

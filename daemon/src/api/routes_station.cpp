@@ -6,9 +6,9 @@
 
 #include "core/error.hpp"
 #include "core/state_json.hpp"
-#include "daemon/api/access.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "http_util.hpp"
+#include "request_context.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
@@ -105,8 +105,7 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
   // run is on the station or when the controller refuses: the cause is still present).
   server.Post("/station/interlock/close",
               guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
-                const std::string who =
-                    operator_name(req.get_header_value("X-Calstand-Operator"), req.remote_addr);
+                const std::string who = who_of(ctx, req);
                 const auto closure = ctx.service.close_interlocks(who);
                 if (!closure.result) throw BadRequest(409, req.path, closure.result.message);
                 send_json(res, 200, {{"closed", closure.closed}, {"by", who}});

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "drivers/device_support.hpp"
 
 namespace calstand::drivers {
@@ -121,10 +123,23 @@ class SimStation::SimImu final : public Imu {
   DeviceState state() const override { return life_.state(); }
   std::map<std::string, std::uint64_t> fault_counters() const override { return {}; }
   std::vector<core::ImuSample> poll() override {
-    auto samples = world_.take_samples(index_);
+    auto produced = world_.take_samples(index_);
     // An inactive device delivers nothing, as a closed port would.
-    if (life_.state() != DeviceState::kActive) samples.clear();
-    return samples;
+    if (life_.state() != DeviceState::kActive) {
+      in_flight_.clear();
+      return {};
+    }
+    // A sample arrives its latency after its instant: one produced now but received later is
+    // still on the way and comes with a later poll, as on a real link (a poll handing it out
+    // now would give a capture starting meanwhile one sample fewer).
+    in_flight_.insert(in_flight_.end(), produced.begin(), produced.end());
+    const double now = world_.clock().now_s() + 1e-9;
+    const auto arrived =
+        std::find_if(in_flight_.begin(), in_flight_.end(),
+                     [&](const core::ImuSample& s) { return s.receive_time_s > now; });
+    std::vector<core::ImuSample> out(in_flight_.begin(), arrived);
+    in_flight_.erase(in_flight_.begin(), arrived);
+    return out;
   }
   double sample_rate_hz() const override { return world_.imu(index_).truth().sample_rate_hz; }
   std::uint64_t sequence_modulus() const override {
@@ -136,6 +151,7 @@ class SimStation::SimImu final : public Imu {
   std::size_t index_;
   std::string name_;
   SimLifecycle life_;
+  std::vector<core::ImuSample> in_flight_;  ///< produced, not yet received (in order)
 };
 
 SimStation::SimStation(const core::StationConfig& config, double start_time_s)
