@@ -52,6 +52,11 @@ class StationRun {
                      std::shared_ptr<EngineCommandQueue> commands = nullptr);
 
  private:
+  /// Records the capture writer's counters (samples, chunks, queue high-water against its
+  /// capacity, refusals) as an info event of the run, source "capture_writer".
+  void record_writer_summary(double t_s);
+
+  std::int64_t run_id_;
   /// Taken first: a run is driven by one process at a time, and one that is driven reads
   /// `running` to others (store/run_lock.hpp); released when the run object goes.
   store::RunLock run_lock_;
