@@ -189,7 +189,8 @@ int main(int argc, char** argv) {
   std::vector<std::unique_ptr<StreamReader>> streams;
   for (int r = 0; r < readers; ++r) streams.push_back(std::make_unique<StreamReader>(port));
   const auto all_greeted = [&] {
-    return std::all_of(streams.begin(), streams.end(), [](const auto& r) { return r->greeted.load(); });
+    return std::all_of(streams.begin(), streams.end(),
+                       [](const auto& r) { return r->greeted.load(); });
   };
   for (int i = 0; i < 1000 && !all_greeted(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -243,7 +244,8 @@ int main(int argc, char** argv) {
   const double wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   // The run's last message may still be on its way to the stream readers.
   const auto all_saw_end = [&] {
-    return std::all_of(streams.begin(), streams.end(), [](const auto& r) { return r->saw_end.load(); });
+    return std::all_of(streams.begin(), streams.end(),
+                       [](const auto& r) { return r->saw_end.load(); });
   };
   for (int i = 0; i < 500 && !all_saw_end(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -324,7 +326,7 @@ int main(int argc, char** argv) {
       writer_refused += e.detail.value("dropped_queue_full", std::uint64_t{0});
     }
     if (e.kind == store::EventKind::kFault)
-      fmt::print("fault event: {}: {}\n", e.source, e.message);
+      fmt::print("fault event at {:.3f} s: {}: {}\n", e.time_s, e.source, e.message);
   }
   const std::uint64_t dropped =
       stored_gaps + stored_shortfall + stream_gap_samples + writer_refused;
