@@ -20,7 +20,7 @@ namespace {
 /// A database file of this process, removed (with its WAL files) before and after.
 struct StationRunDatabase {
   std::string path = (std::filesystem::temp_directory_path() /
-                       ("calstand-station-run-" + std::to_string(::getpid()) + ".db"))
+                      ("calstand-station-run-" + std::to_string(::getpid()) + ".db"))
                          .string();
   StationRunDatabase() { remove(); }
   ~StationRunDatabase() { remove(); }
