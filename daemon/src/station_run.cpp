@@ -18,9 +18,9 @@ constexpr double kTelemetryPeriodS = 0.1;
 
 StationRun::StationRun(const core::StationConfig& station, const std::string& db_path,
                        std::int64_t run_id, double start_time_s)
-    : run_lock_(db_path, run_id),
+    : run_id_(run_id),
+      run_lock_(db_path, run_id),
       config_(station),
-      run_id_(run_id),
       reserve_(db_path, run_id,
                static_cast<std::uint64_t>(station.policy.disk_reserve_mb * 1024.0 * 1024.0)),
       db_(db_path),
@@ -64,6 +64,7 @@ CampaignResult StationRun::run(const procedures::Plan& plan, const CampaignStart
   writer_.flush();
   result.exit_reason = engine.exit_reason();
   result.station_time_s = station_->clock().now_s();
+  record_writer_summary(result.station_time_s);
   return result;
 }
 
@@ -97,6 +98,30 @@ CampaignResult StationRun::end_after_storage_failure(const std::string& what) {
     spdlog::error("run {}: recording the storage failure: {}", run_id_, e.what());
   }
   return result;
+}
+
+void StationRun::record_writer_summary(double t_s) {
+  // The high-water mark set against the capacity is the margin the station had before it would
+  // have refused samples: worth knowing before adding IMUs or raising rates. Straight to the
+  // store, not through the observed journal: it describes the recording, not the station.
+  const auto c = writer_.counters();
+  const std::size_t capacity = writer_.queue_capacity();
+  store::EventRecord e;
+  e.run_id = run_id_;
+  e.time_s = t_s;
+  e.kind = store::EventKind::kInfo;
+  e.source = "capture_writer";
+  e.message = fmt::format(
+      "capture writer: {} samples stored in {} chunks; queue high-water {} of {} samples; {} "
+      "refused",
+      c.written, c.chunks, c.queue_high_water, capacity, c.dropped_queue_full);
+  e.detail = {{"pushed", c.pushed},
+              {"written", c.written},
+              {"chunks", c.chunks},
+              {"dropped_queue_full", c.dropped_queue_full},
+              {"queue_high_water", c.queue_high_water},
+              {"queue_capacity", capacity}};
+  runs_.add_event(e);
 }
 
 }  // namespace calstand::daemon

@@ -285,6 +285,10 @@ bool CaptureWriter::push(StreamId stream, std::span<const core::ImuSample> sampl
         sealed_ = false;
       }
       queued_ += samples.size();
+      // Under mutex_, so a plain compare suffices; the atomic is for counters() readers.
+      if (queued_ > high_water_.load(std::memory_order_relaxed)) {
+        high_water_.store(queued_, std::memory_order_relaxed);
+      }
       enqueued_ += samples.size();
       pushed_.fetch_add(samples.size(), std::memory_order_relaxed);
       accepted = true;
@@ -340,6 +344,7 @@ CaptureWriterCounters CaptureWriter::counters() const {
   c.dropped_queue_full = dropped_.load();
   c.overflow_events = overflow_events_.load();
   c.commits = commits_.load();
+  c.queue_high_water = high_water_.load();
   return c;
 }
 

@@ -56,14 +56,18 @@ class StationRun {
                      std::shared_ptr<EngineCommandQueue> commands = nullptr);
 
  private:
-  /// Taken first: a run is driven by one process at a time, and one that is driven reads
-  /// `running` to others (store/run_lock.hpp); released when the run object goes.
+  /// Records the capture writer's counters (samples, chunks, queue high-water against its
+  /// capacity, refusals) as an info event of the run, source "capture_writer".
+  void record_writer_summary(double t_s);
+
   /// Records the end of a run cut off by a storage failure (`what`), with the reserve's space.
   CampaignResult end_after_storage_failure(const std::string& what);
 
+  std::int64_t run_id_;
+  /// Taken first: a run is driven by one process at a time, and one that is driven reads
+  /// `running` to others (store/run_lock.hpp); released when the run object goes.
   store::RunLock run_lock_;
   core::StationConfig config_;
-  std::int64_t run_id_;
   /// Space to record the run's end with when the disk fills (station policy disk_reserve_mb).
   store::DiskReserve reserve_;
   store::Database db_;

@@ -54,6 +54,9 @@ struct CaptureWriterCounters {
   std::uint64_t dropped_queue_full = 0;  ///< samples refused by push() (queue full or failed)
   std::uint64_t overflow_events = 0;     ///< overflow events recorded
   std::uint64_t commits = 0;             ///< commit_step() calls completed
+  /// Most samples ever waiting in the queue at once (the writer fell that far behind); set
+  /// against queue_capacity it says how close the writer came to refusing samples.
+  std::uint64_t queue_high_water = 0;
 };
 
 /// What commit_step() made durable for one step attempt (all its devices).
@@ -113,6 +116,7 @@ class CaptureWriter {
   void flush();
 
   CaptureWriterCounters counters() const;
+  std::size_t queue_capacity() const { return options_.queue_capacity; }
 
  private:
   struct Stream;
@@ -157,7 +161,7 @@ class CaptureWriter {
   std::vector<Stream*> local_streams_;  // writer thread only: snapshot of streams_
 
   std::atomic<std::uint64_t> pushed_{0}, written_{0}, chunks_{0}, dropped_{0}, overflow_events_{0},
-      commits_{0};
+      commits_{0}, high_water_{0};
 
   std::thread thread_;
 };

@@ -111,6 +111,28 @@ TEST(CaptureWriter, CommitStepIsVisibleToAnotherConnectionWithStepMeans) {
   EXPECT_EQ(other.sql().execAndGet("PRAGMA integrity_check").getString(), "ok");
 }
 
+TEST(CaptureWriter, QueueHighWaterIsTheLargestBacklogAndOutlivesTheFlush) {
+  Fixture f;
+  CaptureWriterOptions options;
+  options.queue_capacity = 5000;
+  CaptureWriter w(f.path, options);
+  EXPECT_EQ(w.counters().queue_high_water, 0u);
+  const auto s = w.open_stream(f.run, f.step_ids[0], 1, "imu0");
+  std::vector<core::ImuSample> batch;
+  for (std::uint32_t i = 0; i < 1200; ++i) batch.push_back(sample(i));
+  // One push of 1200 puts at least 1200 in the queue at once, whatever the writer has taken.
+  ASSERT_TRUE(w.push(s, batch));
+  w.flush();
+  EXPECT_GE(w.counters().queue_high_water, 1200u);
+  // Smaller pushes later do not lower it, and a refused push does not raise it.
+  ASSERT_TRUE(w.push(s, std::span(batch).first(10)));
+  std::vector<core::ImuSample> too_many(6000, sample(0));
+  EXPECT_FALSE(w.push(s, too_many));
+  w.commit_step(f.step_ids[0], 1);
+  EXPECT_GE(w.counters().queue_high_water, 1200u);
+  EXPECT_LE(w.counters().queue_high_water, 1210u);
+}
+
 TEST(CaptureWriter, OverflowIsRefusedCountedAndRecordedAsAFaultEvent) {
   Fixture f;
   std::atomic<std::uint64_t> reported{0};
