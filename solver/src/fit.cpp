@@ -166,7 +166,10 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       marginal_sigma[static_cast<std::size_t>(i)][c] = std::sqrt(C(i, i));
     }
     const auto first = static_cast<Eigen::Index>(ci) * S;
-    A.middleRows(first, S) = llt.matrixL().solve(Ac);
+    // A model without parameters on these rows leaves Ac empty; Eigen's triangular solve of an
+    // empty block still binds a reference to its null data (undefined behaviour; UBSan stops
+    // `calstand fit --model earth_rate` on it), and there is nothing to whiten.
+    if (Ac.cols() > 0) A.middleRows(first, S) = llt.matrixL().solve(Ac);
     y.segment(first, S) = llt.matrixL().solve(yc);
     for (Eigen::Index i = 0; i < S; ++i) gyro_row[static_cast<std::size_t>(first + i)] = c < kAx;
   }
