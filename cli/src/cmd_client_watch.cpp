@@ -3,8 +3,11 @@
 // when the run ends (0 when completed, 1 otherwise).
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <chrono>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "commands.hpp"
 #include "core/error.hpp"
@@ -44,7 +47,22 @@ daemon::Progress progress_of(const nlohmann::json& r) {
 int watch(const WatchOptions& opt) {
   const DaemonClient client(opt.address);
   const std::string path = fmt::format("/runs/{}", opt.run);
-  auto status = client.get(path);
+  // A daemon away when the watch starts (restarting under its supervisor) is waited for as a
+  // lost stream is, up to --reconnect; a refusal (4xx) is an error at once.
+  const auto give_up = std::chrono::steady_clock::now() +
+                       std::chrono::duration<double>(std::max(0.0, opt.reconnect_s));
+  nlohmann::json status;
+  for (;;) {
+    try {
+      status = client.get(path);
+      break;
+    } catch (const core::InputError&) {
+      throw;
+    } catch (const std::runtime_error&) {
+      if (std::chrono::steady_clock::now() >= give_up) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
   ProgressBar bar;
   std::string final_state = status["status"];
   if (!daemon::has_ended(final_state)) {

@@ -151,9 +151,12 @@ TEST_F(DaemonClientCli, SkipWhilePausedSkipsTheNextStep) {
 }
 
 // `calstand watch` rides out a daemon killed and brought back (as systemd's Restart= does):
-// the stream reconnects and the resumed run is followed to its end.
-TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) {
-  const std::string dir = calstand::testing::fresh_dir("watch-restart");
+// the stream reconnects and the resumed run is followed to its end. The daemon is killed
+// while the watch follows the run, or before the watch has started (it waits for the daemon
+// as for a lost stream).
+void watch_through_a_restart(bool kill_before_the_watch) {
+  const std::string dir =
+      calstand::testing::fresh_dir(kill_before_the_watch ? "watch-away" : "watch-restart");
   const std::string listen = "127.0.0.1:" + std::to_string(calstand::testing::free_loopback_port());
   auto daemon =
       std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
@@ -166,11 +169,16 @@ TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) {
     const auto r = api.get("/runs/1");
     return r.body.contains("live") && r.body["steps_done"].get<int>() >= 1;
   }));
+  if (kill_before_the_watch) {
+    EXPECT_EQ(daemon->signal_and_wait(SIGKILL), -SIGKILL);
+  }
   auto watched = std::async(std::launch::async, [&] {
     return calstand::testing::run("watch 1 --reconnect 30 --daemon " + listen);
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // watching
-  EXPECT_EQ(daemon->signal_and_wait(SIGKILL), -SIGKILL);
+  if (!kill_before_the_watch) {
+    EXPECT_EQ(daemon->signal_and_wait(SIGKILL), -SIGKILL);
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(700));  // the daemon is away a while
   daemon = std::make_unique<DaemonProcess>(dir + "/station.db", dir + "/calstandd.log", listen);
   ASSERT_GT(daemon->port(), 0);
@@ -178,6 +186,12 @@ TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) {
   const auto result = watched.get();
   EXPECT_EQ(result.exit_code, 0) << result.out;
   EXPECT_NE(result.out.find("run 1 completed: 12/12 steps"), std::string::npos) << result.out;
+}
+
+TEST(DaemonClientCliRestart, WatchRidesOutADaemonRestart) { watch_through_a_restart(false); }
+
+TEST(DaemonClientCliRestart, WatchWaitsForADaemonAwayWhenItStarts) {
+  watch_through_a_restart(true);
 }
 
 }  // namespace
