@@ -6,7 +6,7 @@
 # clang, libclang-rt-14-dev). Exits non-zero when a target crashes; the crashing input is kept
 # in build-fuzz/ (crash-*), and the log in build-fuzz/<target>.log.
 # `run-fuzz.sh --available` only checks that clang++ can link a libFuzzer target here (exit 0)
-# or says what is missing (exit 2); scripts/run-tests.sh asks it before its fuzz smoke.
+# or says what is missing (exit 2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds="${1:-60}"

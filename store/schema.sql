@@ -231,3 +231,32 @@ CREATE TABLE run_queue (
 -- norm and the integration between static poses: its gyro residual is the gravity direction
 -- after each turn [deg], not a rate. rms_accel_mps2 then holds |calibrated f| - g.
 ALTER TABLE fits ADD COLUMN rms_turn_deg REAL;
+
+-- migration 5: units with identities, acceptance verdicts
+-- The unit in each IMU slot of a run (`imu` is the slot's name at the station): its model and
+-- serial, and where the serial came from: read from the device ('device'), given when the run
+-- was submitted ('submitted'), or fixed in the station file ('station').
+CREATE TABLE run_units (
+  run_id INTEGER NOT NULL REFERENCES runs(id) ON DELETE CASCADE,
+  imu    TEXT NOT NULL,
+  model  TEXT NOT NULL,
+  serial TEXT NOT NULL,
+  source TEXT NOT NULL CHECK (source IN ('device', 'submitted', 'station')),
+  PRIMARY KEY (run_id, imu)
+);
+CREATE INDEX run_units_by_serial ON run_units (serial, run_id);
+-- A record's unit, so that `calstand calibrations --serial` finds it without parsing JSON.
+ALTER TABLE calibrations ADD COLUMN serial TEXT NOT NULL DEFAULT '';
+CREATE INDEX calibrations_by_serial ON calibrations (serial, id);
+-- The verdict of a record against a specification (`calstand accept`): `result` is the whole
+-- outcome (every check with value, sigma, limit and verdict, the decision rule, as-found).
+CREATE TABLE acceptances (
+  id             INTEGER PRIMARY KEY,
+  calibration_id INTEGER NOT NULL REFERENCES calibrations(id) ON DELETE CASCADE,
+  spec_name      TEXT NOT NULL,
+  spec_sha256    TEXT NOT NULL,
+  verdict        TEXT NOT NULL CHECK (verdict IN ('pass', 'fail', 'indeterminate')),
+  result         TEXT NOT NULL CHECK (json_valid(result)),
+  created_utc    TEXT NOT NULL
+);
+CREATE INDEX acceptances_by_calibration ON acceptances (calibration_id, id);

@@ -16,11 +16,12 @@ CalibrationRow row_of(SQLite::Statement& q) {
           q.getColumn(2).getString(),
           q.getColumn(3).getString(),
           nlohmann::json::parse(q.getColumn(4).getString()),
-          q.getColumn(5).getString()};
+          q.getColumn(5).getString(),
+          q.getColumn(6).getString()};
 }
 
 constexpr const char* kSelect =
-    "SELECT id, run_id, imu, model, record, created_utc FROM calibrations ";
+    "SELECT id, run_id, imu, model, record, created_utc, serial FROM calibrations ";
 
 }  // namespace
 
@@ -29,13 +30,15 @@ std::int64_t insert_calibration(Database& db, std::int64_t run, const std::strin
   RunStore(db).load_steps(run);  // InputError for an unknown run
   return detail::guarded("insert calibration", [&] {
     SQLite::Statement st(db.sql(),
-                         "INSERT INTO calibrations (run_id, imu, model, record, created_utc) "
-                         "VALUES (?, ?, ?, ?, ?)");
+                         "INSERT INTO calibrations (run_id, imu, model, record, created_utc, "
+                         "serial) VALUES (?, ?, ?, ?, ?, ?)");
     st.bind(1, run);
     st.bind(2, imu);
     st.bind(3, model);
     st.bind(4, record.dump());
     st.bind(5, utc_now_iso8601());
+    const nlohmann::json* device = record.contains("device") ? &record["device"] : nullptr;
+    st.bind(6, device && device->is_object() ? device->value("serial", "") : std::string());
     st.exec();
     return db.sql().getLastInsertRowid();
   });
@@ -56,6 +59,27 @@ std::vector<CalibrationRow> calibrations_of_run(Database& db, std::int64_t run) 
   return detail::guarded("read calibrations", [&] {
     SQLite::Statement q(db.sql(), std::string(kSelect) + "WHERE run_id = ? ORDER BY id");
     q.bind(1, run);
+    std::vector<CalibrationRow> out;
+    while (q.executeStep()) out.push_back(row_of(q));
+    return out;
+  });
+}
+
+std::vector<CalibrationRow> calibrations_of_serial(Database& db, const std::string& serial) {
+  return detail::guarded("read calibrations", [&] {
+    SQLite::Statement q(
+        db.sql(), std::string(kSelect) + "WHERE serial = ? ORDER BY created_utc DESC, id DESC");
+    q.bind(1, serial);
+    std::vector<CalibrationRow> out;
+    while (q.executeStep()) out.push_back(row_of(q));
+    return out;
+  });
+}
+
+std::vector<CalibrationRow> calibrations_since(Database& db, const std::string& since_utc) {
+  return detail::guarded("read calibrations", [&] {
+    SQLite::Statement q(db.sql(), std::string(kSelect) + "WHERE created_utc >= ? ORDER BY id");
+    q.bind(1, since_utc);
     std::vector<CalibrationRow> out;
     while (q.executeStep()) out.push_back(row_of(q));
     return out;

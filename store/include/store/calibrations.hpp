@@ -17,10 +17,12 @@ struct CalibrationRow {
   std::string model;
   nlohmann::json record;
   std::string created_utc;
+  std::string serial;  ///< the unit's serial (the record's device.serial); empty when unknown
 };
 
 /// Stores a calibration record (schemas/calibration.schema.json) of `imu` fitted on `run`;
-/// returns its id. Throws core::InputError for an unknown run, StoreError on SQL failure.
+/// returns its id. The unit's serial is the record's `device.serial`. Throws core::InputError
+/// for an unknown run, StoreError on SQL failure.
 std::int64_t insert_calibration(Database& db, std::int64_t run, const std::string& imu,
                                 const std::string& model, const nlohmann::json& record);
 
@@ -29,5 +31,12 @@ CalibrationRow load_calibration(Database& db, std::int64_t id);
 
 /// The calibrations fitted on `run`, oldest first.
 std::vector<CalibrationRow> calibrations_of_run(Database& db, std::int64_t run);
+
+/// The calibrations of the unit `serial`, newest first.
+std::vector<CalibrationRow> calibrations_of_serial(Database& db, const std::string& serial);
+
+/// Every calibration created at or after `since_utc` (ISO 8601, compared as text; empty: all),
+/// oldest first.
+std::vector<CalibrationRow> calibrations_since(Database& db, const std::string& since_utc);
 
 }  // namespace calstand::store
