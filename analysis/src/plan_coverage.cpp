@@ -23,7 +23,7 @@ constexpr int kSweepPoints = 72;
 /// velocity random walk 0.03 m/s/sqrt(h), 400 Hz). A noisier unit determines less; the bias
 /// wander of a real one does too, so this is the optimistic side.
 constexpr double kRateHz = 400.0;
-constexpr double kGyroWhiteDpsPerRootHz = 0.07 / 60.0;  ///< [deg/s/sqrt(Hz)] = 0.07 deg/sqrt(h)
+constexpr double kGyroWhiteDpsPerRootHz = 0.07 / 60.0;    ///< [deg/s/sqrt(Hz)] = 0.07 deg/sqrt(h)
 constexpr double kAccelWhiteMps2PerRootHz = 0.03 / 60.0;  ///< 0.03 m/s/sqrt(h)
 
 struct TablePose {
@@ -146,9 +146,8 @@ nlohmann::json to_json(const PlanCoverage& coverage) {
     for (const auto& p : u.undetermined) {
       undetermined.push_back({{"name", p.name}, {"reason", p.reason}});
     }
-    units.push_back({{"imu", u.imu},
-                     {"recording_steps", u.recording_steps},
-                     {"undetermined", undetermined}});
+    units.push_back(
+        {{"imu", u.imu}, {"recording_steps", u.recording_steps}, {"undetermined", undetermined}});
   }
   return {{"model", coverage.model}, {"units", units}};
 }

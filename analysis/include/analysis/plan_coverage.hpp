@@ -22,7 +22,7 @@ struct UnitCoverage {
 };
 
 struct PlanCoverage {
-  std::string model;  ///< Model::text()
+  std::string model;                ///< Model::text()
   std::vector<UnitCoverage> units;  ///< in the station's IMU order
 };
 
