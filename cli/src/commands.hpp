@@ -10,6 +10,7 @@ namespace calstand::cli {
 void register_allan(CLI::App& app);      // allan and noise
 void register_calibrate(CLI::App& app);  // calibrate and apply
 void register_calibrations(CLI::App& app);
+void register_certificate(CLI::App& app);
 void register_client(CLI::App& app);  // calstandd clients: submit, status, pause, resume, abort
 void register_client_watch(CLI::App& app);  // calstandd client: watch
 void register_demo(CLI::App& app);

@@ -195,6 +195,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
   }
   c.time_scale = doc.value("time_scale", c.time_scale);
   c.require_serial = doc.value("require_serial", false);
+  c.equipment = doc.value("equipment", json::array());
   check_semantics(c, file_name);
   c.table.outer_axis.normalize();
   c.table.inner_axis.normalize();
@@ -252,6 +253,7 @@ json StationConfig::to_json() const {
               {"chamber", chamber_j},
               {"imus", imus_j},
               {"require_serial", require_serial},
+              {"equipment", equipment},
               {"policy",
                {{"on_sequence_gap", policy.on_sequence_gap},
                 {"on_stale_stream", policy.on_stale_stream},

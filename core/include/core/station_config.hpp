@@ -93,6 +93,10 @@ struct StationConfig {
   TableConfig table;
   ChamberConfig chamber;
   std::vector<ImuConfig> imus;
+  /// The station's own measuring equipment and its calibration status (station file
+  /// `equipment`: [{"name", "id", "calibrated", "due", "certificate"}], dates YYYY-MM-DD), as a
+  /// unit's certificate states it: the traceability of the unit's calibration.
+  nlohmann::json equipment = nlohmann::json::array();
   /// A production station: every unit of a run must have a serial (read from the device,
   /// given with the run, or fixed here), or the run is refused.
   bool require_serial = false;

@@ -89,7 +89,6 @@ struct RunSummary {
   std::string exit_reason;
 };
 
-/// A whole run as stored, without samples and telemetry.
 /// The unit in one IMU slot of a run (table run_units).
 struct RunUnit {
   std::string imu;     ///< the slot's name at the station, e.g. imu0
@@ -100,6 +99,7 @@ struct RunUnit {
   std::string source = "station";
 };
 
+/// A whole run as stored, without samples and telemetry.
 struct RunRecord {
   RunSummary summary;
   std::optional<std::int64_t> station_id;
