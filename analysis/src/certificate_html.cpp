@@ -88,11 +88,11 @@ std::string identity_section(const CertificateData& d) {
   } else {
     s += "<table><tr><th>Equipment</th><th>Id</th><th>Calibrated</th><th>Due</th></tr>";
     for (const EquipmentStatus& e : d.equipment) {
-      s += fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}{}</td></tr>", esc(e.name),
-                       esc(e.id.empty() ? "-" : e.id),
-                       esc(e.calibrated.empty() ? "-" : e.calibrated), esc(e.due),
-                       e.overdue ? " <span class=\"verdict overdue\">overdue at the run</span>"
-                                 : "");
+      s += fmt::format(
+          "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}{}</td></tr>", esc(e.name),
+          esc(e.id.empty() ? "-" : e.id), esc(e.calibrated.empty() ? "-" : e.calibrated),
+          esc(e.due),
+          e.overdue ? " <span class=\"verdict overdue\">overdue at the run</span>" : "");
     }
     s += "</table>";
   }
@@ -104,15 +104,16 @@ std::string parameter_section(const CertificateData& d) {
   std::string rows;
   for (const auto& p : parameters) {
     const double sigma = p.value("sigma", 0.0);
-    rows += fmt::format("<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3g}</td>"
-                        "<td>{}</td></tr>",
-                        esc(p.value("name", "")), number(p["value"]),
-                        kCertificateCoverageFactor * sigma, esc(p.value("unit", "")));
+    rows += fmt::format(
+        "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3g}</td>"
+        "<td>{}</td></tr>",
+        esc(p.value("name", "")), number(p["value"]), kCertificateCoverageFactor * sigma,
+        esc(p.value("unit", "")));
   }
   // Two columns of the table when long: a full model has some thirty parameters.
-  std::string s = fmt::format(
-      "<h2>Results (expanded uncertainty U = {:g} &sigma;, about 95 %)</h2>",
-      kCertificateCoverageFactor);
+  std::string s =
+      fmt::format("<h2>Results (expanded uncertainty U = {:g} &sigma;, about 95 %)</h2>",
+                  kCertificateCoverageFactor);
   const std::string head = "<tr><th>Parameter</th><th>Value</th><th>U</th><th>Unit</th></tr>";
   if (parameters.size() <= 14) {
     s += "<table>" + head + rows + "</table>";
@@ -122,11 +123,11 @@ std::string parameter_section(const CertificateData& d) {
     std::size_t i = 0;
     const std::size_t half = (parameters.size() + 1) / 2;
     for (const auto& p : parameters) {
-      const std::string row =
-          fmt::format("<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3g}</td>"
-                      "<td>{}</td></tr>",
-                      esc(p.value("name", "")), number(p["value"]),
-                      kCertificateCoverageFactor * p.value("sigma", 0.0), esc(p.value("unit", "")));
+      const std::string row = fmt::format(
+          "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{:.3g}</td>"
+          "<td>{}</td></tr>",
+          esc(p.value("name", "")), number(p["value"]),
+          kCertificateCoverageFactor * p.value("sigma", 0.0), esc(p.value("unit", "")));
       (i++ < half ? left : right) += row;
     }
     s += "<div class=\"cols\"><table>" + head + left + "</table><table>" + head + right +
@@ -140,9 +141,10 @@ std::string parameter_section(const CertificateData& d) {
                      esc(names));
   }
   const nlohmann::json fit = d.record.value("fit", nlohmann::json::object());
-  s += fmt::format("<p>Fit: chi<sup>2</sup>/dof {} over {} degrees of freedom against the run's own "
-                   "noise model.</p>",
-                   text_of(fit, "chi2_dof"), text_of(fit, "dof"));
+  s += fmt::format(
+      "<p>Fit: chi<sup>2</sup>/dof {} over {} degrees of freedom against the run's own "
+      "noise model.</p>",
+      text_of(fit, "chi2_dof"), text_of(fit, "dof"));
   return s;
 }
 
@@ -162,10 +164,11 @@ std::string acceptance_section(const CertificateData& d) {
        "</tr>";
   for (const auto& c : r.value("checks", nlohmann::json::array())) {
     const std::string verdict = c.value("verdict", "");
-    s += fmt::format("<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td>"
-                     "<td>{}</td></tr>",
-                     esc(text_of(c, "check")), esc(text_of(c, "value")), esc(text_of(c, "sigma")),
-                     esc(text_of(c, "limit")), verdict_badge(verdict));
+    s += fmt::format(
+        "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td>"
+        "<td>{}</td></tr>",
+        esc(text_of(c, "check")), esc(text_of(c, "value")), esc(text_of(c, "sigma")),
+        esc(text_of(c, "limit")), verdict_badge(verdict));
   }
   return s + "</table>";
 }

@@ -57,7 +57,8 @@ void html_to_pdf(const std::string& html, const std::string& pdf_path) {
   const std::string command =
       "timeout 120 " + core::shell_quote(chromium) +
       " --headless --no-sandbox --disable-gpu --no-pdf-header-footer --user-data-dir=" +
-      core::shell_quote(profile.string()) + " --print-to-pdf=" + core::shell_quote(partial.string()) + " " +
+      core::shell_quote(profile.string()) +
+      " --print-to-pdf=" + core::shell_quote(partial.string()) + " " +
       core::shell_quote("file://" + page.string()) + " >/dev/null 2>&1 </dev/null";
   const int status = std::system(command.c_str());
   std::error_code ignored;
@@ -65,8 +66,8 @@ void html_to_pdf(const std::string& html, const std::string& pdf_path) {
   std::filesystem::remove_all(profile, ignored);
   if (status != 0 || first_bytes(partial, 5) != "%PDF-") {
     std::filesystem::remove(partial, ignored);
-    throw core::InputError("chromium", "printing the page to PDF failed (exit status " +
-                                           std::to_string(status) + ")");
+    throw core::InputError(
+        "chromium", "printing the page to PDF failed (exit status " + std::to_string(status) + ")");
   }
   std::filesystem::rename(partial, target);
 }
