@@ -115,12 +115,13 @@ LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) 
 nlohmann::json to_json(const LotStatistics& lot) {
   nlohmann::json units = nlohmann::json::array();
   for (const LotUnit& u : lot.units) {
-    units.push_back({{"serial", u.serial},
-                     {"device", u.device},
-                     {"calibration", u.calibration},
-                     {"run", u.run},
-                     {"created_utc", u.created_utc},
-                     {"verdict", u.verdict.empty() ? nlohmann::json() : nlohmann::json(u.verdict)}});
+    units.push_back(
+        {{"serial", u.serial},
+         {"device", u.device},
+         {"calibration", u.calibration},
+         {"run", u.run},
+         {"created_utc", u.created_utc},
+         {"verdict", u.verdict.empty() ? nlohmann::json() : nlohmann::json(u.verdict)}});
   }
   nlohmann::json parameters = nlohmann::json::array();
   for (const LotParameter& p : lot.parameters) {
@@ -130,25 +131,25 @@ nlohmann::json to_json(const LotStatistics& lot) {
     }
     nlohmann::json outliers = nlohmann::json::array();
     for (const LotOutlier& o : p.outliers) {
-      outliers.push_back({{"serial", o.serial},
-                          {"value", o.value},
-                          {"robust_z", std::isfinite(o.robust_z) ? nlohmann::json(o.robust_z)
-                                                                 : nlohmann::json()},
-                          {"verdict", o.verdict.empty() ? nlohmann::json() : nlohmann::json(o.verdict)}});
+      outliers.push_back(
+          {{"serial", o.serial},
+           {"value", o.value},
+           {"robust_z", std::isfinite(o.robust_z) ? nlohmann::json(o.robust_z) : nlohmann::json()},
+           {"verdict", o.verdict.empty() ? nlohmann::json() : nlohmann::json(o.verdict)}});
     }
-    parameters.push_back({{"name", p.name},
-                          {"unit", p.unit},
-                          {"n", p.values.size()},
-                          {"mean", p.mean},
-                          {"std", p.std_dev},
-                          {"median", p.median},
-                          {"robust_sigma", p.robust_sigma},
-                          {"min", p.min},
-                          {"max", p.max},
-                          {"control",
-                           {{"centre", p.mean}, {"lower", p.control_lower}, {"upper", p.control_upper}}},
-                          {"values", values},
-                          {"outliers", outliers}});
+    parameters.push_back(
+        {{"name", p.name},
+         {"unit", p.unit},
+         {"n", p.values.size()},
+         {"mean", p.mean},
+         {"std", p.std_dev},
+         {"median", p.median},
+         {"robust_sigma", p.robust_sigma},
+         {"min", p.min},
+         {"max", p.max},
+         {"control", {{"centre", p.mean}, {"lower", p.control_lower}, {"upper", p.control_upper}}},
+         {"values", values},
+         {"outliers", outliers}});
   }
   return {{"since", lot.since_utc},
           {"units", units},

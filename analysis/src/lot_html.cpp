@@ -61,8 +61,9 @@ std::string lot_html(const LotStatistics& lot) {
       "<p class=\"lead\">A unit more than {:g} robust sigmas (1.4826 MAD) from the lot's median is "
       "flagged, even when it passes: it is unlike its siblings.</p>",
       kLotOutlierZ);
-  body += "<table><tr><th>parameter</th><th>unit</th><th>n</th><th>mean</th><th>std</th>"
-          "<th>median</th><th>min</th><th>max</th><th>outliers</th></tr>";
+  body +=
+      "<table><tr><th>parameter</th><th>unit</th><th>n</th><th>mean</th><th>std</th>"
+      "<th>median</th><th>min</th><th>max</th><th>outliers</th></tr>";
   for (const LotParameter& p : lot.parameters) {
     std::string flagged;
     for (const LotOutlier& o : p.outliers) {
@@ -79,8 +80,9 @@ std::string lot_html(const LotStatistics& lot) {
         flagged.empty() ? "-" : flagged);
   }
   body += "</table></section><section><h2>Control charts</h2>";
-  body += "<p class=\"lead\">Individuals charts: the lot mean and the 3-sigma limits from the "
-          "mean moving range between consecutive units.</p>";
+  body +=
+      "<p class=\"lead\">Individuals charts: the lot mean and the 3-sigma limits from the "
+      "mean moving range between consecutive units.</p>";
   for (std::size_t i = 0; i < lot.parameters.size(); ++i) {
     body += control_chart(lot.parameters[i], i);
   }

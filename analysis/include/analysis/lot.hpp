@@ -55,8 +55,8 @@ struct LotParameter {
 };
 
 struct LotStatistics {
-  std::string since_utc;  ///< the lot's start (empty: every record)
-  std::vector<LotUnit> units;  ///< in calibration order
+  std::string since_utc;                   ///< the lot's start (empty: every record)
+  std::vector<LotUnit> units;              ///< in calibration order
   std::size_t records_without_serial = 0;  ///< left out: nobody knows which unit they were
   std::size_t passed = 0;
   std::size_t failed = 0;
