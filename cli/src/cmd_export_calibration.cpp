@@ -21,14 +21,15 @@ struct ExportCalibrationOptions {
   std::string format;
   std::string out;
   analysis::ExportOptions settings;
-  double update_rate_hz = 0.0;  ///< 0: not given
+  double update_rate_hz = 0.0;
+  CLI::Option* update_rate = nullptr;  ///< given or not (any value given is checked)
 };
 
 void run_export_calibration(const ExportCalibrationOptions& opt) {
   // Everything is checked before anything is written: the format, the options, the record.
   const analysis::ExportFormat format = analysis::parse_export_format(opt.format);
   analysis::ExportOptions settings = opt.settings;
-  if (opt.update_rate_hz != 0.0) settings.update_rate_hz = opt.update_rate_hz;
+  if (opt.update_rate->count() > 0) settings.update_rate_hz = opt.update_rate_hz;
   settings.validate();
   const solver::Calibration calibration =
       solver::read_calibration(core::read_json_file(opt.record), opt.record);
@@ -70,8 +71,9 @@ void register_export_calibration(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--rostopic", opt->settings.rostopic, "OpenVINS: imu0's topic")
       ->capture_default_str();
-  cmd->add_option("--update-rate", opt->update_rate_hz,
-                  "OpenVINS: the IMU's rate in Hz (default: the record's noise sample rate)");
+  opt->update_rate =
+      cmd->add_option("--update-rate", opt->update_rate_hz,
+                      "OpenVINS: the IMU's rate in Hz (default: the record's noise sample rate)");
   cmd->callback([opt] { run_export_calibration(*opt); });
 }
 

@@ -172,6 +172,11 @@ TEST_F(CliExportCalibration, BadInputIsExitCode2NamingItAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("--update-rate"), std::string::npos) << r.out;
 
+  r = run("export-calibration --record " + record_ + " --format openvins --update-rate 0 --out " +
+          out);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("--update-rate: must be positive"), std::string::npos) << r.out;
+
   r = run("export-calibration --record " + record_ + " --format px4 --instance 5 --out " + out);
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("--instance"), std::string::npos) << r.out;
