@@ -10,12 +10,14 @@
 #include "analysis/noise_json.hpp"
 #include "analysis/run_model.hpp"
 #include "analysis/table_free_record.hpp"
+#include "core/error.hpp"
 #include "core/json_schema.hpp"
 #include "core/schemas.hpp"
 #include "solver/noise_estimate.hpp"
 #include "store/calibrations.hpp"
 #include "store/derived_run.hpp"
 #include "store/run_store.hpp"
+#include "store/sample_reader.hpp"
 #include "store/step_data.hpp"
 
 namespace calstand::analysis {
@@ -67,6 +69,17 @@ CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const so
                                                calibration_noise_figures(db, run, out.device));
   check_record(out.record);
   return out;
+}
+
+std::vector<std::string> units_to_calibrate(store::Database& db, std::int64_t run,
+                                            const std::string& device) {
+  if (!device.empty()) return {store::choose_device(db, run, device)};
+  std::vector<std::string> devices = store::sample_devices(db, run);
+  if (devices.empty()) {
+    throw core::InputError("run " + std::to_string(run), "has no IMU samples to calibrate");
+  }
+  std::sort(devices.begin(), devices.end());
+  return devices;
 }
 
 std::int64_t store_calibration(store::Database& db, const CalibrationOutcome& c) {

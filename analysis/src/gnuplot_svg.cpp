@@ -15,6 +15,7 @@
 
 #include "analysis/markup_escape.hpp"
 #include "core/error.hpp"
+#include "core/text.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -42,12 +43,6 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
 
 std::string read_file(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -100,9 +95,10 @@ std::string gnuplot_svg(const std::string& script, const std::string& id_prefix,
       throw std::runtime_error("cannot write the gnuplot script to " + script_file.string());
     }
   }
-  const std::string command = shell_quote(gnuplot) + " " + shell_quote(script_file.string()) +
-                              " >" + shell_quote(svg_file.string()) + " 2>" +
-                              shell_quote(err_file.string()) + " </dev/null";
+  const std::string command = core::shell_quote(gnuplot) + " " +
+                              core::shell_quote(script_file.string()) + " >" +
+                              core::shell_quote(svg_file.string()) + " 2>" +
+                              core::shell_quote(err_file.string()) + " </dev/null";
   const int status = std::system(command.c_str());
   std::string err = read_file(err_file);
   while (!err.empty() && std::isspace(static_cast<unsigned char>(err.back()))) err.pop_back();
@@ -149,6 +145,22 @@ std::string data_block(std::string_view name, const std::vector<std::string>& ro
 
 std::string gp_number(double value) {
   return std::isfinite(value) ? fmt::format("{}", value) : std::string("NaN");
+}
+
+std::string svg_terminal(int width, int height) {
+  return fmt::format(
+      "set terminal svg size {},{} dynamic noenhanced font 'Helvetica,12' background '#ffffff'\n"
+      "set border lw 1 lc rgb '#555555'\n"
+      "set grid lc rgb '#e4e4e4' lw 1\n"
+      "set tics textcolor rgb '#333333'\n",
+      width, height);
+}
+
+std::string horizontal_line(double y, const char* rgb, int dash) {
+  return fmt::format(
+      "set arrow from graph 0, first {0} to graph 1, first {0} nohead dt {1} lw 1.5 lc rgb '{2}' "
+      "front\n",
+      gp_number(y), dash, rgb);
 }
 
 }  // namespace calstand::analysis

@@ -21,28 +21,11 @@ constexpr std::array<const char*, 10> kPalette = {"#1f77b4", "#ff7f0e", "#2ca02c
 
 const char* colour(std::size_t i) { return kPalette[i % kPalette.size()]; }
 
-std::string terminal(int width, int height) {
-  return fmt::format(
-      "set terminal svg size {},{} dynamic noenhanced font 'Helvetica,12' background '#ffffff'\n"
-      "set border lw 1 lc rgb '#555555'\n"
-      "set grid lc rgb '#e4e4e4' lw 1\n"
-      "set tics textcolor rgb '#333333'\n",
-      width, height);
-}
-
 int channel_index(const std::string& name) {
   for (int c = 0; c < solver::kChannels; ++c) {
     if (solver::channel_name(c) == name) return c;
   }
   return -1;
-}
-
-// A dashed horizontal reference line across the graph at y.
-std::string hline(double y, const char* rgb, int dash) {
-  return fmt::format(
-      "set arrow from graph 0, first {0} to graph 1, first {0} nohead dt {1} lw 1.5 lc rgb '{2}' "
-      "front\n",
-      gp_number(y), dash, rgb);
 }
 
 }  // namespace
@@ -54,12 +37,12 @@ std::string history_plot(const ReportData& r) {
     const double chi2 = f.chi2_dof ? std::max(*f.chi2_dof, 1e-6) : std::nan("");
     rows.push_back(fmt::format("{} {} {}", i + 1, gp_number(chi2), data_text(r.history_labels[i])));
   }
-  std::string s = terminal(1000, 420) + data_block("h", rows);
+  std::string s = svg_terminal(1000, 420) + data_block("h", rows);
   s += fmt::format("set logscale y\nset xrange [0.5:{}]\n",
                    static_cast<double>(r.history.size()) + 0.5);
   s += "set ylabel 'chi2 / dof'\nset xtics rotate by 20 right font ',11'\nset bmargin 7\n";
   s += "set offsets 0, 0, graph 0.12, graph 0.05\nset key top right\n";
-  s += hline(1.0, "#2ca02c", 2);
+  s += horizontal_line(1.0, "#2ca02c", 2);
   s += "set label 'noise floor (chi2/dof = 1)' at graph 0.01, first 1 offset 0,0.7 "
        "textcolor rgb '#2ca02c'\n";
   s += "plot $h using 1:2:xtic(3) with linespoints lw 2.5 pt 7 ps 1.3 lc rgb '#1f77b4' "
@@ -78,7 +61,7 @@ std::string residual_plot(const ReportData& r) {
   constexpr std::array<int, 3> kShape = {7, 9, 5};  // x circle, y triangle, z square
   constexpr std::array<double, 3> kOffset = {-0.22, 0.0, 0.22};
 
-  std::string s = terminal(1000, 330 * panels + 20);
+  std::string s = svg_terminal(1000, 330 * panels + 20);
   double max_index = 0.0;
   for (const auto& st : fit.steps) max_index = std::max(max_index, static_cast<double>(st.index));
   for (int sensor = 0; sensor < 2; ++sensor) {
@@ -105,7 +88,8 @@ std::string residual_plot(const ReportData& r) {
   s += "set yrange [*<-2.5:2.5<*]\n";  // the |z| = 2 lines always inside
   s += fmt::format("set key outside right top title {} box lc rgb '#cccccc'\n",
                    gnuplot_quote(r.grouping.kind));
-  s += hline(0.0, "#555555", 1) + hline(2.0, "#999999", 3) + hline(-2.0, "#999999", 3);
+  s += horizontal_line(0.0, "#555555", 1) + horizontal_line(2.0, "#999999", 3) +
+       horizontal_line(-2.0, "#999999", 3);
   for (int sensor = 0; sensor < 2; ++sensor) {
     if ((sensor == 0 && !gyro) || (sensor == 1 && !accel)) continue;
     s += fmt::format("set ylabel '{} residual z'\n", sensor == 0 ? "gyro" : "accel");
@@ -135,7 +119,7 @@ std::string signal_plot(const ReportData& r, const solver::SignalCorrelation& si
   const int c = channel_index(signal.channel);
   const auto& fit_steps = r.diagnosis.fit.steps;
   if (!x || c < 0 || x->size() != fit_steps.size()) return "";
-  std::string s = terminal(420, 360);
+  std::string s = svg_terminal(420, 360);
   s += "set xtics font ',10'\nset ytics font ',10'\nset format x '%.3g'\nset xtics rotate by 30 "
        "right\n";
   // Least-squares line of z on the signal, over the finite points.
@@ -166,7 +150,7 @@ std::string signal_plot(const ReportData& r, const solver::SignalCorrelation& si
                    gnuplot_quote("step mean of " + signal.signal),
                    gnuplot_quote(signal.channel + " residual z"));
   s += "set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05\n";
-  s += hline(0.0, "#555555", 1);
+  s += horizontal_line(0.0, "#555555", 1);
   std::string plot = "plot ";
   for (std::size_t g = 0; g < r.grouping.values.size(); ++g) {
     plot += fmt::format("$g{} using 1:2 with points pt 7 ps 0.9 lc rgb '{}', ", g, colour(g));
@@ -187,13 +171,13 @@ std::string candidate_plot(const ReportData& r) {
     rows.push_back(fmt::format("{} {} {} {}", i + 1, gp_number(std::max(c.chi2_dof_after, 1e-6)),
                                data_text(c.term), rgb));
   }
-  std::string s = terminal(1000, 400) + data_block("c", rows);
+  std::string s = svg_terminal(1000, 400) + data_block("c", rows);
   s += fmt::format("set logscale y\nset xrange [0.4:{}]\n", static_cast<double>(count) + 0.6);
   s += "set ylabel 'chi2 / dof after adding'\nset xtics rotate by 20 right font ',11'\n";
   s += "set bmargin 7\nset key top right\nset style fill solid 0.85 noborder\nset boxwidth 0.6\n";
   s += "set offsets 0, 0, graph 0.1, 0\n";
-  s += hline(std::max(d.fit.chi2_dof, 1e-6), "#d62728", 2);
-  s += hline(1.0, "#2ca02c", 3);
+  s += horizontal_line(std::max(d.fit.chi2_dof, 1e-6), "#d62728", 2);
+  s += horizontal_line(1.0, "#2ca02c", 3);
   s += fmt::format(
       "set label {} at graph 0.99, first {} right offset 0,0.7 textcolor rgb "
       "'#d62728'\n",
@@ -206,7 +190,7 @@ std::string candidate_plot(const ReportData& r) {
 
 std::string allan_plot(const ReportData& r, bool gyro) {
   const solver::RunNoise& noise = *r.noise;
-  std::string s = terminal(1000, 460);
+  std::string s = svg_terminal(1000, 460);
   double ymin = std::numeric_limits<double>::infinity(), ymax = 0.0;
   double tmin = std::numeric_limits<double>::infinity(), tmax = 0.0;
   std::vector<const solver::ChannelNoise*> chans;

@@ -59,7 +59,7 @@ solver::Model model_from_lists(const std::vector<std::string>& terms,
   }
 }
 
-std::string choose_fit_device(store::Database& db, std::int64_t run, const std::string& device) {
+void require_fit_run(store::Database& db, std::int64_t run) {
   store::RunStore runs(db);
   try {
     runs.run_status(run);  // throws for an unknown run
@@ -69,6 +69,10 @@ std::string choose_fit_device(store::Database& db, std::int64_t run, const std::
   if (store::sample_devices(db, run).empty()) {
     throw NothingToFit(fmt::format("run {}", run), "has no samples");
   }
+}
+
+std::string choose_fit_device(store::Database& db, std::int64_t run, const std::string& device) {
+  require_fit_run(db, run);
   return store::choose_device(db, run, device);
 }
 

@@ -206,7 +206,7 @@ TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& ter
 }
 
 bool needs_table_free_fit(store::Database& db, std::int64_t run) {
-  choose_fit_device(db, run, "");  // RunNotFound for an unknown run
+  require_fit_run(db, run);  // RunNotFound for an unknown run (any number of IMUs)
   return !store::orientation_known(db, run);
 }
 

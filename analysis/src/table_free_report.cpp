@@ -13,12 +13,9 @@
 namespace calstand::analysis {
 namespace {
 
+// The key sits top right on every plot of this page.
 std::string terminal(int width, int height) {
-  return fmt::format(
-      "set terminal svg size {},{} dynamic noenhanced font 'Helvetica,12' background '#ffffff'\n"
-      "set border lw 1 lc rgb '#555555'\nset grid lc rgb '#e4e4e4' lw 1\n"
-      "set tics textcolor rgb '#333333'\nset key top right\n",
-      width, height);
+  return svg_terminal(width, height) + "set key top right\n";
 }
 
 std::string optional_number(const std::optional<double>& v, const char* format) {

@@ -2,6 +2,7 @@
 // (correct a run's raw samples with a record, as a new run).
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -9,6 +10,7 @@
 
 #include "analysis/calibrate.hpp"
 #include "commands.hpp"
+#include "core/error.hpp"
 #include "core/json_schema.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
@@ -21,6 +23,7 @@ namespace {
 struct CalibrateOptions : RunModelOptions {
   StaticPoseOptions poses;  ///< runs without a table
   std::string out;
+  std::string out_dir = ".";
   bool as_json = false;
 };
 
@@ -31,28 +34,46 @@ void write_text(const std::string& path, const std::string& text) {
   if (!f) throw std::runtime_error(path + ": cannot write the file");
 }
 
+// Every unit of the run (or the one named) is fitted before anything is written: a unit that
+// cannot be calibrated stops the command with no record of the others half-stored.
 void run_calibrate(const CalibrateOptions& opt) {
   const solver::Model model = solver::Model::parse(opt.model, opt.customs);
   store::Database db = open_existing_database(opt.db);
-  const analysis::CalibrationOutcome c = analysis::calibrate_run(
-      db, opt.run, model, opt.device, static_pose_request(opt.poses, opt.device));
-  const std::string out =
-      opt.out.empty() ? analysis::default_calibration_file(opt.run, c.device) : opt.out;
-  // The file first: a record that cannot be written is not stored either.
-  write_text(out, c.record.dump(2) + "\n");
-  const std::int64_t id = analysis::store_calibration(db, c);
-  if (opt.as_json) {
-    fmt::print("{}\n",
-               nlohmann::json{{"calibration_id", id}, {"file", out}, {"record", c.record}}.dump(2));
-    return;
+  const std::vector<std::string> devices = analysis::units_to_calibrate(db, opt.run, opt.device);
+  if (!opt.out.empty() && devices.size() > 1) {
+    throw core::InputError("--out", fmt::format("run {} has {} units: give --out-dir, or --device "
+                                                "with --out",
+                                                opt.run, devices.size()));
   }
-  if (c.table_free) {
-    print_table_free_fit(*c.table_free);
-  } else {
-    fmt::print("run {} ({}), device {}, {} steps\n", opt.run, c.procedure, c.device, c.steps);
-    print_fit(c.fit);
+  std::vector<analysis::CalibrationOutcome> outcomes;
+  for (const std::string& device : devices) {
+    outcomes.push_back(analysis::calibrate_run(db, opt.run, model, device,
+                                               static_pose_request(opt.poses, device)));
   }
-  fmt::print("\ncalibration {} stored in {} and written to {}\n", id, opt.db, out);
+  nlohmann::json listed = nlohmann::json::array();
+  for (const analysis::CalibrationOutcome& c : outcomes) {
+    const std::string out = !opt.out.empty()
+                                ? opt.out
+                                : (std::filesystem::path(opt.out_dir) /
+                                   analysis::default_calibration_file(opt.run, c.device))
+                                      .string();
+    // The file first: a record that cannot be written is not stored either.
+    write_text(out, c.record.dump(2) + "\n");
+    const std::int64_t id = analysis::store_calibration(db, c);
+    listed.push_back({{"calibration_id", id}, {"file", out}, {"record", c.record}});
+    if (opt.as_json) continue;
+    if (outcomes.size() > 1) fmt::print("== {} ==\n", c.device);
+    if (c.table_free) {
+      print_table_free_fit(*c.table_free);
+    } else {
+      const std::string serial = c.record["device"].value("serial", "");
+      fmt::print("run {} ({}), device {}{}, {} steps\n", opt.run, c.procedure, c.device,
+                 serial.empty() ? "" : " (unit " + serial + ")", c.steps);
+      print_fit(c.fit);
+    }
+    fmt::print("\ncalibration {} stored in {} and written to {}\n\n", id, opt.db, out);
+  }
+  if (opt.as_json) fmt::print("{}\n", nlohmann::json{{"calibrations", listed}}.dump(2));
 }
 
 struct ApplyOptions {
@@ -83,11 +104,17 @@ void run_apply(const ApplyOptions& opt) {
 void register_calibrate(CLI::App& app) {
   auto opt = std::make_shared<CalibrateOptions>();
   auto* cmd = app.add_subcommand(
-      "calibrate", "Fit a run, store the calibration record in the database and write its JSON");
+      "calibrate",
+      "Fit every unit of a run (or --device), store each unit's calibration record in the "
+      "database and write its JSON");
   add_run_model_options(cmd, *opt, false);
   add_static_pose_options(cmd, opt->poses);
-  cmd->add_option("--out", opt->out, "Record file (default calibration-run<ID>-<device>.json)");
-  cmd->add_flag("--json", opt->as_json, "Print the record id, file and record as JSON");
+  cmd->add_option("--out", opt->out,
+                  "Record file, for one unit (default calibration-run<ID>-<device>.json)");
+  cmd->add_option("--out-dir", opt->out_dir, "Folder of the record files (one per unit)")
+      ->capture_default_str();
+  cmd->add_flag("--json", opt->as_json,
+                "Print {\"calibrations\": [{calibration_id, file, record}]}, one per unit");
   cmd->callback([opt] { run_calibrate(*opt); });
 
   auto aopt = std::make_shared<ApplyOptions>();

@@ -14,6 +14,7 @@
 #include "procedures/library.hpp"
 #include "procedures/procedure.hpp"
 #include "progress_bar.hpp"
+#include "unit_option.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -22,6 +23,7 @@ struct ClientOptions {
   DaemonAddress address;
   std::string procedure;
   std::vector<std::string> set_args;
+  std::vector<std::string> unit_args;  ///< submit: NAME=SERIAL
   std::int64_t run = 0;
   bool json = false;
   bool now = false;
@@ -47,9 +49,9 @@ nlohmann::json procedure_field(const std::string& name_or_path) {
 int submit(const ClientOptions& opt) {
   nlohmann::json parameters = nlohmann::json::object();
   for (const auto& [k, v] : procedures::parse_overrides(opt.set_args)) parameters[k] = v;
-  const auto reply = DaemonClient(opt.address)
-                         .post("/runs", {{"procedure", procedure_field(opt.procedure)},
-                                         {"parameters", parameters}});
+  nlohmann::json body = {{"procedure", procedure_field(opt.procedure)}, {"parameters", parameters}};
+  if (!opt.unit_args.empty()) body["units"] = parse_unit_options(opt.unit_args);
+  const auto reply = DaemonClient(opt.address).post("/runs", body);
   if (opt.json) {
     fmt::print("{}\n", reply.dump());
   } else {
@@ -144,6 +146,7 @@ void register_client(CLI::App& app) {
   CLI::App* submit_cmd = add_client_command(app, "submit", "Queue a procedure on calstandd", opt);
   submit_cmd->add_option("procedure", opt->procedure, "Library name or procedure file")->required();
   submit_cmd->add_option("--set", opt->set_args, "Override a parameter: NAME=VALUE (JSON)");
+  submit_cmd->add_option("--unit", opt->unit_args, "The unit in an IMU slot: NAME=SERIAL");
   submit_cmd->add_flag("--json", opt->json, "Print {\"id\": RUN}");
   submit_cmd->callback([opt] { submit(*opt); });
 

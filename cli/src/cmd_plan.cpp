@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "analysis/plan_coverage.hpp"
+#include "analysis/run_model.hpp"
 #include "commands.hpp"
 #include "core/station_config.hpp"
 #include "procedures/plan.hpp"
@@ -22,6 +24,7 @@ struct PlanOptions {
   std::string procedure;
   std::string station_file;
   std::vector<std::string> set_args;
+  std::string model = analysis::kDefaultModel;  ///< the terms coverage is checked for
   bool as_json = false;
 };
 
@@ -133,15 +136,35 @@ void print_text(const procedures::Plan& plan, const core::StationConfig& station
   }
 }
 
+// Per unit, what the procedure leaves undetermined of the model; on a fixture this is where a
+// unit whose mount the pointing was not resolved for shows an axis the procedure never excites.
+void print_coverage(const analysis::PlanCoverage& coverage) {
+  fmt::print("\nwhat each unit's data determine of {}:\n", coverage.model);
+  for (const analysis::UnitCoverage& u : coverage.units) {
+    if (u.undetermined.empty()) {
+      fmt::print("  {:<8} every parameter\n", u.imu);
+      continue;
+    }
+    fmt::print("  {:<8} NOT {} parameter{}:\n", u.imu, u.undetermined.size(),
+               u.undetermined.size() == 1 ? "" : "s");
+    for (const auto& p : u.undetermined) fmt::print("             {:<28} {}\n", p.name, p.reason);
+  }
+}
+
 void run_plan(const PlanOptions& opt) {
   const core::StationConfig station = sim::load_station_or_default(opt.station_file);
   const procedures::Overrides overrides = procedures::parse_overrides(opt.set_args);
   const procedures::Procedure procedure = procedures::load_procedure(opt.procedure);
   const procedures::Plan plan = procedures::make_plan(procedure, station, overrides);
+  const analysis::PlanCoverage coverage =
+      analysis::plan_coverage(plan, station, solver::Model::parse(opt.model));
   if (opt.as_json) {
-    fmt::print("{}\n", plan.to_json().dump(2));
+    nlohmann::json out = plan.to_json();
+    out["coverage"] = analysis::to_json(coverage);
+    fmt::print("{}\n", out.dump(2));
   } else {
     print_text(plan, station);
+    print_coverage(coverage);
   }
   procedures::require_valid(plan);  // exit 2 through main, every violation on stderr
 }
@@ -157,6 +180,9 @@ void register_plan(CLI::App& app) {
   cmd->add_option("procedure", opt->procedure, "Library procedure name or procedure file")
       ->required();
   cmd->add_option("--station", opt->station_file, "Station file (default: built-in simulator)");
+  cmd->add_option("--model", opt->model,
+                  "Terms whose determination per unit is checked (default: the fit's default)")
+      ->capture_default_str();
   cmd->add_option("--set", opt->set_args,
                   "Parameter override NAME=VALUE, VALUE as JSON (e.g. temperatures=[-40,25,85])")
       ->allow_extra_args(false);

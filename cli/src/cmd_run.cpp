@@ -26,6 +26,7 @@
 #include "store/disk_space.hpp"
 #include "store/run_lock.hpp"
 #include "store/run_store.hpp"
+#include "unit_option.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -35,6 +36,7 @@ struct RunOptions {
   std::string station_file;
   std::string db = "calstand.db";
   std::vector<std::string> set_args;
+  std::vector<std::string> unit_args;  ///< NAME=SERIAL
   std::int64_t resume_run = 0;
   bool quiet = false;
 };
@@ -101,6 +103,8 @@ int run_new(const RunOptions& opt) {
   const procedures::Plan plan =
       procedures::make_plan(procedure, station, procedures::parse_overrides(opt.set_args));
   procedures::require_valid(plan);  // every violation, before anything is written or moves
+  const daemon::UnitSerials units = parse_unit_options(opt.unit_args);
+  daemon::units_for_run(station, units);  // a unit unknown or without its serial, likewise
   const store::DatabaseLock lock(opt.db, store::DatabaseLock::Mode::kShared, "calstand run");
   if (const auto why = store::disk_space_shortfall(opt.db, station.policy.min_free_disk_mb)) {
     throw core::InputError(opt.db, *why);  // before the run is recorded or anything moves
@@ -110,7 +114,7 @@ int run_new(const RunOptions& opt) {
   {
     store::Database db(opt.db);
     store::RunStore run_store(db);
-    run_id = daemon::create_run_record(run_store, station, procedure, plan);
+    run_id = daemon::create_run_record(run_store, station, procedure, plan, units);
   }
   fmt::print("run {}: {} ({} steps, estimated {}) into {}\n", run_id, procedure.name,
              plan.steps.size(), format_duration(plan.total_s), opt.db);
@@ -167,6 +171,9 @@ void register_run(CLI::App& app) {
   cmd->add_option("--station", opt->station_file, "Station file (default: built-in simulator)");
   cmd->add_option("--db", opt->db, "SQLite database file")->capture_default_str();
   cmd->add_option("--set", opt->set_args, "Override a parameter: NAME=VALUE (JSON)");
+  cmd->add_option("--unit", opt->unit_args,
+                  "The unit in an IMU slot: NAME=SERIAL (repeat per unit; checked against the "
+                  "serial the device reports)");
   cmd->add_option("--resume", opt->resume_run, "Resume the interrupted run RUN_ID");
   cmd->add_flag("--quiet", opt->quiet, "No progress bar");
   cmd->callback([opt] {

@@ -69,6 +69,7 @@ void show_run(const RunsOptions& opt) {
     nlohmann::json out = store::to_json(r.summary);
     out["parameters"] = r.parameters;
     out["procedure_sha256"] = r.procedure_sha256;
+    out["units"] = store::units_json(r.units);
     out["steps"] = steps;
     out["events"] = events;
     if (shows_static_poses(db, r)) {
@@ -87,7 +88,15 @@ void show_run(const RunsOptions& opt) {
              s.status, s.steps_done, s.steps_total, s.started_utc.empty() ? "-" : s.started_utc,
              s.ended_utc.empty() ? "-" : s.ended_utc,
              s.exit_reason.empty() ? "" : "\n  exit reason: " + s.exit_reason);
-  fmt::print("parameters: {}\n\n", r.parameters.dump());
+  fmt::print("parameters: {}\n", r.parameters.dump());
+  for (const auto& u : r.units) {
+    fmt::print("unit in {}: {} {} ({})\n", u.imu, u.model.empty() ? "-" : u.model,
+               u.serial.empty() ? "(no serial)" : u.serial,
+               u.source == "device"      ? "read from the device"
+               : u.source == "submitted" ? "given with the run"
+                                         : "from the station file");
+  }
+  fmt::print("\n");
   fmt::print("{:>5}  {:<16} {:<11} {:>3}  {:>10} {:>10}  {}\n", "step", "kind", "status", "try",
              "start [s]", "end [s]", "label");
   for (const auto& st : r.steps) {

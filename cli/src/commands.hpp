@@ -9,7 +9,9 @@ namespace calstand::cli {
 // (bad input) or 1 (failure), see main.cpp.
 void register_allan(CLI::App& app);      // allan and noise
 void register_calibrate(CLI::App& app);  // calibrate and apply
-void register_client(CLI::App& app);     // calstandd clients: submit, status, pause, resume, abort
+void register_calibrations(CLI::App& app);
+void register_certificate(CLI::App& app);
+void register_client(CLI::App& app);  // calstandd clients: submit, status, pause, resume, abort
 void register_client_watch(CLI::App& app);  // calstandd client: watch
 void register_demo(CLI::App& app);
 void register_device(CLI::App& app);

@@ -174,6 +174,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     if (j.contains("truth_file")) imu.truth_file = resolve(base_dir, j.at("truth_file"));
     if (j.contains("truth")) imu.truth = j.at("truth");
     if (j.contains("mount_rpy_deg")) imu.mount_rpy_deg = vec3(j.at("mount_rpy_deg"));
+    imu.serial = j.value("serial", std::string());
     imu.connection = resolve_connection_files(j.value("connection", json::object()), base_dir);
     c.imus.push_back(std::move(imu));
   }
@@ -193,6 +194,8 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.sim_thermal_step_s = doc.at("sim").value("thermal_step_s", c.sim_thermal_step_s);
   }
   c.time_scale = doc.value("time_scale", c.time_scale);
+  c.require_serial = doc.value("require_serial", false);
+  c.equipment = doc.value("equipment", json::array());
   check_semantics(c, file_name);
   c.table.outer_axis.normalize();
   c.table.inner_axis.normalize();
@@ -219,6 +222,7 @@ json StationConfig::to_json() const {
     if (!imu.spec_file.empty()) j["spec_file"] = imu.spec_file;
     if (!imu.truth_file.empty()) j["truth_file"] = imu.truth_file;
     if (!imu.truth.is_null()) j["truth"] = imu.truth;
+    if (!imu.serial.empty()) j["serial"] = imu.serial;
     if (!imu.connection.empty()) j["connection"] = imu.connection;
     imus_j.push_back(std::move(j));
   }
@@ -248,6 +252,8 @@ json StationConfig::to_json() const {
               {"table", table_j},
               {"chamber", chamber_j},
               {"imus", imus_j},
+              {"require_serial", require_serial},
+              {"equipment", equipment},
               {"policy",
                {{"on_sequence_gap", policy.on_sequence_gap},
                 {"on_stale_stream", policy.on_stale_stream},

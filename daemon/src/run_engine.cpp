@@ -174,6 +174,7 @@ RunState RunEngine::run(std::size_t first_step, int first_attempt,
   journal_.run_state(RunState::kRunning, station_.clock().now_s(), "");
   try {
     if (auto r = station_.bring_up(); !r) throw StepFailed{"station bring-up: " + r.message};
+    identify_units();
     // Stream health counts from now: a resumed run's clock does not start at 0.
     for (auto& h : imu_health_) h.last_sample_s = station_.clock().now_s();
     if (first_step > 0 && first_step < plan_.steps.size()) {
@@ -502,6 +503,21 @@ void RunEngine::wait_for(double duration_s, const char* phase) {
   set_phase(phase);
   const double end = station_.clock().now_s() + duration_s;
   while (station_.clock().now_s() < end - 1e-9) tick();
+}
+
+void RunEngine::identify_units() {
+  for (std::size_t i = 0; i < station_.imu_count(); ++i) {
+    drivers::Imu& imu = station_.imu(i);
+    const std::optional<drivers::UnitIdentity> id = imu.identity();
+    if (!id) continue;
+    if (std::string why = journal_.unit_identified(imu.name(), id->model, id->serial);
+        !why.empty()) {
+      throw StepFailed{"unit check: " + why};
+    }
+    record_event(
+        EventKind::kInfo, imu.name(),
+        "unit " + id->serial + (id->model.empty() ? "" : " (" + id->model + ")") + " identified");
+  }
 }
 
 void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped) {

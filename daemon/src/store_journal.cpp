@@ -1,5 +1,9 @@
 #include "daemon/store_journal.hpp"
 
+#include <fmt/format.h>
+
+#include "store/units.hpp"
+
 namespace calstand::daemon {
 
 StoreJournal::StoreJournal(store::RunStore& store, store::CaptureWriter& writer,
@@ -95,6 +99,22 @@ void StoreJournal::run_state(RunState state, double t_s, const std::string& reas
   }
   if (is_terminal(state)) ended = stamp;
   store_.set_run_status(run_id_, std::string(to_string(state)), started, ended, reason);
+}
+
+std::string StoreJournal::unit_identified(const std::string& imu, const std::string& model,
+                                          const std::string& serial) {
+  store::RunUnit unit = store::unit_of_run(store_.database(), run_id_, imu);
+  if (!unit.serial.empty() && unit.serial != serial) {
+    return fmt::format(
+        "{} reports serial {}, but the run is for unit {} ({}): another unit is in the slot", imu,
+        serial, unit.serial,
+        unit.source == "submitted" ? "given with the run" : "from the station file");
+  }
+  if (!model.empty()) unit.model = model;
+  unit.serial = serial;
+  unit.source = "device";
+  store::record_run_units(store_.database(), run_id_, {unit});
+  return {};
 }
 
 }  // namespace calstand::daemon

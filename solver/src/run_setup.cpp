@@ -60,6 +60,12 @@ RunSetup run_setup(const store::RunRecord& run, std::int64_t run_id, const std::
       setup.temperature_ref_c = imu["temperature_ref_c"].get<double>();
     }
   }
+  // The unit recorded for the run (read from the device, or given with it) is who was measured.
+  for (const store::RunUnit& unit : run.units) {
+    if (unit.imu != device) continue;
+    if (!unit.model.empty()) setup.imu_model = unit.model;
+    setup.imu_serial = unit.serial;
+  }
   return setup;
 }
 

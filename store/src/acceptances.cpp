@@ -17,9 +17,10 @@ std::int64_t insert_acceptance(Database& db, std::int64_t calibration, const std
     throw core::InputError("verdict", "'" + verdict + "' is not pass, fail or indeterminate");
   }
   return detail::guarded("insert acceptance", [&] {
-    SQLite::Statement st(db.sql(),
-                         "INSERT INTO acceptances (calibration_id, spec_name, spec_sha256, verdict, "
-                         "result, created_utc) VALUES (?, ?, ?, ?, ?, ?)");
+    SQLite::Statement st(
+        db.sql(),
+        "INSERT INTO acceptances (calibration_id, spec_name, spec_sha256, verdict, "
+        "result, created_utc) VALUES (?, ?, ?, ?, ?, ?)");
     st.bind(1, calibration);
     st.bind(2, spec_name);
     st.bind(3, spec_sha256);
@@ -39,13 +40,11 @@ std::optional<AcceptanceRow> latest_acceptance(Database& db, std::int64_t calibr
                         "ORDER BY id DESC LIMIT 1");
     q.bind(1, calibration);
     if (!q.executeStep()) return std::nullopt;
-    return AcceptanceRow{q.getColumn(0).getInt64(),
-                         q.getColumn(1).getInt64(),
-                         q.getColumn(2).getString(),
-                         q.getColumn(3).getString(),
-                         q.getColumn(4).getString(),
-                         nlohmann::json::parse(q.getColumn(5).getString()),
-                         q.getColumn(6).getString()};
+    return AcceptanceRow{
+        q.getColumn(0).getInt64(),  q.getColumn(1).getInt64(),
+        q.getColumn(2).getString(), q.getColumn(3).getString(),
+        q.getColumn(4).getString(), nlohmann::json::parse(q.getColumn(5).getString()),
+        q.getColumn(6).getString()};
   });
 }
 

@@ -49,4 +49,15 @@ nlohmann::json to_json(const EventRecord& event) {
           {"detail", event.detail}};
 }
 
+nlohmann::json to_json(const RunUnit& unit) {
+  return {
+      {"imu", unit.imu}, {"model", unit.model}, {"serial", unit.serial}, {"source", unit.source}};
+}
+
+nlohmann::json units_json(const std::vector<RunUnit>& units) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const RunUnit& u : units) out.push_back(to_json(u));
+  return out;
+}
+
 }  // namespace calstand::store

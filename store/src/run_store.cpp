@@ -11,6 +11,7 @@
 #include "store/hash.hpp"
 #include "store/run_lock.hpp"
 #include "store/run_queue.hpp"
+#include "store/units.hpp"
 
 namespace calstand::store {
 
@@ -495,6 +496,7 @@ RunRecord RunStore::load_run(std::int64_t run) {
     return rec;
   });
   r.steps = load_steps(run);
+  r.units = units_of_run(db_, run);
   return r;
 }
 

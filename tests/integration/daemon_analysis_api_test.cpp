@@ -197,7 +197,7 @@ TEST_F(AnalysisApi, CatalogueReportAndCalibrationsAreServed) {
           " --model accel_bias,gyro_bias,earth_rate --json --out " + db_ + ".cal.json",
       "/dev/null");
   ASSERT_EQ(c.exit_code, 0) << c.out;
-  const std::int64_t id = nlohmann::json::parse(c.out)["calibration_id"];
+  const std::int64_t id = nlohmann::json::parse(c.out)["calibrations"][0]["calibration_id"];
   const Reply cals = api_->get(path("/calibrations"));
   ASSERT_EQ(cals.status, 200);
   ASSERT_EQ(cals.body.size(), 1u);

@@ -92,7 +92,8 @@ TEST_F(FitCli, CalibrateStoresAndApplyCorrectsAValidationRun) {
                record + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto out = nlohmann::json::parse(r.out);
-  EXPECT_GE(out["calibration_id"].get<int>(), 1);
+  ASSERT_EQ(out["calibrations"].size(), 1u);
+  EXPECT_GE(out["calibrations"][0]["calibration_id"].get<int>(), 1);
   const auto doc = nlohmann::json::parse(read_text(record));
   EXPECT_EQ(doc["format"], "calstand-calibration/1");
   EXPECT_EQ(doc["device"]["name"], "imu0");

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "analysis/table_free_fit.hpp"
 #include "solver/calibration_record.hpp"
@@ -36,6 +37,12 @@ struct CalibrationOutcome {
 /// std::runtime_error if the record breaks its own schema (a bug).
 CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const solver::Model& model,
                                  const std::string& device, const TableFreeFitRequest& poses = {});
+
+/// The units of `run` that `calstand calibrate` calibrates: `device` alone when given, else
+/// every IMU with samples (every unit on the fixture), in name order. Throws core::InputError
+/// naming the run when it has no samples or `device` has none.
+std::vector<std::string> units_to_calibrate(store::Database& db, std::int64_t run,
+                                            const std::string& device);
 
 /// Stores the record in the database's calibrations (with the model text of whichever fit);
 /// returns its id.

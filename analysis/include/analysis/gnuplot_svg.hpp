@@ -35,4 +35,11 @@ std::string data_block(std::string_view name, const std::vector<std::string>& ro
 /// A number for a data block: shortest round-trip form, or "NaN" (gnuplot skips it).
 std::string gp_number(double value);
 
+/// The svg terminal of calstand's plots, `width` x `height` pixels, with its borders, grid and
+/// tics in the pages' colours (one look on every page).
+std::string svg_terminal(int width, int height);
+
+/// A dashed horizontal reference line across the graph at y (dash type `dash`, colour `rgb`).
+std::string horizontal_line(double y, const char* rgb, int dash);
+
 }  // namespace calstand::analysis

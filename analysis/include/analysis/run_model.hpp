@@ -44,6 +44,10 @@ class NothingToFit : public core::InputError {
   using core::InputError::InputError;
 };
 
+/// The checks every analysis makes of a run, whatever its device: an unknown run throws
+/// RunNotFound, a run without samples NothingToFit.
+void require_fit_run(store::Database& db, std::int64_t run);
+
 /// The device of `run` to analyse (`device`, or "" for the run's only IMU), after the checks
 /// every analysis makes: an unknown run throws RunNotFound, a run without samples NothingToFit,
 /// an unknown or ambiguous device core::InputError (store::choose_device()).

@@ -58,6 +58,10 @@ struct ImuConfig {
   std::string truth_file;  ///< absolute path
   nlohmann::json truth;    ///< inline truth document, or null
   Eigen::Vector3d mount_rpy_deg = Eigen::Vector3d::Zero();
+  /// The unit's serial number, or empty. A simulated IMU reports it as a device whose protocol
+  /// carries its identity would; for a real IMU whose protocol cannot, it names the unit that
+  /// stays in this slot (a lab). A factory gives each run's units with `--unit NAME=SN`.
+  std::string serial;
   nlohmann::json connection = nlohmann::json::object();
 };
 
@@ -89,6 +93,13 @@ struct StationConfig {
   TableConfig table;
   ChamberConfig chamber;
   std::vector<ImuConfig> imus;
+  /// The station's own measuring equipment and its calibration status (station file
+  /// `equipment`: [{"name", "id", "calibrated", "due", "certificate"}], dates YYYY-MM-DD), as a
+  /// unit's certificate states it: the traceability of the unit's calibration.
+  nlohmann::json equipment = nlohmann::json::array();
+  /// A production station: every unit of a run must have a serial (read from the device,
+  /// given with the run, or fixed here), or the run is refused.
+  bool require_serial = false;
   FaultPolicy policy;
   /// Station seconds per wall-clock second of a real station's clock (1 in a lab). Only for
   /// rehearsing against an accelerated `calstand sim-station`, whose world runs this much

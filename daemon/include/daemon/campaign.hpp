@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -10,14 +11,27 @@
 #include "procedures/plan.hpp"
 #include "procedures/procedure.hpp"
 #include "store/run_store.hpp"
+#include "store/units.hpp"
 
 namespace calstand::daemon {
 
+/// Serials given with a run for its units, by IMU name (`--unit imu0=SN1234`).
+using UnitSerials = std::map<std::string, std::string>;
+
+/// The unit in each IMU slot of `station` for a new run: the serial given with the run
+/// ("submitted"), else the one in the station file ("station"), else none. A simulated IMU
+/// reports its serial when the run starts, which the engine checks against this. Throws
+/// core::InputError naming `units.NAME` for a slot the station lacks or an empty serial, and
+/// naming the slot when the station requires serials (`require_serial`) and one has none.
+std::vector<store::RunUnit> units_for_run(const core::StationConfig& station,
+                                          const UnitSerials& submitted);
+
 /// Records a new run of `plan` (procedure text and hash, parameters, station snapshot, the
-/// expanded steps) and returns its id. Nothing runs.
+/// expanded steps, its units: units_for_run, checked before anything is written) and returns
+/// its id. Nothing runs.
 std::int64_t create_run_record(store::RunStore& runs, const core::StationConfig& station,
-                               const procedures::Procedure& procedure,
-                               const procedures::Plan& plan);
+                               const procedures::Procedure& procedure, const procedures::Plan& plan,
+                               const UnitSerials& submitted = {});
 
 /// How a campaign ended.
 struct CampaignResult {

@@ -144,6 +144,9 @@ class RunEngine {
   void wait_for(double duration_s, const char* phase);
   void wait_for_streams();
   void reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped);
+  /// Records the identity each IMU reports (those whose protocol says); throws StepFailed
+  /// when a slot holds another unit than the run is for.
+  void identify_units();
   void tick();
   /// Takes the requests waiting in the queue and applies them in order (engine thread).
   void take_commands();

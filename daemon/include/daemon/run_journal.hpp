@@ -41,6 +41,11 @@ class RunJournal {
   virtual void table_telemetry(const core::TableState& state) = 0;
   virtual void chamber_telemetry(const core::ChamberState& state) = 0;
   virtual void run_state(RunState state, double t_s, const std::string& reason) = 0;
+  /// The unit in slot `imu` reported its identity when the station came up. Returns why the
+  /// run must not go on (another unit than the run was given for sits in the slot), or empty
+  /// when the identity is recorded.
+  virtual std::string unit_identified(const std::string& imu, const std::string& model,
+                                      const std::string& serial) = 0;
 };
 
 }  // namespace calstand::daemon

@@ -37,6 +37,8 @@ class StoreJournal final : public RunJournal {
   void table_telemetry(const core::TableState& state) override;
   void chamber_telemetry(const core::ChamberState& state) override;
   void run_state(RunState state, double t_s, const std::string& reason) override;
+  std::string unit_identified(const std::string& imu, const std::string& model,
+                              const std::string& serial) override;
 
   std::int64_t run_id() const { return run_id_; }
 

@@ -56,6 +56,7 @@ std::string reason_field(const nlohmann::json& body) {
 nlohmann::json run_status_json(const store::RunRecord& record, const service::LiveSnapshot& live) {
   nlohmann::json j = store::to_json(record.summary);
   j["parameters"] = record.parameters;
+  j["units"] = store::units_json(record.units);
   const auto total = record.summary.steps_total;
   j["progress"] = total == 0
                       ? 0.0
@@ -87,8 +88,8 @@ nlohmann::json run_status_json(const store::RunRecord& record, const service::Li
 void register_run_routes(httplib::Server& server, const RouteContext& ctx) {
   server.Post("/runs", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
                 const RunRequest request = parse_run_request(parse_json_body(req));
-                const std::int64_t id =
-                    ctx.service.submit(request.procedure, request.overrides, who_of(ctx, req));
+                const std::int64_t id = ctx.service.submit(request.procedure, request.overrides,
+                                                           who_of(ctx, req), request.units);
                 res.set_header("Location", fmt::format("/runs/{}", id));
                 send_json(res, 201, {{"id", id}});
               }));

@@ -13,8 +13,8 @@ RunRequest parse_run_request(const nlohmann::json& body) {
     throw procedures::ProcedureError("request", {{"", "the body must be a JSON object"}});
   }
   for (const auto& [key, value] : body.items()) {
-    if (key != "procedure" && key != "parameters") {
-      violations.push_back({key, "unknown field (expected procedure, parameters)"});
+    if (key != "procedure" && key != "parameters" && key != "units") {
+      violations.push_back({key, "unknown field (expected procedure, parameters, units)"});
     }
   }
   procedures::Overrides overrides;
@@ -23,6 +23,20 @@ RunRequest parse_run_request(const nlohmann::json& body) {
       violations.push_back({"parameters", "must be an object of parameter values"});
     } else {
       for (const auto& [k, v] : p->items()) overrides[k] = v;
+    }
+  }
+  UnitSerials units;
+  if (const auto u = body.find("units"); u != body.end()) {
+    if (!u->is_object()) {
+      violations.push_back({"units", "must be an object of serials by IMU name"});
+    } else {
+      for (const auto& [imu, serial] : u->items()) {
+        if (!serial.is_string() || serial.get<std::string>().empty()) {
+          violations.push_back({"units." + imu, "must be a non-empty serial string"});
+        } else {
+          units[imu] = serial.get<std::string>();
+        }
+      }
     }
   }
   const auto proc = body.find("procedure");
@@ -44,6 +58,7 @@ RunRequest parse_run_request(const nlohmann::json& body) {
     out.procedure = procedures::parse_procedure(proc->dump(2), "request.procedure");
   }
   out.overrides = std::move(overrides);
+  out.units = std::move(units);
   return out;
 }
 

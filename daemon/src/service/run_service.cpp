@@ -481,15 +481,17 @@ void RunService::record_action(std::int64_t run, const std::string& who,
 }
 
 std::int64_t RunService::submit(const procedures::Procedure& procedure,
-                                const procedures::Overrides& overrides, const std::string& who) {
+                                const procedures::Overrides& overrides, const std::string& who,
+                                const UnitSerials& units) {
   const procedures::Plan plan = procedures::make_plan(procedure, options_.station, overrides);
-  procedures::require_valid(plan);  // every violation, before anything is written
+  procedures::require_valid(plan);         // every violation, before anything is written
+  units_for_run(options_.station, units);  // a unit missing or unknown, before anything either
   if (auto why = disk_shortfall()) throw OutOfSpace(*why + "; free space, then submit again");
   std::int64_t run = 0;
   {
     store::Database db(options_.db_path);
     store::RunStore runs(db);
-    run = create_run_record(runs, options_.station, procedure, plan);
+    run = create_run_record(runs, options_.station, procedure, plan, units);
     // Enqueued before it is marked queued: a crash in between leaves an idle run, never a
     // queued run outside the queue.
     store::enqueue_run(db, run, who);

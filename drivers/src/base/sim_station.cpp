@@ -114,8 +114,10 @@ class SimStation::SimChamber final : public Chamber {
 
 class SimStation::SimImu final : public Imu {
  public:
-  SimImu(sim::SimWorld& world, std::size_t index)
-      : world_(world), index_(index), name_(world.imu_name(index)) {}
+  SimImu(sim::SimWorld& world, std::size_t index, const core::ImuConfig& config)
+      : world_(world), index_(index), name_(world.imu_name(index)) {
+    if (!config.serial.empty()) identity_ = UnitIdentity{config.model, config.serial};
+  }
   const std::string& name() const override { return name_; }
   Result configure() override { return life_.configure(); }
   Result activate() override { return life_.activate(); }
@@ -145,12 +147,19 @@ class SimStation::SimImu final : public Imu {
   std::uint64_t sequence_modulus() const override {
     return world_.imu(index_).truth().sequence_modulus;
   }
+  /// A simulated unit reports the serial its station entry gives it, as a device whose
+  /// protocol carries its identity would (only once configured, as over a link).
+  std::optional<UnitIdentity> identity() const override {
+    if (life_.state() == DeviceState::kUnconfigured) return std::nullopt;
+    return identity_;
+  }
 
  private:
   sim::SimWorld& world_;
   std::size_t index_;
   std::string name_;
   SimLifecycle life_;
+  std::optional<UnitIdentity> identity_;
   std::vector<core::ImuSample> in_flight_;  ///< produced, not yet received (in order)
 };
 
@@ -159,7 +168,7 @@ SimStation::SimStation(const core::StationConfig& config, double start_time_s)
       table_(std::make_unique<SimTurntable>(world_)),
       chamber_(std::make_unique<SimChamber>(world_)) {
   for (std::size_t i = 0; i < world_.imu_count(); ++i) {
-    imus_.push_back(std::make_unique<SimImu>(world_, i));
+    imus_.push_back(std::make_unique<SimImu>(world_, i, config.imus.at(i)));
   }
 }
 

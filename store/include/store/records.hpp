@@ -89,6 +89,16 @@ struct RunSummary {
   std::string exit_reason;
 };
 
+/// The unit in one IMU slot of a run (table run_units).
+struct RunUnit {
+  std::string imu;     ///< the slot's name at the station, e.g. imu0
+  std::string model;   ///< model or spec sheet name; empty when unknown
+  std::string serial;  ///< serial number; empty when nobody knows it
+  /// Where the serial came from: "device" (read from the unit), "submitted" (given with the
+  /// run, `--unit imu0=SN`), or "station" (fixed in the station file).
+  std::string source = "station";
+};
+
 /// A whole run as stored, without samples and telemetry.
 struct RunRecord {
   RunSummary summary;
@@ -101,6 +111,7 @@ struct RunRecord {
   std::optional<double> ended_clock_s;
   std::vector<StepRecord> steps;
   std::vector<EventRecord> events;
+  std::vector<RunUnit> units;  ///< the unit in each IMU slot, when recorded (migration 5)
 };
 
 }  // namespace calstand::store

@@ -18,5 +18,9 @@ nlohmann::json to_json(const RunSummary& run);
 nlohmann::json to_json(const StepRecord& step);
 /// {"id", "time_s", "wall_utc", "kind", "source", "message", "detail"}
 nlohmann::json to_json(const EventRecord& event);
+/// `{"imu", "model", "serial", "source"}`.
+nlohmann::json to_json(const RunUnit& unit);
+/// An array of to_json(RunUnit).
+nlohmann::json units_json(const std::vector<RunUnit>& units);
 
 }  // namespace calstand::store

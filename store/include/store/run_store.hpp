@@ -27,6 +27,9 @@ class RunStore {
   /// `db` must outlive the RunStore.
   explicit RunStore(Database& db) : db_(db) {}
 
+  /// The connection this store works on.
+  Database& database() { return db_; }
+
   /// Registers or updates station `name` with its configuration and devices (the device list
   /// is replaced). Returns the station id.
   std::int64_t upsert_station(const std::string& name, const nlohmann::json& config,

@@ -5,18 +5,9 @@
 #include <vector>
 
 #include "store/database.hpp"
+#include "store/records.hpp"
 
 namespace calstand::store {
-
-/// The unit in one IMU slot of a run (table run_units).
-struct RunUnit {
-  std::string imu;     ///< the slot's name at the station, e.g. imu0
-  std::string model;   ///< model or spec sheet name; empty when unknown
-  std::string serial;  ///< serial number; empty when nobody knows it
-  /// Where the serial came from: "device" (read from the unit), "submitted" (given with the
-  /// run, `--unit imu0=SN`), or "station" (fixed in the station file).
-  std::string source = "station";
-};
 
 /// Stores the units of `run`, replacing what was stored for the same slots (a resume reads the
 /// devices again). Throws StoreError on SQL failure.

@@ -63,6 +63,11 @@ class MemoryJournal final : public RunJournal {
   void table_telemetry(const core::TableState&) override { ++table_rows; }
   void chamber_telemetry(const core::ChamberState&) override { ++chamber_rows; }
   void run_state(RunState state, double, const std::string&) override { states.push_back(state); }
+  std::string unit_identified(const std::string& imu, const std::string&,
+                              const std::string& serial) override {
+    units[imu] = serial;
+    return {};
+  }
 
   bool has_event(EventKind kind, const std::string& text) const {
     for (const auto& [k, m] : events) {
@@ -77,6 +82,7 @@ class MemoryJournal final : public RunJournal {
   std::map<std::tuple<std::size_t, int, std::string>, Attempt> attempts;
   std::vector<std::pair<EventKind, std::string>> events;
   std::vector<RunState> states;
+  std::map<std::string, std::string> units;  ///< serial reported per IMU slot
   int table_rows = 0, chamber_rows = 0;
   bool refuse_samples = false;
   bool refuse_samples_until_wait = false;

@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "daemon/campaign.hpp"
 #include "procedures/procedure.hpp"
 
 namespace calstand::daemon::api {
@@ -10,9 +11,11 @@ namespace calstand::daemon::api {
 struct RunRequest {
   procedures::Procedure procedure;
   procedures::Overrides overrides;
+  UnitSerials units;  ///< serials given for the run's units, by IMU name
 };
 
-/// Reads a `POST /runs` body: `{"procedure": NAME | {procedure document}, "parameters": {...}}`.
+/// Reads a `POST /runs` body: `{"procedure": NAME | {procedure document}, "parameters": {...},
+/// "units": {"imu0": "SN1234", ...}}` ("units" optional).
 /// NAME is a library procedure only (the daemon never reads a file a client names); an inline
 /// document is parsed and checked like a procedure file named `request.procedure`.
 /// Throws procedures::ProcedureError listing every violation (paths such as `procedure`,

@@ -36,6 +36,10 @@ class ObservedJournal final : public RunJournal {
   void table_telemetry(const core::TableState& state) override;
   void chamber_telemetry(const core::ChamberState& state) override;
   void run_state(RunState state, double t_s, const std::string& reason) override;
+  std::string unit_identified(const std::string& imu, const std::string& model,
+                              const std::string& serial) override {
+    return inner_.unit_identified(imu, model, serial);
+  }
 
   /// True when the next telemetry message is due (wall time).
   bool telemetry_due() const { return std::chrono::steady_clock::now() >= next_telemetry_; }

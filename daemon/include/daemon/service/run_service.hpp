@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/station_config.hpp"
+#include "daemon/campaign.hpp"
 #include "daemon/engine_command.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/live_status.hpp"
@@ -74,10 +75,13 @@ class RunService {
   void stop(const std::string& why);
 
   /// Plans `procedure` with `overrides` on the station and queues it as a new run; returns the
-  /// run id. Throws procedures::ProcedureError listing every violation when the plan breaks a
-  /// rule, OutOfSpace when the disk is too full to start it (nothing is written then).
+  /// run id, with the serials given for its units (`units`, by IMU name). Throws
+  /// procedures::ProcedureError listing every violation when the plan breaks a rule,
+  /// core::InputError for a unit the station lacks or a serial it requires and lacks,
+  /// OutOfSpace when the disk is too full to start it (nothing is written then).
   std::int64_t submit(const procedures::Procedure& procedure,
-                      const procedures::Overrides& overrides, const std::string& who);
+                      const procedures::Overrides& overrides, const std::string& who,
+                      const UnitSerials& units = {});
   /// Records an operator action taken on run `run` outside the engine (a fit, a diagnosis) as
   /// an operator event with who asked, in the run's events and on the live stream. Throws
   /// core::InputError when there is no such run.

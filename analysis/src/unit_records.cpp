@@ -1,0 +1,62 @@
+#include "analysis/unit_records.hpp"
+
+#include <algorithm>
+#include <set>
+
+namespace calstand::analysis {
+
+bool may_be_in_force(const std::optional<store::AcceptanceRow>& acceptance) {
+  return !acceptance || acceptance->verdict == "pass";
+}
+
+std::vector<UnitRecord> unit_records(store::Database& db, const std::string& serial) {
+  std::vector<store::CalibrationRow> rows;
+  if (serial.empty()) {
+    rows = store::calibrations_since(db, "");
+    // Newest first, as for one unit: created_utc, then id for records made in one second.
+    std::reverse(rows.begin(), rows.end());
+  } else {
+    rows = store::calibrations_of_serial(db, serial);
+  }
+  std::vector<UnitRecord> out;
+  std::set<std::string> has_one_in_force;
+  for (store::CalibrationRow& row : rows) {
+    UnitRecord r;
+    r.acceptance = store::latest_acceptance(db, row.id);
+    r.in_force = !row.serial.empty() && may_be_in_force(r.acceptance) &&
+                 has_one_in_force.insert(row.serial).second;
+    r.calibration = std::move(row);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::optional<UnitRecord> record_in_force_before(store::Database& db, const std::string& serial,
+                                                 std::int64_t calibration) {
+  if (serial.empty()) return std::nullopt;
+  for (store::CalibrationRow& row : store::calibrations_of_serial(db, serial)) {
+    if (row.id >= calibration) continue;  // ids grow with time: only records made before
+    UnitRecord r;
+    r.acceptance = store::latest_acceptance(db, row.id);
+    if (!may_be_in_force(r.acceptance)) continue;
+    r.calibration = std::move(row);
+    r.in_force = true;
+    return r;
+  }
+  return std::nullopt;
+}
+
+nlohmann::json to_json(const UnitRecord& r) {
+  const store::CalibrationRow& c = r.calibration;
+  return {{"id", c.id},
+          {"run", c.run},
+          {"imu", c.imu},
+          {"serial", c.serial},
+          {"model", c.model},
+          {"created_utc", c.created_utc},
+          {"verdict", r.acceptance ? nlohmann::json(r.acceptance->verdict) : nlohmann::json()},
+          {"spec", r.acceptance ? nlohmann::json(r.acceptance->spec_name) : nlohmann::json()},
+          {"in_force", r.in_force}};
+}
+
+}  // namespace calstand::analysis
