@@ -1,8 +1,11 @@
 #include "analysis/noise_json.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "core/error.hpp"
+#include "core/units.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -147,6 +150,7 @@ nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
   if (!long_enough_for_noise(noise.duration_s)) return nullptr;
   nlohmann::json j = {{"step", noise.step},
                       {"duration_s", noise.duration_s},
+                      {"sample_rate_hz", noise.sample_rate_hz},
                       {"channels", nlohmann::json::object()}};
   for (const auto& c : noise.channels) {
     nlohmann::json figures = nlohmann::json::array();
@@ -161,6 +165,51 @@ nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
     j["channels"][std::string(solver::to_string(c.channel))] = figures;
   }
   return j;
+}
+
+std::optional<solver::RunNoise> calibration_noise_terms(const nlohmann::json& noise) {
+  if (!noise.is_object()) return std::nullopt;
+  // The figures' units say how to go back: N in the data's unit times sqrt(s), K in the data's
+  // unit per sqrt(s) (solver::NoiseTerms), whatever datasheet unit the record used.
+  struct Wanted {
+    const char* figure;
+    const char* unit;
+    solver::NoiseTerm solver::NoiseTerms::*term;
+  };
+  constexpr Wanted kGyro[] = {
+      {"angle_random_walk", "deg/sqrt(s)", &solver::NoiseTerms::random_walk},
+      {"rate_random_walk", "deg/s/sqrt(s)", &solver::NoiseTerms::rate_random_walk}};
+  constexpr Wanted kAccel[] = {
+      {"velocity_random_walk", "m/s/sqrt(s)", &solver::NoiseTerms::random_walk},
+      {"acceleration_random_walk", "m/s^2/sqrt(s)", &solver::NoiseTerms::rate_random_walk}};
+  solver::RunNoise out;
+  out.sample_rate_hz = noise.value("sample_rate_hz", 0.0);
+  const nlohmann::json channels = noise.value("channels", nlohmann::json::object());
+  for (const solver::ImuChannel c : solver::kAllChannels) {
+    const std::string name(solver::to_string(c));
+    solver::ChannelNoise ch;
+    ch.channel = c;
+    for (const Wanted& w :
+         solver::is_gyro(c) ? std::span<const Wanted>(kGyro) : std::span<const Wanted>(kAccel)) {
+      const std::string where = "noise.channels." + name + ": " + w.figure;
+      const nlohmann::json figures = channels.value(name, nlohmann::json::array());
+      const auto f = std::find_if(figures.begin(), figures.end(), [&](const nlohmann::json& j) {
+        return j.is_object() && j.value("name", "") == w.figure;
+      });
+      if (f == figures.end() || !f->contains("value") || !(*f)["value"].is_number()) {
+        throw core::InputError(where, "missing from the record's noise figures");
+      }
+      double value = 0.0;
+      try {
+        value = core::convert((*f)["value"].get<double>(), f->value("unit", std::string()), w.unit);
+      } catch (const core::InputError& e) {
+        throw core::InputError(where, e.what());
+      }
+      ch.terms.*w.term = {value, 0.0, f->value("resolved", true)};
+    }
+    out.channels.push_back(std::move(ch));
+  }
+  return out;
 }
 
 }  // namespace calstand::analysis

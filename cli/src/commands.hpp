@@ -16,6 +16,7 @@ void register_client_watch(CLI::App& app);  // calstandd client: watch
 void register_demo(CLI::App& app);
 void register_device(CLI::App& app);
 void register_diagnose(CLI::App& app);  // diagnose and history
+void register_export_calibration(CLI::App& app);
 void register_fit(CLI::App& app);
 void register_lot(CLI::App& app);
 void register_import_export(CLI::App& app);  // import and export

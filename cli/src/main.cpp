@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_demo(app);
   calstand::cli::register_device(app);
   calstand::cli::register_diagnose(app);
+  calstand::cli::register_export_calibration(app);
   calstand::cli::register_fit(app);
   calstand::cli::register_lot(app);
   calstand::cli::register_import_export(app);

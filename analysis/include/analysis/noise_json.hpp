@@ -65,9 +65,18 @@ nlohmann::ordered_json allan_json(const solver::AllanResult& result, const std::
                                   std::optional<DatasheetUnit> datasheet);
 
 /// The run's noise figures in datasheet units from its longest static capture, for a
-/// calibration record: {"step", "duration_s", "channels": {"gx": [figures...], ...}}, or null
-/// when the run has no static capture at least kMinNoiseRecordS long.
+/// calibration record: {"step", "duration_s", "sample_rate_hz", "channels": {"gx": [figures...],
+/// ...}}, or null when the run has no static capture at least kMinNoiseRecordS long.
 nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
                                          const std::string& device);
+
+/// A calibration record's "noise" (calibration_noise_figures()) read back into noise terms, for
+/// the exports that need them in the data's unit (solver::kalibr_from_run_noise): per channel
+/// gx..az the random walk N and rate random walk K converted from their datasheet figures
+/// (angle/velocity random walk, rate/acceleration random walk) with their "resolved" flags;
+/// sample_rate_hz, 0 for a record written before it was stored. None when `noise` is null or
+/// absent. Throws core::InputError naming the channel and figure when one is missing or its unit
+/// does not convert.
+std::optional<solver::RunNoise> calibration_noise_terms(const nlohmann::json& noise);
 
 }  // namespace calstand::analysis

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "core/error.hpp"
 #include "recorded_run.hpp"
 
 namespace calstand::analysis {
@@ -44,6 +45,64 @@ TEST(CalibrationNoiseFigures, ALongStaticRecordGivesTheTrueRandomWalk) {
       EXPECT_NEAR(f.at("value").get<double>(), kTrueArwDegRtH, 0.15 * kTrueArwDegRtH) << channel;
     }
     EXPECT_TRUE(found) << channel;
+  }
+  // What the exports read back (calibration_noise_terms): the rate, and the white noise in the
+  // data's unit again.
+  EXPECT_NEAR(j.at("sample_rate_hz").get<double>(), 200.0, 1e-6);
+  const auto terms = calibration_noise_terms(j);
+  ASSERT_TRUE(terms.has_value());
+  EXPECT_NEAR(terms->sample_rate_hz, 200.0, 1e-6);
+  ASSERT_EQ(terms->channels.size(), 6u);
+  EXPECT_NEAR(terms->channels[0].terms.random_walk.value, kTrueArwDegRtH / 60.0,
+              0.15 * kTrueArwDegRtH / 60.0);
+}
+
+TEST(CalibrationNoiseTerms, ReadTheFiguresBackInTheDataUnit) {
+  // Figures as calibration_noise_figures writes them, in datasheet units.
+  nlohmann::json channels;
+  for (const char* g : {"gx", "gy", "gz"}) {
+    channels[g] = {{{"name", "angle_random_walk"},
+                    {"value", 0.3},
+                    {"unit", "deg/sqrt(h)"},
+                    {"resolved", true}},
+                   {{"name", "rate_random_walk"},
+                    {"value", 2.16},
+                    {"unit", "deg/h/sqrt(h)"},
+                    {"resolved", false}}};
+  }
+  for (const char* a : {"ax", "ay", "az"}) {
+    channels[a] = {{{"name", "velocity_random_walk"},
+                    {"value", 0.06},
+                    {"unit", "m/s/sqrt(h)"},
+                    {"resolved", true}},
+                   {{"name", "acceleration_random_walk"},
+                    {"value", 0.432},
+                    {"unit", "m/s/h/sqrt(h)"},
+                    {"resolved", true}}};
+  }
+  const nlohmann::json noise = {{"step", 2}, {"sample_rate_hz", 125.0}, {"channels", channels}};
+  const auto terms = calibration_noise_terms(noise);
+  ASSERT_TRUE(terms.has_value());
+  EXPECT_EQ(terms->sample_rate_hz, 125.0);
+  ASSERT_EQ(terms->channels.size(), 6u);
+  const auto& gz = terms->channels[2];
+  EXPECT_EQ(gz.channel, solver::ImuChannel::kGz);
+  EXPECT_NEAR(gz.terms.random_walk.value, 0.3 / 60.0, 1e-15);            // deg/sqrt(s)
+  EXPECT_NEAR(gz.terms.rate_random_walk.value, 2.16 / 216000.0, 1e-18);  // deg/s/sqrt(s)
+  EXPECT_TRUE(gz.terms.random_walk.resolved);
+  EXPECT_FALSE(gz.terms.rate_random_walk.resolved);
+  const auto& ay = terms->channels[4];
+  EXPECT_NEAR(ay.terms.random_walk.value, 0.06 / 60.0, 1e-15);
+  EXPECT_NEAR(ay.terms.rate_random_walk.value, 0.432 / 216000.0, 1e-18);
+
+  EXPECT_FALSE(calibration_noise_terms(nullptr).has_value());
+  nlohmann::json broken = noise;
+  broken["channels"]["ay"][1]["unit"] = "m/s";  // not a random walk's dimension
+  try {
+    calibration_noise_terms(broken);
+    ADD_FAILURE() << "accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ay"), std::string::npos) << e.what();
   }
 }
 
