@@ -55,7 +55,7 @@ AcceptanceOutcome accept_run(store::Database& db, const AcceptanceSpec& spec,
   if (newest.empty()) {
     const std::string what = request.device.empty() ? "no calibration record"
                                                     : "no calibration record of " + request.device;
-    throw core::InputError(
+    throw NoCalibrationRecord(
         fmt::format("run {}", request.run),
         fmt::format("{} (calstand calibrate --run {}{} first)", what, request.run,
                     request.device.empty() ? "" : " --device " + request.device));

@@ -11,9 +11,16 @@
 
 #include "analysis/acceptance.hpp"
 #include "analysis/acceptance_spec.hpp"
+#include "core/error.hpp"
 #include "store/database.hpp"
 
 namespace calstand::analysis {
+
+/// The run (or the device asked for) has no calibration record to judge (HTTP 409).
+class NoCalibrationRecord : public core::InputError {
+ public:
+  using core::InputError::InputError;
+};
 
 /// What to judge.
 struct AcceptRequest {
@@ -36,8 +43,8 @@ struct AcceptanceOutcome {
 /// Judges the newest calibration record of each unit of `request.run` (or of
 /// `request.device`) against `spec`: its checks, its unit verdict, its as-found drift, and
 /// the validation checks. Writes nothing but the validation run's corrected copy and its fit
-/// history. Throws RunNotFound for an unknown run, core::InputError naming the run when it has
-/// no record (or none of `request.device`), and as fit_validation_run().
+/// history. Throws RunNotFound for an unknown run, NoCalibrationRecord naming the run when it
+/// has no record (or none of `request.device`), and as fit_validation_run().
 AcceptanceOutcome accept_run(store::Database& db, const AcceptanceSpec& spec,
                              const AcceptRequest& request);
 
