@@ -17,6 +17,12 @@ ValidationFit fit_validation_run(store::Database& db, const store::CalibrationRo
   const std::string where = fmt::format("--validation-run {}", validation_run);
   // Every check before anything is written: the corrected run is only made for a run that
   // measured this unit.
+  if (validation_run == calibration.run) {
+    // Corrected with its own fit, a run leaves nothing by construction: no evidence at all.
+    throw core::InputError(where,
+                           "is the run the record was fitted on; a validation run "
+                           "measures the unit again");
+  }
   const std::string device = choose_fit_device(db, validation_run, calibration.imu);
   if (needs_table_free_fit(db, validation_run)) {
     throw core::InputError(where,

@@ -26,8 +26,9 @@ struct ValidationFit {
 /// Corrects `device`'s samples of `validation_run` with `calibration`'s record as a derived
 /// run, and fits `spec.model` (empty: the record's model) to it, recording the fit in that
 /// run's history (command "accept"). Throws RunNotFound / NothingToFit for the validation run,
-/// core::InputError naming `--validation-run` when that run has no such device, holds another
-/// unit (serials known and different), or was recorded without a table (not supported).
+/// core::InputError naming `--validation-run` when that run is the calibrated run itself, has
+/// no such device, holds another unit (serials known and different), or was recorded without a
+/// table (not supported).
 ValidationFit fit_validation_run(store::Database& db, const store::CalibrationRow& calibration,
                                  std::int64_t validation_run, const ValidationSpec& spec);
 

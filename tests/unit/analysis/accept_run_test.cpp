@@ -202,6 +202,8 @@ TEST_F(AcceptRun, AValidationRunCorrectedWithAGoodRecordPasses) {
   }
   EXPECT_EQ(validation_checks, 7u);  // 3 biases, 3 scales, chi2
   EXPECT_EQ(u.verdict, Verdict::kPass);
+  // The calibrated run itself is no validation: corrected with its own fit it leaves nothing.
+  EXPECT_THROW(accept_run(*db_, s, {run2_, "", run2_}), core::InputError);
 }
 
 TEST_F(AcceptRun, AValidationRunCorrectedWithASpoiledRecordFailsOnTheSpoiledParameter) {
