@@ -27,7 +27,10 @@ std::vector<AcceptanceCheck> without_validation_run(const ValidationSpec& valida
     c.source = CheckSource::kValidation;
     c.spec_limit = limit.where;
     c.limit = limit.value;
-    if (limit.max_sigma) c.limit.max = *limit.max_sigma;
+    // A limit on the sigma alone shows that bound (it is what the check would have judged).
+    if (limit.max_sigma && !c.limit.max_abs && !c.limit.min && !c.limit.max) {
+      c.limit.max = *limit.max_sigma;
+    }
     c.unit = limit.unit;
     c.verdict = Verdict::kFail;
     c.reason = "no validation run given (--validation-run): the specification asks for one";

@@ -165,7 +165,9 @@ nlohmann::json to_json(const AcceptanceCheck& c) {
           {"spec_limit", c.spec_limit},
           {"value", optional_number(c.value)},
           {"sigma", optional_number(c.sigma)},
-          {"limit", to_json(c.limit)},
+          {"limit", limit_json(c.limit)},
+          {"limit_kind", limit_kind(c.limit)},
+          {"limit_text", describe(c.limit, c.unit)},
           {"unit", c.unit},
           {"verdict", std::string(to_string(c.verdict))},
           {"reason", c.reason}};

@@ -31,7 +31,20 @@ std::string_view to_string(Verdict verdict) {
   return "fail";
 }
 
-nlohmann::json to_json(const Bounds& b) {
+std::string limit_kind(const Bounds& b) {
+  std::string kind;
+  if (b.max_abs) kind = "max_abs";
+  const char* side = b.min && b.max ? "min_max" : b.min ? "min" : b.max ? "max" : nullptr;
+  if (side) kind += (kind.empty() ? "" : "+") + std::string(side);
+  return kind;
+}
+
+nlohmann::json limit_json(const Bounds& b) {
+  const int set = (b.max_abs ? 1 : 0) + (b.min ? 1 : 0) + (b.max ? 1 : 0);
+  // One bound is the number a reader expects next to a value; a zone is its two ends.
+  if (set == 1) return b.max_abs ? *b.max_abs : b.min ? *b.min : *b.max;
+  if (set == 2 && b.min && b.max) return nlohmann::json::array({*b.min, *b.max});
+  if (set == 0) return nullptr;
   nlohmann::json j = nlohmann::json::object();
   if (b.max_abs) j["max_abs"] = *b.max_abs;
   if (b.min) j["min"] = *b.min;

@@ -49,7 +49,9 @@ std::vector<AcceptanceCheck> judge_limits(const nlohmann::json& record,
 std::vector<AcceptanceCheck> judge_record(const nlohmann::json& record, const AcceptanceSpec& spec);
 
 /// A check as JSON: {"check", "kind", "source", "spec_limit", "value", "sigma", "limit",
-/// "unit", "verdict", "reason"} (value and sigma null when not in the record).
+/// "limit_kind", "limit_text", "unit", "verdict", "reason"}: value and sigma null when not in
+/// the record; limit the bound (limit_json()), limit_kind which bound ("max_abs", "max",
+/// "min", "min_max"), limit_text the zone in words ("|v| <= 0.005 deg/s").
 nlohmann::json to_json(const AcceptanceCheck& check);
 
 /// The verdict of a unit over its checks (decision_rule.hpp combine()).

@@ -26,8 +26,13 @@ struct Bounds {
   std::optional<double> max;
 };
 
-/// {"max_abs": L} / {"min": a, "max": b} / {"min": a} / {"max": b}: the zone as JSON.
-nlohmann::json to_json(const Bounds& bounds);
+/// The zone's kind: "max_abs", "min", "max" or "min_max" (or "max_abs+min_max" and the like
+/// for a zone of several kinds, which a specification does not write).
+std::string limit_kind(const Bounds& bounds);
+
+/// The zone's limit as a number (max_abs, min or max: the one bound), [min, max] for a
+/// two-sided zone, {"max_abs", "min", "max"} for any other combination; null for none.
+nlohmann::json limit_json(const Bounds& bounds);
 
 /// The zone in words with its unit, e.g. "|v| <= 0.005 deg/s", "0.1 <= v <= 2", "v <= 2".
 std::string describe(const Bounds& bounds, const std::string& unit);

@@ -145,7 +145,9 @@ TEST(Acceptance, AUnitAsJsonHasTheIssuesShape) {
   for (const char* key : {"check", "value", "sigma", "limit", "verdict"}) {
     EXPECT_TRUE(j.at("checks")[0].contains(key)) << key;
   }
-  EXPECT_EQ(j.at("checks")[0].at("limit"), nlohmann::json({{"max_abs", 0.005}}));
+  EXPECT_EQ(j.at("checks")[0].at("limit"), 0.005);
+  EXPECT_EQ(j.at("checks")[0].at("limit_kind"), "max_abs");
+  EXPECT_EQ(j.at("checks")[0].at("limit_text"), "|v| <= 0.005 deg/s");
   EXPECT_TRUE(j.at("as_found").is_null());
 }
 

@@ -95,7 +95,11 @@ TEST(DecisionRule, AUnitTakesItsWorstCheck) {
 TEST(DecisionRule, BoundsInWordsAndJson) {
   EXPECT_EQ(describe(kAbs, "deg/s"), "|v| <= 0.005 deg/s");
   EXPECT_EQ(describe(Bounds{std::nullopt, -1.0, 1.0}, ""), "-1 <= v <= 1");
-  EXPECT_EQ(to_json(Bounds{std::nullopt, 1.0, std::nullopt}), nlohmann::json({{"min", 1.0}}));
+  EXPECT_EQ(limit_json(Bounds{std::nullopt, 1.0, std::nullopt}), 1.0);
+  EXPECT_EQ(limit_kind(Bounds{std::nullopt, 1.0, std::nullopt}), "min");
+  EXPECT_EQ(limit_json(Bounds{std::nullopt, -1.0, 1.0}), nlohmann::json::array({-1.0, 1.0}));
+  EXPECT_EQ(limit_kind(Bounds{std::nullopt, -1.0, 1.0}), "min_max");
+  EXPECT_EQ(limit_json(kAbs), 0.005);
   EXPECT_NE(decision_rule_text(2.0).find("k = 2"), std::string::npos);
 }
 
