@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("calstand ") + calstand::core::kVersion);
+  calstand::cli::register_accept(app);
   calstand::cli::register_allan(app);
   calstand::cli::register_calibrate(app);
   calstand::cli::register_calibrations(app);

@@ -207,6 +207,48 @@ TEST_F(AnalysisApi, CatalogueReportAndCalibrationsAreServed) {
   EXPECT_EQ(api_->get(cals.body[0]["href"].get<std::string>()).status, 200);
 }
 
+// An acceptance over the API judges the run's records as `calstand accept --json` does, stores
+// the verdict, and refuses a bad specification with every violation, a run without a record
+// (409) and an unknown run (404).
+TEST_F(AnalysisApi, AnAcceptanceIsTheCommandLinesAndIsStored) {
+  const std::string spec =
+      R"js({"format": "calstand-acceptance/1", "name": "api", "limits": [
+            {"parameter": "accel_bias.*", "max_abs": 0.05, "unit": "m/s^2"},
+            {"fit": "chi2_dof", "max": 1000}]})js";
+  Reply r = api_->post(path("/acceptance"), spec);
+  EXPECT_EQ(r.status, 409) << r.raw;  // nothing calibrated yet
+  const auto c = calstand::testing::run("calibrate --db " + db_ + " --run " + std::to_string(run_) +
+                                            " --model accel_bias,gyro_bias,earth_rate --out " +
+                                            db_ + ".cal.json",
+                                        "/dev/null");
+  ASSERT_EQ(c.exit_code, 0) << c.out;
+
+  r = api_->post(path("/acceptance"), spec);
+  ASSERT_EQ(r.status, 200) << r.raw;
+  EXPECT_EQ(r.body.at("verdict"), "pass");
+  ASSERT_EQ(r.body.at("units").size(), 1u);
+  EXPECT_EQ(r.body.at("units")[0].at("acceptance_id"), 1);
+  const std::string file = db_ + ".spec.json";
+  calstand::testing::write_text(file, spec);
+  const nlohmann::json cli = cli_json("accept --spec " + file);
+  EXPECT_EQ(cli.at("units")[0].at("acceptance_id"), 2);
+  EXPECT_EQ(cli.at("spec").at("sha256"), r.body.at("spec").at("sha256"));  // the same bytes
+  EXPECT_EQ(cli.at("units")[0].at("checks"), r.body.at("units")[0].at("checks"));
+  EXPECT_EQ(cli.at("decision_rule"), r.body.at("decision_rule"));
+
+  r = api_->post(path("/acceptance"),
+                 R"js({"format": "calstand-acceptance/1", "name": "bad", "limits": [
+                      {"parameter": "gyro_bias.*", "max_abs": 18, "unit": "deg/h"},
+                      {"parameter": "gyro_bais.*", "max_abs": 1, "unit": "deg/s"}]})js");
+  ASSERT_EQ(r.status, 400) << r.raw;
+  ASSERT_EQ(r.body.at("violations").size(), 2u) << r.raw;
+  EXPECT_EQ(r.body.at("violations")[0].at("path"), "limits[0].unit");
+  EXPECT_EQ(r.body.at("violations")[1].at("path"), "limits[1].parameter");
+  EXPECT_EQ(api_->post("/runs/999/acceptance", spec).status, 404);
+  EXPECT_EQ(api_->post(path("/acceptance?validation_run=x"), spec).status, 400);
+  EXPECT_EQ(api_->post(path("/acceptance"), spec, "").status, 401);
+}
+
 // A run recorded without a table (a hand-held session imported as calstand-import/2): the
 // loop's routes take the table-free methods, the same code as `calstand fit` and `diagnose`.
 TEST(AnalysisApiWithoutTable, FitsDiagnosisAndReportOfAHandHeldSession) {

@@ -1,6 +1,7 @@
 // The model-against-measurement loop (issue 14): /catalogue, /runs/{id}/fits|diagnose|history|
-// report|calibrations|series. Every handler calls the analysis library as `calstand fit`,
-// `diagnose`, `history` and `report` do, so that the answers are the command line's.
+// report|calibrations|series|acceptance. Every handler calls the analysis library as `calstand
+// fit`, `diagnose`, `history`, `report` and `accept` do, so that the answers are the command
+// line's.
 #include <fmt/format.h>
 
 #include <charconv>
@@ -8,6 +9,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "analysis/accept_run.hpp"
+#include "analysis/acceptance_spec.hpp"
 #include "analysis/catalogue.hpp"
 #include "analysis/fit_history.hpp"
 #include "analysis/fit_request.hpp"
@@ -17,6 +20,7 @@
 #include "analysis/run_series.hpp"
 #include "analysis/table_free_diagnose.hpp"
 #include "core/error.hpp"
+#include "core/json_schema.hpp"
 #include "http_util.hpp"
 #include "request_context.hpp"
 #include "routes.hpp"
@@ -264,6 +268,49 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) 
                }
                send_json(res, 200, out);
              }));
+
+  // The body is the specification itself, as `calstand accept --spec` reads it from a file; its
+  // sha256 is of the body's bytes.
+  server.Post(
+      R"(/runs/(\d+)/acceptance)",
+      guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+        const std::int64_t id = id_from_path(req);
+        parse_json_body(req, std::nullopt);  // the depth limit, before the schema's own parse
+        analysis::AcceptanceSpec spec;
+        try {
+          spec = analysis::parse_acceptance_spec(req.body, "body");
+        } catch (const core::SchemaError& e) {
+          nlohmann::json violations = nlohmann::json::array();
+          for (const auto& v : e.violations())
+            violations.push_back({{"path", v.path}, {"message", v.message}});
+          send_json(
+              res, 400,
+              {{"error", "invalid specification"}, {"where", "body"}, {"violations", violations}});
+          return;
+        }
+        analysis::AcceptRequest request;
+        request.run = id;
+        request.device = text_param(req, "device", "");
+        request.validation_run =
+            int_param(req, "validation_run", 1, std::numeric_limits<std::int64_t>::max());
+        store::Database db(ctx.db_path);
+        analysis::AcceptanceOutcome outcome;
+        try {
+          outcome = analysis::accept_run(db, spec, request);
+        } catch (const analysis::RunNotFound& e) {
+          throw BadRequest(404, e.where(), e.what());
+        } catch (const analysis::NoCalibrationRecord& e) {
+          throw BadRequest(409, e.where(), e.what());
+        } catch (const analysis::NothingToFit& e) {
+          throw BadRequest(409, e.where(), e.what());
+        }
+        analysis::store_acceptances(db, outcome);
+        ctx.service.record_action(
+            id, who_of(ctx, req),
+            fmt::format("acceptance against \"{}\" (sha256 {}): {}", spec.name,
+                        spec.sha256.substr(0, 12), analysis::to_string(outcome.verdict)));
+        send_json(res, 200, analysis::to_json(outcome));
+      }));
 
   server.Get(
       R"(/runs/(\d+)/series)", guarded([&ctx](const httplib::Request& req, httplib::Response& res) {

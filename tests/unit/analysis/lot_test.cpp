@@ -76,7 +76,8 @@ TEST_F(LotTest, EachUnitCountsOnceWithItsNewestRecordAndTheOddOneIsFlaggedEvenWh
   std::sort(sorted.begin(), sorted.end());
   EXPECT_NEAR(p.median, 0.5 * (sorted[3] + sorted[4]), 1e-15);
   double moving = 0.0;
-  for (std::size_t i = 1; i < p.values.size(); ++i) moving += std::abs(p.values[i] - p.values[i - 1]);
+  for (std::size_t i = 1; i < p.values.size(); ++i)
+    moving += std::abs(p.values[i] - p.values[i - 1]);
   EXPECT_NEAR(p.control_upper - p.mean, 3.0 * moving / 7.0 / 1.128, 1e-15);
 
   EXPECT_TRUE(lot_statistics(db_, "9999-01-01").units.empty());
