@@ -4,6 +4,7 @@
 #include <limits>
 #include <map>
 
+#include "analysis/unit_records.hpp"
 #include "store/acceptances.hpp"
 
 namespace calstand::analysis {
@@ -45,8 +46,7 @@ std::optional<store::CalibrationRow> record_in_force_before(
     // A second record of the same run is the same measurement fitted again, not an earlier
     // state of the unit.
     if (!older || row.run == calibration.run) continue;
-    const auto judged = store::latest_acceptance(db, row.id);
-    if (judged && (judged->verdict == "fail" || judged->verdict == "indeterminate")) continue;
+    if (!may_be_in_force(store::latest_acceptance(db, row.id))) continue;
     return row;
   }
   return std::nullopt;

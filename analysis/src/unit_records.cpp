@@ -31,21 +31,6 @@ std::vector<UnitRecord> unit_records(store::Database& db, const std::string& ser
   return out;
 }
 
-std::optional<UnitRecord> record_in_force_before(store::Database& db, const std::string& serial,
-                                                 std::int64_t calibration) {
-  if (serial.empty()) return std::nullopt;
-  for (store::CalibrationRow& row : store::calibrations_of_serial(db, serial)) {
-    if (row.id >= calibration) continue;  // ids grow with time: only records made before
-    UnitRecord r;
-    r.acceptance = store::latest_acceptance(db, row.id);
-    if (!may_be_in_force(r.acceptance)) continue;
-    r.calibration = std::move(row);
-    r.in_force = true;
-    return r;
-  }
-  return std::nullopt;
-}
-
 nlohmann::json to_json(const UnitRecord& r) {
   const store::CalibrationRow& c = r.calibration;
   return {{"id", c.id},

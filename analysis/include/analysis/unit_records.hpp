@@ -1,7 +1,7 @@
 #pragma once
 // A unit's calibration records across runs, and which one is in force: what a factory looks up
-// by serial number (`calstand calibrations`), and what acceptance compares a new record with
-// (as found).
+// by serial number (`calstand calibrations`); acceptance's as-found (as_found.hpp) uses the same
+// rule for the record in force before a recalibration.
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -30,11 +30,6 @@ bool may_be_in_force(const std::optional<store::AcceptanceRow>& acceptance);
 /// Empty `serial`: every record in the database, newest first, one in force per serial (none
 /// for records without a serial: nobody knows which unit they belong to).
 std::vector<UnitRecord> unit_records(store::Database& db, const std::string& serial);
-
-/// The record of unit `serial` that was in force before calibration `calibration` was made
-/// (the newest earlier one that may be in force), if any: the "as found" of a recalibration.
-std::optional<UnitRecord> record_in_force_before(store::Database& db, const std::string& serial,
-                                                 std::int64_t calibration);
 
 /// `{"id", "run", "imu", "serial", "model", "created_utc", "verdict" (or null), "spec" (or null),
 ///   "in_force"}`, the record itself left out (GET /calibrations/{id} has it).
