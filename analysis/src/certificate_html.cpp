@@ -26,7 +26,10 @@ th, td { text-align: left; padding: 1px 4px; border-bottom: 1px solid #eef1f4; v
 th { background: #f0f3f7; font-weight: 600; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 table.kv th { width: 34%; background: none; font-weight: 600; }
-.verdict { display: inline-block; padding: 1px 8px; border-radius: 8px; font-weight: 700; }
+.verdict { display: inline-block; padding: 0 6px; border-radius: 6px; font-weight: 700;
+           line-height: 1.25; }
+table.checks { font-size: 7.5pt; }
+p.rule { font-size: 7.5pt; color: #6b7785; margin: 2px 0; }
 .pass { background: #d8f0dc; color: #1e7b34; }
 .fail { background: #fbe0dd; color: #b3261e; }
 .indeterminate, .overdue { background: #fff1d6; color: #a86400; }
@@ -40,7 +43,7 @@ footer { margin-top: 6px; border-top: 1px solid #dde3ea; padding-top: 3px; font-
 std::string esc(const std::string& text) { return html_escape(text); }
 
 std::string number(const nlohmann::json& v) {
-  return v.is_number() ? fmt::format("{:.6g}", v.get<double>()) : std::string("-");
+  return v.is_number() ? fmt::format("{:.5g}", v.get<double>()) : std::string("-");
 }
 
 std::string text_of(const nlohmann::json& j, const char* key) {
@@ -154,23 +157,37 @@ std::string acceptance_section(const CertificateData& d) {
     return s + "<p>Not judged against a specification (<code>calstand accept</code>).</p>";
   }
   const nlohmann::json& r = d.acceptance->result;
-  s += fmt::format("<p>Specification <b>{}</b> (<code>{}</code>): {} &nbsp; {}</p>",
+  s += fmt::format("<p>Specification <b>{}</b> (<code>{}</code>): {}</p>",
                    esc(d.acceptance->spec_name), esc(d.acceptance->spec_sha256.substr(0, 16)),
-                   verdict_badge(d.acceptance->verdict),
-                   esc(r.contains("decision_rule") && r["decision_rule"].is_string()
-                           ? r["decision_rule"].get<std::string>()
-                           : ""));
-  s += "<table><tr><th>Check</th><th>Value</th><th>&sigma;</th><th>Limit</th><th>Verdict</th>"
-       "</tr>";
-  for (const auto& c : r.value("checks", nlohmann::json::array())) {
-    const std::string verdict = c.value("verdict", "");
-    s += fmt::format(
-        "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td>"
-        "<td>{}</td></tr>",
-        esc(text_of(c, "check")), esc(text_of(c, "value")), esc(text_of(c, "sigma")),
-        esc(text_of(c, "limit")), verdict_badge(verdict));
+                   verdict_badge(d.acceptance->verdict));
+  if (r.contains("decision_rule") && r["decision_rule"].is_string()) {
+    s += "<p class=\"rule\">" + esc(r["decision_rule"].get<std::string>()) + "</p>";
   }
-  return s + "</table>";
+  std::vector<std::string> rows;
+  for (const auto& c : r.value("checks", nlohmann::json::array())) {
+    rows.push_back(fmt::format(
+        "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>"
+        "<td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
+        esc(text_of(c, "check")), esc(text_of(c, "value")),
+        c.contains("sigma") && c["sigma"].is_number()
+            ? fmt::format("{:.2g}", c["sigma"].get<double>())
+            : std::string("-"),
+        esc(text_of(c, "limit")), esc(c.value("unit", "")), verdict_badge(c.value("verdict", ""))));
+  }
+  const std::string head =
+      "<tr><th>Check</th><th>Value</th><th>&sigma;</th><th>Limit</th><th>Unit</th><th>Verdict</th>"
+      "</tr>";
+  // Two columns of checks when there are many: a whole specification stays on the page.
+  if (rows.size() <= 6) {
+    std::string table = "<table class=\"checks\">" + head;
+    for (const auto& row : rows) table += row;
+    return s + table + "</table>";
+  }
+  std::string left = "<table class=\"checks\">" + head;
+  std::string right = "<table class=\"checks\">" + head;
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    (i < (rows.size() + 1) / 2 ? left : right) += rows[i];
+  return s + "<div class=\"cols\">" + left + "</table>" + right + "</table></div>";
 }
 
 }  // namespace

@@ -13,7 +13,7 @@ namespace calstand::analysis {
 std::string certificate_residual_plot(const solver::FitResult& fit) {
   constexpr std::array<const char*, 3> kAxisColour = {"#1f77b4", "#2ca02c", "#d62728"};
   constexpr std::array<double, 3> kOffset = {-0.2, 0.0, 0.2};
-  std::string s = svg_terminal(900, 320);
+  std::string s = svg_terminal(900, 250);
   double max_index = 0.0;
   for (int sensor = 0; sensor < 2; ++sensor) {
     for (int axis = 0; axis < 3; ++axis) {
