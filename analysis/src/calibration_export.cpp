@@ -83,26 +83,4 @@ ExportResult export_calibration(const solver::Calibration& calibration, ExportFo
   throw core::InputError("--format", "unknown format");
 }
 
-void write_export_file(const std::string& path, const std::string& text) {
-  // Beside the target so that the rename stays on one file system; unique to this process so
-  // that two exports to one target do not share it; removed whatever fails.
-  const std::string tmp = fmt::format("{}.tmp.{}", path, static_cast<long>(::getpid()));
-  struct RemoveUnlessRenamed {
-    const std::string& path;
-    bool renamed = false;
-    ~RemoveUnlessRenamed() {
-      std::error_code ignored;
-      if (!renamed) std::filesystem::remove(path, ignored);
-    }
-  } guard{tmp};
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f || !(f << text) || !f.flush()) throw core::InputError(path, "cannot write the file");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw core::InputError(path, "cannot write the file: " + ec.message());
-  guard.renamed = true;
-}
-
 }  // namespace calstand::analysis

@@ -12,6 +12,7 @@
 #include "analysis/acceptance_spec.hpp"
 #include "analysis/junit.hpp"
 #include "commands.hpp"
+#include "core/file_output.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -26,13 +27,6 @@ struct AcceptOptions {
   std::string junit;
   bool as_json = false;
 };
-
-void write_file(const std::string& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f << text;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": cannot write the file");
-}
 
 std::string number(const std::optional<double>& v) {
   return v ? fmt::format("{:.6g}", *v) : std::string("-");
@@ -109,7 +103,7 @@ int run_accept(const AcceptOptions& opt, bool validation_given) {
   if (validation_given) request.validation_run = opt.validation_run;
   analysis::AcceptanceOutcome outcome = analysis::accept_run(db, spec, request);
   // The XML before the verdicts are stored: a CI job that gets no file sees no stored verdict.
-  if (!opt.junit.empty()) write_file(opt.junit, analysis::junit_xml(outcome));
+  if (!opt.junit.empty()) core::write_file_whole(opt.junit, analysis::junit_xml(outcome));
   analysis::store_acceptances(db, outcome);
   if (opt.as_json) {
     fmt::print("{}\n", analysis::to_json(outcome).dump(2));

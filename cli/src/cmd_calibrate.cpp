@@ -11,6 +11,7 @@
 #include "analysis/calibrate.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "core/json_schema.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
@@ -26,13 +27,6 @@ struct CalibrateOptions : RunModelOptions {
   std::string out_dir = ".";
   bool as_json = false;
 };
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f << text;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": cannot write the file");
-}
 
 // Every unit of the run (or the one named) is fitted before anything is written: a unit that
 // cannot be calibrated stops the command with no record of the others half-stored.
@@ -58,7 +52,7 @@ void run_calibrate(const CalibrateOptions& opt) {
                                    analysis::default_calibration_file(opt.run, c.device))
                                       .string();
     // The file first: a record that cannot be written is not stored either.
-    write_text(out, c.record.dump(2) + "\n");
+    core::write_file_whole(out, c.record.dump(2) + "\n");
     const std::int64_t id = analysis::store_calibration(db, c);
     listed.push_back({{"calibration_id", id}, {"file", out}, {"record", c.record}});
     if (opt.as_json) continue;

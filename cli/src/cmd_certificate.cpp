@@ -9,6 +9,7 @@
 #include "analysis/html_to_pdf.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -21,15 +22,6 @@ struct CertificateOptions {
   std::int64_t calibration = 0;
   std::string out;
 };
-
-void write_whole(const std::string& path, const std::string& text) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream f(partial, std::ios::binary | std::ios::trunc);
-    if (!(f << text) || !f.flush()) throw core::InputError(path, "cannot write the file");
-  }
-  std::filesystem::rename(partial, path);
-}
 
 void run_certificate(const CertificateOptions& opt) {
   store::Database db = open_existing_database(opt.db);
@@ -44,7 +36,7 @@ void run_certificate(const CertificateOptions& opt) {
   if (std::filesystem::path(opt.out).extension() == ".pdf") {
     analysis::html_to_pdf(html, opt.out);
   } else {
-    write_whole(opt.out, html);
+    core::write_file_whole(opt.out, html);
   }
   fmt::print("certificate {} of unit {} ({}) written to {}\n", data.number,
              data.serial.empty() ? "(no serial)" : data.serial, data.device, opt.out);

@@ -10,6 +10,7 @@
 
 #include "analysis/calibration_export.hpp"
 #include "commands.hpp"
+#include "core/file_output.hpp"
 #include "core/json_schema.hpp"
 #include "solver/calibration_record.hpp"
 
@@ -34,7 +35,7 @@ void run_export_calibration(const ExportCalibrationOptions& opt) {
   const solver::Calibration calibration =
       solver::read_calibration(core::read_json_file(opt.record), opt.record);
   const analysis::ExportResult result = analysis::export_calibration(calibration, format, settings);
-  analysis::write_export_file(opt.out, result.text);
+  core::write_file_whole(opt.out, result.text);
   for (const std::string& w : result.warnings) {
     std::cerr << fmt::format("calstand: warning: {}\n", w);
   }

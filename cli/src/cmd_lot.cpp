@@ -9,7 +9,7 @@
 
 #include "analysis/lot.hpp"
 #include "commands.hpp"
-#include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -26,13 +26,7 @@ void run_lot(const LotOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   const analysis::LotStatistics lot = analysis::lot_statistics(db, opt.since);
   if (!opt.html.empty()) {
-    const std::string page = analysis::lot_html(lot);
-    const std::string partial = opt.html + ".partial";
-    {
-      std::ofstream f(partial, std::ios::binary | std::ios::trunc);
-      if (!(f << page) || !f.flush()) throw core::InputError(opt.html, "cannot write the file");
-    }
-    std::filesystem::rename(partial, opt.html);
+    core::write_file_whole(opt.html, analysis::lot_html(lot));
   }
   if (opt.as_json) {
     fmt::print("{}\n", analysis::to_json(lot).dump(2));

@@ -11,6 +11,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "core/json_schema.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/spec_sheet.hpp"
@@ -45,28 +46,7 @@ void write_truth_from_spec(const TruthFromSpecOptions& opt) {
     fmt::print("{}", text);
     return;
   }
-  // Write beside the target and rename, so a failed write never leaves half a file. The name
-  // is unique to this process, so two runs writing the same target do not share a temporary,
-  // and the temporary is removed whatever fails.
-  const std::string tmp = fmt::format("{}.tmp.{}", opt.out, static_cast<long>(::getpid()));
-  struct RemoveUnlessRenamed {
-    const std::string& path;
-    bool renamed = false;
-    ~RemoveUnlessRenamed() {
-      std::error_code ignored;
-      if (!renamed) std::filesystem::remove(path, ignored);
-    }
-  } guard{tmp};
-  {
-    std::ofstream f(tmp);
-    if (!f || !(f << text) || !f.flush()) {
-      throw core::InputError(opt.out, "cannot write the truth file");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, opt.out, ec);
-  if (ec) throw core::InputError(opt.out, "cannot write the truth file: " + ec.message());
-  guard.renamed = true;
+  core::write_file_whole(opt.out, text);
 }
 
 }  // namespace

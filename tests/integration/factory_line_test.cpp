@@ -41,8 +41,8 @@ class FactoryLine : public ::testing::Test {
     db_ = dir_ + "line.db";
     // Three units drawn from the LN200 datasheet (turn-on bias, bias instability, random walks),
     // the third with its gyro x bias out of specification.
-    nlohmann::json station =
-        nlohmann::json::parse(read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
+    nlohmann::json station = nlohmann::json::parse(
+        read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
     const nlohmann::json base = station["imus"][0];
     station["imus"] = nlohmann::json::array();
     const std::vector<std::vector<double>> mounts = {{0, 0, 0}, {0, 0, 90}, {180, 0, 0}};
@@ -65,9 +65,14 @@ class FactoryLine : public ::testing::Test {
       station["imus"].push_back(imu);
     }
     station["require_serial"] = true;
-    station["equipment"] = {
-        {{"name", "table encoders"}, {"id", "AC-1"}, {"calibrated", "2026-01-10"}, {"due", "2099-01-10"}},
-        {{"name", "chamber sensor"}, {"id", "PT-7"}, {"calibrated", "2020-01-10"}, {"due", "2021-01-10"}}};
+    station["equipment"] = {{{"name", "table encoders"},
+                             {"id", "AC-1"},
+                             {"calibrated", "2026-01-10"},
+                             {"due", "2099-01-10"}},
+                            {{"name", "chamber sensor"},
+                             {"id", "PT-7"},
+                             {"calibrated", "2020-01-10"},
+                             {"due", "2021-01-10"}}};
     station_ = dir_ + "fixture.json";
     write_text(station_, station.dump(2));
     spec_ = dir_ + "spec.json";
@@ -122,9 +127,9 @@ TEST_F(FactoryLine, OneRunCalibratesTheFixtureJudgesCertifiesAndExportsEveryUnit
   }
 
   // accept: two passes and a fail naming the odd unit's parameter; exit 1, JUnit for CI.
-  r = run("accept --json --db " + db_ + " --run 1 --spec " + spec_ + " --junit " + dir_ +
-              "junit.xml",
-          dir_ + "accept.err");
+  r = run(
+      "accept --json --db " + db_ + " --run 1 --spec " + spec_ + " --junit " + dir_ + "junit.xml",
+      dir_ + "accept.err");
   EXPECT_EQ(r.exit_code, 1) << r.out << read_text(dir_ + "accept.err");
   const nlohmann::json accepted = nlohmann::json::parse(r.out);
   ASSERT_EQ(accepted["units"].size(), 3u);

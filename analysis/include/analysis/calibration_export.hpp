@@ -72,8 +72,4 @@ struct ExportResult {
 ExportResult export_calibration(const solver::Calibration& calibration, ExportFormat format,
                                 const ExportOptions& options = {});
 
-/// Writes `text` to `path` whole or not at all: a temporary file beside it, renamed over it.
-/// Throws core::InputError naming `path` when it cannot be written (the temporary is removed).
-void write_export_file(const std::string& path, const std::string& text);
-
 }  // namespace calstand::analysis

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "export_test_support.hpp"
 
 namespace calstand::analysis {
@@ -82,12 +83,12 @@ TEST(CalibrationExport, TheFileIsReplacedWholeOrLeftAlone) {
     std::ifstream f(p);
     return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
   };
-  write_export_file(path, "old\n");
-  write_export_file(path, "new text\n");
+  core::write_file_whole(path, "old\n");
+  core::write_file_whole(path, "new text\n");
   EXPECT_EQ(read(path), "new text\n");
   // A target in a folder that does not exist: refused by name, nothing left behind.
   const std::string missing = (dir / "no-such-folder" / "out.params").string();
-  EXPECT_EQ(export_refusal_where([&] { write_export_file(missing, "x"); }), missing);
+  EXPECT_EQ(export_refusal_where([&] { core::write_file_whole(missing, "x"); }), missing);
   std::size_t files = 0;
   for (const auto& e : std::filesystem::directory_iterator(dir)) files += e.is_regular_file();
   EXPECT_EQ(files, 1u);
