@@ -29,6 +29,7 @@ void register_runs(CLI::App& app);         // runs and show
 void register_sim_session(CLI::App& app);  // hand-held / Ferraris sessions, no table
 void register_sim_station(CLI::App& app);
 void register_station(CLI::App& app);
+void register_trend(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);
 
