@@ -288,7 +288,10 @@ TEST(DaemonApi, AbortsARunToTheSafeState) {
 TEST(DaemonApi, AbortsAQueuedRunBeforeItStarts) {
   InProcessDaemon d(calstand::testing::fresh_dir("abort-queued") + "/station.db");
   ApiClient api(d.port());
-  const std::int64_t first = api.submit("six-position", kLong);
+  // The simulated station runs as fast as the CPU allows: the first run must outlast a busy
+  // machine's scheduling of this thread (kLong took 0.8 s and once finished first), so it gets
+  // an hour per position; it is aborted at the end.
+  const std::int64_t first = api.submit("six-position", {{"capture_s", 3600}});
   const std::int64_t second = api.submit("six-position", kShort);
   ASSERT_EQ(status_of(api, second), "queued");
   ASSERT_EQ(api.post("/runs/" + std::to_string(second) + "/abort", "").status, 202);
