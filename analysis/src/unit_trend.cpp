@@ -67,20 +67,22 @@ nlohmann::json optional_array(const std::vector<std::optional<double>>& v) {
 nlohmann::json to_json(const UnitTrend& trend) {
   nlohmann::json records = nlohmann::json::array();
   for (const TrendRecord& r : trend.records) {
-    records.push_back({{"calibration", r.calibration},
-                       {"run", r.run},
-                       {"created_utc", r.created_utc},
-                       {"verdict", r.verdict.empty() ? nlohmann::json() : nlohmann::json(r.verdict)}});
+    records.push_back(
+        {{"calibration", r.calibration},
+         {"run", r.run},
+         {"created_utc", r.created_utc},
+         {"verdict", r.verdict.empty() ? nlohmann::json() : nlohmann::json(r.verdict)}});
   }
   nlohmann::json parameters = nlohmann::json::array();
   for (const TrendParameter& p : trend.parameters) {
-    parameters.push_back({{"name", p.name},
-                          {"unit", p.unit},
-                          {"values", optional_array(p.values)},
-                          {"sigmas", optional_array(p.sigmas)},
-                          {"change", p.change},
-                          {"change_sigma", p.change_sigma},
-                          {"change_z", p.change_z ? nlohmann::json(*p.change_z) : nlohmann::json()}});
+    parameters.push_back(
+        {{"name", p.name},
+         {"unit", p.unit},
+         {"values", optional_array(p.values)},
+         {"sigmas", optional_array(p.sigmas)},
+         {"change", p.change},
+         {"change_sigma", p.change_sigma},
+         {"change_z", p.change_z ? nlohmann::json(*p.change_z) : nlohmann::json()}});
   }
   return {{"serial", trend.serial}, {"records", records}, {"parameters", parameters}};
 }

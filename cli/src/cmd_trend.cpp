@@ -31,13 +31,15 @@ void run_trend(const TrendOptions& opt) {
                rec.created_utc, rec.verdict.empty() ? "" : " (" + rec.verdict + ")");
   }
   fmt::print("\n{:<28} {:<9}", "parameter", "unit");
-  for (std::size_t r = 0; r < trend.records.size(); ++r) fmt::print(" {:>22}", fmt::format("[{}]", r + 1));
+  for (std::size_t r = 0; r < trend.records.size(); ++r)
+    fmt::print(" {:>22}", fmt::format("[{}]", r + 1));
   fmt::print(" {:>12} {:>8}\n", "change", "z");
   for (const analysis::TrendParameter& p : trend.parameters) {
     fmt::print("{:<28} {:<9}", p.name, p.unit);
     for (std::size_t r = 0; r < p.values.size(); ++r) {
-      fmt::print(" {:>22}", p.values[r] ? fmt::format("{:.5g} +- {:.2g}", *p.values[r], *p.sigmas[r])
-                                        : std::string("-"));
+      fmt::print(" {:>22}", p.values[r]
+                                ? fmt::format("{:.5g} +- {:.2g}", *p.values[r], *p.sigmas[r])
+                                : std::string("-"));
     }
     fmt::print(" {:>12.4g} {:>8}\n", p.change,
                p.change_z ? fmt::format("{:.1f}", *p.change_z) : std::string("-"));

@@ -27,7 +27,8 @@ TEST(UnitTrend, ChangesAreInTimeOrderAndWeighedAgainstBothRecordsSigmas) {
     nlohmann::json params = {
         {{"name", "gyro_bias.x"}, {"value", bias}, {"sigma", sigma}, {"unit", "deg/s"}}};
     if (with_scale) {
-      params.push_back({{"name", "gyro_scale.x"}, {"value", 100.0}, {"sigma", 5.0}, {"unit", "ppm"}});
+      params.push_back(
+          {{"name", "gyro_scale.x"}, {"value", 100.0}, {"sigma", 5.0}, {"unit", "ppm"}});
     }
     return nlohmann::json{{"device", {{"name", "imu0"}, {"model", ""}, {"serial", "SN7"}}},
                           {"parameters", params}};
