@@ -7,8 +7,9 @@ namespace calstand::cli {
 // Each subcommand lives in its own cmd_<name>.cpp and registers itself here. A command's
 // callback returns through CLI11; errors are reported as one line on stderr with exit code 2
 // (bad input) or 1 (failure), see main.cpp.
-void register_accept(CLI::App& app);     // acceptance against a specification
-void register_allan(CLI::App& app);      // allan and noise
+void register_accept(CLI::App& app);  // acceptance against a specification
+void register_allan(CLI::App& app);   // allan and noise
+void register_analyze(CLI::App& app);
 void register_calibrate(CLI::App& app);  // calibrate and apply
 void register_calibrations(CLI::App& app);
 void register_certificate(CLI::App& app);

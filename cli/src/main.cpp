@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("calstand ") + calstand::core::kVersion);
   calstand::cli::register_accept(app);
   calstand::cli::register_allan(app);
+  calstand::cli::register_analyze(app);
   calstand::cli::register_calibrate(app);
   calstand::cli::register_calibrations(app);
   calstand::cli::register_certificate(app);

@@ -1,0 +1,114 @@
+#include "analysis/stability.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "analysis/noise_json.hpp"
+#include "core/error.hpp"
+#include "solver/noise_fit.hpp"
+#include "solver/run_noise.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+constexpr double kDegPerSToDegPerH = 3600.0;
+constexpr double kMps2ToUg = 1e6 / 9.80665;  ///< per g0, as datasheets count g
+/// IEEE 952: the flicker floor of the Allan deviation is 0.664 B.
+constexpr double kFlickerFloor = 0.664;
+
+}  // namespace
+
+StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
+                                    const std::string& device, std::optional<std::size_t> step) {
+  solver::RunNoiseOptions options;
+  options.device = device;
+  options.step = step;
+  const solver::RunNoise noise = solver::analyse_run_noise(db, run, options);
+  if (!long_enough_for_noise(noise.duration_s)) {
+    throw core::InputError(
+        fmt::format("run {} step {}", run, noise.step),
+        fmt::format("the capture lasts {:.0f} s; a bias floor and a correlation time need a "
+                    "static record of at least {:.0f} s",
+                    noise.duration_s, kMinNoiseRecordS));
+  }
+  StabilityAnalysis out;
+  out.run = run;
+  out.device = noise.device;
+  out.step = noise.step;
+  out.step_label = noise.step_label;
+  out.duration_s = noise.duration_s;
+  for (std::size_t c = 0; c < noise.channels.size() && c < out.channels.size(); ++c) {
+    const solver::ChannelNoise& ch = noise.channels[c];
+    const double k = c < 3 ? kDegPerSToDegPerH : kMps2ToUg;
+    ChannelStability& s = out.channels[c];
+    s.channel = std::string(solver::to_string(ch.channel));
+    const auto& points = ch.allan.points;
+    out.confidence = ch.allan.confidence;
+    const auto floor = std::min_element(
+        points.begin(), points.end(), [](const solver::AllanPoint& a, const solver::AllanPoint& b) {
+          return a.deviation < b.deviation;
+        });
+    if (floor != points.end()) {
+      s.bias_instability = k * floor->deviation / kFlickerFloor;
+      s.bias_instability_lo = k * floor->lo / kFlickerFloor;
+      s.bias_instability_hi = k * floor->hi / kFlickerFloor;
+      s.min_tau_s = floor->tau_s;
+      // A floor is where the curve turns up again: a later point whose interval lies wholly
+      // above the minimum's. A minimum at (or near) the last averaging times that noise alone
+      // put there is not one.
+      s.floor_resolved = std::any_of(floor + 1, points.end(),
+                                     [&](const solver::AllanPoint& p) { return p.lo > floor->hi; });
+    }
+    // As the noise-term fit: without the shortest averaging times, where the IMU's
+    // anti-aliasing filter lowers the curve and a vanishing correlation time would fit it.
+    const double min_fit_tau_s = options.min_tau_samples / noise.sample_rate_hz;
+    solver::AllanResult curve = ch.allan;
+    std::erase_if(curve.points,
+                  [&](const solver::AllanPoint& p) { return p.tau_s < min_fit_tau_s; });
+    const solver::GaussMarkovFit gm = solver::fit_gauss_markov(curve, true);
+    s.variation_sigma = k * gm.sigma;
+    s.correlation_time_s = gm.tau_c_s;
+    s.correlation_resolved = gm.peak_in_range && 1.89 * gm.tau_c_s >= min_fit_tau_s;
+  }
+  return out;
+}
+
+nlohmann::json to_json(const StabilityAnalysis& s) {
+  const auto sensor = [&](std::size_t first, const char* unit) {
+    nlohmann::json bi = nlohmann::json::array();
+    nlohmann::json interval = nlohmann::json::array();
+    nlohmann::json tau = nlohmann::json::array();
+    nlohmann::json sigma = nlohmann::json::array();
+    nlohmann::json tau_c = nlohmann::json::array();
+    nlohmann::json resolved = nlohmann::json::array();
+    nlohmann::json floor_resolved = nlohmann::json::array();
+    for (std::size_t c = first; c < first + 3; ++c) {
+      const ChannelStability& ch = s.channels[c];
+      bi.push_back(ch.bias_instability);
+      interval.push_back({ch.bias_instability_lo, ch.bias_instability_hi});
+      tau.push_back(ch.min_tau_s);
+      sigma.push_back(ch.variation_sigma);
+      tau_c.push_back(ch.correlation_time_s);
+      resolved.push_back(ch.correlation_resolved);
+      floor_resolved.push_back(ch.floor_resolved);
+    }
+    return nlohmann::json{{fmt::format("bias_instability_{}", unit), bi},
+                          {fmt::format("bias_instability_interval_{}", unit), interval},
+                          {"floor_tau_s", tau},
+                          {fmt::format("bias_variation_{}", unit), sigma},
+                          {"correlation_time_s", tau_c},
+                          {"correlation_resolved", resolved},
+                          {"floor_resolved", floor_resolved}};
+  };
+  return {{"run", s.run},
+          {"device", s.device},
+          {"step", s.step},
+          {"step_label", s.step_label},
+          {"duration_s", s.duration_s},
+          {"confidence", s.confidence},
+          {"gyro", sensor(0, "deg_per_h")},
+          {"accel", sensor(3, "ug")}};
+}
+
+}  // namespace calstand::analysis
