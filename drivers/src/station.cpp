@@ -33,10 +33,6 @@ Result Station::make_safe() {
   return first;
 }
 
-PowerSupply& Station::power_supply(std::size_t index) {
-  throw std::out_of_range("station has no power supply " + std::to_string(index));
-}
-
 PowerSupply* Station::supply_of(const std::string& imu_name) {
   for (std::size_t i = 0; i < power_supply_count(); ++i) {
     if (power_supply(i).imu_name() == imu_name) return &power_supply(i);

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/clock.hpp"
@@ -24,7 +26,10 @@ class Station {
   virtual Imu& imu(std::size_t index) = 0;
   /// The supplies of the station file's `power_supplies`, in its order.
   virtual std::size_t power_supply_count() const { return 0; }
-  virtual PowerSupply& power_supply(std::size_t index);
+  /// (Defined inline: the base part's SimStation links without the station part.)
+  virtual PowerSupply& power_supply(std::size_t index) {
+    throw std::out_of_range("station has no power supply " + std::to_string(index));
+  }
   /// The supply feeding IMU `imu_name`, or nullptr when the station does not switch it.
   PowerSupply* supply_of(const std::string& imu_name);
   /// Lets station time pass until `t_s`: a simulated station advances its world (as fast as
