@@ -129,7 +129,8 @@ void SimWorld::set_imu_power(std::size_t i, bool on) {
 }
 
 double SimWorld::imu_temperature_c(std::size_t i) const {
-  return chamber_.imu_temperature_c() - (config_.chamber.imu_self_heating_c - imus_.at(i).self_heating_c);
+  return chamber_.imu_temperature_c() -
+         (config_.chamber.imu_self_heating_c - imus_.at(i).self_heating_c);
 }
 
 TableKinematics SimWorld::table_kinematics() const {

@@ -69,9 +69,9 @@ struct ImuConfig {
 /// it for `power` steps; make_safe() leaves it per `safe_state`.
 struct PowerSupplyConfig {
   std::string name;
-  std::string backend = "sim";  ///< "sim" (the in-process simulator) or "scpi"
-  std::string imu;              ///< the name of the IMU it feeds (one supply per IMU)
-  double voltage_v = 28.0;      ///< output voltage set at configure() [V]
+  std::string backend = "sim";   ///< "sim" (the in-process simulator) or "scpi"
+  std::string imu;               ///< the name of the IMU it feeds (one supply per IMU)
+  double voltage_v = 28.0;       ///< output voltage set at configure() [V]
   double current_limit_a = 1.0;  ///< current limit set at configure() [A]
   /// What the safe state does with the output: "off" switches it off, "on" leaves it as it is
   /// (a unit that must stay warm, or whose heaters must not cycle).

@@ -125,7 +125,8 @@ class AcutrolServer {
   /// The reply to one line (terminator excluded), or none: a line protocol other than the
   /// table's served by the same transport (SCPI, whose set commands are not answered).
   /// `overlong`: the line was longer than acutrol::kMaxLineBytes and its text was dropped.
-  using LineHandler = std::function<std::optional<std::string>(std::string_view line, bool overlong)>;
+  using LineHandler =
+      std::function<std::optional<std::string>(std::string_view line, bool overlong)>;
   /// Serves `handler` instead of the table command language (same transport and threads).
   explicit AcutrolServer(LineHandler handler, AcutrolServerOptions options = {});
   ~AcutrolServer();

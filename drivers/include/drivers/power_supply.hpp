@@ -8,12 +8,12 @@ namespace calstand::drivers {
 
 /// What a supply reports in one reading.
 struct PowerReading {
-  bool ok = false;          ///< false: unreadable (why in `message`); the values are the last good
-  bool output_on = false;   ///< the output as last commanded and confirmed
-  double voltage_v = 0.0;   ///< measured at the output [V]
-  double current_a = 0.0;   ///< measured at the output [A]
-  double time_s = 0.0;      ///< station clock when read [s]
-  std::string message;      ///< why not ok
+  bool ok = false;         ///< false: unreadable (why in `message`); the values are the last good
+  bool output_on = false;  ///< the output as last commanded and confirmed
+  double voltage_v = 0.0;  ///< measured at the output [V]
+  double current_a = 0.0;  ///< measured at the output [A]
+  double time_s = 0.0;     ///< station clock when read [s]
+  std::string message;     ///< why not ok
 };
 
 /// A programmable power supply feeding one IMU (station file `power_supplies[]`). configure()

@@ -8,8 +8,8 @@
 namespace calstand::drivers {
 
 /// A station of real devices: the drivers the station file names (table "acutrol", chamber
-/// "modbus", IMUs "serial" or "socketcan", supplies "scpi"), on the steady clock (scaled by the file's
-/// time_scale when rehearsing against an accelerated sim-station). Construction parses every
+/// "modbus", IMUs "serial" or "socketcan", supplies "scpi"), on the steady clock (scaled by the
+/// file's time_scale when rehearsing against an accelerated sim-station). Construction parses every
 /// connection and opens nothing; bring_up() opens the links.
 class RealStation final : public Station {
  public:

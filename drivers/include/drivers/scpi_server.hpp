@@ -34,8 +34,8 @@ class SimScpiSupply {
 
   /// Highest voltage the simulated supply takes [V]; more is -222.
   static constexpr double kMaxVoltageV = 60.0;
-  static constexpr double kMaxCurrentA = 10.0;   ///< highest current limit [A]
-  static constexpr double kLoadPowerW = 12.0;    ///< what a simulated unit draws [W]
+  static constexpr double kMaxCurrentA = 10.0;  ///< highest current limit [A]
+  static constexpr double kLoadPowerW = 12.0;   ///< what a simulated unit draws [W]
 
  private:
   void push_error(int code, std::string_view text);
@@ -52,8 +52,8 @@ class SimScpiSupply {
 /// pseudo-terminal) by the line server the table simulator uses.
 class ScpiServer {
  public:
-  ScpiServer(sim::SimWorld& world, std::mutex& world_mutex, std::size_t imu_index,
-             double voltage_v, double current_limit_a, AcutrolServerOptions options = {});
+  ScpiServer(sim::SimWorld& world, std::mutex& world_mutex, std::size_t imu_index, double voltage_v,
+             double current_limit_a, AcutrolServerOptions options = {});
   void start() { server_->start(); }
   void stop() noexcept { server_->stop(); }
   std::uint16_t port() const { return server_->port(); }

@@ -9,8 +9,8 @@ namespace calstand::drivers {
 ScpiConnection ScpiConnection::from_json(const nlohmann::json& j, const std::string& where) {
   // The schema checks every field (types, ranges, models); what is left is reading them with
   // the documented defaults.
-  core::validate_part_or_throw(core::schema_definition("station.schema.json", "scpi_connection"),
-                               j, "", where);
+  core::validate_part_or_throw(core::schema_definition("station.schema.json", "scpi_connection"), j,
+                               "", where);
   ScpiConnection c;
   c.response_timeout = std::chrono::milliseconds(j.value("timeout_ms", 1000));
   c.commands = scpi::find_command_set(j.value("model", "generic"));

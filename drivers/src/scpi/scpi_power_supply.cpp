@@ -22,7 +22,9 @@ std::string fill(std::string_view tmpl, double value) {
 
 ScpiPowerSupply::ScpiPowerSupply(const core::PowerSupplyConfig& config, core::Clock& clock,
                                  const std::string& where)
-    : config_(config), clock_(clock), connection_(ScpiConnection::from_json(config.connection, where)) {
+    : config_(config),
+      clock_(clock),
+      connection_(ScpiConnection::from_json(config.connection, where)) {
   if (connection_.transport == ScpiConnection::Transport::kSerial) {
     auto port = std::make_unique<SerialPort>(connection_.serial);
     serial_ = port.get();
@@ -110,10 +112,10 @@ Result ScpiPowerSupply::send(const std::string& line, bool want_reply, std::stri
     }
   }
   std::string wire = line + "\n";
-  const IoResult w = transport_->write(
-      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(wire.data()),
-                                    wire.size()),
-      left());
+  const IoResult w =
+      transport_->write(std::span<const std::uint8_t>(
+                            reinterpret_cast<const std::uint8_t*>(wire.data()), wire.size()),
+                        left());
   if (!w.ok()) return fail("link_errors", w.error);
   if (!want_reply) return Result::success();
   for (;;) {
@@ -128,9 +130,9 @@ Result ScpiPowerSupply::send(const std::string& line, bool want_reply, std::stri
     }
     const auto wait = left();
     if (wait.count() <= 0) {
-      return fail("timeouts", fmt::format("no reply from the power supply ({}) within {} ms",
-                                          connection_.describe(),
-                                          connection_.response_timeout.count()));
+      return fail("timeouts",
+                  fmt::format("no reply from the power supply ({}) within {} ms",
+                              connection_.describe(), connection_.response_timeout.count()));
     }
     const IoResult r = transport_->read(buffer, wait);
     if (!r.ok()) return fail("link_errors", r.error);
@@ -157,9 +159,8 @@ Result ScpiPowerSupply::command(const std::string& line) {
   }
   if (!first) return Result::success();
   counters_.add("refused_commands");
-  const std::string why =
-      fmt::format("power supply refused '{}': {},\"{}\"", line, first->code,
-                  acutrol::sanitize_text(first->text, 100));
+  const std::string why = fmt::format("power supply refused '{}': {},\"{}\"", line, first->code,
+                                      acutrol::sanitize_text(first->text, 100));
   events_.push(clock_.now_s(), true, why);
   return Result::failure(why);
 }

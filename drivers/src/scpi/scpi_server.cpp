@@ -98,8 +98,8 @@ std::optional<std::string> SimScpiSupply::handle(std::string_view line) {
   if (header == "CURR?") return fmt::format("{:.4f}", current_limit_a_);
   if (header == "MEAS:VOLT?") return fmt::format("{:.4f}", on ? voltage_v_ : 0.0);
   if (header == "MEAS:CURR?") {
-    const double amps = on && voltage_v_ > 0.0 ? std::min(current_limit_a_, kLoadPowerW / voltage_v_)
-                                               : 0.0;
+    const double amps =
+        on && voltage_v_ > 0.0 ? std::min(current_limit_a_, kLoadPowerW / voltage_v_) : 0.0;
     return fmt::format("{:.4f}", amps);
   }
   push_error(-113, "Undefined header");

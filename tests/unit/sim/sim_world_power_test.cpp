@@ -66,8 +66,8 @@ TEST(SimWorldPower, TurnOnBiasSpreadOverPowerCyclesMatchesTheSpecSheet) {
     if (g.x() == previous) ++repeated;
     previous = g.x();
     for (int i = 0; i < 3; ++i) {
-      gyro.push_back(g[i] * 3600.0);             // deg/h
-      accel.push_back(a[i] / 9.80665 * 1e6);     // ug
+      gyro.push_back(g[i] * 3600.0);          // deg/h
+      accel.push_back(a[i] / 9.80665 * 1e6);  // ug
     }
   }
   EXPECT_EQ(repeated, 0) << "a power-up kept the previous turn-on bias";

@@ -23,10 +23,8 @@ core::PowerSupplyConfig supply_config(int port, int timeout_ms = 300) {
   c.imu = "imu0";
   c.voltage_v = 28.0;
   c.current_limit_a = 1.5;
-  c.connection = {{"transport", "tcp"},
-                  {"host", "127.0.0.1"},
-                  {"port", port},
-                  {"timeout_ms", timeout_ms}};
+  c.connection = {
+      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", port}, {"timeout_ms", timeout_ms}};
   return c;
 }
 
@@ -93,7 +91,10 @@ TEST_F(ScpiAgainstSimulator, ADroppedConnectionIsRecordedAndReconnected) {
   bool back = false;
   for (int i = 0; i < 10 && !back; ++i) {
     const auto r = psu.read();
-    if (r.ok) back = true; else ++failures;
+    if (r.ok)
+      back = true;
+    else
+      ++failures;
     std::this_thread::sleep_for(50ms);
   }
   ASSERT_TRUE(back) << "the driver did not reconnect";
