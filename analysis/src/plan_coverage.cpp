@@ -104,6 +104,7 @@ UnitCoverage unit_coverage(const procedures::Plan& plan, const core::StationConf
             summarize(step, pose, temperature_c, plan.step_start_s.at(i), build, model));
         break;
       case procedures::StepKind::kWait:
+      case procedures::StepKind::kPower:
         break;
     }
   }

@@ -73,6 +73,9 @@ std::string commanded(const procedures::Step& s) {
       return fmt::format("record {} s", format_number(s.duration_s));
     case StepKind::kWait:
       return fmt::format("{} s", format_number(s.duration_s));
+    case StepKind::kPower:
+      return fmt::format("supply of {} {}, settle {} s", s.imu.empty() ? "every IMU" : s.imu,
+                         s.power_on ? "on" : "off", format_number(s.settle_s));
   }
   return "";
 }

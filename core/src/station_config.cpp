@@ -109,9 +109,36 @@ void check_semantics(const StationConfig& c, const std::string& file) {
                        fmt::format("duplicate IMU name \"{}\"", c.imus[i].name));
     }
   }
+  // Which IMU a supply feeds is a reference the schema cannot check; one supply per IMU, so
+  // that switching "the supply of imu0" is never ambiguous.
+  std::set<std::string> supply_names;
+  std::set<std::string> fed;
+  for (std::size_t i = 0; i < c.power_supplies.size(); ++i) {
+    const PowerSupplyConfig& p = c.power_supplies[i];
+    same_world(p.backend, fmt::format("power_supplies[{}].backend", i));
+    if (!supply_names.insert(p.name).second) {
+      throw InputError(fmt::format("{}: power_supplies[{}].name", file, i),
+                       fmt::format("duplicate supply name \"{}\"", p.name));
+    }
+    if (!names.contains(p.imu)) {
+      throw InputError(fmt::format("{}: power_supplies[{}].imu", file, i),
+                       fmt::format("no IMU named \"{}\" in imus", p.imu));
+    }
+    if (!fed.insert(p.imu).second) {
+      throw InputError(fmt::format("{}: power_supplies[{}].imu", file, i),
+                       fmt::format("\"{}\" is already fed by another supply", p.imu));
+    }
+  }
 }
 
 }  // namespace
+
+const PowerSupplyConfig* StationConfig::supply_of(const std::string& imu_name) const {
+  for (const auto& p : power_supplies) {
+    if (p.imu == imu_name) return &p;
+  }
+  return nullptr;
+}
 
 TableGeometry StationConfig::geometry(std::size_t imu_index) const {
   TableGeometry g;
@@ -178,6 +205,17 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     imu.connection = resolve_connection_files(j.value("connection", json::object()), base_dir);
     c.imus.push_back(std::move(imu));
   }
+  for (const json& j : doc.value("power_supplies", json::array())) {
+    PowerSupplyConfig p;
+    p.name = j.at("name").get<std::string>();
+    p.backend = j.at("backend").get<std::string>();
+    p.imu = j.at("imu").get<std::string>();
+    p.voltage_v = j.at("voltage_v").get<double>();
+    p.current_limit_a = j.at("current_limit_a").get<double>();
+    p.safe_state = j.value("safe_state", p.safe_state);
+    p.connection = resolve_connection_files(j.value("connection", json::object()), base_dir);
+    c.power_supplies.push_back(std::move(p));
+  }
   if (doc.contains("policy")) {
     const json& p = doc.at("policy");
     c.policy.on_sequence_gap = p.value("on_sequence_gap", c.policy.on_sequence_gap);
@@ -226,6 +264,17 @@ json StationConfig::to_json() const {
     if (!imu.connection.empty()) j["connection"] = imu.connection;
     imus_j.push_back(std::move(j));
   }
+  json supplies_j = json::array();
+  for (const auto& p : power_supplies) {
+    json j = {{"name", p.name},
+              {"backend", p.backend},
+              {"imu", p.imu},
+              {"voltage_v", p.voltage_v},
+              {"current_limit_a", p.current_limit_a},
+              {"safe_state", p.safe_state}};
+    if (!p.connection.empty()) j["connection"] = p.connection;
+    supplies_j.push_back(std::move(j));
+  }
   json table_j = {{"backend", table.backend},
                   {"outer_axis", vec3_json(table.outer_axis)},
                   {"inner_axis", vec3_json(table.inner_axis)},
@@ -266,6 +315,7 @@ json StationConfig::to_json() const {
               {"sim", {{"max_step_s", sim_max_step_s}, {"thermal_step_s", sim_thermal_step_s}}}};
   if (!description.empty()) doc["description"] = description;
   if (time_scale != 1.0) doc["time_scale"] = time_scale;
+  if (!power_supplies.empty()) doc["power_supplies"] = supplies_j;
   return doc;
 }
 

@@ -326,6 +326,9 @@ void RunEngine::execute(std::size_t index) {
     case StepKind::kWait:
       wait_for(step.duration_s, "waiting");
       break;
+    case StepKind::kPower:
+      power(step, index);
+      break;
   }
   journal_.step_completed(index, attempt_, station_.clock().now_s());
 }
@@ -499,6 +502,47 @@ void RunEngine::wait_for_streams() {
   while (any_stale() && station_.clock().now_s() < end) tick();
 }
 
+void RunEngine::power(const Step& step, std::size_t index) {
+  std::vector<std::size_t> units;
+  for (std::size_t i = 0; i < station_.imu_count(); ++i) {
+    const std::string& name = station_.imu(i).name();
+    if (!step.imu.empty() && name != step.imu) continue;
+    drivers::PowerSupply* supply = station_.supply_of(name);
+    if (supply == nullptr) continue;  // the plan has refused a named unit without a supply
+    if (auto r = supply->set_output(step.power_on); !r) {
+      throw StepFailed{fmt::format("step {} ({}): {} refused power {}: {}", index, step.label,
+                                   supply->name(), step.power_on ? "on" : "off", r.message)};
+    }
+    record_event(EventKind::kInfo, supply->name(),
+                 fmt::format("{} powered {}", name, step.power_on ? "on" : "off"));
+    ImuHealth& health = imu_health_[i];
+    health.unpowered = !step.power_on;
+    // A unit that starts again counts from 0: its first sample is no sequence gap.
+    health.last_sequence.reset();
+    health.stale = false;
+    health.last_sample_s = station_.clock().now_s();
+    units.push_back(i);
+  }
+  if (step.power_on) {
+    set_phase("waiting for IMU streams after power on");
+    const double on_s = station_.clock().now_s();
+    const auto started = [&](std::size_t i) { return imu_health_[i].last_sample_s > on_s; };
+    for (;;) {
+      tick();
+      const bool all = std::all_of(units.begin(), units.end(), started);
+      if (all) break;
+      if (station_.clock().now_s() - on_s >= options_.power_on_timeout_s) {
+        for (std::size_t i : units) {
+          if (started(i)) continue;
+          throw StepFailed{fmt::format("{} did not start streaming within {:g} s after power on",
+                                       station_.imu(i).name(), options_.power_on_timeout_s)};
+        }
+      }
+    }
+  }
+  wait_for(step.settle_s, step.power_on ? "settling after power on" : "settling after power off");
+}
+
 void RunEngine::wait_for(double duration_s, const char* phase) {
   set_phase(phase);
   const double end = station_.clock().now_s() + duration_s;
@@ -535,6 +579,24 @@ void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_
   record_event(
       EventKind::kInfo, "engine",
       fmt::format("resuming at step {}: re-establishing temperature and position", first_step));
+  // The supplies as the power steps before it left them (a restarted station may have
+  // switched them by its safe state): replayed in order, the last one per unit wins.
+  for (std::size_t i = 0; i < first_step && i < plan_.steps.size(); ++i) {
+    const Step& s = plan_.steps[i];
+    if (s.kind != StepKind::kPower) continue;
+    if (std::find(skipped.begin(), skipped.end(), i) != skipped.end()) continue;
+    for (std::size_t u = 0; u < station_.imu_count(); ++u) {
+      const std::string& name = station_.imu(u).name();
+      if (!s.imu.empty() && name != s.imu) continue;
+      drivers::PowerSupply* supply = station_.supply_of(name);
+      if (supply == nullptr) continue;
+      if (auto r = supply->set_output(s.power_on); !r) {
+        throw StepFailed{fmt::format("re-establishing power of {}: {}", name, r.message)};
+      }
+      imu_health_[u].unpowered = !s.power_on;
+      imu_health_[u].last_sequence.reset();
+    }
+  }
   if (last_temperature) set_temperature(plan_.steps[*last_temperature], *last_temperature);
   if (last_move) move(plan_.steps[*last_move], *last_move);
 }
@@ -584,7 +646,7 @@ void RunEngine::poll_imus() {
     ImuHealth& health = imu_health_[i];
     const auto samples = imu.poll();
     if (samples.empty()) {
-      if (now - health.last_sample_s > options_.imu_stale_s) {
+      if (!health.unpowered && now - health.last_sample_s > options_.imu_stale_s) {
         if (!health.stale) {
           health.stale = true;
           record_event(

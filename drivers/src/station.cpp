@@ -1,5 +1,8 @@
 #include "drivers/station.hpp"
 
+#include <stdexcept>
+#include <string>
+
 #include "core/error.hpp"
 #include "drivers/real_station.hpp"
 #include "drivers/sim_station.hpp"
@@ -9,6 +12,7 @@ namespace calstand::drivers {
 Result Station::bring_up() {
   std::vector<Device*> devices{&table(), &chamber()};
   for (std::size_t i = 0; i < imu_count(); ++i) devices.push_back(&imu(i));
+  for (std::size_t i = 0; i < power_supply_count(); ++i) devices.push_back(&power_supply(i));
   for (Device* d : devices) {
     if (auto r = d->configure(); !r) return Result::failure(d->name() + ": " + r.message);
     if (auto r = d->activate(); !r) return Result::failure(d->name() + ": " + r.message);
@@ -23,7 +27,17 @@ Result Station::make_safe() {
   };
   keep_first(table().stop(), table().name());
   keep_first(chamber().standby(), chamber().name());
+  for (std::size_t i = 0; i < power_supply_count(); ++i) {
+    keep_first(power_supply(i).make_safe(), power_supply(i).name());
+  }
   return first;
+}
+
+PowerSupply* Station::supply_of(const std::string& imu_name) {
+  for (std::size_t i = 0; i < power_supply_count(); ++i) {
+    if (power_supply(i).imu_name() == imu_name) return &power_supply(i);
+  }
+  return nullptr;
 }
 
 std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s) {

@@ -204,6 +204,19 @@ class Expander {
                   : fmt::format("{} rate {:+} deg/s", s.axis.empty() ? "?" : s.axis, s.rate_dps);
   }
 
+  void power(const json& j, const std::string& path, Step& s) {
+    s.kind = StepKind::kPower;
+    s.power_on = j["power"] == "on";
+    s.imu = j.value("imu", std::string());
+    if (j.contains("settle_s")) {
+      field(j, "settle_s", path, s, s.settle_s,
+            [](double v) -> std::string { return v >= 0.0 ? "" : "must not be negative"; });
+    }
+    s.label = j.contains("label") ? label(j)
+                                  : fmt::format("power {} {}", s.imu.empty() ? "all" : s.imu,
+                                                s.power_on ? "on" : "off");
+  }
+
   void timed(const json& j, const std::string& path, Step& s, StepKind kind) {
     s.kind = kind;
     field(j, "duration_s", path, s, s.duration_s, positive);
@@ -255,6 +268,8 @@ class Expander {
       rate(j, path, s);
     else if (kind == "capture")
       timed(j, path, s, StepKind::kCapture);
+    else if (kind == "power")
+      power(j, path, s);
     else
       timed(j, path, s, StepKind::kWait);
     steps_.push_back(std::move(s));

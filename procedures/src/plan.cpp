@@ -91,6 +91,9 @@ class Planner {
         return s.duration_s;
       case StepKind::kWait:
         return s.duration_s;
+      case StepKind::kPower:
+        power(s);
+        return s.settle_s;
     }
     return 0.0;
   }
@@ -119,6 +122,17 @@ class Planner {
     chamber_ = {now_c, s.target_c, t, ramp / 60.0};
     if (!s.wait_for_soak || ramp <= 0) return 0.0;
     return std::abs(s.target_c - now_c) / chamber_.ramp_c_per_s + s.soak.stable_s;
+  }
+
+  // A power step needs a supply for its unit (or, for all, for at least one).
+  void power(const Step& s) {
+    if (!s.imu.empty()) {
+      if (station_.supply_of(s.imu) == nullptr) {
+        violation(s, "imu", fmt::format("the station has no power supply for IMU \"{}\"", s.imu));
+      }
+    } else if (station_.power_supplies.empty()) {
+      violation(s, "power", "the station has no power supply (station file power_supplies)");
+    }
   }
 
   double move(const Step& s) {

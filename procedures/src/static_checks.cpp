@@ -48,6 +48,7 @@ const char* const kNumericFields[][4] = {
     {"rate", "rate_dps", "settle_s", "duration_s"},
     {"capture", "duration_s", nullptr, nullptr},
     {"wait", "duration_s", nullptr, nullptr},
+    {"power", "settle_s", nullptr, nullptr},
 };
 
 /// Walks the step tree with the loop variables in scope.

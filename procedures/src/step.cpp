@@ -16,6 +16,8 @@ std::string_view to_string(StepKind kind) {
       return "capture";
     case StepKind::kWait:
       return "wait";
+    case StepKind::kPower:
+      return "power";
   }
   return "?";
 }
@@ -57,6 +59,11 @@ nlohmann::json Step::to_json() const {
     case StepKind::kCapture:
     case StepKind::kWait:
       j["duration_s"] = duration_s;
+      break;
+    case StepKind::kPower:
+      j["power"] = power_on ? "on" : "off";
+      j["settle_s"] = settle_s;
+      if (!imu.empty()) j["imu"] = imu;
       break;
   }
   return j;

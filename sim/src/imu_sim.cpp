@@ -135,7 +135,8 @@ void ImuSim::build_channels() {
   }
 }
 
-void ImuSim::power_on(double time_s) {
+void ImuSim::power_on(double time_s, bool warm) {
+  transient_running_ = !warm;
   for (int i = 0; i < 3; ++i)
     turn_on_gyro_[i] = turn_on_draw_.next() * truth_.gyro_noise.turn_on_bias[i];
   for (int i = 0; i < 3; ++i) {
@@ -146,6 +147,14 @@ void ImuSim::power_on(double time_s) {
   power_on_time_s_ = time_s;
   sequence_ = 0;
   ++power_cycles_;
+}
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::power_on_transient(double time_s) const {
+  if (!transient_running_ || time_s < power_on_time_s_) {
+    return {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  }
+  const double decay = std::exp(-(time_s - power_on_time_s_) / truth_.power_on_time_constant_s);
+  return {truth_.gyro_power_on_bias * decay, truth_.accel_power_on_bias * decay};
 }
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::noise_free_reading(const TableKinematics& table,
@@ -162,11 +171,14 @@ core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, doub
 core::ImuSample ImuSim::sample(double time_s, const ImuInputs& in) {
   const double temperature_c = in.temperature_c;
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
+  const auto [gyro_transient, accel_transient] = power_on_transient(time_s);
 
   std::array<double, 6> value{};
   for (int i = 0; i < 3; ++i) {
-    value[static_cast<std::size_t>(i)] = in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i];
-    value[static_cast<std::size_t>(i) + 3] = in.force_mps2[i] + accel_error[i] + turn_on_accel_[i];
+    value[static_cast<std::size_t>(i)] =
+        in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i] + gyro_transient[i];
+    value[static_cast<std::size_t>(i) + 3] =
+        in.force_mps2[i] + accel_error[i] + turn_on_accel_[i] + accel_transient[i];
   }
   for (std::size_t c = 0; c < 6; ++c) {
     Channel& ch = channels_[c];

@@ -247,6 +247,11 @@ void ImuTruth::validate(const std::string& file_name) const {
   if (sequence_modulus < 2) c.fail("output.sequence_modulus", sequence_modulus, "must be >= 2");
   c.non_negative("output.latency_s", latency_s);
   c.finite("output.clock_drift_ppm", clock_drift_ppm);
+  c.positive("power_on.time_constant_s", power_on_time_constant_s);
+  for (int i = 0; i < 3; ++i) {
+    c.finite("power_on.gyro_bias_deg_per_h", gyro_power_on_bias[i]);
+    c.finite("power_on.accel_bias_ug", accel_power_on_bias[i]);
+  }
 }
 
 ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
@@ -278,6 +283,17 @@ ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
     t.latency_s = o.value("latency_s", t.latency_s);
     t.clock_drift_ppm = o.value("clock_drift_ppm", t.clock_drift_ppm);
   }
+  if (doc.contains("power_on")) {
+    const json& p = doc.at("power_on");
+    const auto triple_of = [&](const char* key, double scale) -> Eigen::Vector3d {
+      if (!p.contains(key)) return Eigen::Vector3d::Zero();
+      const json& a = p.at(key);
+      return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>()) * scale;
+    };
+    t.gyro_power_on_bias = triple_of("gyro_bias_deg_per_h", 1.0 / 3600.0);
+    t.accel_power_on_bias = triple_of("accel_bias_ug", kUgToMps2);
+    t.power_on_time_constant_s = p.value("time_constant_s", t.power_on_time_constant_s);
+  }
   t.validate(file_name);
   return t;
 }
@@ -285,7 +301,10 @@ ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
 json imu_truth_to_json(const ImuTruth& t) {
   json params = json::object();
   for (const auto& [name, value] : t.nonzero_parameters()) params[name] = value;
-  return json{
+  const auto triple_out = [](const Eigen::Vector3d& v, double scale) {
+    return json::array({v.x() / scale, v.y() / scale, v.z() / scale});
+  };
+  json doc{
       {"format", "calstand-truth/1"},
       {"name", t.name},
       {"temperature_ref_c", t.temperature_ref_c},
@@ -302,6 +321,13 @@ json imu_truth_to_json(const ImuTruth& t) {
         {"latency_s", t.latency_s},
         {"clock_drift_ppm", t.clock_drift_ppm}}},
   };
+  // Only a unit with a transient says so: truth files of units without one stay as they were.
+  if (!t.gyro_power_on_bias.isZero() || !t.accel_power_on_bias.isZero()) {
+    doc["power_on"] = {{"gyro_bias_deg_per_h", triple_out(t.gyro_power_on_bias, 1.0 / 3600.0)},
+                       {"accel_bias_ug", triple_out(t.accel_power_on_bias, kUgToMps2)},
+                       {"time_constant_s", t.power_on_time_constant_s}};
+  }
+  return doc;
 }
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> deterministic_errors(const ImuTruth& t,

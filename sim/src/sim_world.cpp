@@ -97,7 +97,9 @@ SimWorld::SimWorld(const core::StationConfig& config, double start_time_s)
     SimulatedImu imu;
     imu.name = c.name;
     imu.sim = make_imu_sim(config, i);
-    imu.sim->power_on(start_time_s);
+    // A world starts (or a run resumes) with its units on for long: warm and settled.
+    imu.sim->power_on(start_time_s, /*warm=*/true);
+    imu.self_heating_c = config.chamber.imu_self_heating_c;
     // A sample stands for the interval that ends at its time stamp: the first is one period
     // after power-up, so advancing by T delivers T * rate samples.
     imu.first_sample_s = start_time_s + imu.sim->sample_period_s();
@@ -112,6 +114,23 @@ void SimWorld::power_cycle_imu(std::size_t i) {
   // The first sample after power-up falls one period later, on a fresh grid.
   imu.first_sample_s = clock_.now_s() + imu.sim->sample_period_s();
   imu.next_index = 0;
+}
+
+void SimWorld::set_imu_power(std::size_t i, bool on) {
+  SimulatedImu& imu = imus_.at(i);
+  if (on == imu.sim->powered()) return;
+  if (!on) {
+    imu.sim->power_off();
+    return;
+  }
+  imu.sim->power_on(clock_.now_s());
+  imu.first_sample_s = clock_.now_s() + imu.sim->sample_period_s();
+  imu.next_index = 0;
+}
+
+double SimWorld::imu_temperature_c(std::size_t i) const {
+  return chamber_.imu_temperature_c() -
+         (config_.chamber.imu_self_heating_c - imus_.at(i).self_heating_c);
 }
 
 TableKinematics SimWorld::table_kinematics() const {
@@ -144,6 +163,14 @@ void SimWorld::advance_to(double t_end_s) {
     const double dt = next - t;
     if (dt > 0.0) {
       table_.step(dt);
+      // Self-heating of each unit: towards the chamber's figure while on, towards none while
+      // off, with the IMU's thermal time constant (exact for any step).
+      const double tau = config_.chamber.imu_time_constant_s;
+      const double keep = tau > 0.0 ? std::exp(-dt / tau) : 0.0;
+      for (auto& imu : imus_) {
+        const double goal = imu.sim->powered() ? config_.chamber.imu_self_heating_c : 0.0;
+        imu.self_heating_c = goal + (imu.self_heating_c - goal) * keep;
+      }
       thermal_pending_s_ += dt;
       if (thermal_pending_s_ >= config_.sim_thermal_step_s) {
         chamber_.step(thermal_pending_s_);
@@ -162,7 +189,7 @@ void SimWorld::advance_to(double t_end_s) {
         kin = table_kinematics();
         have_kinematics = true;
       }
-      const core::ImuSample s = imu.sim->sample(t, kin, chamber_.imu_temperature_c());
+      const core::ImuSample s = imu.sim->sample(t, kin, imu_temperature_c(i));
       ++imu.next_index;
       if (imu.drop_remaining > 0) {
         --imu.drop_remaining;

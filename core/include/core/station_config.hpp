@@ -65,6 +65,20 @@ struct ImuConfig {
   nlohmann::json connection = nlohmann::json::object();
 };
 
+/// A programmable supply feeding one IMU (station file `power_supplies[]`). The engine switches
+/// it for `power` steps; make_safe() leaves it per `safe_state`.
+struct PowerSupplyConfig {
+  std::string name;
+  std::string backend = "sim";   ///< "sim" (the in-process simulator) or "scpi"
+  std::string imu;               ///< the name of the IMU it feeds (one supply per IMU)
+  double voltage_v = 28.0;       ///< output voltage set at configure() [V]
+  double current_limit_a = 1.0;  ///< current limit set at configure() [A]
+  /// What the safe state does with the output: "off" switches it off, "on" leaves it as it is
+  /// (a unit that must stay warm, or whose heaters must not cycle).
+  std::string safe_state = "off";
+  nlohmann::json connection = nlohmann::json::object();
+};
+
 /// How the run engine treats stream faults and invalid captures (station file `policy`).
 struct FaultPolicy {
   /// "record" (event, keep the capture), "repeat_capture" or "abort".
@@ -93,6 +107,11 @@ struct StationConfig {
   TableConfig table;
   ChamberConfig chamber;
   std::vector<ImuConfig> imus;
+  /// The supplies the station switches (at most one per IMU); empty: the IMUs are powered by
+  /// something the station does not control.
+  std::vector<PowerSupplyConfig> power_supplies;
+  /// The supply feeding IMU `imu_name`, or nullptr.
+  const PowerSupplyConfig* supply_of(const std::string& imu_name) const;
   /// The station's own measuring equipment and its calibration status (station file
   /// `equipment`: [{"name", "id", "calibrated", "due", "certificate"}], dates YYYY-MM-DD), as a
   /// unit's certificate states it: the traceability of the unit's calibration.

@@ -58,6 +58,9 @@ struct EngineOptions {
   /// Before repeating a capture invalidated by a stale stream, wait up to this long for the
   /// stream to come back [s].
   double stream_recovery_timeout_s = 30.0;
+  /// After a `power` step switches a unit on, its stream must start within this, or the run
+  /// fails to the safe state [s].
+  double power_on_timeout_s = 10.0;
   /// When the station cannot be made safe at the end of a run (a device's link is down), the
   /// engine keeps trying for this long in real seconds before giving up and saying so.
   double safe_state_retry_s = 30.0;
@@ -142,6 +145,8 @@ class RunEngine {
   /// Records the IMUs for `duration_s`; repeats invalidated attempts; returns the good attempt.
   int capture(std::size_t index, double duration_s, int first_attempt);
   void wait_for(double duration_s, const char* phase);
+  /// A `power` step: switches the supplies, waits for the streams to start (on), settles.
+  void power(const procedures::Step& step, std::size_t index);
   void wait_for_streams();
   void reestablish(std::size_t first_step, const std::vector<std::size_t>& skipped);
   /// Records the identity each IMU reports (those whose protocol says); throws StepFailed
@@ -222,6 +227,8 @@ class RunEngine {
     std::optional<std::uint32_t> last_sequence;
     double last_sample_s = 0.0;
     bool stale = false;
+    /// Switched off by a power step: its silence is meant, not a stale stream.
+    bool unpowered = false;
   };
   std::vector<ImuHealth> imu_health_;
   double last_telemetry_s_ = -1e300;

@@ -3,6 +3,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -121,6 +122,13 @@ struct AcutrolServerOptions {
 class AcutrolServer {
  public:
   explicit AcutrolServer(TableServerBackend& backend, AcutrolServerOptions options = {});
+  /// The reply to one line (terminator excluded), or none: a line protocol other than the
+  /// table's served by the same transport (SCPI, whose set commands are not answered).
+  /// `overlong`: the line was longer than acutrol::kMaxLineBytes and its text was dropped.
+  using LineHandler =
+      std::function<std::optional<std::string>(std::string_view line, bool overlong)>;
+  /// Serves `handler` instead of the table command language (same transport and threads).
+  explicit AcutrolServer(LineHandler handler, AcutrolServerOptions options = {});
   ~AcutrolServer();
   AcutrolServer(const AcutrolServer&) = delete;
   AcutrolServer& operator=(const AcutrolServer&) = delete;
@@ -151,7 +159,7 @@ class AcutrolServer {
   void serve(ByteTransport& link, const std::atomic<bool>& dropped);
   void reap_sessions(bool all);
 
-  TableServerBackend& backend_;
+  LineHandler handler_;
   AcutrolServerOptions options_;
   int listen_fd_ = -1;
   std::uint16_t port_ = 0;

@@ -8,8 +8,8 @@
 namespace calstand::drivers {
 
 /// A station of real devices: the drivers the station file names (table "acutrol", chamber
-/// "modbus", IMUs "serial" or "socketcan"), on the steady clock (scaled by the file's
-/// time_scale when rehearsing against an accelerated sim-station). Construction parses every
+/// "modbus", IMUs "serial" or "socketcan", supplies "scpi"), on the steady clock (scaled by the
+/// file's time_scale when rehearsing against an accelerated sim-station). Construction parses every
 /// connection and opens nothing; bring_up() opens the links.
 class RealStation final : public Station {
  public:
@@ -24,6 +24,8 @@ class RealStation final : public Station {
   Chamber& chamber() override { return *chamber_; }
   std::size_t imu_count() const override { return imus_.size(); }
   Imu& imu(std::size_t index) override { return *imus_.at(index); }
+  std::size_t power_supply_count() const override { return supplies_.size(); }
+  PowerSupply& power_supply(std::size_t index) override { return *supplies_.at(index); }
   void wait_until(double t_s) override { clock_.sleep_until(t_s); }
 
  private:
@@ -32,6 +34,7 @@ class RealStation final : public Station {
   std::unique_ptr<Turntable> table_;
   std::unique_ptr<Chamber> chamber_;
   std::vector<std::unique_ptr<Imu>> imus_;
+  std::vector<std::unique_ptr<PowerSupply>> supplies_;
 };
 
 }  // namespace calstand::drivers

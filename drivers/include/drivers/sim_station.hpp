@@ -24,6 +24,8 @@ class SimStation final : public Station {
   Chamber& chamber() override;
   std::size_t imu_count() const override { return imus_.size(); }
   Imu& imu(std::size_t index) override;
+  std::size_t power_supply_count() const override { return supplies_.size(); }
+  PowerSupply& power_supply(std::size_t index) override;
   void wait_until(double t_s) override { world_.advance_to(t_s); }
 
   sim::SimWorld& world() { return world_; }
@@ -32,10 +34,12 @@ class SimStation final : public Station {
   class SimTurntable;
   class SimChamber;
   class SimImu;
+  class SimPowerSupply;
   sim::SimWorld world_;
   std::unique_ptr<SimTurntable> table_;
   std::unique_ptr<SimChamber> chamber_;
   std::vector<std::unique_ptr<SimImu>> imus_;
+  std::vector<std::unique_ptr<SimPowerSupply>> supplies_;
 };
 
 }  // namespace calstand::drivers

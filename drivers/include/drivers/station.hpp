@@ -1,12 +1,15 @@
 #pragma once
 
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/clock.hpp"
 #include "core/station_config.hpp"
 #include "drivers/chamber.hpp"
 #include "drivers/imu.hpp"
+#include "drivers/power_supply.hpp"
 #include "drivers/turntable.hpp"
 
 namespace calstand::drivers {
@@ -21,13 +24,22 @@ class Station {
   virtual Chamber& chamber() = 0;
   virtual std::size_t imu_count() const = 0;
   virtual Imu& imu(std::size_t index) = 0;
+  /// The supplies of the station file's `power_supplies`, in its order.
+  virtual std::size_t power_supply_count() const { return 0; }
+  /// (Defined inline: the base part's SimStation links without the station part.)
+  virtual PowerSupply& power_supply(std::size_t index) {
+    throw std::out_of_range("station has no power supply " + std::to_string(index));
+  }
+  /// The supply feeding IMU `imu_name`, or nullptr when the station does not switch it.
+  PowerSupply* supply_of(const std::string& imu_name);
   /// Lets station time pass until `t_s`: a simulated station advances its world (as fast as
   /// the CPU allows), a real one sleeps.
   virtual void wait_until(double t_s) = 0;
   /// configure() and activate() every device; the first failure is returned.
   Result bring_up();
-  /// Table to rest, chamber to standby (the safe state); best effort on every device, the
-  /// first failure is returned.
+  /// Table to rest, chamber to standby, each supply to its safe state (off, or left on, per
+  /// the station file): the safe state; best effort on every device, the first failure is
+  /// returned.
   Result make_safe();
 };
 

@@ -56,7 +56,18 @@ struct AcutrolServer::Session {
 };
 
 AcutrolServer::AcutrolServer(TableServerBackend& backend, AcutrolServerOptions options)
-    : backend_(backend), options_(std::move(options)) {}
+    : handler_([&backend](std::string_view line, bool overlong) -> std::optional<std::string> {
+        if (overlong) {
+          return acutrol::format_error(
+              acutrol::ErrorCode::kLineTooLong,
+              fmt::format("line longer than {} bytes", acutrol::kMaxLineBytes));
+        }
+        return handle_command_line(line, backend);
+      }),
+      options_(std::move(options)) {}
+
+AcutrolServer::AcutrolServer(LineHandler handler, AcutrolServerOptions options)
+    : handler_(std::move(handler)), options_(std::move(options)) {}
 
 AcutrolServer::~AcutrolServer() { stop(); }
 
@@ -171,13 +182,10 @@ void AcutrolServer::serve(ByteTransport& link, const std::atomic<bool>& dropped)
     if (!r.ok()) return;  // the client hung up or the link failed: end of session
     lines.push(std::span<const std::uint8_t>(buffer, r.bytes));
     while (auto line = lines.next()) {
-      std::string reply =
-          line->overlong ? acutrol::format_error(
-                               acutrol::ErrorCode::kLineTooLong,
-                               fmt::format("line longer than {} bytes", acutrol::kMaxLineBytes))
-                         : handle_command_line(line->text, backend_);
+      std::optional<std::string> answer = handler_(line->text, line->overlong);
       ++commands_;
-      if (!answering_) continue;
+      if (!answering_ || !answer) continue;
+      std::string reply = std::move(*answer);
       reply.push_back(acutrol::kTerminator);
       const auto* bytes = reinterpret_cast<const std::uint8_t*>(reply.data());
       if (!link.write(std::span<const std::uint8_t>(bytes, reply.size()), kReplyTimeout).ok()) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "core/error.hpp"
 #include "drivers/device_support.hpp"
 
 namespace calstand::drivers {
@@ -163,12 +164,88 @@ class SimStation::SimImu final : public Imu {
   std::vector<core::ImuSample> in_flight_;  ///< produced, not yet received (in order)
 };
 
+class SimStation::SimPowerSupply final : public PowerSupply {
+ public:
+  SimPowerSupply(sim::SimWorld& world, std::size_t imu_index, const core::PowerSupplyConfig& config)
+      : world_(world),
+        imu_index_(imu_index),
+        config_(config),
+        voltage_v_(config.voltage_v),
+        current_limit_a_(config.current_limit_a) {}
+  const std::string& name() const override { return config_.name; }
+  const std::string& imu_name() const override { return config_.imu; }
+  Result configure() override { return life_.configure(); }
+  Result activate() override { return life_.activate(); }
+  Result deactivate() override { return life_.deactivate(); }
+  DeviceState state() const override { return life_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override {
+    return {{"refused_commands", refused_}};
+  }
+  Result set_output(bool on) override {
+    if (auto r = life_.require_active(config_.name); !r) return count(r);
+    world_.set_imu_power(imu_index_, on);
+    return Result::success();
+  }
+  Result set_voltage(double volts) override {
+    if (auto r = life_.require_active(config_.name); !r) return count(r);
+    if (!(volts > 0.0)) return count(Result::failure(fmt::format("voltage {} V refused", volts)));
+    voltage_v_ = volts;
+    return Result::success();
+  }
+  Result set_current_limit(double amps) override {
+    if (auto r = life_.require_active(config_.name); !r) return count(r);
+    if (!(amps > 0.0)) return count(Result::failure(fmt::format("current {} A refused", amps)));
+    current_limit_a_ = amps;
+    return Result::success();
+  }
+  PowerReading read() override {
+    PowerReading p;
+    p.ok = true;
+    p.time_s = world_.now_s();
+    p.output_on = world_.imu_powered(imu_index_);
+    if (p.output_on) {
+      p.voltage_v = voltage_v_;
+      p.current_a = std::min(current_limit_a_, kLoadPowerW / voltage_v_);
+    }
+    return p;
+  }
+  Result make_safe() override {
+    // Allowed in every lifecycle state: the safe state must not depend on how far bring-up got.
+    if (config_.safe_state == "off") world_.set_imu_power(imu_index_, false);
+    return Result::success();
+  }
+
+ private:
+  /// What a simulated unit draws: about an LN200's [W].
+  static constexpr double kLoadPowerW = 12.0;
+  Result count(Result r) {
+    if (!r) ++refused_;
+    return r;
+  }
+  sim::SimWorld& world_;
+  std::size_t imu_index_;
+  core::PowerSupplyConfig config_;
+  SimLifecycle life_;
+  double voltage_v_;
+  double current_limit_a_;
+  std::uint64_t refused_ = 0;
+};
+
 SimStation::SimStation(const core::StationConfig& config, double start_time_s)
     : world_(config, start_time_s),
       table_(std::make_unique<SimTurntable>(world_)),
       chamber_(std::make_unique<SimChamber>(world_)) {
   for (std::size_t i = 0; i < world_.imu_count(); ++i) {
     imus_.push_back(std::make_unique<SimImu>(world_, i, config.imus.at(i)));
+  }
+  for (const auto& p : config.power_supplies) {
+    std::size_t index = 0;
+    while (index < config.imus.size() && config.imus[index].name != p.imu) ++index;
+    // StationConfig::from_json has checked the name; a config built in code may not have.
+    if (index == config.imus.size()) {
+      throw core::InputError("power_supplies." + p.name + ".imu", "no IMU named \"" + p.imu + "\"");
+    }
+    supplies_.push_back(std::make_unique<SimPowerSupply>(world_, index, p));
   }
 }
 
@@ -177,5 +254,6 @@ SimStation::~SimStation() = default;
 Turntable& SimStation::table() { return *table_; }
 Chamber& SimStation::chamber() { return *chamber_; }
 Imu& SimStation::imu(std::size_t index) { return *imus_.at(index); }
+PowerSupply& SimStation::power_supply(std::size_t index) { return *supplies_.at(index); }
 
 }  // namespace calstand::drivers

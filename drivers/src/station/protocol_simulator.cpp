@@ -187,6 +187,9 @@ core::StationConfig ProtocolSimulator::client_station() const {
                       {"sample_rate_hz", truth.sample_rate_hz},
                       {"sequence_modulus", truth.sequence_modulus}};
   }
+  // The SCPI supply simulator (drivers/scpi_server.hpp) is not served here yet: the client
+  // station has no supplies rather than simulated ones a real station cannot hold.
+  c.power_supplies.clear();
   return c;
 }
 

@@ -8,6 +8,7 @@
 #include "drivers/can_imu.hpp"
 #endif
 #include "drivers/modbus_chamber.hpp"
+#include "drivers/scpi_power_supply.hpp"
 #include "drivers/serial_imu.hpp"
 
 namespace calstand::drivers {
@@ -47,6 +48,14 @@ RealStation::RealStation(const core::StationConfig& config, double start_time_s)
     } else {
       unknown_backend(fmt::format("imus[{}].backend", i), imu.backend, "serial, socketcan");
     }
+  }
+  for (std::size_t i = 0; i < config_.power_supplies.size(); ++i) {
+    const auto& p = config_.power_supplies[i];
+    if (p.backend != "scpi") {
+      unknown_backend(fmt::format("power_supplies[{}].backend", i), p.backend, "scpi");
+    }
+    supplies_.push_back(
+        make_scpi_power_supply(p, clock_, fmt::format("power_supplies[{}].connection", i)));
   }
 }
 

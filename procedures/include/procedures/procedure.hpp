@@ -34,9 +34,9 @@ class ProcedureError : public core::InputError {
   std::vector<Violation> violations_;
 };
 
-enum class StepKind { kSetTemperature, kMove, kRate, kCapture, kWait };
+enum class StepKind { kSetTemperature, kMove, kRate, kCapture, kWait, kPower };
 
-/// "set_temperature", "move", "rate", "capture", "wait" (the `kind` of the file).
+/// "set_temperature", "move", "rate", "capture", "wait", "power" (the `kind` of the file).
 std::string_view to_string(StepKind kind);
 
 /// The chamber is soaked once its temperature stays within tolerance_c of the target for
@@ -87,6 +87,9 @@ struct Step {
   /// Whether the axis is brought to rest at the end of this step: true unless the next step is
   /// a rate step on the same axis, which then ramps straight from this rate to its own.
   bool rest_after = true;
+
+  // kPower: the supply of `imu` (every supplied IMU when empty) on or off, then settle_s.
+  bool power_on = false;
 
   /// kCapture, kWait, kRate: recording (or waiting) time [s]; for a rate step given in
   /// revolutions, revolutions * 360 / |rate_dps|.

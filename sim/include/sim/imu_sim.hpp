@@ -74,7 +74,10 @@ class ImuSim {
 
   /// Powers the IMU up at `time_s`: a new turn-on bias per channel, the sequence counter and the
   /// device clock restart, the output filter starts settled. Every power-up draws new values.
-  void power_on(double time_s);
+  /// From a cold start (`warm` false) the truth's power-on bias transient runs from `time_s`;
+  /// `warm` stands for a unit that has been on for long before `time_s` (a simulated world
+  /// starting, a run resumed): its transient is over.
+  void power_on(double time_s, bool warm = false);
   void power_off() { powered_ = false; }
   bool powered() const { return powered_; }
   int power_cycles() const { return power_cycles_; }
@@ -100,6 +103,10 @@ class ImuSim {
   /// quantization (the simulator's truth, which a real station would not know) [deg/s, m/s^2].
   std::pair<Eigen::Vector3d, Eigen::Vector3d> noise_free_reading(const TableKinematics& table,
                                                                  double temperature_c) const;
+
+  /// The power-on transient's bias offsets at `time_s` (zero before the last power_on(), after
+  /// a warm one, or for a truth without a transient) [deg/s, m/s^2].
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> power_on_transient(double time_s) const;
 
   /// The turn-on bias in force since the last power_on() [deg/s, m/s^2].
   const Eigen::Vector3d& turn_on_gyro_bias() const { return turn_on_gyro_; }
@@ -135,6 +142,7 @@ class ImuSim {
   bool filter_primed_ = false;
   int power_cycles_ = 0;
   double power_on_time_s_ = 0.0;
+  bool transient_running_ = false;  ///< the last power-up was cold
   std::uint32_t sequence_ = 0;
   std::array<double, 6> last_slow_noise_{};
 };

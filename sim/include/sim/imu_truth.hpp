@@ -59,6 +59,15 @@ struct ImuTruth {
   double latency_s = 0.001;                ///< receive time minus sample instant
   double clock_drift_ppm = 0.0;            ///< device clock rate error
 
+  // Power-on transient (truth file `power_on`): at each power-up the bias starts offset by
+  // these amounts and the offset decays as exp(-t / power_on_time_constant_s), t from the
+  // power-up, as a unit warming its sensing elements does. Zero: no transient. The unit's
+  // self-heating after a power-up follows the station's chamber model (imu_self_heating_c,
+  // imu_time_constant_s): it starts at the air's temperature and settles above it.
+  Eigen::Vector3d gyro_power_on_bias = Eigen::Vector3d::Zero();   ///< deg/s at t = 0
+  Eigen::Vector3d accel_power_on_bias = Eigen::Vector3d::Zero();  ///< m/s^2 at t = 0
+  double power_on_time_constant_s = 60.0;  ///< decay of the bias transient [s], > 0
+
   /// Sets the parameter `full_name` (e.g. "gyro_misalignment.xz") in contract units;
   /// throws core::InputError naming the parameter when it is not in the catalogue or not a
   /// property of the IMU (`table_tilt.*` belongs to the station: table.tilt_rad).

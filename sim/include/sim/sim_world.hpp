@@ -77,6 +77,16 @@ class SimWorld {
   void set_imu_stalled(std::size_t i, bool stalled) { imus_.at(i).stalled = stalled; }
   /// Powers IMU i off and on again now: a new turn-on bias (bias repeatability).
   void power_cycle_imu(std::size_t i);
+  /// Switches IMU i's supply (a power supply's output). Off: the unit produces no samples (its
+  /// stream stops) and cools towards the air. On after off: a cold start (ImuSim::power_on: a
+  /// new turn-on bias, the truth's bias transient) and self-heating that settles from the air's
+  /// temperature with the chamber's imu_time_constant_s. Switching to the state it is in does
+  /// nothing.
+  void set_imu_power(std::size_t i, bool on);
+  bool imu_powered(std::size_t i) const { return imus_.at(i).sim->powered(); }
+  /// IMU i's own temperature: the chamber's IMU temperature less the self-heating it has not
+  /// (yet) built up since its last power-up [degC].
+  double imu_temperature_c(std::size_t i) const;
 
   core::TableState table_state() const { return table_.state(clock_.now_s()); }
   core::ChamberState chamber_state() const { return chamber_.state(clock_.now_s()); }
@@ -91,6 +101,9 @@ class SimWorld {
     std::uint64_t next_index = 0;  // samples are due at first_sample_s + index * period
     std::uint32_t drop_remaining = 0;
     bool stalled = false;
+    /// Self-heating built up [degC]: the chamber's imu_self_heating_c when on long, 0 when off
+    /// long; it moves towards either with the chamber's imu_time_constant_s.
+    double self_heating_c = 0.0;
     std::vector<core::ImuSample> buffer;
     double next_due_s() const {
       return first_sample_s + static_cast<double>(next_index) * sim->sample_period_s();

@@ -51,6 +51,73 @@ TEST(StationConfig, RoundTripsThroughJson) {
   EXPECT_EQ(b.imus[0].mount_rpy_deg, Eigen::Vector3d(0, 0, 90));
 }
 
+json with_supply(json doc, json supply) {
+  doc["power_supplies"] = json::array({std::move(supply)});
+  return doc;
+}
+
+json sim_supply() {
+  return {{"name", "psu0"},  {"backend", "sim"},       {"imu", "dut"},
+          {"voltage_v", 28}, {"current_limit_a", 1.5}, {"safe_state", "on"}};
+}
+
+TEST(StationConfig, PowerSuppliesRoundTrip) {
+  const StationConfig a =
+      StationConfig::from_json(with_supply(minimal_station(), sim_supply()), "a.json");
+  ASSERT_EQ(a.power_supplies.size(), 1u);
+  EXPECT_EQ(a.power_supplies[0].imu, "dut");
+  EXPECT_DOUBLE_EQ(a.power_supplies[0].voltage_v, 28.0);
+  EXPECT_EQ(a.power_supplies[0].safe_state, "on");
+  EXPECT_EQ(a.supply_of("dut"), &a.power_supplies[0]);
+  EXPECT_EQ(a.supply_of("other"), nullptr);
+  const StationConfig b = StationConfig::from_json(a.to_json(), "b.json");
+  EXPECT_EQ(a.to_json(), b.to_json());
+  // Defaults: safe state off.
+  json plain = sim_supply();
+  plain.erase("safe_state");
+  EXPECT_EQ(StationConfig::from_json(with_supply(minimal_station(), plain), "c.json")
+                .power_supplies[0]
+                .safe_state,
+            "off");
+}
+
+// Each bad supply is refused naming its field.
+TEST(StationConfig, BadPowerSuppliesNameTheField) {
+  const auto error_of = [](const json& supply) {
+    try {
+      StationConfig::from_json(with_supply(minimal_station(), supply), "s.json");
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  json s = sim_supply();
+  s["imu"] = "nobody";
+  EXPECT_NE(error_of(s).find("power_supplies[0].imu"), std::string::npos) << error_of(s);
+  s = sim_supply();
+  s["voltage_v"] = -5;
+  EXPECT_NE(error_of(s).find("power_supplies[0].voltage_v"), std::string::npos) << error_of(s);
+  s = sim_supply();
+  s["safe_state"] = "maybe";
+  EXPECT_NE(error_of(s).find("safe_state"), std::string::npos) << error_of(s);
+  s = sim_supply();
+  s["backend"] = "scpi";
+  s["connection"] = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", 5025}};
+  EXPECT_NE(error_of(s).find("power_supplies[0].backend"), std::string::npos) << error_of(s);
+  s = sim_supply();
+  s.erase("current_limit_a");
+  EXPECT_NE(error_of(s).find("current_limit_a"), std::string::npos) << error_of(s);
+  json doc = minimal_station();
+  doc["power_supplies"] = json::array({sim_supply(), sim_supply()});
+  doc["power_supplies"][1]["name"] = "psu1";
+  try {
+    StationConfig::from_json(doc, "s.json");
+    ADD_FAILURE() << "two supplies for one IMU accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("power_supplies[1].imu"), std::string::npos) << e.what();
+  }
+}
+
 TEST(StationConfig, TableTiltIsOptionalAndRoundTrips) {
   EXPECT_EQ(StationConfig::from_json(minimal_station(), "s.json").table.tilt_rad,
             Eigen::Vector2d::Zero());

@@ -634,5 +634,66 @@ TEST(RunEngine, RequestsQueuedBeforeTheRunAreTakenAtTheFirstBoundary) {
   EXPECT_TRUE(commands->take_all().empty());  // the engine took both
 }
 
+// ---- power steps ---------------------------------------------------------------------------
+
+Step power(bool on, double settle_s, std::string imu = {}) {
+  Step s;
+  s.kind = StepKind::kPower;
+  s.label = on ? "power on" : "power off";
+  s.power_on = on;
+  s.settle_s = settle_s;
+  s.imu = std::move(imu);
+  return s;
+}
+
+core::StationConfig station_with_supply_safe(const std::string& safe_state) {
+  core::StationConfig c = sim::default_station();
+  c.power_supplies.at(0).safe_state = safe_state;
+  return c;
+}
+
+TEST(RunEngine, PowerStepsCycleTheUnitAndTheCaptureAfterwardsIsWhole) {
+  drivers::SimStation station(station_with_supply_safe("off"));
+  MemoryJournal journal;
+  const double bias_before = station.world().imu(0).turn_on_gyro_bias().x();
+  RunEngine engine(
+      station, journal,
+      plan_of({capture(1.0), power(false, 5.0), power(true, 2.0, "imu0"), capture(2.0)}));
+  EXPECT_EQ(engine.run(), RunState::kCompleted) << engine.exit_reason();
+  EXPECT_EQ(journal.completed.size(), 4u);
+  EXPECT_NE(station.world().imu(0).turn_on_gyro_bias().x(), bias_before)
+      << "a new turn-on bias after the power cycle";
+  EXPECT_NEAR(static_cast<double>(samples_of(journal, 3)), 800.0, 1.0);
+  EXPECT_TRUE(journal.has_event(EventKind::kInfo, "imu0 powered off"));
+  EXPECT_TRUE(journal.has_event(EventKind::kInfo, "imu0 powered on"));
+  EXPECT_FALSE(journal.has_event(EventKind::kFault, "stream stale"))
+      << "a unit switched off is not a stale stream";
+  EXPECT_FALSE(journal.has_event(EventKind::kFault, "gap")) << "its restart is no sequence gap";
+  EXPECT_FALSE(station.world().imu_powered(0)) << "safe state \"off\" switches the supply off";
+}
+
+TEST(RunEngine, AUnitThatDoesNotComeBackFailsTheRunSafeWithTheReason) {
+  drivers::SimStation station(station_with_supply_safe("off"));
+  MemoryJournal journal;
+  station.world().set_imu_stalled(0, true);  // powered, but its stream never starts
+  EngineOptions options;
+  options.power_on_timeout_s = 3.0;
+  RunEngine engine(station, journal, plan_of({power(false, 1.0), power(true, 1.0), capture(1.0)}),
+                   options);
+  EXPECT_EQ(engine.run(), RunState::kFailed);
+  EXPECT_EQ(engine.exit_reason(), "imu0 did not start streaming within 3 s after power on");
+  EXPECT_EQ(journal.completed.size(), 1u);
+  EXPECT_FALSE(station.world().imu_powered(0)) << "the safe state switched the supply off";
+  EXPECT_EQ(station.chamber().read_state().mode, core::ChamberMode::kStandby);
+}
+
+TEST(RunEngine, SafeStateOnLeavesTheSupplyOn) {
+  drivers::SimStation station(station_with_supply_safe("on"));
+  MemoryJournal journal;
+  RunEngine engine(station, journal, plan_of({power(false, 1.0), power(true, 1.0)}));
+  EXPECT_EQ(engine.run(), RunState::kCompleted);
+  EXPECT_TRUE(station.world().imu_powered(0));
+}
+
 }  // namespace
 }  // namespace calstand::daemon

@@ -253,5 +253,32 @@ TEST(PlanPointing, AnUnknownImuOrAStationWithoutImusIsAViolationOfTheStep) {
                        "the station has no IMU to point");
 }
 
+TEST(PlanPower, APowerStepTakesItsSettleTimeAndNeedsASupplyForItsUnit) {
+  core::StationConfig with = station();
+  with.imus.push_back({});
+  with.imus.back().name = "imu0";
+  core::PowerSupplyConfig psu;
+  psu.name = "psu0";
+  psu.imu = "imu0";
+  with.power_supplies.push_back(psu);
+  const std::string steps =
+      R"([{"kind": "power", "power": "off", "settle_s": 5},
+          {"kind": "power", "power": "on", "settle_s": 30, "imu": "imu0"}])";
+  const Plan ok = make_plan(parse(doc_with(steps)), with, {});
+  EXPECT_TRUE(ok.violations.empty());
+  ASSERT_EQ(ok.steps.size(), 2u);
+  EXPECT_EQ(ok.steps[1].kind, StepKind::kPower);
+  EXPECT_TRUE(ok.steps[1].power_on);
+  EXPECT_DOUBLE_EQ(ok.step_duration_s[0], 5.0);
+  EXPECT_DOUBLE_EQ(ok.step_duration_s[1], 30.0);
+  EXPECT_EQ(ok.steps[1].to_json()["power"], "on");
+
+  const Plan none = plan_of(steps);  // a station without supplies
+  ASSERT_EQ(none.violations.size(), 2u);
+  EXPECT_EQ(none.violations[0].path, "steps[0].power");
+  EXPECT_EQ(none.violations[1].path, "steps[1].imu");
+  EXPECT_NE(none.violations[1].message.find("no power supply for IMU \"imu0\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace calstand::procedures
