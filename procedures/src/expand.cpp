@@ -225,8 +225,23 @@ class Expander {
   }
 
   void for_each(const json& j, const std::string& path) {
-    const json* values = &j["values"];
     json resolved;
+    if (j.contains("count")) {
+      // count: the loop variable runs 1..N (a power-cycle number, say).
+      json count = j["count"];
+      if (const auto ref = detail::parse_reference(count)) {
+        const auto value = lookup(ref->name);
+        if (!value) return;  // unreachable after the static checks
+        count = *value;
+      }
+      const double n = count.is_number() ? count.get<double>() : 0.0;
+      if (!(n >= 1.0 && n <= 10000.0) || n != std::floor(n)) {
+        add(path + ".count", fmt::format("{} is not a whole number from 1 to 10000", count.dump()));
+        return;
+      }
+      for (int k = 1; k <= static_cast<int>(n); ++k) resolved.push_back(k);
+    }
+    const json* values = j.contains("count") ? &resolved : &j["values"];
     if (const auto ref = detail::parse_reference(*values)) {
       const auto value = lookup(ref->name);
       if (!value || !value->is_array()) {  // unreachable after the static checks

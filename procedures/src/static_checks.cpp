@@ -160,7 +160,23 @@ class StepChecker {
                                                    var, outer.path)});
       }
     }
-    const json& values = step["values"];
+    if (step.contains("count")) {
+      // A count given by reference must name a number parameter; its value (a whole number
+      // from 1) is checked where it is expanded, as the parameter may be overridden.
+      if (const auto ref = parse_reference(step["count"]); step["count"].is_string()) {
+        if (!ref || ref->negated) {
+          out_.push_back({path + ".count", quote_value(step["count"]) +
+                                               " is neither a number nor a reference ${name}"});
+        } else if (specs_.count(ref->name) == 0) {
+          out_.push_back({path + ".count", ref->text() + " refers to no parameter"});
+        } else if (specs_.at(ref->name).type != Type::kNumber) {
+          out_.push_back({path + ".count", fmt::format("{} is a {} parameter, not a number",
+                                                       ref->text(),
+                                                       to_string(specs_.at(ref->name).type))});
+        }
+      }
+    }
+    const json& values = step.contains("values") ? step["values"] : json::array({1});
     if (values.is_array()) {
       if (values.empty())
         out_.push_back({path + ".values", "[] is empty: the loop would run no steps"});
