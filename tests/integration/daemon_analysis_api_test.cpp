@@ -1,7 +1,9 @@
 // The loop API of calstandd (issue 14) against a daemon in-process on an ephemeral loopback
 // port with the simulated station: a fit or diagnosis over the API is exactly `calstand fit
 // --json` / `diagnose --json` on the same run, the token is required for POSTs, bad requests
-// name the field, and the series downsampling keeps its bounds.
+// name the field, and the series downsampling keeps its bounds. The factory line's reads (issue
+// 17): the lot, a unit's records and its certificate are `calstand lot`, `calibrations` and
+// `certificate` on the same database.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
