@@ -1,8 +1,9 @@
 // The console's entry point: the token field, the message banner, the live stream indicator,
 // and the router that shows one page per location hash (#/station, #/runs, #/runs/ID,
-// #/loop/ID).
+// #/loop/ID, #/lot, #/lot/YYYY-MM-DD, #/units/SERIAL).
 import { setToken, token } from './api.js';
 import { connect, onStreamState, reconnect } from './live.js';
+import { showLot, showUnit } from './lot_page.js';
 import { showLoop } from './loop_page.js';
 import { showRuns } from './runs_page.js';
 import { showStation } from './station_page.js';
@@ -21,13 +22,24 @@ export function clearMessage() {
   messageBox.textContent = '';
 }
 
+// A percent-encoded part of the address as text; a malformed one (typed by hand) as it stands.
+function decoded(text) {
+  try {
+    return decodeURIComponent(text);
+  } catch {
+    return text;
+  }
+}
+
 // Pages return a function that releases what they hold (subscriptions, charts) when left.
 let leavePage = () => {};
 
 function route() {
   const [, page = 'station', id] = (location.hash || '#/station').split('/');
-  for (const name of ['station', 'runs', 'loop']) {
-    document.getElementById(`nav-${name}`).classList.toggle('current', name === page);
+  // A unit's page belongs to the lot's tab.
+  const tab = page === 'units' ? 'lot' : page;
+  for (const name of ['station', 'runs', 'loop', 'lot']) {
+    document.getElementById(`nav-${name}`).classList.toggle('current', name === tab);
   }
   leavePage();
   clearMessage();
@@ -37,6 +49,10 @@ function route() {
   const runId = id ? Number(id) : null;
   if (page === 'runs') leavePage = showRuns(ctx, runId);
   else if (page === 'loop') leavePage = showLoop(ctx, runId);
+  else if (page === 'lot') leavePage = showLot(ctx, id || '');
+  // The serial is percent-encoded in the address (a '/' in it would split it).
+  else if (page === 'units' && id) leavePage = showUnit(ctx, decoded(id));
+  else if (page === 'units') leavePage = showLot(ctx);
   else leavePage = showStation(ctx);
 }
 

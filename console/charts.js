@@ -1,6 +1,6 @@
 // Plots on uPlot (global `uPlot`, from npm, embedded in calstandd): live rolling time series,
-// points coloured by group, and a line on a log axis. Each returns an object with the data
-// setters a page needs and destroy().
+// points coloured by group, a line on a log axis, and a lot's control chart. Each returns an
+// object with the data setters a page needs and destroy().
 
 /** Colours for series and groups, distinguishable on white and for most colour vision. */
 export const PALETTE = ['#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#8c564b', '#e377c2',
@@ -108,6 +108,72 @@ export function logCurve(container, { title, xLabel, yLabel, label, height = 220
     destroy() {
       unfollow();
       if (plot) plot.destroy();
+    },
+  };
+}
+
+// The lot report's colours (analysis/src/lot_html.cpp), so that the console's chart and the
+// printed one read alike: units blue, the mean green, limits and outliers red.
+const CONTROL_COLOURS = { unit: '#1f77b4', mean: '#2ca02c', limit: '#d62728' };
+// Below this many units the x axis names each unit by its serial; beyond, by its number.
+const SERIALS_ON_AXIS = 12;
+
+// The ticks of an axis `incr` apart, with the digits that tell them apart and no more (uPlot's
+// own rounds 1.5e-5 to 0, and 0.0015 and 0.002 to the same text); one form for the whole axis,
+// chosen by its largest tick.
+function tickTexts(splits, incr) {
+  const largest = Math.max(incr, ...splits.map((v) => Math.abs(v)));
+  const step = Math.floor(Math.log10(incr) + 1e-9);  // the decade of the increment
+  const clamp = (digits) => Math.min(Math.max(0, digits), 12);
+  if (largest >= 1e-3 && largest < 1e6) return splits.map((v) => v.toFixed(clamp(-step)));
+  const digits = clamp(Math.floor(Math.log10(largest) + 1e-9) - step);
+  return splits.map((v) => (v === 0 ? '0' : v.toExponential(digits)));
+}
+
+/** An individuals control chart of one lot parameter (GET /lot's `parameters[i]`): each unit's
+ *  value in calibration order joined by a line, the mean, the upper and lower control limits
+ *  (UCL, LCL: dashed) and the flagged outliers ringed. The legend names the unit under the
+ *  cursor. */
+export function controlChart(container, parameter, { height = 230 } = {}) {
+  const values = parameter.values.map((v) => v.value);
+  const serials = parameter.values.map((v) => v.serial);
+  const flagged = new Set(parameter.outliers.map((o) => o.serial));
+  const n = values.length;
+  const xs = values.map((_, i) => i + 1);
+  const flat = (y) => xs.map(() => y);
+  const data = [xs, values, flat(parameter.mean), flat(parameter.control.upper), flat(parameter.control.lower),
+    values.map((v, i) => (flagged.has(serials[i]) ? v : null))];
+  const line = (label, stroke, extra = {}) => ({ label, stroke, width: 1.5, points: { show: false }, ...extra });
+  const plot = new uPlot({
+    width: widthOf(container), height,
+    scales: { x: { time: false, range: () => [0.5, n + 0.5] } },
+    axes: [
+      { label: 'unit, in calibration order', incrs: [1, 2, 5, 10, 20, 50, 100, 200, 500],
+        values: (u, splits) => splits.map((x) => (Number.isInteger(x) && x >= 1 && x <= n
+          ? (n <= SERIALS_ON_AXIS ? serials[x - 1] : String(x)) : '')) },
+      // The panel's title names the parameter; the axis says its unit, its ticks as wide as
+      // their text.
+      { label: parameter.unit, values: (u, splits, axis, space, incr) => tickTexts(splits, incr),
+        size: (u, texts) => 24 + 7 * Math.max(3, ...(texts || []).map((t) => String(t).length)) },
+    ],
+    series: [
+      { label: 'unit', value: (u, x) => (x === null || x === undefined ? '–' : `${x}: ${serials[x - 1] ?? ''}`) },
+      line('value', CONTROL_COLOURS.unit, { points: { show: true, size: 6 } }),
+      line('mean', CONTROL_COLOURS.mean, { width: 1 }),
+      line('UCL', CONTROL_COLOURS.limit, { dash: [6, 4] }),
+      line('LCL', CONTROL_COLOURS.limit, { dash: [6, 4] }),
+      { label: 'outlier', stroke: CONTROL_COLOURS.limit, paths: () => null,
+        points: { show: true, size: 13, width: 2, stroke: CONTROL_COLOURS.limit, fill: 'rgba(0,0,0,0)' } },
+    ],
+  }, data, container);
+  // What is drawn, for whoever checks the page (the browser test): units and outliers marked.
+  container.dataset.units = String(n);
+  container.dataset.outliers = String(data[5].filter((v) => v !== null).length);
+  const unfollow = followWidth(plot, container);
+  return {
+    destroy() {
+      unfollow();
+      plot.destroy();
     },
   };
 }

@@ -1,10 +1,15 @@
 #include "analysis/lot.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <charconv>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <numeric>
 
+#include "core/error.hpp"
 #include "store/acceptances.hpp"
 #include "store/calibrations.hpp"
 
@@ -57,9 +62,48 @@ void describe(LotParameter& p, const std::vector<LotUnit>& units,
   }
 }
 
+// The whole number of text[at, at + digits), or -1 when those are not all digits.
+int digits_at(const std::string& text, std::size_t at, std::size_t digits) {
+  if (at + digits > text.size()) return -1;
+  int value = 0;
+  const char* first = text.data() + at;
+  const auto [ptr, ec] = std::from_chars(first, first + digits, value);
+  return ec == std::errc() && ptr == first + digits && value >= 0 ? value : -1;
+}
+
 }  // namespace
 
+void check_lot_since(const std::string& since_utc, const std::string& where) {
+  if (since_utc.empty()) return;
+  const auto malformed = [&] {
+    return core::InputError(where, fmt::format("expected a UTC date YYYY-MM-DD or time "
+                                               "YYYY-MM-DDTHH:MM[:SS], got \"{}\"",
+                                               since_utc));
+  };
+  // Fixed positions: the separators first, then every field a number in range.
+  const std::size_t n = since_utc.size();
+  if ((n != 10 && n != 16 && n != 19) || since_utc[4] != '-' || since_utc[7] != '-') {
+    throw malformed();
+  }
+  const int y = digits_at(since_utc, 0, 4);
+  const int m = digits_at(since_utc, 5, 2);
+  const int d = digits_at(since_utc, 8, 2);
+  if (y < 0 || m < 0 || d < 0) throw malformed();
+  const std::chrono::year_month_day date{std::chrono::year(y), std::chrono::month(unsigned(m)),
+                                         std::chrono::day(unsigned(d))};
+  if (!date.ok()) throw malformed();
+  if (n == 10) return;
+  if (since_utc[10] != 'T' || since_utc[13] != ':') throw malformed();
+  const int hour = digits_at(since_utc, 11, 2);
+  const int minute = digits_at(since_utc, 14, 2);
+  if (hour < 0 || hour > 23 || minute < 0 || minute > 59) throw malformed();
+  if (n == 16) return;
+  const int second = digits_at(since_utc, 17, 2);
+  if (since_utc[16] != ':' || second < 0 || second > 59) throw malformed();
+}
+
 LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) {
+  check_lot_since(since_utc, "since");
   LotStatistics lot;
   lot.since_utc = since_utc;
   // Oldest first: a unit's later record replaces its earlier one, and the unit takes the place
@@ -100,7 +144,12 @@ LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) 
     for (const auto& p : row.record.value("parameters", nlohmann::json::array())) {
       const std::string name = p.value("name", "");
       auto [it, added] = parameter_index.emplace(name, lot.parameters.size());
-      if (added) lot.parameters.push_back({name, p.value("unit", "")});
+      if (added) {
+        LotParameter first;
+        first.name = name;
+        first.unit = p.value("unit", "");
+        lot.parameters.push_back(std::move(first));
+      }
       LotParameter& lp = lot.parameters[it->second];
       lp.values.push_back(p.value("value", 0.0));
       lp.serials.push_back(serial);

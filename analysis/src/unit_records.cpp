@@ -44,4 +44,11 @@ nlohmann::json to_json(const UnitRecord& r) {
           {"in_force", r.in_force}};
 }
 
+nlohmann::json unit_records_json(const std::string& serial,
+                                 const std::vector<UnitRecord>& records) {
+  nlohmann::json calibrations = nlohmann::json::array();
+  for (const UnitRecord& r : records) calibrations.push_back(to_json(r));
+  return {{"serial", serial}, {"calibrations", std::move(calibrations)}};
+}
+
 }  // namespace calstand::analysis

@@ -22,9 +22,7 @@ void run_calibrations(const CalibrationsOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   const std::vector<analysis::UnitRecord> records = analysis::unit_records(db, opt.serial);
   if (opt.as_json) {
-    nlohmann::json out = nlohmann::json::array();
-    for (const auto& r : records) out.push_back(analysis::to_json(r));
-    fmt::print("{}\n", nlohmann::json{{"serial", opt.serial}, {"calibrations", out}}.dump(2));
+    fmt::print("{}\n", analysis::unit_records_json(opt.serial, records).dump(2));
     return;
   }
   if (records.empty()) {

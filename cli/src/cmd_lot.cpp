@@ -23,6 +23,7 @@ struct LotOptions {
 };
 
 void run_lot(const LotOptions& opt) {
+  analysis::check_lot_since(opt.since, "--since");
   store::Database db = open_existing_database(opt.db);
   const analysis::LotStatistics lot = analysis::lot_statistics(db, opt.since);
   if (!opt.html.empty()) {
@@ -63,7 +64,9 @@ void register_lot(CLI::App& app) {
       "Every unit calibrated (its newest record): each parameter's distribution, units far from "
       "their siblings, yield, control charts");
   cmd->add_option("--db", opt->db, "Database file")->required();
-  cmd->add_option("--since", opt->since, "Only records made since this date (YYYY-MM-DD)");
+  cmd->add_option(
+      "--since", opt->since,
+      "Only records made since this UTC date (YYYY-MM-DD) or time (YYYY-MM-DDTHH:MM[:SS])");
   cmd->add_option("--html", opt->html, "Write the statistics and control charts as HTML");
   cmd->add_flag("--json", opt->as_json, "Print the statistics as JSON");
   cmd->callback([opt] { run_lot(*opt); });

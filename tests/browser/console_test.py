@@ -15,6 +15,13 @@ Checks, in one daemon's life (it takes seconds: the simulated station runs faste
   5. on the loop page of a run recorded without a table (a simulated hand-held session imported
      with `calstand import`), fit and diagnose show the table-free fit: its method, the frame
      convention's parameters, and the candidates such a run can fit.
+  7. on a fixture of three units of the demo IMU (the third with its gyro x bias ten times a
+     line's limit) run, calibrated and judged: the lot page shows the yield and the verdicts, the
+     parameter table with the API's numbers and the odd unit flagged, and a control chart per
+     parameter drawn with every unit and the outliers ringed; a `since` after the records empties
+     it; the lookup of a serial lists its records with the one in force and a certificate link
+     that opens the unit's certificate. Screenshots of the lot page are saved as console_lot.png and
+     console_lot_charts.png.
 Screenshots and the page's HTML are saved into --out when a check fails.
 
 Exit codes: 0 passed, 1 failed, 77 skipped (no chromium, chromedriver or selenium; a failure
@@ -96,6 +103,49 @@ class Daemon:
         except subprocess.TimeoutExpired:
             self.proc.kill()
         self.log.close()
+
+
+def fixture_station(demo_station, workdir):
+    """The demo station with a fixture of three demo IMUs (the errors the same, the noise each
+    its own): CON-1001 and CON-1002 named by the station file, the third named with the run and
+    built with its gyro x bias at 0.05 deg/s, ten times the line's limit."""
+    with open(demo_station) as f:
+        station = json.load(f)
+    base = station["imus"][0]
+    station["imus"] = []
+    for i in range(3):
+        imu = json.loads(json.dumps(base))
+        imu["name"] = f"imu{i}"
+        if i < 2:
+            imu["serial"] = f"CON-100{i + 1}"
+        else:
+            imu["truth"]["parameters"]["gyro_bias.x"] = 0.05
+        station["imus"].append(imu)
+    path = os.path.join(workdir, "fixture.json")
+    with open(path, "w") as f:
+        json.dump(station, f)
+    return path
+
+
+def prepare_lot(daemon, calstand, workdir):
+    """One six-position run of the fixture, each unit calibrated twice (the second model
+    newest), the newest records judged: CON-1003 fails (its first record, never judged, stays in
+    force)."""
+    status, answer = daemon.request("POST", "/runs", {"procedure": "six-position", "parameters": {"capture_s": 5},
+                                                     "units": {"imu2": "CON-1003"}})
+    assert status == 201, answer
+    run = answer["id"]
+    assert daemon.wait_run(run) == "completed"
+    for model in ("accel_bias,gyro_bias,earth_rate",
+                  "accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate"):
+        subprocess.run([calstand, "calibrate", "--db", daemon.db, "--run", str(run), "--model", model,
+                        "--out-dir", workdir], check=True, capture_output=True)
+    status, verdict = daemon.request("POST", f"/runs/{run}/acceptance", {
+        "format": "calstand-acceptance/1", "name": "console line", "limits": [
+            {"parameter": "gyro_bias.*", "max_abs": 0.005, "unit": "deg/s"}]})
+    assert status == 200, verdict
+    verdicts = [u["verdict"] for u in verdict["units"]]
+    assert verdicts == ["pass", "pass", "fail"], verdicts
 
 
 def make_driver():
@@ -306,6 +356,77 @@ class ConsoleTest:
         candidates = self.text("#candidates")
         assert "gyro_g_sensitivity" in candidates and "accel_quadratic" in candidates, candidates
 
+    def lot_page_charts_every_parameter(self):
+        from selenium.webdriver.common.by import By
+        self.open("#/lot")
+        lot = self.daemon.request("GET", "/lot")[1]
+        names = [p["name"] for p in lot["parameters"]]
+        assert len(lot["units"]) == 3 and names, f"the fixture's lot: {lot}"
+        rows = self.wait("the parameter table", lambda: self.driver.find_elements(
+            By.CSS_SELECTOR, "#lot-parameters tbody tr"))
+        assert [r.get_attribute("data-parameter") for r in rows] == names, \
+            f"table rows {[r.get_attribute('data-parameter') for r in rows]}, the lot's {names}"
+        self.wait("the yield", lambda: self.text("#yield") == "66.7 %")
+        verdicts = self.text("#verdicts")
+        assert "2 pass" in verdicts and "1 fail" in verdicts, verdicts
+        for row, p in zip(rows, lot["parameters"]):
+            cells = [c.text for c in row.find_elements(By.CSS_SELECTOR, "td")]
+            assert cells[2] == "3", (p["name"], cells)
+            for shown, key in ((cells[3], "mean"), (cells[4], "std"), (cells[5], "median")):
+                assert abs(float(shown) - p[key]) <= 1e-4 * abs(p[key]) + 1e-300, \
+                    f"{p['name']} {key}: shown {shown}, the API's {p[key]}"
+            for o in p["outliers"]:
+                assert o["serial"] in cells[8], f"{p['name']}: {o['serial']} not flagged in '{cells[8]}'"
+            if not p["outliers"]:
+                assert cells[8] == "–", (p["name"], cells[8])
+        odd = next(p for p in lot["parameters"] if p["name"] == "gyro_bias.x")
+        assert [o["serial"] for o in odd["outliers"]] == ["CON-1003"], odd["outliers"]
+        odd_row = rows[names.index("gyro_bias.x")].text
+        assert "CON-1003" in odd_row and "fail" in odd_row, odd_row
+        # One drawn chart per parameter, each with every unit and the parameter's outliers.
+        charts = self.wait("a control chart per parameter", lambda: (lambda c: len(c) == len(names) and c)(
+            self.driver.find_elements(By.CSS_SELECTOR, "#control-charts .control-chart")))
+        for chart, p in zip(charts, lot["parameters"]):
+            assert chart.get_attribute("data-parameter") == p["name"]
+            assert chart.find_elements(By.CSS_SELECTOR, ".uplot canvas"), f"{p['name']}: no plot drawn"
+            assert chart.get_attribute("data-units") == "3", (p["name"], chart.get_attribute("data-units"))
+            assert chart.get_attribute("data-outliers") == str(len(p["outliers"])), \
+                (p["name"], chart.get_attribute("data-outliers"), p["outliers"])
+        self.driver.execute_script("window.scrollTo(0, 0)")
+        self.driver.save_screenshot(os.path.join(self.out_dir, "console_lot.png"))
+        self.driver.execute_script(
+            "document.querySelector('.control-chart[data-parameter=\"gyro_bias.x\"]').parentElement.scrollIntoView()")
+        self.driver.save_screenshot(os.path.join(self.out_dir, "console_lot_charts.png"))
+        # A lot that starts after every record is empty.
+        self.driver.execute_script(
+            "const f = document.getElementById('since'); f.value = '2999-12-31';"
+            "f.dispatchEvent(new Event('change'));")
+        self.wait("the lot since 2999-12-31 in the address", lambda: self.driver.current_url.endswith("#/lot/2999-12-31"))
+        self.wait("an empty lot", lambda: self.text("#lot-size") == "0")
+        assert not self.driver.find_elements(By.CSS_SELECTOR, "#control-charts .control-chart"), "charts of an empty lot"
+
+    def unit_lookup_links_certificates(self):
+        from selenium.webdriver.common.by import By
+        self.open("#/lot")
+        field = self.wait("the serial field", lambda: self.find("#serial"))
+        field.send_keys("CON-1003")
+        self.find("#lookup").click()
+        self.wait("the unit's page", lambda: self.text("#unit-serial") == "CON-1003")
+        answer = self.daemon.request("GET", "/units/CON-1003/calibrations")[1]
+        rows = self.wait("the unit's records", lambda: self.driver.find_elements(By.CSS_SELECTOR, "#records tbody tr"))
+        assert [int(r.get_attribute("data-record")) for r in rows] == [c["id"] for c in answer["calibrations"]], \
+            (answer, [r.text for r in rows])
+        # Its newest record failed: the older one, never judged, is in force.
+        assert "fail" in rows[0].text and "in force" not in rows[0].text, rows[0].text
+        assert "in force" in rows[1].text, rows[1].text
+        assert f"record #{answer['calibrations'][1]['id']}" in self.text("#in-force"), self.text("#in-force")
+        link = rows[0].find_element(By.CSS_SELECTOR, "a.certificate").get_attribute("href")
+        assert link.endswith(f"/calibrations/{answer['calibrations'][0]['id']}/certificate"), link
+        with urllib.request.urlopen(link, timeout=120) as r:
+            page = r.read().decode()
+            assert r.status == 200 and r.headers["Content-Type"].startswith("text/html"), (r.status, r.headers)
+        assert "CON-1003" in page, "the certificate does not name the unit"
+
     def action_without_token_refused(self):
         status, answer = self.daemon.request("POST", "/runs", {"procedure": "six-position",
                                                                 "parameters": {"capture_s": 30000}})
@@ -374,6 +495,16 @@ def main():
             test.check("recommended term lowers chi2", test.recommended_term_lowers_chi2)
             test.check("action without token refused", test.action_without_token_refused)
             test.check("table-free run in the loop", test.table_free_run_in_the_loop)
+            line = Daemon(args.calstandd, workdir, fixture_station(args.station, workdir), name="line")
+            try:
+                line_test = ConsoleTest(driver, line, args.out)
+                line_test.check("fixture run calibrated and judged", lambda: prepare_lot(line, args.calstand, workdir))
+                if not line_test.failures:
+                    line_test.check("lot page charts every parameter", line_test.lot_page_charts_every_parameter)
+                    line_test.check("unit lookup links certificates", line_test.unit_lookup_links_certificates)
+                test.failures += line_test.failures
+            finally:
+                line.stop()
             with open(os.path.join(workdir, "tokens.json"), "w") as f:
                 json.dump({"format": "calstand-tokens/1",
                            "tokens": [{"name": "screen", "role": "read", "token": VIEWER_TOKEN}]}, f)

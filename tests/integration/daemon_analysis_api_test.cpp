@@ -1,13 +1,18 @@
 // The loop API of calstandd (issue 14) against a daemon in-process on an ephemeral loopback
 // port with the simulated station: a fit or diagnosis over the API is exactly `calstand fit
 // --json` / `diagnose --json` on the same run, the token is required for POSTs, bad requests
-// name the field, and the series downsampling keeps its bounds.
+// name the field, and the series downsampling keeps its bounds. The factory line's reads (issue
+// 17): the lot, a unit's records and its certificate are `calstand lot`, `calibrations` and
+// `certificate` on the same database.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 
 #include "cli_runner.hpp"
 #include "core/error_terms.hpp"
+#include "core/station_config.hpp"
 #include "daemon/api/api_server.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
@@ -247,6 +252,190 @@ TEST_F(AnalysisApi, AnAcceptanceIsTheCommandLinesAndIsStored) {
   EXPECT_EQ(api_->post("/runs/999/acceptance", spec).status, 404);
   EXPECT_EQ(api_->post(path("/acceptance?validation_run=x"), spec).status, 400);
   EXPECT_EQ(api_->post(path("/acceptance"), spec, "").status, 401);
+}
+
+// The factory line over the API (issue 17): a fixture of two units, one named by its station
+// entry and one by the submission (a serial with a space and a slash, as a customer's may be),
+// calibrated twice; the second record of the second unit fails its acceptance, so its first
+// stays in force. The lot, a unit's records and its certificate are those of `calstand lot`,
+// `calibrations` and `certificate`.
+class FactoryApi : public ::testing::Test {
+ protected:
+  static constexpr const char* kFirst = "LOT-A1";
+  static constexpr const char* kSecond = "LOT B/2";
+
+  void SetUp() override {
+    dir_ = calstand::testing::fresh_dir(
+        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    db_ = dir_ + "/station.db";
+    core::StationConfig station = sim::load_station_or_default("");
+    station.imus[0].serial = kFirst;
+    core::ImuConfig second = station.imus[0];
+    second.name = "imu1";  // another unit: its errors are drawn with its own seed
+    second.serial.clear();
+    second.mount_rpy_deg = {0.0, 0.0, 90.0};
+    station.imus.push_back(second);
+    daemon_ = std::make_unique<InProcessDaemon>(db_, station);
+    api_ = std::make_unique<ApiClient>(daemon_->port());
+    const Reply submitted = api_->post_json("/runs", {{"procedure", "six-position"},
+                                                      {"parameters", {{"capture_s", 5}}},
+                                                      {"units", {{"imu1", kSecond}}}});
+    ASSERT_EQ(submitted.status, 201) << submitted.raw;
+    run_ = submitted.body.at("id");
+    ASSERT_TRUE(wait_until([&] {
+      const Reply r = api_->get("/runs/" + std::to_string(run_));
+      return r.status == 200 && r.body.value("status", "") == "completed";
+    }));
+    calibrate("accel_bias,gyro_bias,earth_rate");                                 // records 1, 2
+    calibrate("accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate");  // 3, 4
+    // The first unit's newest record passes; the second unit's fails a chi2/dof no fit meets.
+    const std::string runs = "/runs/" + std::to_string(run_);
+    Reply r = api_->post(runs + "/acceptance?device=imu0",
+                         R"js({"format": "calstand-acceptance/1", "name": "line", "limits": [
+                               {"parameter": "accel_bias.*", "max_abs": 0.05, "unit": "m/s^2"}]})js");
+    ASSERT_EQ(r.status, 200) << r.raw;
+    ASSERT_EQ(r.body.at("verdict"), "pass") << r.raw;
+    r = api_->post(runs + "/acceptance?device=imu1",
+                   R"js({"format": "calstand-acceptance/1", "name": "strict", "limits": [
+                         {"fit": "chi2_dof", "max": 1e-9}]})js");
+    ASSERT_EQ(r.status, 200) << r.raw;
+    ASSERT_EQ(r.body.at("verdict"), "fail") << r.raw;
+  }
+  void calibrate(const std::string& model) {
+    const auto c =
+        calstand::testing::run("calibrate --db " + db_ + " --run " + std::to_string(run_) +
+                                   " --model " + model + " --out-dir " + dir_,
+                               "/dev/null");
+    ASSERT_EQ(c.exit_code, 0) << c.out;
+  }
+  nlohmann::json cli(const std::string& args) {
+    const auto r = calstand::testing::run(args + " --db " + db_ + " --json", "/dev/null");
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << r.out;
+    return nlohmann::json::parse(r.out, nullptr, false);
+  }
+  // A path segment percent-encoded (RFC 3986: all but the unreserved characters).
+  static std::string encoded(const std::string& segment) {
+    std::string out;
+    for (const unsigned char c : segment) {
+      if (std::isalnum(c) || c == '-' || c == '.' || c == '_' || c == '~') {
+        out += static_cast<char>(c);
+      } else {
+        out += fmt::format("%{:02X}", c);
+      }
+    }
+    return out;
+  }
+
+  std::string dir_;
+  std::string db_;
+  std::unique_ptr<InProcessDaemon> daemon_;
+  std::unique_ptr<ApiClient> api_;
+  std::int64_t run_ = 0;
+};
+
+TEST_F(FactoryApi, TheLotIsTheCommandLinesWithBothUnitsAndTheirVerdicts) {
+  const Reply lot = api_->get("/lot");
+  ASSERT_EQ(lot.status, 200) << lot.raw;
+  EXPECT_EQ(lot.body, cli("lot")) << lot.body.dump(1);
+  ASSERT_EQ(lot.body.at("units").size(), 2u);
+  EXPECT_EQ(lot.body["units"][0]["serial"], kFirst);
+  EXPECT_EQ(lot.body["units"][0]["calibration"], 3);  // each unit with its newest record
+  EXPECT_EQ(lot.body["units"][0]["verdict"], "pass");
+  EXPECT_EQ(lot.body["units"][1]["serial"], kSecond);
+  EXPECT_EQ(lot.body["units"][1]["calibration"], 4);
+  EXPECT_EQ(lot.body["units"][1]["verdict"], "fail");
+  EXPECT_EQ(lot.body["verdicts"]["pass"], 1);
+  EXPECT_EQ(lot.body["verdicts"]["fail"], 1);
+  EXPECT_DOUBLE_EQ(lot.body["yield"].get<double>(), 0.5);
+  // The newest model's parameters (earth_rate, the site's, is no unit's), each with a value per
+  // unit and its control limits.
+  ASSERT_EQ(lot.body["parameters"].size(), 3u + 3u + 6u + 3u) << lot.body["parameters"];
+  for (const auto& p : lot.body["parameters"]) {
+    EXPECT_EQ(p["n"], 2) << p.dump();
+    EXPECT_EQ(p["values"].size(), 2u) << p.dump();
+    EXPECT_LE(p["control"]["lower"].get<double>(), p["mean"].get<double>()) << p.dump();
+    EXPECT_GE(p["control"]["upper"].get<double>(), p["mean"].get<double>()) << p.dump();
+  }
+
+  const Reply since = api_->get("/lot?since=2000-01-01");
+  ASSERT_EQ(since.status, 200) << since.raw;
+  EXPECT_EQ(since.body, cli("lot --since 2000-01-01"));
+  EXPECT_EQ(since.body["since"], "2000-01-01");
+  EXPECT_EQ(since.body["units"].size(), 2u);
+  const Reply later = api_->get("/lot?since=9999-12-31T23:59");
+  ASSERT_EQ(later.status, 200) << later.raw;
+  EXPECT_EQ(later.body["units"].size(), 0u);
+  EXPECT_EQ(later.body["parameters"].size(), 0u);
+
+  for (const char* bad : {"yesterday", "2026-13-01", "2026-1-1", "01.12.2026"}) {
+    const Reply r = api_->get(std::string("/lot?since=") + bad);
+    EXPECT_EQ(r.status, 400) << bad << ": " << r.raw;
+    EXPECT_EQ(r.body.value("where", ""), "?since") << r.raw;
+    EXPECT_NE(r.body.value("error", "").find(bad), std::string::npos) << r.raw;
+  }
+  // The command line refuses the same start, naming its option.
+  const auto r = calstand::testing::run("lot --since yesterday --db " + db_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.out.find("--since"), std::string::npos) << r.out;
+}
+
+TEST_F(FactoryApi, AUnitsRecordsAreTheCommandLinesWithTheOneInForce) {
+  const Reply second = api_->get("/units/" + encoded(kSecond) + "/calibrations");
+  ASSERT_EQ(second.status, 200) << second.raw;
+  EXPECT_EQ(second.body, cli(std::string("calibrations --serial '") + kSecond + "'"));
+  EXPECT_EQ(second.body["serial"], kSecond);
+  const nlohmann::json& records = second.body.at("calibrations");
+  ASSERT_EQ(records.size(), 2u) << second.raw;
+  // Newest first; the newest failed its acceptance, so the older one is in force.
+  EXPECT_EQ(records[0]["id"], 4);
+  EXPECT_EQ(records[0]["verdict"], "fail");
+  EXPECT_EQ(records[0]["spec"], "strict");
+  EXPECT_FALSE(records[0]["in_force"].get<bool>());
+  EXPECT_EQ(records[1]["id"], 2);
+  EXPECT_TRUE(records[1]["verdict"].is_null());
+  EXPECT_TRUE(records[1]["in_force"].get<bool>());
+  EXPECT_EQ(records[1]["imu"], "imu1");
+
+  const Reply first = api_->get(std::string("/units/") + kFirst + "/calibrations");
+  ASSERT_EQ(first.status, 200) << first.raw;
+  ASSERT_EQ(first.body["calibrations"].size(), 2u);
+  EXPECT_EQ(first.body["calibrations"][0]["id"], 3);
+  EXPECT_TRUE(first.body["calibrations"][0]["in_force"].get<bool>());
+
+  // A serial nobody calibrated has no records, as the command line says.
+  const Reply unknown = api_->get("/units/NOBODY/calibrations");
+  ASSERT_EQ(unknown.status, 200) << unknown.raw;
+  EXPECT_EQ(unknown.body, cli("calibrations --serial NOBODY"));
+  EXPECT_EQ(unknown.body["calibrations"].size(), 0u);
+}
+
+TEST_F(FactoryApi, ACertificateIsTheUnitsPageAndAnUnknownOneIsNotFound) {
+  const Reply page = api_->get("/calibrations/4/certificate");
+  if (page.status == 503) {
+    EXPECT_EQ(page.body["where"], "gnuplot");
+    GTEST_SKIP() << "gnuplot is not installed: the certificate's residual plot needs it";
+  }
+  ASSERT_EQ(page.status, 200) << page.raw.substr(0, 300);
+  EXPECT_EQ(page.raw.rfind("<!DOCTYPE html>", 0), 0u) << page.raw.substr(0, 100);
+  bool html = false;
+  for (const auto& [k, v] : page.headers) html |= k == "Content-Type" && v.starts_with("text/html");
+  EXPECT_TRUE(html);
+  // The unit (its serial, HTML-escaped: the slash and the space stay), the record's number and
+  // the verdict that keeps it out of force.
+  EXPECT_NE(page.raw.find(kSecond), std::string::npos);
+  EXPECT_NE(page.raw.find("-000004"), std::string::npos);
+  EXPECT_NE(page.raw.find("strict"), std::string::npos);
+  // The command line's page of the same record says the same (issued at another moment).
+  const auto c = calstand::testing::run(
+      "certificate --db " + db_ + " --calibration 4 --out " + dir_ + "/cert.html", "/dev/null");
+  ASSERT_EQ(c.exit_code, 0) << c.out;
+  const std::string from_cli = calstand::testing::read_text(dir_ + "/cert.html");
+  EXPECT_EQ(from_cli.size(), page.raw.size());
+
+  const Reply unknown = api_->get("/calibrations/999/certificate");
+  EXPECT_EQ(unknown.status, 404) << unknown.raw;
+  EXPECT_EQ(unknown.body.value("where", ""), "/calibrations/999");
+  EXPECT_EQ(api_->get("/calibrations/0/certificate").status, 404);
 }
 
 // A run recorded without a table (a hand-held session imported as calstand-import/2): the

@@ -4,7 +4,9 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 
+#include "core/station_config.hpp"
 #include "daemon/api/api_server.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
@@ -33,6 +35,14 @@ class InProcessDaemon {
         service_({sim::load_station_or_default(""), db, daemon::service::RecoveryPolicy::kAuto},
                  hub_),
         server_(service_, hub_, with_free_port(std::move(api_options))) {
+    port_ = server_.start();
+    service_.start();
+  }
+  /// With `station` (a fixture of several units, serials) instead of the built-in station.
+  InProcessDaemon(const std::string& db, core::StationConfig station)
+      : hub_(4096),
+        service_({std::move(station), db, daemon::service::RecoveryPolicy::kAuto}, hub_),
+        server_(service_, hub_, options(64 * 1024)) {
     port_ = server_.start();
     service_.start();
   }

@@ -67,8 +67,15 @@ struct LotStatistics {
   std::vector<LotParameter> parameters;  ///< in the order they first appear
 };
 
-/// The lot of every unit (serial) calibrated at or after `since_utc` (ISO 8601 date or time,
-/// compared as text; empty: all), each with its newest record.
+/// Checks the start of a lot as `calstand lot --since` and GET /lot?since= take it: a UTC date
+/// YYYY-MM-DD, or a UTC time YYYY-MM-DDTHH:MM[:SS]; empty: every record. Records' times are
+/// compared with it as text, so any other form (a slash, a missing zero, a time zone) would
+/// select another lot than it says without a word. Throws core::InputError naming `where`.
+void check_lot_since(const std::string& since_utc, const std::string& where);
+
+/// The lot of every unit (serial) calibrated at or after `since_utc` (check_lot_since; empty:
+/// all), each with its newest record. Throws core::InputError naming `since` for a malformed
+/// start.
 LotStatistics lot_statistics(store::Database& db, const std::string& since_utc);
 
 /// `{"since", "units": [...], "records_without_serial", "verdicts": {"pass", "fail",

@@ -35,4 +35,9 @@ std::vector<UnitRecord> unit_records(store::Database& db, const std::string& ser
 ///   "in_force"}`, the record itself left out (GET /calibrations/{id} has it).
 nlohmann::json to_json(const UnitRecord& record);
 
+/// `{"serial", "calibrations": [to_json(record), ...]}`: the lookup of unit `serial` (empty:
+/// every record) as `calstand calibrations --json` prints it and GET /units/{serial}/calibrations
+/// answers it.
+nlohmann::json unit_records_json(const std::string& serial, const std::vector<UnitRecord>& records);
+
 }  // namespace calstand::analysis

@@ -178,6 +178,7 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   register_procedure_routes(server, impl_->ctx);
   register_console_routes(server, impl_->ctx);
   register_analysis_routes(server, impl_->ctx);
+  register_factory_routes(server, impl_->ctx);
 }
 
 ApiServer::~ApiServer() { stop(); }

@@ -42,5 +42,8 @@ void register_procedure_routes(httplib::Server& server, const RouteContext& ctx)
 void register_console_routes(httplib::Server& server, const RouteContext& ctx);
 /// /catalogue, /runs/{id}/fits|diagnose|history|report|calibrations|series (routes_analysis.cpp).
 void register_analysis_routes(httplib::Server& server, const RouteContext& ctx);
+/// The factory line: /lot, /units/{serial}/calibrations, /calibrations/{id}/certificate
+/// (routes_factory.cpp).
+void register_factory_routes(httplib::Server& server, const RouteContext& ctx);
 
 }  // namespace calstand::daemon::api

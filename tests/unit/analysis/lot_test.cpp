@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "core/error.hpp"
 #include "store/acceptances.hpp"
 #include "store/calibrations.hpp"
 #include "store/run_store.hpp"
@@ -93,6 +94,29 @@ TEST_F(LotTest, TwoUnitsHaveNoSpreadToFlagAgainst) {
   ASSERT_EQ(lot.parameters.size(), 1u);
   EXPECT_TRUE(lot.parameters[0].outliers.empty());
   EXPECT_FALSE(lot.yield.has_value());
+}
+
+// The start of a lot is compared with the records' times as text: only the forms that compare
+// as they read are taken, and anything else is refused naming where it came from.
+TEST_F(LotTest, ALotStartsAtADateOrATimeAndNothingElse) {
+  calibrate("A", 1e-3);
+  for (const char* since :
+       {"", "2026-02-28", "2024-02-29", "2026-12-01T08:30", "2026-12-01T23:59:59"}) {
+    EXPECT_NO_THROW(check_lot_since(since, "?since")) << since;
+  }
+  for (const char* since : {"yesterday", "2026-1-01", "2026/01/01", "2026-13-01", "2025-02-29",
+                            "2026-01-01 08:30", "2026-01-01T24:00", "2026-01-01T08:30Z",
+                            "2026-01-01T08:30:00.5", "-026-01-01", "2026-01-0x"}) {
+    try {
+      check_lot_since(since, "?since");
+      ADD_FAILURE() << since << " was taken";
+    } catch (const core::InputError& e) {
+      EXPECT_EQ(e.where(), "?since") << since;
+      EXPECT_NE(std::string(e.what()).find(since), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(lot_statistics(db_, "01.12.2026"), core::InputError);
+  EXPECT_EQ(lot_statistics(db_, "2000-01-01T00:00").units.size(), 1u);
 }
 
 }  // namespace
