@@ -1,10 +1,12 @@
 // `calstand analyze KIND`: the datasheet analyses of the seed's test catalogue on a stored run.
-// Kinds so far: stability (in-run bias stability of a long static capture).
+// Kinds so far: stability (in-run bias stability of a long static capture), repeatability
+// (turn-on bias across power cycles).
 #include <fmt/format.h>
 
 #include <optional>
 #include <string>
 
+#include "analysis/repeatability.hpp"
 #include "analysis/stability.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
@@ -42,14 +44,37 @@ void print_stability(const analysis::StabilityAnalysis& s) {
       "a bound.\nnot resolved: the correlation time is outside what the record shows.\n");
 }
 
+void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
+  fmt::print("run {} {}: {} power cycles, {} position{} each ({} degrees of freedom)\n", r.run,
+             r.device, r.cycles, r.positions, r.positions == 1 ? "" : "s", r.dof);
+  fmt::print("{:<8} {:>16} {:>26} {:>14} {:>16}\n", "channel", "repeatability",
+             fmt::format("{:.0f} % interval", 100.0 * r.confidence), "spread", "noise of a mean");
+  for (std::size_t c = 0; c < r.channels.size(); ++c) {
+    const auto& ch = r.channels[c];
+    const char* unit = c < 3 ? "deg/h" : "ug";
+    fmt::print("{:<8} {:>10.4g} {:<5} {:>11.4g} .. {:<11.4g} {:>14.4g} {:>16.4g}\n", ch.channel,
+               ch.repeatability, unit, ch.repeatability_lo, ch.repeatability_hi, ch.spread,
+               ch.noise_of_means);
+  }
+  fmt::print("repeatability = sqrt(spread^2 - noise of a mean^2), 1 sigma across power-ups\n");
+}
+
 void run_analyze(const AnalyzeOptions& opt) {
-  if (opt.kind != "stability") {
+  if (opt.kind != "stability" && opt.kind != "repeatability") {
     throw core::InputError("KIND", "'" + opt.kind +
-                                       "' is not an analysis calstand has (stability); "
-                                       "repeatability, warmup, bandwidth and hysteresis follow "
-                                       "with their procedures");
+                                       "' is not an analysis calstand has (stability, "
+                                       "repeatability)");
   }
   store::Database db = open_existing_database(opt.db);
+  if (opt.kind == "repeatability") {
+    const auto r = analysis::analyse_repeatability(db, opt.run, opt.device);
+    if (opt.as_json) {
+      fmt::print("{}\n", analysis::to_json(r).dump(2));
+    } else {
+      print_repeatability(r);
+    }
+    return;
+  }
   const analysis::StabilityAnalysis s =
       analysis::analyse_stability(db, opt.run, opt.device, opt.step);
   if (opt.as_json) {
@@ -67,7 +92,7 @@ void register_analyze(CLI::App& app) {
       "analyze",
       "Datasheet analyses of a run: stability (bias instability and bias variation "
       "with its correlation time, from a long static capture)");
-  cmd->add_option("kind", opt->kind, "stability")->required();
+  cmd->add_option("kind", opt->kind, "stability | repeatability")->required();
   cmd->add_option("--db", opt->db, "Database file")->required();
   cmd->add_option("--run", opt->run, "Run id")->required();
   cmd->add_option("--device", opt->device, "IMU (default: the run's first)");

@@ -170,9 +170,9 @@ class StepChecker {
         } else if (specs_.count(ref->name) == 0) {
           out_.push_back({path + ".count", ref->text() + " refers to no parameter"});
         } else if (specs_.at(ref->name).type != Type::kNumber) {
-          out_.push_back({path + ".count", fmt::format("{} is a {} parameter, not a number",
-                                                       ref->text(),
-                                                       to_string(specs_.at(ref->name).type))});
+          out_.push_back(
+              {path + ".count", fmt::format("{} is a {} parameter, not a number", ref->text(),
+                                            to_string(specs_.at(ref->name).type))});
         }
       }
     }

@@ -25,6 +25,7 @@ std::string fmt_double(double v) {
 using calstand::testing::read_text;
 using calstand::testing::Result;
 using calstand::testing::run;
+using calstand::testing::write_text;
 
 // One 20-minute static-allan run shared by the tests (a fraction of a second of simulation).
 class NoiseCli : public ::testing::Test {
@@ -299,6 +300,57 @@ TEST(AnalyzeStabilityCli, RecoversTheSheetsBiasVariationAndCorrelationTimeAndFin
   r = run("analyze stability --db " + db + " --run 2");
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.out.find("at least 600 s"), std::string::npos) << r.out;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
+// Twelve power cycles of the LN200-class unit (turn-on bias 3 deg/h and 500 ug, 1 sigma, a new
+// draw at every power-up) on three station seeds: each axis's 95 % interval should hold the
+// sheet's figure, so of the 18 intervals about one misses; more than three missing is a bias,
+// not chance (binomial, p < 0.01). Pooled over seeds and axes the estimate is within 20 %.
+TEST(AnalyzeRepeatabilityCli, TwelvePowerCyclesRecoverTheSheetsTurnOnBiasWithinTheirIntervals) {
+  const std::string dir = ::testing::TempDir() + "analyze_repeat-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const nlohmann::json truth =
+      nlohmann::json::parse(run("station --json").out)["derived"]["imus"][0]["truth"]["noise"];
+  const double gyro_truth = truth["gyro"]["turn_on_bias_deg_per_h"];
+  const double accel_truth = truth["accel"]["turn_on_bias_ug"];
+  nlohmann::json station = nlohmann::json::parse(
+      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
+  int missed = 0;
+  double gyro_sq = 0.0;
+  double accel_sq = 0.0;
+  for (int seed : {101, 202, 303}) {
+    station["seed"] = seed;
+    const std::string file = dir + "/station" + std::to_string(seed) + ".json";
+    write_text(file, station.dump());
+    const std::string db = dir + "/repeat" + std::to_string(seed) + ".db";
+    Result r = run("run repeatability --quiet --station " + file + " --db " + db);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    r = run("analyze repeatability --json --db " + db + " --run 1");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const nlohmann::json a = nlohmann::json::parse(r.out);
+    EXPECT_EQ(a["cycles"], 12);
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto& gi = a["gyro"]["interval_deg_per_h"][axis];
+      const auto& ai = a["accel"]["interval_ug"][axis];
+      missed += (gyro_truth < gi[0].get<double>() || gyro_truth > gi[1].get<double>()) ? 1 : 0;
+      missed += (accel_truth < ai[0].get<double>() || accel_truth > ai[1].get<double>()) ? 1 : 0;
+      gyro_sq += std::pow(a["gyro"]["bias_repeatability_deg_per_h"][axis].get<double>(), 2) / 9;
+      accel_sq += std::pow(a["accel"]["bias_repeatability_ug"][axis].get<double>(), 2) / 9;
+      EXPECT_EQ(a["gyro"]["turn_on_bias_deg_per_h"][axis].size(), 12u);
+    }
+  }
+  EXPECT_LE(missed, 3);
+  EXPECT_NEAR(std::sqrt(gyro_sq), gyro_truth, 0.2 * gyro_truth);
+  EXPECT_NEAR(std::sqrt(accel_sq), accel_truth, 0.2 * accel_truth);
+  // A run without power cycles is refused, saying what it needs.
+  const Result r = run("analyze repeatability --db " + dir + "/repeat101.db --run 1 --device imu9");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
   std::filesystem::remove_all(dir);
 }
 
