@@ -8,6 +8,7 @@
 
 #include "analysis/repeatability.hpp"
 #include "analysis/stability.hpp"
+#include "analysis/warmup.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "open_database.hpp"
@@ -21,6 +22,8 @@ struct AnalyzeOptions {
   std::int64_t run = 0;
   std::string device;
   std::optional<std::size_t> step;
+  double band_deg_per_h = 1.0;  ///< warmup: settled when within this of the final gyro bias
+  double band_ug = 50.0;        ///< warmup: ... and of the final accelerometer bias
   bool as_json = false;
 };
 
@@ -59,13 +62,43 @@ void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
   fmt::print("repeatability = sqrt(spread^2 - noise of a mean^2), 1 sigma across power-ups\n");
 }
 
+void print_warmup(const analysis::WarmupAnalysis& w) {
+  fmt::print(
+      "run {} {}, step {} \"{}\": {:.0f} s from power-up, bins of {:.3g} s; the IMU warmed "
+      "by {:.2f} degC\n",
+      w.run, w.device, w.step, w.step_label, w.duration_s, w.bin_s, w.temperature_rise_c,
+      w.with_temperature ? " (its temperature is a term of the fit)" : "");
+  fmt::print("{:<8} {:>24} {:>16} {:>22}\n", "channel", "transient amplitude", "time constant",
+             "time to band");
+  for (std::size_t c = 0; c < w.channels.size(); ++c) {
+    const auto& ch = w.channels[c];
+    const bool gyro = c < 3;
+    fmt::print("{:<8} {:>10.4g} +- {:<7.2g} {:<5} {:>12.4g} s {:>12.0f} s (+-{:g} {}){}\n",
+               ch.channel, ch.amplitude, ch.amplitude_sigma, gyro ? "deg/h" : "ug",
+               ch.time_constant_s, ch.time_to_band_s, gyro ? w.band_deg_per_h : w.band_ug,
+               gyro ? "deg/h" : "ug",
+               ch.resolved ? (ch.temperature_term ? "  (with a temperature term)" : "")
+                           : "  (no transient resolved)");
+  }
+}
+
 void run_analyze(const AnalyzeOptions& opt) {
-  if (opt.kind != "stability" && opt.kind != "repeatability") {
+  if (opt.kind != "stability" && opt.kind != "repeatability" && opt.kind != "warmup") {
     throw core::InputError("KIND", "'" + opt.kind +
                                        "' is not an analysis calstand has (stability, "
-                                       "repeatability)");
+                                       "repeatability, warmup)");
   }
   store::Database db = open_existing_database(opt.db);
+  if (opt.kind == "warmup") {
+    const auto w = analysis::analyse_warmup(db, opt.run, opt.device, opt.step, opt.band_deg_per_h,
+                                            opt.band_ug);
+    if (opt.as_json) {
+      fmt::print("{}\n", analysis::to_json(w).dump(2));
+    } else {
+      print_warmup(w);
+    }
+    return;
+  }
   if (opt.kind == "repeatability") {
     const auto r = analysis::analyse_repeatability(db, opt.run, opt.device);
     if (opt.as_json) {
@@ -92,11 +125,17 @@ void register_analyze(CLI::App& app) {
       "analyze",
       "Datasheet analyses of a run: stability (bias instability and bias variation "
       "with its correlation time, from a long static capture)");
-  cmd->add_option("kind", opt->kind, "stability | repeatability")->required();
+  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup")->required();
   cmd->add_option("--db", opt->db, "Database file")->required();
   cmd->add_option("--run", opt->run, "Run id")->required();
   cmd->add_option("--device", opt->device, "IMU (default: the run's first)");
   cmd->add_option("--step", opt->step, "Static capture step (default: the longest)");
+  cmd->add_option("--band-deg-per-h", opt->band_deg_per_h,
+                  "warmup: a gyro bias within this of its settled value is settled")
+      ->capture_default_str();
+  cmd->add_option("--band-ug", opt->band_ug,
+                  "warmup: an accelerometer bias within this of its settled value is settled")
+      ->capture_default_str();
   cmd->add_flag("--json", opt->as_json, "Print the analysis as JSON");
   cmd->callback([opt] { run_analyze(*opt); });
 }
