@@ -3,9 +3,11 @@
 // (turn-on bias across power cycles).
 #include <fmt/format.h>
 
+#include <cmath>
 #include <optional>
 #include <string>
 
+#include "analysis/hysteresis.hpp"
 #include "analysis/repeatability.hpp"
 #include "analysis/stability.hpp"
 #include "analysis/warmup.hpp"
@@ -82,13 +84,37 @@ void print_warmup(const analysis::WarmupAnalysis& w) {
   }
 }
 
+void print_hysteresis(const analysis::HysteresisAnalysis& h) {
+  fmt::print("run {} {}: {} at each set point, on the way up and down\n", h.run, h.device, h.model);
+  fmt::print("{:>8}  {:<16} {:>22} {:>22} {:>22} {:>7}\n", "degC", "parameter", "up", "down",
+             "up - down", "z");
+  for (const auto& p : h.points) {
+    fmt::print("{:>8g}  {:<16} {:>22} {:>22} {:>22} {:>7.1f} {}{}\n", p.temperature_c, p.parameter,
+               fmt::format("{:.5g} +- {:.2g}", p.up, p.up_sigma),
+               fmt::format("{:.5g} +- {:.2g}", p.down, p.down_sigma),
+               fmt::format("{:.3g} +- {:.2g}", p.difference, p.difference_sigma), p.z, p.unit,
+               std::abs(p.z) > 4.0 ? "  <- hysteresis" : "");
+  }
+  fmt::print("|z| > 4: the difference is far beyond both fits' uncertainty\n");
+}
+
 void run_analyze(const AnalyzeOptions& opt) {
-  if (opt.kind != "stability" && opt.kind != "repeatability" && opt.kind != "warmup") {
+  if (opt.kind != "stability" && opt.kind != "repeatability" && opt.kind != "warmup" &&
+      opt.kind != "hysteresis") {
     throw core::InputError("KIND", "'" + opt.kind +
                                        "' is not an analysis calstand has (stability, "
-                                       "repeatability, warmup)");
+                                       "repeatability, warmup, hysteresis)");
   }
   store::Database db = open_existing_database(opt.db);
+  if (opt.kind == "hysteresis") {
+    const auto h = analysis::analyse_hysteresis(db, opt.run, opt.device);
+    if (opt.as_json) {
+      fmt::print("{}\n", analysis::to_json(h).dump(2));
+    } else {
+      print_hysteresis(h);
+    }
+    return;
+  }
   if (opt.kind == "warmup") {
     const auto w = analysis::analyse_warmup(db, opt.run, opt.device, opt.step, opt.band_deg_per_h,
                                             opt.band_ug);
@@ -125,7 +151,7 @@ void register_analyze(CLI::App& app) {
       "analyze",
       "Datasheet analyses of a run: stability (bias instability and bias variation "
       "with its correlation time, from a long static capture)");
-  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup")->required();
+  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup | hysteresis")->required();
   cmd->add_option("--db", opt->db, "Database file")->required();
   cmd->add_option("--run", opt->run, "Run id")->required();
   cmd->add_option("--device", opt->device, "IMU (default: the run's first)");

@@ -1,5 +1,6 @@
 #include "sim/imu_sim.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -149,6 +150,17 @@ void ImuSim::power_on(double time_s, bool warm) {
   ++power_cycles_;
 }
 
+double ImuSim::hysteresis_branch(double temperature_c) {
+  const double half = 0.5 * truth_.hysteresis_width_c;
+  // The play operator starts where the unit is, in the middle of its band.
+  if (!play_started_) {
+    play_c_ = temperature_c;
+    play_started_ = true;
+  }
+  play_c_ = std::clamp(play_c_, temperature_c - half, temperature_c + half);
+  return (temperature_c - play_c_) / truth_.hysteresis_width_c;  // -1/2 .. +1/2
+}
+
 std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::power_on_transient(double time_s) const {
   if (!transient_running_ || time_s < power_on_time_s_) {
     return {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
@@ -172,13 +184,16 @@ core::ImuSample ImuSim::sample(double time_s, const ImuInputs& in) {
   const double temperature_c = in.temperature_c;
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
   const auto [gyro_transient, accel_transient] = power_on_transient(time_s);
+  const double hysteresis = hysteresis_branch(temperature_c);
 
   std::array<double, 6> value{};
   for (int i = 0; i < 3; ++i) {
-    value[static_cast<std::size_t>(i)] =
-        in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i] + gyro_transient[i];
-    value[static_cast<std::size_t>(i) + 3] =
-        in.force_mps2[i] + accel_error[i] + turn_on_accel_[i] + accel_transient[i];
+    value[static_cast<std::size_t>(i)] = in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i] +
+                                         gyro_transient[i] +
+                                         hysteresis * truth_.gyro_hysteresis_bias[i];
+    value[static_cast<std::size_t>(i) + 3] = in.force_mps2[i] + accel_error[i] + turn_on_accel_[i] +
+                                             accel_transient[i] +
+                                             hysteresis * truth_.accel_hysteresis_bias[i];
   }
   for (std::size_t c = 0; c < 6; ++c) {
     Channel& ch = channels_[c];

@@ -248,6 +248,11 @@ void ImuTruth::validate(const std::string& file_name) const {
   c.non_negative("output.latency_s", latency_s);
   c.finite("output.clock_drift_ppm", clock_drift_ppm);
   c.positive("power_on.time_constant_s", power_on_time_constant_s);
+  c.positive("thermal_hysteresis.width_c", hysteresis_width_c);
+  for (int i = 0; i < 3; ++i) {
+    c.finite("thermal_hysteresis.gyro_bias_deg_per_h", gyro_hysteresis_bias[i]);
+    c.finite("thermal_hysteresis.accel_bias_ug", accel_hysteresis_bias[i]);
+  }
   for (int i = 0; i < 3; ++i) {
     c.finite("power_on.gyro_bias_deg_per_h", gyro_power_on_bias[i]);
     c.finite("power_on.accel_bias_ug", accel_power_on_bias[i]);
@@ -294,6 +299,17 @@ ImuTruth imu_truth_from_json(const json& doc, const std::string& file_name) {
     t.accel_power_on_bias = triple_of("accel_bias_ug", kUgToMps2);
     t.power_on_time_constant_s = p.value("time_constant_s", t.power_on_time_constant_s);
   }
+  if (doc.contains("thermal_hysteresis")) {
+    const json& h = doc.at("thermal_hysteresis");
+    const auto triple_of = [&](const char* key, double scale) -> Eigen::Vector3d {
+      if (!h.contains(key)) return Eigen::Vector3d::Zero();
+      const json& a = h.at(key);
+      return Eigen::Vector3d(a[0].get<double>(), a[1].get<double>(), a[2].get<double>()) * scale;
+    };
+    t.gyro_hysteresis_bias = triple_of("gyro_bias_deg_per_h", 1.0 / 3600.0);
+    t.accel_hysteresis_bias = triple_of("accel_bias_ug", kUgToMps2);
+    t.hysteresis_width_c = h.value("width_c", t.hysteresis_width_c);
+  }
   t.validate(file_name);
   return t;
 }
@@ -326,6 +342,12 @@ json imu_truth_to_json(const ImuTruth& t) {
     doc["power_on"] = {{"gyro_bias_deg_per_h", triple_out(t.gyro_power_on_bias, 1.0 / 3600.0)},
                        {"accel_bias_ug", triple_out(t.accel_power_on_bias, kUgToMps2)},
                        {"time_constant_s", t.power_on_time_constant_s}};
+  }
+  if (!t.gyro_hysteresis_bias.isZero() || !t.accel_hysteresis_bias.isZero()) {
+    doc["thermal_hysteresis"] = {
+        {"gyro_bias_deg_per_h", triple_out(t.gyro_hysteresis_bias, 1.0 / 3600.0)},
+        {"accel_bias_ug", triple_out(t.accel_hysteresis_bias, kUgToMps2)},
+        {"width_c", t.hysteresis_width_c}};
   }
   return doc;
 }

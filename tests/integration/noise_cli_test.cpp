@@ -417,3 +417,63 @@ TEST(AnalyzeWarmupCli, RecoversThePowerOnTransientsTimeConstantAndFindsNoneWhenT
 }
 
 }  // namespace
+
+namespace {
+
+// Up and down a temperature staircase (-20, 10, 40, 70 degC, then 40, 10, -20) on an
+// LN200-class unit, once given a thermal hysteresis (gyro x 5 deg/h, accelerometer z 1000 ug
+// between the branches, play width 2 degC) and once not. The set points between the ends are
+// reached from both sides: there the hysteresis shows in full and nothing else does; -20 degC
+// is reached from above both times (from room temperature first), so it shows none. Without
+// hysteresis no difference reaches 4 sigma.
+TEST(AnalyzeHysteresisCli, FindsTheHysteresisTheUnitWasGivenWhereItShowsAndNoneWhenItHasNone) {
+  const std::string dir = ::testing::TempDir() + "analyze_hyst-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  nlohmann::json station = nlohmann::json::parse(
+      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
+  constexpr double kGyroDps = 5.0 / 3600.0;
+  constexpr double kAccelMps2 = 1000e-6 * 9.80665;
+  for (const bool hysteresis : {true, false}) {
+    const std::string name = hysteresis ? "with" : "without";
+    const std::string truth_file = dir + "/" + name + ".truth.json";
+    Result r = run("truth-from-spec ln200 --seed 7 --out " + truth_file);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    nlohmann::json truth = nlohmann::json::parse(read_text(truth_file));
+    if (hysteresis) {
+      truth["thermal_hysteresis"] = {{"gyro_bias_deg_per_h", {5.0, 0.0, 0.0}},
+                                     {"accel_bias_ug", {0.0, 0.0, 1000.0}},
+                                     {"width_c", 2.0}};
+    }
+    write_text(truth_file, truth.dump());
+    station["imus"][0].erase("model");
+    station["imus"][0]["truth_file"] = truth_file;
+    const std::string station_file = dir + "/" + name + ".station.json";
+    write_text(station_file, station.dump());
+    const std::string db = dir + "/" + name + ".db";
+    r = run("run thermal-hysteresis --quiet --set soak_s=600 --station " + station_file + " --db " +
+            db);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    r = run("analyze hysteresis --json --db " + db + " --run 1");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const nlohmann::json h = nlohmann::json::parse(r.out);
+    ASSERT_EQ(h["points"].size(), 27u);  // 3 set points x 9 parameters
+    EXPECT_EQ(h["up_only_c"], nlohmann::json::array({70.0}));
+    for (const auto& p : h["points"]) {
+      const double t = p["temperature_c"];
+      const std::string name_of = p["parameter"];
+      double expected = 0.0;
+      if (hysteresis && t > -20.0) {
+        if (name_of == "gyro_bias.x") expected = kGyroDps;
+        if (name_of == "accel_bias.z") expected = kAccelMps2;
+      }
+      const double d = p["difference"];
+      const double sigma = p["difference_sigma"];
+      EXPECT_LT(std::abs(d - expected), 4.0 * sigma) << name << " " << p.dump();
+      if (expected != 0.0) EXPECT_GT(p["z"].get<double>(), 5.0) << p.dump();
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

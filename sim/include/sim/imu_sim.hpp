@@ -116,6 +116,12 @@ class ImuSim {
   const core::TableGeometry& geometry() const { return geometry_; }
 
  private:
+  /// The hysteresis branch at `temperature_c`: (T - y) / width of the play operator y, which
+  /// this advances, in [-1/2, 1/2].
+  double hysteresis_branch(double temperature_c);
+  double play_c_ = 0.0;  ///< the play operator's state [degC]
+  bool play_started_ = false;
+
   // Noise and output chain of one axis of one sensor.
   struct Channel {
     std::optional<WhiteNoise> white;

@@ -68,6 +68,15 @@ struct ImuTruth {
   Eigen::Vector3d accel_power_on_bias = Eigen::Vector3d::Zero();  ///< m/s^2 at t = 0
   double power_on_time_constant_s = 60.0;  ///< decay of the bias transient [s], > 0
 
+  // Thermal hysteresis (truth file `thermal_hysteresis`): the bias follows which way the IMU
+  // temperature came. A play operator y of width hysteresis_width_c follows the temperature T
+  // (y stays put while |T - y| <= width / 2, is dragged along beyond); the bias adds
+  // delta (T - y) / width, so the way up reads delta / 2 above the middle, the way down delta / 2
+  // below, at one temperature. Zero delta: none.
+  Eigen::Vector3d gyro_hysteresis_bias = Eigen::Vector3d::Zero();   ///< up less down [deg/s]
+  Eigen::Vector3d accel_hysteresis_bias = Eigen::Vector3d::Zero();  ///< up less down [m/s^2]
+  double hysteresis_width_c = 2.0;                                  ///< [degC], > 0
+
   /// Sets the parameter `full_name` (e.g. "gyro_misalignment.xz") in contract units;
   /// throws core::InputError naming the parameter when it is not in the catalogue or not a
   /// property of the IMU (`table_tilt.*` belongs to the station: table.tilt_rad).
