@@ -231,11 +231,10 @@ class Expander {
             [](double n) -> std::string { return n >= 0 ? "" : "must not be negative"; });
     }
     if (f_ok && n_ok) s.duration_s = s.cycles / s.frequency_hz;
-    s.label = j.contains("label") ? label(j)
-                                  : fmt::format("{} sine {} deg at {} Hz",
-                                                s.axis.empty() ? "?" : s.axis,
-                                                format_number(s.amplitude_deg),
-                                                format_number(s.frequency_hz));
+    s.label = j.contains("label")
+                  ? label(j)
+                  : fmt::format("{} sine {} deg at {} Hz", s.axis.empty() ? "?" : s.axis,
+                                format_number(s.amplitude_deg), format_number(s.frequency_hz));
   }
 
   void power(const json& j, const std::string& path, Step& s) {

@@ -26,9 +26,7 @@ std::string_view to_string(StepKind kind) {
   return "?";
 }
 
-double Step::peak_rate_dps() const {
-  return 2.0 * std::numbers::pi * frequency_hz * amplitude_deg;
-}
+double Step::peak_rate_dps() const { return 2.0 * std::numbers::pi * frequency_hz * amplitude_deg; }
 
 double Step::peak_accel_dps2() const {
   const double w = 2.0 * std::numbers::pi * frequency_hz;

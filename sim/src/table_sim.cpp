@@ -85,16 +85,16 @@ Status TableAxisSim::command_sine(double amplitude_deg, double frequency_hz) {
   }
   const double w = 2.0 * std::numbers::pi * frequency_hz;
   if (w * amplitude_deg > limits_.max_rate_dps) {
-    return Status::refused(fmt::format("sine {} deg at {} Hz peaks at {} deg/s, beyond the axis "
-                                       "limit {} deg/s",
-                                       amplitude_deg, frequency_hz, w * amplitude_deg,
-                                       limits_.max_rate_dps));
+    return Status::refused(
+        fmt::format("sine {} deg at {} Hz peaks at {} deg/s, beyond the axis "
+                    "limit {} deg/s",
+                    amplitude_deg, frequency_hz, w * amplitude_deg, limits_.max_rate_dps));
   }
   if (w * w * amplitude_deg > limits_.max_accel_dps2) {
-    return Status::refused(fmt::format("sine {} deg at {} Hz peaks at {} deg/s^2, beyond the axis "
-                                       "limit {} deg/s^2",
-                                       amplitude_deg, frequency_hz, w * w * amplitude_deg,
-                                       limits_.max_accel_dps2));
+    return Status::refused(
+        fmt::format("sine {} deg at {} Hz peaks at {} deg/s^2, beyond the axis "
+                    "limit {} deg/s^2",
+                    amplitude_deg, frequency_hz, w * w * amplitude_deg, limits_.max_accel_dps2));
   }
   // About the commanded angle, not the servo's: a settled axis stands there, and the centre
   // must not depend on the servo's residual error at the instant of the command.
@@ -169,9 +169,9 @@ void TableAxisSim::step_profile(double dt_s) {
       // The sine itself, not rate-limited step by step: command_sine() refused one beyond the
       // limits, and the servo's clamps catch the start (the rate jumps from 0 to 2 pi f A).
       sine_time_s_ += dt_s;
-      const double next =
-          sine_center_deg_ + sine_amplitude_deg_ * std::sin(2.0 * std::numbers::pi *
-                                                            sine_frequency_hz_ * sine_time_s_);
+      const double next = sine_center_deg_ +
+                          sine_amplitude_deg_ *
+                              std::sin(2.0 * std::numbers::pi * sine_frequency_hz_ * sine_time_s_);
       profile_rate_dps_ = (next - profile_angle_deg_) / dt_s;
       profile_angle_deg_ = next;
       return;

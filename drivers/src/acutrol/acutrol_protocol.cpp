@@ -179,8 +179,8 @@ Parsed<StatusReply> parse_status(std::string_view payload) {
   if (head.size() < 3) return bad("expected MODE,settled,INTERLOCK[,fault text]");
   StatusReply s;
   bool mode_known = false;
-  for (const auto m : {WireMode::kRest, WireMode::kPosition, WireMode::kRate, WireMode::kSine,
-                       WireMode::kFault}) {
+  for (const auto m :
+       {WireMode::kRest, WireMode::kPosition, WireMode::kRate, WireMode::kSine, WireMode::kFault}) {
     if (iequals(head[0], to_wire(m))) {
       s.mode = m;
       mode_known = true;

@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <numbers>
 #include <exception>
+#include <numbers>
 
 namespace calstand::drivers {
 
@@ -400,7 +400,8 @@ Result AcutrolTable::start_sine(TableAxis table_axis, double amplitude_deg, doub
   if (auto r = command_ok(axis_command(CommandKind::kModeSine, axis)); !r) {
     return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
   }
-  if (auto r = command_ok(axis_command(CommandKind::kDemandSine, axis, amplitude_deg, frequency_hz));
+  if (auto r =
+          command_ok(axis_command(CommandKind::kDemandSine, axis, amplitude_deg, frequency_hz));
       !r) {
     return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
   }

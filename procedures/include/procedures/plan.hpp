@@ -41,9 +41,9 @@ struct Envelope {
 /// acceleration limits, both axes at once, then the axis settle time; rate steps take
 /// |change of rate| / accel, then settle_s, then the recording, then |rate| / accel to stop
 /// when rest_after; an oscillation takes (settle_cycles + cycles) / frequency_hz and the axis
-/// settle time (back at its start angle); a soaking set_temperature takes |change| / ramp + the soak's stable_s
-/// (never the timeout). The chamber air and IMU thermal lags are NOT modelled: a real soak
-/// usually takes longer than the estimate.
+/// settle time (back at its start angle); a soaking set_temperature takes |change| / ramp + the
+/// soak's stable_s (never the timeout). The chamber air and IMU thermal lags are NOT modelled: a
+/// real soak usually takes longer than the estimate.
 struct Plan {
   std::string procedure;  ///< the procedure's name
   std::string file_name;
@@ -54,7 +54,8 @@ struct Plan {
   double total_s = 0.0;                 ///< estimated duration [s]
   Envelope envelope;
   /// Every rule broken: override and value rules of expansion, then station limits (rates
-  /// above an axis limit, oscillations whose peak rate or acceleration is above it, setpoints outside the chamber range, ramps above its limit).
+  /// above an axis limit, oscillations whose peak rate or acceleration is above it, setpoints
+  /// outside the chamber range, ramps above its limit).
   std::vector<Violation> violations;
 
   bool ok() const { return violations.empty(); }

@@ -78,8 +78,8 @@ class TableAxisSim {
   double sine_center_deg_ = 0.0;    // sine mode: the start angle, unwrapped [deg]
   double sine_amplitude_deg_ = 0.0;
   double sine_frequency_hz_ = 0.0;
-  double sine_time_s_ = 0.0;  // since the sine was commanded [s]
-  double settled_for_s_ = 0.0;      // how long the error has stayed in tolerance [s]
+  double sine_time_s_ = 0.0;    // since the sine was commanded [s]
+  double settled_for_s_ = 0.0;  // how long the error has stayed in tolerance [s]
   bool in_position_ = true;
   std::string fault_text_;
   // exp() is the only costly call in step(); the simulator steps at a fixed dt, so it is

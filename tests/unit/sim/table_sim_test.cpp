@@ -441,7 +441,6 @@ TEST(TableAxisSim, SteadyRateIsExactWithUnevenSteps) {
   EXPECT_TRUE(axis.state().in_position);
 }
 
-
 // The sine goes about the commanded angle, and the true axis follows it through the servo's
 // first-order lag: gain 1 / sqrt(1 + (w tau)^2) and phase -atan(w tau), seen on the angle and on
 // the rate the encoder reports alike. A least-squares fit at the known frequency reads both.

@@ -259,7 +259,6 @@ TEST(AcutrolProtocol, RandomCorpusNeverCrashesAndEveryLineIsAccountedFor) {
   }
 }
 
-
 TEST(AcutrolProtocol, SineCommandsFormatAndParseBackAndRefuseBadArguments) {
   EXPECT_EQ(format_command({CommandKind::kModeSine, 1}), ":mode:sine 1");
   EXPECT_EQ(format_command({CommandKind::kDemandSine, 2, 0.5, 2.0}),

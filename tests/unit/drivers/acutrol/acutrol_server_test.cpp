@@ -236,7 +236,6 @@ TEST(AcutrolServer, ServesOverAPseudoTerminal) {
   EXPECT_EQ(reply->text, "CALSTAND,ACUTROL-SIM,0,1.0");
 }
 
-
 TEST_F(AcutrolServerTest, SineDemandOscillatesAboutThePresentAngleWithinTheLimits) {
   LineClient c(server_.port());
   EXPECT_EQ(c.ask(":mode:position 2"), "OK");
@@ -255,7 +254,8 @@ TEST_F(AcutrolServerTest, SineDemandOscillatesAboutThePresentAngleWithinTheLimit
     hi = std::max(hi, number(c.ask(":read:pos? 2")));
     fastest = std::max(fastest, std::abs(number(c.ask(":read:rate? 2"))));
     return hi - lo > 1.6;  // the servo lag takes some off the 2 deg peak to peak
-  })) << lo << " .. " << hi << " " << c.ask(":read:status? 2");
+  })) << lo
+      << " .. " << hi << " " << c.ask(":read:status? 2");
   EXPECT_GT(lo, 45.0 - 1.05);
   EXPECT_LT(hi, 45.0 + 1.05);
   EXPECT_LT(fastest, 2.0 * M_PI * 2.0 * 1.0 * 1.05);

@@ -485,7 +485,6 @@ TEST(AcutrolTableSerial, MissingDeviceFailsConfigureNamingThePath) {
   EXPECT_TRUE(contains(again.message, "next attempt in")) << again.message;
 }
 
-
 TEST_F(AcutrolTableOnServer, StartSineOscillatesTheAxisAndStopBringsItToRest) {
   bring_up();
   ASSERT_TRUE(table_->move_to(0.0, -20.0));
