@@ -105,6 +105,9 @@ UnitCoverage unit_coverage(const procedures::Plan& plan, const core::StationConf
         break;
       case procedures::StepKind::kWait:
       case procedures::StepKind::kPower:
+      // An oscillation's mean rate is nil: at its pose it adds what a capture there would, which
+      // the plan gives separately if the model needs it; it is for the bandwidth analysis.
+      case procedures::StepKind::kOscillate:
         break;
     }
   }

@@ -1,18 +1,21 @@
 // `calstand analyze KIND`: the datasheet analyses of the seed's test catalogue on a stored run.
-// Kinds so far: stability (in-run bias stability of a long static capture), repeatability
-// (turn-on bias across power cycles).
+// Kinds: stability (in-run bias stability of a long static capture), repeatability (turn-on
+// bias across power cycles), warmup (the power-on transient), hysteresis (up and down a
+// temperature staircase), bandwidth (gain and phase of oscillate steps).
 #include <fmt/format.h>
 
 #include <cmath>
 #include <optional>
 #include <string>
 
+#include "analysis/bandwidth.hpp"
 #include "analysis/hysteresis.hpp"
 #include "analysis/repeatability.hpp"
 #include "analysis/stability.hpp"
 #include "analysis/warmup.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -27,6 +30,7 @@ struct AnalyzeOptions {
   double band_deg_per_h = 1.0;  ///< warmup: settled when within this of the final gyro bias
   double band_ug = 50.0;        ///< warmup: ... and of the final accelerometer bias
   bool as_json = false;
+  std::string html;  ///< bandwidth: the gain-curve page
 };
 
 void print_stability(const analysis::StabilityAnalysis& s) {
@@ -68,8 +72,7 @@ void print_warmup(const analysis::WarmupAnalysis& w) {
   fmt::print(
       "run {} {}, step {} \"{}\": {:.0f} s from power-up, bins of {:.3g} s; the IMU warmed "
       "by {:.2f} degC\n",
-      w.run, w.device, w.step, w.step_label, w.duration_s, w.bin_s, w.temperature_rise_c,
-      w.with_temperature ? " (its temperature is a term of the fit)" : "");
+      w.run, w.device, w.step, w.step_label, w.duration_s, w.bin_s, w.temperature_rise_c);
   fmt::print("{:<8} {:>24} {:>16} {:>22}\n", "channel", "transient amplitude", "time constant",
              "time to band");
   for (std::size_t c = 0; c < w.channels.size(); ++c) {
@@ -98,12 +101,48 @@ void print_hysteresis(const analysis::HysteresisAnalysis& h) {
   fmt::print("|z| > 4: the difference is far beyond both fits' uncertainty\n");
 }
 
+void print_bandwidth(const analysis::BandwidthAnalysis& b) {
+  fmt::print("run {} {}: gyro against the table encoder\n", b.run, b.device);
+  fmt::print("{:<5} {:>10} {:>9} {:>9} {:>11}\n", "axis", "f [Hz]", "gain", "[dB]", "phase [deg]");
+  for (const auto& p : b.points) {
+    fmt::print("{:<5} {:>10.4g} {:>9.4f} {:>9.2f} {:>11.2f}\n", static_cast<char>('x' + p.axis),
+               p.frequency_hz, p.gain, p.gain_db, p.phase_deg);
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto& fc = b.bandwidth_hz[a];
+    const auto& tau = b.delay_s[a];
+    if (!fc && !tau) continue;
+    fmt::print("{}: bandwidth {}, delay {}{}\n", static_cast<char>('x' + a),
+               fc ? fmt::format("{:.4g} Hz", *fc) : "beyond the frequencies tested",
+               tau ? fmt::format("{:.3g} ms", *tau * 1e3) : "-",
+               b.low_pass_order[a] > 0
+                   ? fmt::format(" (after a order-{} low-pass's phase)", b.low_pass_order[a])
+                   : "");
+  }
+}
+
+void run_bandwidth(const AnalyzeOptions& opt) {
+  store::Database db = open_existing_database(opt.db);
+  const analysis::BandwidthAnalysis b = analysis::analyse_bandwidth(db, opt.run, opt.device);
+  if (!opt.html.empty()) {
+    core::write_file_whole(opt.html,
+                           "<!doctype html><meta charset=utf-8><title>bandwidth</title>\n" +
+                               analysis::bandwidth_svg(b) + "\n");
+  }
+  if (opt.as_json) {
+    fmt::print("{}\n", analysis::to_json(b).dump(2));
+  } else {
+    print_bandwidth(b);
+  }
+}
+
 void run_analyze(const AnalyzeOptions& opt) {
+  if (opt.kind == "bandwidth") return run_bandwidth(opt);
   if (opt.kind != "stability" && opt.kind != "repeatability" && opt.kind != "warmup" &&
       opt.kind != "hysteresis") {
     throw core::InputError("KIND", "'" + opt.kind +
                                        "' is not an analysis calstand has (stability, "
-                                       "repeatability, warmup, hysteresis)");
+                                       "repeatability, warmup, hysteresis, bandwidth)");
   }
   store::Database db = open_existing_database(opt.db);
   if (opt.kind == "hysteresis") {
@@ -150,8 +189,12 @@ void register_analyze(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "analyze",
       "Datasheet analyses of a run: stability (bias instability and bias variation "
-      "with its correlation time, from a long static capture)");
-  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup | hysteresis")->required();
+      "with its correlation time, from a long static capture); repeatability (turn-on bias "
+      "spread over power cycles); warmup (the bias transient after power-up); hysteresis (up "
+      "and down a temperature staircase); bandwidth (gyro gain and phase against the encoder "
+      "from oscillate steps, -3 dB bandwidth and delay)");
+  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup | hysteresis | bandwidth")
+      ->required();
   cmd->add_option("--db", opt->db, "Database file")->required();
   cmd->add_option("--run", opt->run, "Run id")->required();
   cmd->add_option("--device", opt->device, "IMU (default: the run's first)");
@@ -163,6 +206,7 @@ void register_analyze(CLI::App& app) {
                   "warmup: an accelerometer bias within this of its settled value is settled")
       ->capture_default_str();
   cmd->add_flag("--json", opt->as_json, "Print the analysis as JSON");
+  cmd->add_option("--html", opt->html, "bandwidth: write the gain curves to this HTML file");
   cmd->callback([opt] { run_analyze(*opt); });
 }
 

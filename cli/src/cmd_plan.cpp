@@ -76,6 +76,13 @@ std::string commanded(const procedures::Step& s) {
     case StepKind::kPower:
       return fmt::format("supply of {} {}, settle {} s", s.imu.empty() ? "every IMU" : s.imu,
                          s.power_on ? "on" : "off", format_number(s.settle_s));
+    case StepKind::kOscillate:
+      return fmt::format(
+          "{} sine {} deg at {} Hz (peak {} deg/s, {} deg/s^2), settle {} cycles, "
+          "record {} cycles ({} s)",
+          s.axis, format_number(s.amplitude_deg), format_number(s.frequency_hz),
+          format_number(s.peak_rate_dps()), format_number(s.peak_accel_dps2()),
+          format_number(s.settle_cycles), format_number(s.cycles), format_number(s.duration_s));
   }
   return "";
 }

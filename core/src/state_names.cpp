@@ -11,6 +11,8 @@ std::string_view to_string(AxisMode mode) {
       return "position";
     case AxisMode::kRate:
       return "rate";
+    case AxisMode::kSine:
+      return "sine";
     case AxisMode::kFault:
       return "fault";
   }

@@ -14,6 +14,11 @@ namespace calstand::daemon {
 using procedures::Step;
 using procedures::StepKind;
 
+// Encoder readings per period of an oscillation: the bandwidth analysis fits a sine at the
+// known frequency to them, which 20 points a period, spread over many periods, pin well below
+// the IMU's own noise.
+constexpr double kTracePerCycle = 20.0;
+
 GapPolicy parse_gap_policy(const std::string& name) {
   if (name == "record") return GapPolicy::kRecord;
   if (name == "repeat_capture") return GapPolicy::kRepeatCapture;
@@ -142,6 +147,7 @@ void RunEngine::skip_step(std::size_t index) {
   skip_requested_ = false;
   const std::string why = skip_reason_;
   const Step& step = plan_.steps[index];
+  if (step.kind == StepKind::kOscillate) station_.table().stop();  // the sine must not run on
   if (step.kind == StepKind::kRate && step.rest_after) {
     // The next step expects the table at rest, as after a completed rate step.
     const auto axis =
@@ -320,6 +326,9 @@ void RunEngine::execute(std::size_t index) {
     case StepKind::kRate:
       rate(step, index);
       return;  // rate() commits its own capture attempt
+    case StepKind::kOscillate:
+      oscillate(step, index);
+      return;  // as rate()
     case StepKind::kCapture:
       attempt_ = capture(index, step.duration_s, attempt_);
       return;
@@ -412,6 +421,30 @@ void RunEngine::rate(const Step& step, std::size_t index) {
   attempt_ = capture(index, step.duration_s, attempt_);
   // The table comes to rest after a rate step unless the next step turns the same axis on.
   if (step.rest_after) station_.table().set_rate(axis, 0.0);
+}
+
+void RunEngine::oscillate(const Step& step, std::size_t index) {
+  const auto axis = step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
+  const core::TableState start = station_.table().read_state();
+  if (auto r = station_.table().start_sine(axis, step.amplitude_deg, step.frequency_hz); !r) {
+    throw StepFailed{
+        fmt::format("step {} ({}): table refused the sine: {}", index, step.label, r.message)};
+  }
+  // The tick (and with it the IMU polls and the encoder readings) follows the sine while it
+  // runs; whatever ends the step (interrupt, abort, failure) ends the tracing with it.
+  struct Tracing {
+    double& tick_s;
+    ~Tracing() { tick_s = 0.0; }
+  } tracing{trace_tick_s_};
+  trace_tick_s_ = std::min(options_.tick_s, 1.0 / (kTracePerCycle * step.frequency_hz));
+  wait_for(step.settle_cycles / step.frequency_hz, "oscillating");
+  attempt_ = capture(index, step.duration_s, attempt_);
+  trace_tick_s_ = 0.0;
+  // Back at rest where it started, so that the next step finds the table as a move left it.
+  Step back = step;
+  back.outer_deg = start.outer.angle_deg;
+  back.inner_deg = start.inner.angle_deg;
+  move(back, index);
 }
 
 int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) {
@@ -607,13 +640,14 @@ void RunEngine::tick() {
   if (pause_requested_ && pause_immediate_ && !reestablishing_) throw Interrupted{};
   if (skip_wanted()) throw Skipped{};
   const double now = station_.clock().now_s();
-  station_.wait_until(now + options_.tick_s);
+  station_.wait_until(now + (trace_tick_s_ > 0.0 ? trace_tick_s_ : options_.tick_s));
   poll_imus();
   record_device_events();
   check_interlocks();
   const double t = station_.clock().now_s();
+  if (trace_tick_s_ > 0.0) journal_.table_trace(station_.table().read_state());
   if (t - last_telemetry_s_ >= options_.telemetry_period_s) {
-    journal_.table_telemetry(station_.table().read_state());
+    if (trace_tick_s_ <= 0.0) journal_.table_telemetry(station_.table().read_state());
     journal_.chamber_telemetry(station_.chamber().read_state());
     last_telemetry_s_ = t;
   }

@@ -5,6 +5,9 @@
 #include "store/units.hpp"
 
 namespace calstand::daemon {
+namespace {
+constexpr std::size_t kTraceBatch = 256;  // rows per transaction [-]
+}  // namespace
 
 StoreJournal::StoreJournal(store::RunStore& store, store::CaptureWriter& writer,
                            std::int64_t run_id, double telemetry_period_s, bool wait_when_busy,
@@ -57,12 +60,14 @@ void StoreJournal::step_completed(std::size_t step, int attempt, double t_s) {
   // Durable samples first, then the step's status: a crash in between leaves the step
   // unfinished and its attempt is redone, never a completed step without its data.
   writer_.commit_step(id, attempt);
+  flush_trace();
   std::erase_if(streams_, [&](const auto& entry) { return std::get<0>(entry.first) == id; });
   store_.mark_step_completed(run_id_, step, attempt, store::Stamp::now(t_s));
 }
 
 void StoreJournal::step_failed(std::size_t step, int /*attempt*/, double t_s,
                                const std::string& why) {
+  flush_trace();
   store_.mark_step_failed(run_id_, step, store::Stamp::now(t_s), why);
 }
 
@@ -83,6 +88,17 @@ void StoreJournal::event(double t_s, EventKind kind, const std::string& source,
 
 void StoreJournal::table_telemetry(const core::TableState& state) {
   if (table_decimator_.accept(state.time_s)) store_.add_table_telemetry(run_id_, state);
+}
+
+void StoreJournal::table_trace(const core::TableState& state) {
+  trace_.push_back(state);
+  if (trace_.size() >= kTraceBatch) flush_trace();
+}
+
+void StoreJournal::flush_trace() {
+  if (trace_.empty()) return;
+  store_.add_table_telemetry(run_id_, trace_);
+  trace_.clear();
 }
 
 void StoreJournal::chamber_telemetry(const core::ChamberState& state) {

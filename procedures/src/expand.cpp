@@ -18,6 +18,10 @@ using nlohmann::json;
 
 constexpr double kDefaultSettleS = 2.0;    // rate steps without settle_s [s]
 constexpr double kMaxAbsAngleDeg = 360.0;  // move angles beyond one turn are a typo, not intent
+// Oscillations without settle_cycles: two periods, so that the start of the sine (the servo
+// catching up, the IMU's output filter) has died out before the record; both settle within a
+// small part of a period at the frequencies a bandwidth test uses.
+constexpr double kDefaultSettleCycles = 2.0;
 constexpr const char* kBodyDirections = "\"+x\", \"-x\", \"+y\", \"-y\", \"+z\", \"-z\"";
 
 class Expander {
@@ -166,8 +170,8 @@ class Expander {
         j.contains("label") ? label(j) : fmt::format("point {} up", s.up.empty() ? "?" : s.up);
   }
 
-  void rate(const json& j, const std::string& path, Step& s) {
-    s.kind = StepKind::kRate;
+  // The table axis of a rate or oscillate step: "outer", "inner" or a reference to one.
+  void table_axis(const json& j, const std::string& path, Step& s) {
     const json& axis = j["axis"];
     if (axis.is_string() && (axis == "outer" || axis == "inner")) {
       s.axis = axis.get<std::string>();
@@ -181,6 +185,11 @@ class Expander {
                                         value ? quote_value(*value) : "nothing"));
       }
     }
+  }
+
+  void rate(const json& j, const std::string& path, Step& s) {
+    s.kind = StepKind::kRate;
+    table_axis(j, path, s);
     const bool rate_ok = field(j, "rate_dps", path, s, s.rate_dps, [](double r) -> std::string {
       return r != 0 ? "" : "must not be 0 (record at rest with a capture step)";
     });
@@ -202,6 +211,30 @@ class Expander {
     s.label = j.contains("label")
                   ? label(j)
                   : fmt::format("{} rate {:+} deg/s", s.axis.empty() ? "?" : s.axis, s.rate_dps);
+  }
+
+  void oscillate(const json& j, const std::string& path, Step& s) {
+    s.kind = StepKind::kOscillate;
+    table_axis(j, path, s);
+    field(j, "amplitude_deg", path, s, s.amplitude_deg, [](double a) -> std::string {
+      if (!(a > 0)) return "must be greater than 0";
+      return a <= kMaxAbsAngleDeg ? "" : "is beyond one turn (360)";
+    });
+    const bool f_ok = field(j, "frequency_hz", path, s, s.frequency_hz, positive);
+    const auto whole = [](double n) -> std::string {
+      return n > 0 && n == std::floor(n) ? "" : "must be a whole number greater than 0";
+    };
+    const bool n_ok = field(j, "cycles", path, s, s.cycles, whole);
+    s.settle_cycles = kDefaultSettleCycles;
+    if (j.contains("settle_cycles")) {
+      field(j, "settle_cycles", path, s, s.settle_cycles,
+            [](double n) -> std::string { return n >= 0 ? "" : "must not be negative"; });
+    }
+    if (f_ok && n_ok) s.duration_s = s.cycles / s.frequency_hz;
+    s.label = j.contains("label")
+                  ? label(j)
+                  : fmt::format("{} sine {} deg at {} Hz", s.axis.empty() ? "?" : s.axis,
+                                format_number(s.amplitude_deg), format_number(s.frequency_hz));
   }
 
   void power(const json& j, const std::string& path, Step& s) {
@@ -285,6 +318,8 @@ class Expander {
       timed(j, path, s, StepKind::kCapture);
     else if (kind == "power")
       power(j, path, s);
+    else if (kind == "oscillate")
+      oscillate(j, path, s);
     else
       timed(j, path, s, StepKind::kWait);
     steps_.push_back(std::move(s));

@@ -94,6 +94,8 @@ class Planner {
       case StepKind::kPower:
         power(s);
         return s.settle_s;
+      case StepKind::kOscillate:
+        return oscillate(s);
     }
     return 0.0;
   }
@@ -175,6 +177,38 @@ class Planner {
     track.angle_deg = wrap180(track.angle_deg + turned_deg);
     track.rate_dps = s.rest_after ? 0.0 : s.rate_dps;
     return accel_s + s.settle_s + s.duration_s + stop_s;
+  }
+
+  // The sine's peak rate and acceleration are the axis's own limits to respect: a controller
+  // refuses (or worse, clips) a sine beyond them, and a clipped sine is no sine to fit.
+  double oscillate(const Step& s) {
+    const core::AxisConfig& cfg = axis_config(s.axis);
+    const double peak_rate = s.peak_rate_dps();
+    const double peak_accel = s.peak_accel_dps2();
+    if (peak_rate > cfg.max_rate_dps) {
+      violation(s, "amplitude_deg",
+                fmt::format("{} deg at {} Hz peaks at {} deg/s (2 pi f A), above the {} axis "
+                            "rate limit {} deg/s",
+                            shown_value(s, "amplitude_deg", s.amplitude_deg),
+                            shown_value(s, "frequency_hz", s.frequency_hz),
+                            format_number(peak_rate), s.axis, format_number(cfg.max_rate_dps)));
+    }
+    if (peak_accel > cfg.max_accel_dps2) {
+      violation(s, "amplitude_deg",
+                fmt::format("{} deg at {} Hz peaks at {} deg/s^2 ((2 pi f)^2 A), above the {} "
+                            "axis acceleration limit {} deg/s^2",
+                            shown_value(s, "amplitude_deg", s.amplitude_deg),
+                            shown_value(s, "frequency_hz", s.frequency_hz),
+                            format_number(peak_accel), s.axis, format_number(cfg.max_accel_dps2)));
+    }
+    AxisEnvelope& env = axis_envelope(s.axis);
+    env.max_rate_dps = std::max(env.max_rate_dps, peak_rate);
+    env.max_accel_dps2 = std::max(env.max_accel_dps2, peak_accel);
+    plan_.envelope.capture_s += s.duration_s;
+    ++plan_.envelope.captures;
+    // The axis comes back to its start angle and settles there.
+    return s.frequency_hz > 0 ? s.settle_cycles / s.frequency_hz + s.duration_s + cfg.settle_time_s
+                              : 0.0;
   }
 
   const core::StationConfig& station_;

@@ -41,14 +41,15 @@ std::optional<Type> infer_type(const json& value, const std::string& path,
   return std::nullopt;
 }
 
-const char* const kNumericFields[][4] = {
+const char* const kNumericFields[][5] = {
     // kind, then its numeric fields (nullptr-terminated)
-    {"set_temperature", "target_c", "ramp_c_per_min", nullptr},
-    {"move", "outer_deg", "inner_deg", nullptr},
-    {"rate", "rate_dps", "settle_s", "duration_s"},
-    {"capture", "duration_s", nullptr, nullptr},
-    {"wait", "duration_s", nullptr, nullptr},
-    {"power", "settle_s", nullptr, nullptr},
+    {"set_temperature", "target_c", "ramp_c_per_min", nullptr, nullptr},
+    {"move", "outer_deg", "inner_deg", nullptr, nullptr},
+    {"rate", "rate_dps", "settle_s", "duration_s", nullptr},
+    {"capture", "duration_s", nullptr, nullptr, nullptr},
+    {"wait", "duration_s", nullptr, nullptr, nullptr},
+    {"power", "settle_s", nullptr, nullptr, nullptr},
+    {"oscillate", "amplitude_deg", "frequency_hz", "cycles", "settle_cycles"},
 };
 
 /// Walks the step tree with the loop variables in scope.
@@ -210,7 +211,7 @@ class StepChecker {
     if (kind == "for_each") return for_each(step, path);
     for (const auto& row : kNumericFields) {
       if (kind != row[0]) continue;
-      for (int f = 1; f < 4 && row[f] != nullptr; ++f) {
+      for (int f = 1; f < 5 && row[f] != nullptr; ++f) {
         if (step.contains(row[f])) numeric(step[row[f]], path + "." + row[f]);
       }
     }
@@ -220,6 +221,7 @@ class StepChecker {
       }
     }
     if (kind == "move") move(step, path);
+    if (kind == "oscillate") axis(step["axis"], path + ".axis");
     if (kind == "rate") {
       axis(step["axis"], path + ".axis");
       if (step.contains("revolutions")) numeric(step["revolutions"], path + ".revolutions");

@@ -1,4 +1,6 @@
+#include <cmath>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "procedures/procedure.hpp"
 
@@ -18,8 +20,17 @@ std::string_view to_string(StepKind kind) {
       return "wait";
     case StepKind::kPower:
       return "power";
+    case StepKind::kOscillate:
+      return "oscillate";
   }
   return "?";
+}
+
+double Step::peak_rate_dps() const { return 2.0 * std::numbers::pi * frequency_hz * amplitude_deg; }
+
+double Step::peak_accel_dps2() const {
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  return w * w * amplitude_deg;
 }
 
 nlohmann::json Step::to_json() const {
@@ -64,6 +75,14 @@ nlohmann::json Step::to_json() const {
       j["power"] = power_on ? "on" : "off";
       j["settle_s"] = settle_s;
       if (!imu.empty()) j["imu"] = imu;
+      break;
+    case StepKind::kOscillate:
+      j["axis"] = axis;
+      j["amplitude_deg"] = amplitude_deg;
+      j["frequency_hz"] = frequency_hz;
+      j["cycles"] = cycles;
+      j["settle_cycles"] = settle_cycles;
+      j["duration_s"] = duration_s;
       break;
   }
   return j;

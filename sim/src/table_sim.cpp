@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <utility>
 
 namespace calstand::sim {
@@ -73,6 +74,39 @@ Status TableAxisSim::command_rate(double rate_dps) {
   return Status::success();
 }
 
+Status TableAxisSim::command_sine(double amplitude_deg, double frequency_hz) {
+  if (mode_ == core::AxisMode::kFault) {
+    return Status::refused(fmt::format("axis in fault ({}): clear the fault first", fault_text_));
+  }
+  if (!(amplitude_deg > 0.0) || !std::isfinite(amplitude_deg) || !(frequency_hz > 0.0) ||
+      !std::isfinite(frequency_hz)) {
+    return Status::refused(fmt::format("sine {} deg at {} Hz: both must be positive and finite",
+                                       amplitude_deg, frequency_hz));
+  }
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  if (w * amplitude_deg > limits_.max_rate_dps) {
+    return Status::refused(
+        fmt::format("sine {} deg at {} Hz peaks at {} deg/s, beyond the axis "
+                    "limit {} deg/s",
+                    amplitude_deg, frequency_hz, w * amplitude_deg, limits_.max_rate_dps));
+  }
+  if (w * w * amplitude_deg > limits_.max_accel_dps2) {
+    return Status::refused(
+        fmt::format("sine {} deg at {} Hz peaks at {} deg/s^2, beyond the axis "
+                    "limit {} deg/s^2",
+                    amplitude_deg, frequency_hz, w * w * amplitude_deg, limits_.max_accel_dps2));
+  }
+  // About the commanded angle, not the servo's: a settled axis stands there, and the centre
+  // must not depend on the servo's residual error at the instant of the command.
+  sine_center_deg_ = mode_ == core::AxisMode::kPosition ? target_angle_deg_ : profile_angle_deg_;
+  sine_amplitude_deg_ = amplitude_deg;
+  sine_frequency_hz_ = frequency_hz;
+  sine_time_s_ = 0.0;
+  mode_ = core::AxisMode::kSine;
+  restart_settling();
+  return Status::success();
+}
+
 void TableAxisSim::stop() {
   // A fault already brakes to rest; stopping must not clear it.
   if (mode_ == core::AxisMode::kFault) return;
@@ -131,6 +165,17 @@ void TableAxisSim::step_profile(double dt_s) {
     case core::AxisMode::kRate:
       profile_rate_dps_ = limit_rate(target_rate_dps_);
       break;
+    case core::AxisMode::kSine: {
+      // The sine itself, not rate-limited step by step: command_sine() refused one beyond the
+      // limits, and the servo's clamps catch the start (the rate jumps from 0 to 2 pi f A).
+      sine_time_s_ += dt_s;
+      const double next = sine_center_deg_ +
+                          sine_amplitude_deg_ *
+                              std::sin(2.0 * std::numbers::pi * sine_frequency_hz_ * sine_time_s_);
+      profile_rate_dps_ = (next - profile_angle_deg_) / dt_s;
+      profile_angle_deg_ = next;
+      return;
+    }
     case core::AxisMode::kRest:
     case core::AxisMode::kFault:
       profile_rate_dps_ = limit_rate(0.0);
@@ -181,6 +226,9 @@ void TableAxisSim::step_settling(double dt_s) {
       break;
     case core::AxisMode::kRest:
       within = std::abs(rate_dps_) < limits_.rate_tolerance_dps;
+      break;
+    case core::AxisMode::kSine:
+      within = true;  // "settled": the start of the sine is settle_time_s behind
       break;
     case core::AxisMode::kFault:
       within = false;  // a faulted axis is never "in position"

@@ -372,6 +372,43 @@ void RunStore::add_chamber_telemetry(std::int64_t run, std::span<const core::Cha
   });
 }
 
+std::vector<core::TableState> RunStore::table_telemetry(std::int64_t run, double from_s,
+                                                        double to_s) {
+  require_run(run);
+  return guarded("read table telemetry", [&] {
+    SQLite::Statement q(db_.sql(),
+                        "SELECT time_s, outer_deg, inner_deg, outer_rate_dps, inner_rate_dps, "
+                        "outer_mode, inner_mode FROM table_telemetry "
+                        "WHERE run_id = ? AND time_s >= ? AND time_s <= ? ORDER BY time_s, id");
+    q.bind(1, run);
+    q.bind(2, from_s);
+    q.bind(3, to_s);
+    const auto mode_of = [](const SQLite::Column& c) {
+      const std::string text = c.isNull() ? "" : c.getString();
+      for (const auto m : {core::AxisMode::kRest, core::AxisMode::kPosition, core::AxisMode::kRate,
+                           core::AxisMode::kSine, core::AxisMode::kFault}) {
+        if (text == core::to_string(m)) return m;
+      }
+      return core::AxisMode::kRest;
+    };
+    std::vector<core::TableState> rows;
+    while (q.executeStep()) {
+      core::TableState s;
+      s.time_s = q.getColumn(0).getDouble();
+      s.outer.angle_deg = q.getColumn(1).getDouble();
+      s.inner.angle_deg = q.getColumn(2).getDouble();
+      s.outer.rate_dps = q.getColumn(3).getDouble();
+      s.inner.rate_dps = q.getColumn(4).getDouble();
+      s.outer.mode = mode_of(q.getColumn(5));
+      s.inner.mode = mode_of(q.getColumn(6));
+      s.outer.fault = s.outer.mode == core::AxisMode::kFault;
+      s.inner.fault = s.inner.mode == core::AxisMode::kFault;
+      rows.push_back(std::move(s));
+    }
+    return rows;
+  });
+}
+
 std::vector<core::ChamberState> RunStore::chamber_telemetry(std::int64_t run, double from_s,
                                                             double to_s) {
   require_run(run);

@@ -9,15 +9,18 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <iostream>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "analysis/bandwidth.hpp"
 #include "core/error.hpp"
 #include "daemon/campaign.hpp"
 #include "procedures/plan.hpp"
 #include "procedures/procedure.hpp"
+#include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
@@ -75,8 +78,8 @@ void remove_db(const std::string& path) {
 /// Runs library procedure `name` with `overrides` on the embedded simulated station into the
 /// database at `db_path`, as `calstand run` does; returns the run id.
 std::int64_t run_procedure(const std::string& name, const std::vector<std::string>& overrides,
-                           const std::string& db_path) {
-  const core::StationConfig station = sim::default_station();
+                           const std::string& db_path,
+                           const core::StationConfig& station = sim::default_station()) {
   const auto procedure = procedures::load_procedure(name);
   const auto plan =
       procedures::make_plan(procedure, station, procedures::parse_overrides(overrides));
@@ -219,6 +222,42 @@ TEST(LibraryStaticAllan, DeterminesTheNoiseFiguresAndNoErrorModel) {
   const auto steps = solver::summarize_steps(solver::load_run_data(db, run_id), model);
   EXPECT_THROW((void)solver::fit_model(steps, model, solver::measure_noise_floor(steps)),
                core::InputError);
+  remove_db(db_path);
+}
+
+// bandwidth determines no error-model term (its means are static poses): it is documented for
+// `calstand analyze bandwidth`. Its LN200-class unit (noise, bias instability, 400 Hz) is given
+// a gyro output filter of 10 Hz (2nd-order Butterworth) and 5 ms of latency; the analysis must
+// find the cutoff within 10 % and the latency within one sample period (2.5 ms) on each axis.
+TEST(LibraryBandwidth, RecoversTheOutputFilterCutoffAndLatency) {
+  core::StationConfig station = sim::default_station();
+  sim::ImuTruth truth = sim::resolve_imu_truth(station.imus[0], station.seed, 0);
+  constexpr double kCutoffHz = 10.0, kLatencyS = 0.005;
+  truth.gyro_bandwidth_hz = kCutoffHz;
+  truth.filter_order = 2;
+  truth.latency_s = kLatencyS;
+  station.imus[0].model.clear();
+  station.imus[0].truth = sim::imu_truth_to_json(truth);
+  const std::string db_path = fresh_db("bandwidth");
+  const std::int64_t run_id = run_procedure(
+      "bandwidth", {"frequencies_hz=[1,2,4,6,8,10,12,15]", "amplitude_deg=0.03", "cycles=20"},
+      db_path, station);
+  if (HasFailure()) return;
+  store::Database db(db_path);
+  const analysis::BandwidthAnalysis b = analysis::analyse_bandwidth(db, run_id, "");
+  EXPECT_EQ(b.points.size(), 24u);
+  const double period_s = 1.0 / truth.sample_rate_hz;
+  for (std::size_t a = 0; a < 3; ++a) {
+    ASSERT_TRUE(b.bandwidth_hz[a]) << "axis " << a;
+    ASSERT_TRUE(b.delay_s[a]) << "axis " << a;
+    EXPECT_NEAR(*b.bandwidth_hz[a], kCutoffHz, 0.1 * kCutoffHz) << "axis " << a;
+    EXPECT_NEAR(*b.delay_s[a], kLatencyS, period_s) << "axis " << a;
+    EXPECT_EQ(b.low_pass_order[a], 2) << "axis " << a;
+    std::cout << "axis " << a << ": bandwidth " << *b.bandwidth_hz[a] << " Hz, delay "
+              << *b.delay_s[a] * 1e3 << " ms\n";
+  }
+  // Well below the cutoff the gain is one.
+  EXPECT_NEAR(b.points.front().gain, 1.0, 0.02);
   remove_db(db_path);
 }
 

@@ -10,6 +10,7 @@ enum class AxisMode {
   kRest,      ///< servo holding, no command (power-up and safe state)
   kPosition,  ///< moving to or holding a commanded angle
   kRate,      ///< turning at a commanded rate
+  kSine,      ///< oscillating: angle = start + amplitude sin(2 pi f t) about its start angle
   kFault,     ///< stopped by a fault; commands are refused until the fault is cleared
 };
 
@@ -20,7 +21,9 @@ struct AxisState {
   double angle_deg = 0.0;  ///< encoder reading, wrapped to [-180, 180) [deg]
   double rate_dps = 0.0;   ///< angular rate about the axis, right-handed [deg/s]
   AxisMode mode = AxisMode::kRest;
-  bool in_position = true;  ///< position mode: settled within tolerance; rate mode: rate settled
+  /// position mode: settled within tolerance; rate mode: rate settled; sine mode: the sine has
+  /// run for the settle time
+  bool in_position = true;
   bool fault = false;
   std::string fault_text;  ///< why the axis faulted (empty when fault is false)
 };

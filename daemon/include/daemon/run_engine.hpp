@@ -142,6 +142,9 @@ class RunEngine {
   void soak(const procedures::Step& step, std::size_t index);
   void move(const procedures::Step& step, std::size_t index);
   void rate(const procedures::Step& step, std::size_t index);
+  /// An oscillation: the sine, settle cycles, the capture with every table reading traced,
+  /// then the axis back at rest at its start angle.
+  void oscillate(const procedures::Step& step, std::size_t index);
   /// Records the IMUs for `duration_s`; repeats invalidated attempts; returns the good attempt.
   int capture(std::size_t index, double duration_s, int first_attempt);
   void wait_for(double duration_s, const char* phase);
@@ -232,6 +235,9 @@ class RunEngine {
   };
   std::vector<ImuHealth> imu_health_;
   double last_telemetry_s_ = -1e300;
+  /// While an oscillation runs: the control tick [s], short enough to sample the encoder's sine
+  /// (kTracePerCycle readings a period), each reading traced to the journal; 0 otherwise.
+  double trace_tick_s_ = 0.0;
 };
 
 }  // namespace calstand::daemon

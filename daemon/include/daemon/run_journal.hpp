@@ -39,6 +39,10 @@ class RunJournal {
   virtual void event(double t_s, EventKind kind, const std::string& source,
                      const std::string& message) = 0;
   virtual void table_telemetry(const core::TableState& state) = 0;
+  /// A table reading of an oscillation, every one kept (no decimation to the telemetry
+  /// period): the bandwidth analysis fits the encoder's sine on them. Stored with the table
+  /// telemetry; durable at the latest with the step. Default: as table_telemetry().
+  virtual void table_trace(const core::TableState& state) { table_telemetry(state); }
   virtual void chamber_telemetry(const core::ChamberState& state) = 0;
   virtual void run_state(RunState state, double t_s, const std::string& reason) = 0;
   /// The unit in slot `imu` reported its identity when the station came up. Returns why the

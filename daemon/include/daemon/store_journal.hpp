@@ -35,6 +35,7 @@ class StoreJournal final : public RunJournal {
   void event(double t_s, EventKind kind, const std::string& source,
              const std::string& message) override;
   void table_telemetry(const core::TableState& state) override;
+  void table_trace(const core::TableState& state) override;
   void chamber_telemetry(const core::ChamberState& state) override;
   void run_state(RunState state, double t_s, const std::string& reason) override;
   std::string unit_identified(const std::string& imu, const std::string& model,
@@ -43,6 +44,10 @@ class StoreJournal final : public RunJournal {
   std::int64_t run_id() const { return run_id_; }
 
  private:
+  /// Writes the buffered trace rows in one transaction (a row per transaction would cost a
+  /// commit per control tick).
+  void flush_trace();
+  std::vector<core::TableState> trace_;
   std::int64_t step_id(std::size_t step);
 
   store::RunStore& store_;

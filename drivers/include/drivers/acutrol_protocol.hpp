@@ -31,6 +31,8 @@ enum class CommandKind {
   kModePosition,    ///< `:mode:position N`       -> OK
   kDemandRate,      ///< `:demand:rate N,<dps>`   -> OK
   kDemandPosition,  ///< `:demand:position N,<deg>` -> OK
+  kModeSine,        ///< `:mode:sine N`           -> OK
+  kDemandSine,      ///< `:demand:sine N,<deg>,<Hz>` -> OK (amplitude, frequency)
   kReadPosition,    ///< `:read:pos? N`           -> `<deg>`
   kReadRate,        ///< `:read:rate? N`          -> `<dps>`
   kReadStatus,      ///< `:read:status? N`        -> `<MODE>,<settled>,<INTERLOCK>[,<fault text>]`
@@ -40,8 +42,9 @@ enum class CommandKind {
   kStop,            ///< `:stop N`                -> OK (brake to rest and hold; never refused)
 };
 
-/// One command. `value` is the demand (deg or deg/s) or the rate limit [deg/s]; `value2` the
-/// acceleration limit [deg/s^2] of `:limit`. Unused fields are zero.
+/// One command. `value` is the demand (deg or deg/s; the amplitude [deg] of a sine) or the rate
+/// limit [deg/s]; `value2` the acceleration limit [deg/s^2] of `:limit` or the frequency [Hz] of
+/// a sine. Unused fields are zero.
 struct Command {
   CommandKind kind = CommandKind::kIdentify;
   int axis = 0;  ///< 1 outer, 2 inner; 0 for `*idn?`
@@ -99,13 +102,13 @@ bool is_ok(const Reply& reply);
 /// A `:read:pos?` or `:read:rate?` payload: one finite decimal number.
 Parsed<double> parse_number(std::string_view payload);
 
-enum class WireMode { kRest, kPosition, kRate, kFault };
+enum class WireMode { kRest, kPosition, kRate, kSine, kFault };
 std::string_view to_wire(WireMode mode);
 
 /// `:read:status?` payload.
 struct StatusReply {
   WireMode mode = WireMode::kRest;
-  bool settled = false;  ///< position: in position; rate: at rate; rest: at rest
+  bool settled = false;  ///< position: in position; rate: at rate; rest: at rest; sine: running
   bool interlock_open = false;
   std::string fault_text;  ///< empty when the axis has no fault
 };

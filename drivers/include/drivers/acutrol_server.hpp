@@ -46,10 +46,14 @@ class TableServerBackend {
   virtual AxisReport report(int axis) = 0;
   virtual acutrol::InterlockReply interlock(int axis) = 0;
 
-  /// `:mode:position` / `:mode:rate`: selects the mode the next demand is for (no motion yet).
+  /// `:mode:position` / `:mode:rate` / `:mode:sine`: selects the mode the next demand is for
+  /// (no motion yet).
   virtual Refusal select_mode(int axis, acutrol::WireMode mode) = 0;
   virtual Refusal demand_position(int axis, double angle_deg) = 0;
   virtual Refusal demand_rate(int axis, double rate_dps) = 0;
+  /// `:demand:sine`: oscillate about the present angle, amplitude [deg] and frequency [Hz];
+  /// refused (201) when the peak rate or acceleration is beyond the `:limit`.
+  virtual Refusal demand_sine(int axis, double amplitude_deg, double frequency_hz) = 0;
   /// `:limit N,R,...`: the rate and acceleration limits the controller enforces from now on.
   virtual Refusal set_limits(int axis, double max_rate_dps, double max_accel_dps2) = 0;
   /// Brake to rest and hold. Never refused (it is the safe state), even with an interlock open.
@@ -77,6 +81,7 @@ class SimTableBackend final : public TableServerBackend {
   Refusal select_mode(int axis, acutrol::WireMode mode) override;
   Refusal demand_position(int axis, double angle_deg) override;
   Refusal demand_rate(int axis, double rate_dps) override;
+  Refusal demand_sine(int axis, double amplitude_deg, double frequency_hz) override;
   Refusal set_limits(int axis, double max_rate_dps, double max_accel_dps2) override;
   void stop(int axis) override;
   Refusal close_interlock(int axis) override;

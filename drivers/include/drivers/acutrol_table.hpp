@@ -46,7 +46,8 @@ struct AcutrolConnection {
 ///   `POST /station/interlock/close`), never a side effect of a run starting.
 /// - close_interlocks(): `:interlock:close` on each axis whose interlock is open; refused
 ///   while a cause is present, with the controller's text.
-/// - move_to()/set_rate(): mode then demand per axis; a refusal returns the controller's text.
+/// - move_to()/set_rate()/start_sine(): mode then demand per axis (`:mode:sine N` and
+///   `:demand:sine N,<deg>,<Hz>` for a sine); a refusal returns the controller's text.
 ///   Rates beyond the configured limit are refused before anything is sent.
 /// - stop(): both axes to rest; allowed in every state, and tries both axes even when the link
 ///   is broken (best effort).
@@ -84,6 +85,7 @@ class AcutrolTable final : public Turntable {
 
   Result move_to(double outer_deg, double inner_deg) override;
   Result set_rate(TableAxis axis, double rate_dps) override;
+  Result start_sine(TableAxis axis, double amplitude_deg, double frequency_hz) override;
   Result stop() override;
   core::TableState read_state() override;
   InterlockClosure close_interlocks() override;

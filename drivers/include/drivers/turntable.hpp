@@ -24,6 +24,11 @@ class Turntable : public Device {
   virtual Result move_to(double outer_deg, double inner_deg) = 0;
   /// One axis turning at a signed rate; the other axis keeps its mode.
   virtual Result set_rate(TableAxis axis, double rate_dps) = 0;
+  /// One axis oscillating about the angle it stands at: angle = start + amplitude_deg
+  /// sin(2 pi frequency_hz t), t from the command; the other axis keeps its mode. Refused (the
+  /// reason in the Result) when the peak rate 2 pi f A or the peak acceleration (2 pi f)^2 A is
+  /// beyond the axis's limits. stop() ends it (the axis brakes to rest where it is).
+  virtual Result start_sine(TableAxis axis, double amplitude_deg, double frequency_hz) = 0;
   /// Both axes to rest at their acceleration limits and hold: the safe state.
   virtual Result stop() = 0;
   virtual core::TableState read_state() = 0;

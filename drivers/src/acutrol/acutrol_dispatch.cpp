@@ -29,6 +29,10 @@ std::string handle_command_line(std::string_view line, TableServerBackend& backe
       return ack(backend.demand_rate(c.axis, c.value));
     case CommandKind::kDemandPosition:
       return ack(backend.demand_position(c.axis, c.value));
+    case CommandKind::kModeSine:
+      return ack(backend.select_mode(c.axis, acutrol::WireMode::kSine));
+    case CommandKind::kDemandSine:
+      return ack(backend.demand_sine(c.axis, c.value, c.value2));
     case CommandKind::kReadPosition:
       return acutrol::format_number(backend.report(c.axis).angle_deg);
     case CommandKind::kReadRate:

@@ -18,6 +18,7 @@ enum class Args {
   kAxis,       // N
   kAxisValue,  // N,<number>
   kAxisLimit,  // N,R,<number>,<number>
+  kAxisPair,   // N,<number>,<number>
 };
 
 struct CommandSpec {
@@ -33,6 +34,8 @@ constexpr std::array kCommands{
     CommandSpec{CommandKind::kModePosition, ":mode:position", Args::kAxis},
     CommandSpec{CommandKind::kDemandRate, ":demand:rate", Args::kAxisValue},
     CommandSpec{CommandKind::kDemandPosition, ":demand:position", Args::kAxisValue},
+    CommandSpec{CommandKind::kModeSine, ":mode:sine", Args::kAxis},
+    CommandSpec{CommandKind::kDemandSine, ":demand:sine", Args::kAxisPair},
     CommandSpec{CommandKind::kReadPosition, ":read:pos?", Args::kAxis},
     CommandSpec{CommandKind::kReadRate, ":read:rate?", Args::kAxis},
     CommandSpec{CommandKind::kReadStatus, ":read:status?", Args::kAxis},
@@ -113,6 +116,8 @@ std::string format_command(const Command& c) {
       return fmt::format("{} {},{:.6f}", spec.header, c.axis, c.value);
     case Args::kAxisLimit:
       return fmt::format("{} {},R,{:.6f},{:.6f}", spec.header, c.axis, c.value, c.value2);
+    case Args::kAxisPair:
+      return fmt::format("{} {},{:.6f},{:.6f}", spec.header, c.axis, c.value, c.value2);
   }
   return std::string(spec.header);
 }
@@ -149,6 +154,8 @@ std::string_view to_wire(WireMode mode) {
       return "POSITION";
     case WireMode::kRate:
       return "RATE";
+    case WireMode::kSine:
+      return "SINE";
     case WireMode::kFault:
       return "FAULT";
   }
@@ -172,13 +179,14 @@ Parsed<StatusReply> parse_status(std::string_view payload) {
   if (head.size() < 3) return bad("expected MODE,settled,INTERLOCK[,fault text]");
   StatusReply s;
   bool mode_known = false;
-  for (const auto m : {WireMode::kRest, WireMode::kPosition, WireMode::kRate, WireMode::kFault}) {
+  for (const auto m :
+       {WireMode::kRest, WireMode::kPosition, WireMode::kRate, WireMode::kSine, WireMode::kFault}) {
     if (iequals(head[0], to_wire(m))) {
       s.mode = m;
       mode_known = true;
     }
   }
-  if (!mode_known) return bad("mode is not REST, POSITION, RATE or FAULT");
+  if (!mode_known) return bad("mode is not REST, POSITION, RATE, SINE or FAULT");
   if (head[1] != "0" && head[1] != "1") return bad("settled flag is not 0 or 1");
   s.settled = head[1] == "1";
   if (iequals(head[2], "open")) {
@@ -246,9 +254,11 @@ CommandParse parse_command(std::string_view line) {
   const auto parts = split_commas(args);
   const std::size_t expected = spec->args == Args::kAxis        ? 1
                                : spec->args == Args::kAxisValue ? 2
+                               : spec->args == Args::kAxisPair  ? 3
                                                                 : 4;
   if (parts.size() != expected || parts.front().empty()) {
-    static constexpr std::array kUsage{"", "N", "N,<value>", "N,R,<rate dps>,<accel dps2>"};
+    static constexpr std::array kUsage{"", "N", "N,<value>", "N,R,<rate dps>,<accel dps2>",
+                                       "N,<amplitude deg>,<frequency Hz>"};
     return fail(ErrorCode::kBadArgument, fmt::format("{} expects {}", spec->header,
                                                      kUsage[static_cast<std::size_t>(spec->args)]));
   }
@@ -280,6 +290,16 @@ CommandParse parse_command(std::string_view line) {
     }
     c.value = *rate.value;
     c.value2 = *acc.value;
+  } else if (spec->args == Args::kAxisPair) {
+    const auto amplitude = parse_finite(parts[1], "amplitude");
+    if (!amplitude) return fail(ErrorCode::kBadArgument, amplitude.error);
+    const auto frequency = parse_finite(parts[2], "frequency");
+    if (!frequency) return fail(ErrorCode::kBadArgument, frequency.error);
+    if (!(*amplitude.value > 0.0) || !(*frequency.value > 0.0)) {
+      return fail(ErrorCode::kBadArgument, "amplitude and frequency must be positive");
+    }
+    c.value = *amplitude.value;
+    c.value2 = *frequency.value;
   }
   return {c, {}};
 }

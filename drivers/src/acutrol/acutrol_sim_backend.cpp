@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "drivers/acutrol_server.hpp"
 #include "sim/sim_world.hpp"
@@ -28,6 +29,8 @@ WireMode to_wire_mode(core::AxisMode mode) {
       return WireMode::kPosition;
     case core::AxisMode::kRate:
       return WireMode::kRate;
+    case core::AxisMode::kSine:
+      return WireMode::kSine;
     case core::AxisMode::kFault:
       return WireMode::kFault;
   }
@@ -114,6 +117,28 @@ Refusal SimTableBackend::demand_rate(int axis, double rate_dps) {
                               rate_dps, c.max_rate_dps));
   }
   const auto st = sim_axis(world_, axis).command_rate(rate_dps);
+  if (!st) return refuse(ErrorCode::kLimitExceeded, fmt::format("axis {}: {}", axis, st.message));
+  return std::nullopt;
+}
+
+Refusal SimTableBackend::demand_sine(int axis, double amplitude_deg, double frequency_hz) {
+  std::lock_guard lock(mutex_);
+  if (auto r = motion_refusal(axis)) return r;
+  auto& c = control(axis);
+  if (c.selected != WireMode::kSine) {
+    return refuse(ErrorCode::kWrongMode,
+                  fmt::format("axis {} is not in sine mode: send :mode:sine {} first", axis, axis));
+  }
+  // The controller's own limits, which may be below the simulated axis's (`:limit`).
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  if (w * amplitude_deg > c.max_rate_dps || w * w * amplitude_deg > c.max_accel_dps2) {
+    return refuse(ErrorCode::kLimitExceeded,
+                  fmt::format("axis {} sine {:.6f} deg at {:.6f} Hz peaks at {:.6f} deg/s and "
+                              "{:.6f} deg/s^2, beyond the limits {:.6f} deg/s, {:.6f} deg/s^2",
+                              axis, amplitude_deg, frequency_hz, w * amplitude_deg,
+                              w * w * amplitude_deg, c.max_rate_dps, c.max_accel_dps2));
+  }
+  const auto st = sim_axis(world_, axis).command_sine(amplitude_deg, frequency_hz);
   if (!st) return refuse(ErrorCode::kLimitExceeded, fmt::format("axis {}: {}", axis, st.message));
   return std::nullopt;
 }

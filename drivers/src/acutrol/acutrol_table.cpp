@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <exception>
+#include <numbers>
 
 namespace calstand::drivers {
 
@@ -42,6 +43,8 @@ core::AxisMode to_axis_mode(acutrol::WireMode mode) {
       return core::AxisMode::kPosition;
     case acutrol::WireMode::kRate:
       return core::AxisMode::kRate;
+    case acutrol::WireMode::kSine:
+      return core::AxisMode::kSine;
     case acutrol::WireMode::kFault:
       return core::AxisMode::kFault;
   }
@@ -373,6 +376,33 @@ Result AcutrolTable::set_rate(TableAxis table_axis, double rate_dps) {
     return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
   }
   if (auto r = command_ok(axis_command(CommandKind::kDemandRate, axis, rate_dps)); !r) {
+    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+  }
+  return Result::success();
+}
+
+Result AcutrolTable::start_sine(TableAxis table_axis, double amplitude_deg, double frequency_hz) {
+  std::lock_guard lock(mutex_);
+  if (auto r = life_.require_active(name_); !r) return r;
+  const int axis = wire_axis(table_axis);
+  const auto& limits = table_axis == TableAxis::kInner ? config_.inner : config_.outer;
+  // As for a rate: checked here too, so that a controller that lost its limits is not the only
+  // guard.
+  const double w = 2.0 * std::numbers::pi * frequency_hz;
+  if (!(amplitude_deg > 0.0) || !(frequency_hz > 0.0) || !std::isfinite(w * w * amplitude_deg) ||
+      w * amplitude_deg > limits.max_rate_dps || w * w * amplitude_deg > limits.max_accel_dps2) {
+    return Result::failure(fmt::format(
+        "{} axis: sine {} deg at {} Hz (peak {} deg/s, {} deg/s^2) is not within the limits "
+        "{} deg/s, {} deg/s^2",
+        axis_name(axis), amplitude_deg, frequency_hz, w * amplitude_deg, w * w * amplitude_deg,
+        limits.max_rate_dps, limits.max_accel_dps2));
+  }
+  if (auto r = command_ok(axis_command(CommandKind::kModeSine, axis)); !r) {
+    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+  }
+  if (auto r =
+          command_ok(axis_command(CommandKind::kDemandSine, axis, amplitude_deg, frequency_hz));
+      !r) {
     return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
   }
   return Result::success();

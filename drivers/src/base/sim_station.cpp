@@ -61,6 +61,15 @@ class SimStation::SimTurntable final : public Turntable {
           fmt::format("{} axis: {}", axis == TableAxis::kOuter ? "outer" : "inner", r.message));
     return r;
   }
+  Result start_sine(TableAxis axis, double amplitude_deg, double frequency_hz) override {
+    if (auto r = life_.require_active(name_); !r) return r;
+    auto& a = axis == TableAxis::kOuter ? world_.table().outer() : world_.table().inner();
+    const auto r = count(from_sim(a.command_sine(amplitude_deg, frequency_hz)));
+    if (!r)
+      return Result::failure(
+          fmt::format("{} axis: {}", axis == TableAxis::kOuter ? "outer" : "inner", r.message));
+    return r;
+  }
   Result stop() override {
     // Stopping is the safe state: allowed in every lifecycle state.
     world_.table().outer().stop();

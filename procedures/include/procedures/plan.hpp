@@ -17,7 +17,7 @@ inline constexpr double kMaxPlanDuration_s = 365.25 * 86400.0;
 
 /// What one table axis is asked to do over a whole procedure.
 struct AxisEnvelope {
-  double max_rate_dps = 0.0;       ///< largest |rate| of its rate steps [deg/s]
+  double max_rate_dps = 0.0;       ///< largest |rate| of its rate steps and oscillations [deg/s]
   double max_move_rate_dps = 0.0;  ///< largest peak |rate| of its moves [deg/s]
   double max_accel_dps2 = 0.0;     ///< acceleration used (the axis limit) if it moves at all
 };
@@ -40,9 +40,10 @@ struct Envelope {
 /// temperature, and assume: moves follow a trapezoidal profile per axis at the axis rate and
 /// acceleration limits, both axes at once, then the axis settle time; rate steps take
 /// |change of rate| / accel, then settle_s, then the recording, then |rate| / accel to stop
-/// when rest_after; a soaking set_temperature takes |change| / ramp + the soak's stable_s
-/// (never the timeout). The chamber air and IMU thermal lags are NOT modelled: a real soak
-/// usually takes longer than the estimate.
+/// when rest_after; an oscillation takes (settle_cycles + cycles) / frequency_hz and the axis
+/// settle time (back at its start angle); a soaking set_temperature takes |change| / ramp + the
+/// soak's stable_s (never the timeout). The chamber air and IMU thermal lags are NOT modelled: a
+/// real soak usually takes longer than the estimate.
 struct Plan {
   std::string procedure;  ///< the procedure's name
   std::string file_name;
@@ -53,7 +54,8 @@ struct Plan {
   double total_s = 0.0;                 ///< estimated duration [s]
   Envelope envelope;
   /// Every rule broken: override and value rules of expansion, then station limits (rates
-  /// above an axis limit, setpoints outside the chamber range, ramps above its limit).
+  /// above an axis limit, oscillations whose peak rate or acceleration is above it, setpoints
+  /// outside the chamber range, ramps above its limit).
   std::vector<Violation> violations;
 
   bool ok() const { return violations.empty(); }

@@ -34,9 +34,10 @@ class ProcedureError : public core::InputError {
   std::vector<Violation> violations_;
 };
 
-enum class StepKind { kSetTemperature, kMove, kRate, kCapture, kWait, kPower };
+enum class StepKind { kSetTemperature, kMove, kRate, kCapture, kWait, kPower, kOscillate };
 
-/// "set_temperature", "move", "rate", "capture", "wait", "power" (the `kind` of the file).
+/// "set_temperature", "move", "rate", "capture", "wait", "power", "oscillate" (the `kind` of the
+/// file).
 std::string_view to_string(StepKind kind);
 
 /// The chamber is soaked once its temperature stays within tolerance_c of the target for
@@ -91,13 +92,26 @@ struct Step {
   // kPower: the supply of `imu` (every supplied IMU when empty) on or off, then settle_s.
   bool power_on = false;
 
-  /// kCapture, kWait, kRate: recording (or waiting) time [s]; for a rate step given in
-  /// revolutions, revolutions * 360 / |rate_dps|.
+  // kOscillate: `axis` follows angle = start + amplitude_deg sin(2 pi frequency_hz t) for
+  // settle_cycles (not recorded: the servo and the IMU's output filter settle), then for cycles
+  // while the IMUs and the encoder are recorded; the axis then comes back to rest at the start.
+  double amplitude_deg = 0.0;  ///< > 0 [deg]
+  double frequency_hz = 0.0;   ///< > 0 [Hz]
+  double cycles = 0.0;         ///< recorded periods, a whole number > 0
+  double settle_cycles = 0.0;  ///< periods before recording, >= 0 (default 2)
+  /// Peak rate 2 pi f A [deg/s] and peak acceleration (2 pi f)^2 A [deg/s^2] of the oscillation.
+  double peak_rate_dps() const;
+  double peak_accel_dps2() const;
+
+  /// kCapture, kWait, kRate, kOscillate: recording (or waiting) time [s]; for a rate step given
+  /// in revolutions, revolutions * 360 / |rate_dps|; for an oscillation cycles / frequency_hz.
   double duration_s = 0.0;
   std::optional<double> revolutions;  ///< kRate given in whole revolutions
 
-  /// True for the kinds that record IMU data (capture and rate).
-  bool records() const { return kind == StepKind::kCapture || kind == StepKind::kRate; }
+  /// True for the kinds that record IMU data (capture, rate and oscillate).
+  bool records() const {
+    return kind == StepKind::kCapture || kind == StepKind::kRate || kind == StepKind::kOscillate;
+  }
   /// The commanded values as JSON: index, kind, label, origin, loop values and the fields of
   /// the kind, in the file's names and units.
   nlohmann::json to_json() const;

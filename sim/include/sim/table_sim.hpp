@@ -33,6 +33,12 @@ class TableAxisSim {
   Status command_position(double angle_deg);
   /// Turns at `rate_dps` (signed, right-handed); refused beyond max_rate_dps.
   Status command_rate(double rate_dps);
+  /// Oscillates about the angle the axis is commanded to (its profile's angle, where a settled
+  /// axis stands): the profile follows start + amplitude_deg sin(2 pi frequency_hz t), t from
+  /// this call, and the axis follows the profile through its servo lag. Refused when the axis
+  /// is faulted, for a non-positive or non-finite amplitude or frequency, or when the peak rate
+  /// 2 pi f A or the peak acceleration (2 pi f)^2 A exceeds the axis's limits. stop() ends it.
+  Status command_sine(double amplitude_deg, double frequency_hz);
   /// Decelerates at the acceleration limit and holds at rest (the safe state).
   void stop();
   /// A fault (e.g. amplifier trip): the axis brakes to rest at the acceleration limit, reports
@@ -69,7 +75,11 @@ class TableAxisSim {
   double profile_rate_dps_ = 0.0;   // profile rate over the last step [deg/s]
   double target_angle_deg_ = 0.0;   // position mode, unwrapped [deg]
   double target_rate_dps_ = 0.0;    // rate mode [deg/s]
-  double settled_for_s_ = 0.0;      // how long the error has stayed in tolerance [s]
+  double sine_center_deg_ = 0.0;    // sine mode: the start angle, unwrapped [deg]
+  double sine_amplitude_deg_ = 0.0;
+  double sine_frequency_hz_ = 0.0;
+  double sine_time_s_ = 0.0;    // since the sine was commanded [s]
+  double settled_for_s_ = 0.0;  // how long the error has stayed in tolerance [s]
   bool in_position_ = true;
   std::string fault_text_;
   // exp() is the only costly call in step(); the simulator steps at a fixed dt, so it is

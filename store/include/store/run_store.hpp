@@ -71,6 +71,11 @@ class RunStore {
   void add_table_telemetry(std::int64_t run, std::span<const core::TableState> states);
   void add_chamber_telemetry(std::int64_t run, const core::ChamberState& state);
   void add_chamber_telemetry(std::int64_t run, std::span<const core::ChamberState> states);
+  /// The table telemetry of `run` with station time in [from_s, to_s], in time order: time,
+  /// encoder angles [deg] and rates [deg/s] and modes (fault text is not stored).
+  std::vector<core::TableState> table_telemetry(
+      std::int64_t run, double from_s = -std::numeric_limits<double>::infinity(),
+      double to_s = std::numeric_limits<double>::infinity());
   /// The chamber telemetry of `run` with station time in [from_s, to_s], in time order (time,
   /// air temperature, setpoint and mode; fault text is not stored).
   std::vector<core::ChamberState> chamber_telemetry(

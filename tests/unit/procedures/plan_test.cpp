@@ -280,5 +280,55 @@ TEST(PlanPower, APowerStepTakesItsSettleTimeAndNeedsASupplyForItsUnit) {
   EXPECT_NE(none.violations[1].message.find("no power supply for IMU \"imu0\""), std::string::npos);
 }
 
+// Outer axis 100 deg/s, 50 deg/s^2: 1 deg at 1 Hz peaks at 6.28 deg/s and 39.5 deg/s^2 (within);
+// at 2 Hz at 158 deg/s^2 (beyond the acceleration only); 20 deg at 1 Hz at 125.7 deg/s (beyond
+// both).
+TEST(PlanOscillate, TakesSettleAndRecordedCyclesAndRefusesASineBeyondTheAxisNamingTheStep) {
+  const Plan ok = plan_of(R"([{"kind": "oscillate", "axis": "outer", "amplitude_deg": 1,
+                               "frequency_hz": 1, "cycles": 10, "settle_cycles": 3}])");
+  ASSERT_TRUE(ok.ok()) << test::lines(ok.violations);
+  EXPECT_EQ(ok.steps[0].kind, StepKind::kOscillate);
+  EXPECT_DOUBLE_EQ(ok.steps[0].duration_s, 10.0);
+  EXPECT_DOUBLE_EQ(ok.step_duration_s[0], 3.0 + 10.0 + 0.5);  // settle, record, back at rest
+  EXPECT_NEAR(ok.envelope.outer.max_rate_dps, 2.0 * M_PI, 1e-12);
+  EXPECT_EQ(ok.envelope.captures, 1u);
+  EXPECT_EQ(ok.steps[0].to_json()["kind"], "oscillate");
+
+  const Plan fast = plan_of(R"([{"kind": "wait", "duration_s": 1},
+      {"kind": "oscillate", "axis": "${a}", "amplitude_deg": 1, "frequency_hz": "${f}",
+       "cycles": 10}])",
+                            R"({"a": {"default": "outer", "description": "axis"},
+                                "f": {"default": 2, "description": "Hz"}})");
+  ASSERT_EQ(fast.violations.size(), 1u) << test::lines(fast.violations);
+  EXPECT_EQ(fast.violations[0].path, "steps[1].amplitude_deg");
+  EXPECT_NE(fast.violations[0].message.find("above the outer axis acceleration limit 50"),
+            std::string::npos)
+      << fast.violations[0].message;
+  EXPECT_NE(fast.violations[0].message.find("${f} = 2 Hz"), std::string::npos)
+      << fast.violations[0].message;
+  // The default settle is two periods.
+  EXPECT_DOUBLE_EQ(fast.step_duration_s[1], 2.0 / 2.0 + 10.0 / 2.0 + 0.5);
+
+  const Plan wide = plan_of(R"([{"kind": "oscillate", "axis": "outer", "amplitude_deg": 20,
+                                 "frequency_hz": 1, "cycles": 1}])");
+  ASSERT_EQ(wide.violations.size(), 2u) << test::lines(wide.violations);
+  EXPECT_NE(wide.violations[0].message.find("above the outer axis rate limit 100"),
+            std::string::npos);
+  // The inner axis has room for the same sine: the limits are the named axis's.
+  EXPECT_TRUE(plan_of(R"([{"kind": "oscillate", "axis": "inner", "amplitude_deg": 1,
+                           "frequency_hz": 1.5, "cycles": 1}])")
+                  .ok());
+}
+
+TEST(PlanOscillate, ValueRulesNameTheField) {
+  const Procedure p = parse(doc_with(R"([{"kind": "oscillate", "axis": "outer",
+      "amplitude_deg": 0, "frequency_hz": -1, "cycles": 2.5}])"));
+  const auto v = make_plan(p, station()).violations;
+  ASSERT_EQ(v.size(), 3u) << test::lines(v);
+  EXPECT_EQ(v[0].path, "steps[0].amplitude_deg");
+  EXPECT_EQ(v[1].path, "steps[0].frequency_hz");
+  EXPECT_EQ(v[2].path, "steps[0].cycles");
+}
+
 }  // namespace
 }  // namespace calstand::procedures

@@ -441,5 +441,69 @@ TEST(TableAxisSim, SteadyRateIsExactWithUnevenSteps) {
   EXPECT_TRUE(axis.state().in_position);
 }
 
+// The sine goes about the commanded angle, and the true axis follows it through the servo's
+// first-order lag: gain 1 / sqrt(1 + (w tau)^2) and phase -atan(w tau), seen on the angle and on
+// the rate the encoder reports alike. A least-squares fit at the known frequency reads both.
+TEST(TableAxisSim, SineFollowsTheProfileThroughTheServoLagAboutTheStartAngle) {
+  AxisLimits limits;
+  limits.max_rate_dps = 100.0;
+  limits.max_accel_dps2 = 500.0;
+  limits.servo_time_constant_s = 0.02;
+  TableAxisSim axis(limits);
+  ASSERT_TRUE(axis.command_position(30.0));
+  run_until_settled(axis, 10.0);
+  const double a = 2.0, f = 2.0, w = 2.0 * M_PI * f;  // 25 deg/s, 316 deg/s^2 peak
+  ASSERT_TRUE(axis.command_sine(a, f));
+  EXPECT_EQ(axis.state().mode, core::AxisMode::kSine);
+  double t = 0.0;
+  for (int i = 0; i < 1000; ++i) {  // one second: the start has died out
+    axis.step(kDt);
+    t += kDt;
+  }
+  double ss = 0, sc = 0, cc = 0, ys = 0, yc = 0, rs = 0, rc = 0, lo = 1e9, hi = -1e9;
+  for (int i = 0; i < 2000; ++i) {  // four whole periods
+    axis.step(kDt);
+    t += kDt;
+    const double s = std::sin(w * t), c = std::cos(w * t);
+    ss += s * s, sc += s * c, cc += c * c;
+    ys += (axis.true_angle_deg() - 30.0) * s, yc += (axis.true_angle_deg() - 30.0) * c;
+    // The reported rate is the mean over the step: its instant is half a step back.
+    const double sm = std::sin(w * (t - kDt / 2)), cm = std::cos(w * (t - kDt / 2));
+    rs += axis.state().rate_dps * sm, rc += axis.state().rate_dps * cm;
+    lo = std::min(lo, axis.state().angle_deg);
+    hi = std::max(hi, axis.state().angle_deg);
+  }
+  // Whole periods on a fine grid: sin and cos are orthogonal, so the projections are the fit.
+  EXPECT_NEAR(sc / ss, 0.0, 1e-3);
+  const double gain = 1.0 / std::sqrt(1.0 + w * w * 0.02 * 0.02);
+  const double lag = -std::atan(w * 0.02);
+  EXPECT_NEAR(std::hypot(ys / ss, yc / cc) / a, gain, 2e-3);
+  EXPECT_NEAR(std::atan2(yc / cc, ys / ss), lag, 2e-3);
+  EXPECT_NEAR(std::hypot(rs / ss, rc / cc) / (w * a), gain, 2e-3);
+  EXPECT_NEAR(std::atan2(rc / cc, rs / ss) - M_PI / 2, lag, 2e-3);
+  EXPECT_NEAR(0.5 * (lo + hi), 30.0, 1e-3);  // about the start angle
+  EXPECT_TRUE(axis.state().in_position);
+
+  axis.stop();
+  run_until_settled(axis, 10.0);
+  EXPECT_EQ(axis.state().mode, core::AxisMode::kRest);
+  EXPECT_NEAR(axis.true_rate_dps(), 0.0, 1e-9);
+}
+
+TEST(TableAxisSim, SineBeyondTheRateOrAccelerationLimitIsRefused) {
+  AxisLimits limits;
+  limits.max_rate_dps = 100.0;
+  limits.max_accel_dps2 = 500.0;
+  TableAxisSim axis(limits);
+  const auto fast = axis.command_sine(1.0, 4.0);  // 632 deg/s^2
+  EXPECT_FALSE(fast);
+  EXPECT_NE(fast.message.find("deg/s^2"), std::string::npos) << fast.message;
+  EXPECT_FALSE(axis.command_sine(20.0, 1.0));  // 126 deg/s
+  EXPECT_FALSE(axis.command_sine(0.0, 1.0));
+  EXPECT_EQ(axis.state().mode, core::AxisMode::kRest);
+  axis.inject_fault("door");
+  EXPECT_FALSE(axis.command_sine(0.1, 1.0));
+}
+
 }  // namespace
 }  // namespace calstand::sim

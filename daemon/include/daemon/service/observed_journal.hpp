@@ -34,6 +34,7 @@ class ObservedJournal final : public RunJournal {
   void event(double t_s, EventKind kind, const std::string& source,
              const std::string& message) override;
   void table_telemetry(const core::TableState& state) override;
+  void table_trace(const core::TableState& state) override { inner_.table_trace(state); }
   void chamber_telemetry(const core::ChamberState& state) override;
   void run_state(RunState state, double t_s, const std::string& reason) override;
   std::string unit_identified(const std::string& imu, const std::string& model,

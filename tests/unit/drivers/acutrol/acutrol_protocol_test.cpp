@@ -259,5 +259,27 @@ TEST(AcutrolProtocol, RandomCorpusNeverCrashesAndEveryLineIsAccountedFor) {
   }
 }
 
+TEST(AcutrolProtocol, SineCommandsFormatAndParseBackAndRefuseBadArguments) {
+  EXPECT_EQ(format_command({CommandKind::kModeSine, 1}), ":mode:sine 1");
+  EXPECT_EQ(format_command({CommandKind::kDemandSine, 2, 0.5, 2.0}),
+            ":demand:sine 2,0.500000,2.000000");
+  const auto p = parse_command(" :DEMAND:SINE 2, 0.25 ,+10 \r");
+  ASSERT_TRUE(p.command) << p.error.text;
+  EXPECT_EQ(p.command->kind, CommandKind::kDemandSine);
+  EXPECT_EQ(p.command->axis, 2);
+  EXPECT_DOUBLE_EQ(p.command->value, 0.25);
+  EXPECT_DOUBLE_EQ(p.command->value2, 10.0);
+  for (const char* bad : {":demand:sine 1,0.5", ":demand:sine 1,0,2", ":demand:sine 1,0.5,-2",
+                          ":demand:sine 1,0.5,nan", ":demand:sine 1,0.5,2,3"}) {
+    const auto b = parse_command(bad);
+    EXPECT_FALSE(b.command) << bad;
+    EXPECT_EQ(b.error.code, 101) << bad << ": " << b.error.text;
+  }
+  const auto status = parse_status("SINE,1,CLOSED");
+  ASSERT_TRUE(status) << status.error;
+  EXPECT_EQ(status.value->mode, WireMode::kSine);
+  EXPECT_EQ(format_status(*status.value), "SINE,1,CLOSED");
+}
+
 }  // namespace
 }  // namespace calstand::drivers::acutrol

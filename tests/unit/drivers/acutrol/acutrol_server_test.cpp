@@ -236,5 +236,33 @@ TEST(AcutrolServer, ServesOverAPseudoTerminal) {
   EXPECT_EQ(reply->text, "CALSTAND,ACUTROL-SIM,0,1.0");
 }
 
+TEST_F(AcutrolServerTest, SineDemandOscillatesAboutThePresentAngleWithinTheLimits) {
+  LineClient c(server_.port());
+  EXPECT_EQ(c.ask(":mode:position 2"), "OK");
+  EXPECT_EQ(c.ask(":demand:position 2,45.0"), "OK");
+  EXPECT_TRUE(eventually([&] { return c.ask(":read:status? 2") == "POSITION,1,CLOSED"; }));
+  // The mode comes first, as for the other demands.
+  EXPECT_EQ(c.ask(":demand:sine 2,1.0,2.0").rfind("ERR 200 ", 0), 0u);
+  EXPECT_EQ(c.ask(":mode:sine 2"), "OK");
+  // 5 deg at 2 Hz peaks at 790 deg/s^2, beyond the inner axis's 500.
+  const std::string refused = c.ask(":demand:sine 2,5,2");
+  EXPECT_EQ(refused.rfind("ERR 201 ", 0), 0u) << refused;
+  EXPECT_EQ(c.ask(":demand:sine 2,1.0,2.0"), "OK");
+  double lo = 1e9, hi = -1e9, fastest = 0.0;
+  EXPECT_TRUE(eventually([&] {
+    lo = std::min(lo, number(c.ask(":read:pos? 2")));
+    hi = std::max(hi, number(c.ask(":read:pos? 2")));
+    fastest = std::max(fastest, std::abs(number(c.ask(":read:rate? 2"))));
+    return hi - lo > 1.6;  // the servo lag takes some off the 2 deg peak to peak
+  })) << lo
+      << " .. " << hi << " " << c.ask(":read:status? 2");
+  EXPECT_GT(lo, 45.0 - 1.05);
+  EXPECT_LT(hi, 45.0 + 1.05);
+  EXPECT_LT(fastest, 2.0 * M_PI * 2.0 * 1.0 * 1.05);
+  EXPECT_EQ(c.ask(":read:status? 2").rfind("SINE,", 0), 0u);
+  EXPECT_EQ(c.ask(":stop 2"), "OK");
+  EXPECT_TRUE(eventually([&] { return c.ask(":read:status? 2") == "REST,1,CLOSED"; }));
+}
+
 }  // namespace
 }  // namespace calstand::drivers

@@ -485,5 +485,30 @@ TEST(AcutrolTableSerial, MissingDeviceFailsConfigureNamingThePath) {
   EXPECT_TRUE(contains(again.message, "next attempt in")) << again.message;
 }
 
+TEST_F(AcutrolTableOnServer, StartSineOscillatesTheAxisAndStopBringsItToRest) {
+  bring_up();
+  ASSERT_TRUE(table_->move_to(0.0, -20.0));
+  ASSERT_TRUE(eventually([&] { return table_->read_state().inner.in_position; }));
+  // Beyond the station's limits: refused before anything is sent.
+  const auto far = table_->start_sine(TableAxis::kInner, 10.0, 5.0);
+  EXPECT_FALSE(far);
+  EXPECT_TRUE(contains(far.message, "not within the limits")) << far.message;
+  ASSERT_TRUE(table_->start_sine(TableAxis::kInner, 0.5, 1.0));
+  double lo = 1e9, hi = -1e9;
+  EXPECT_TRUE(eventually([&] {
+    const auto st = table_->read_state();
+    lo = std::min(lo, st.inner.angle_deg);
+    hi = std::max(hi, st.inner.angle_deg);
+    return st.inner.mode == core::AxisMode::kSine && hi - lo > 0.95;
+  }));
+  EXPECT_NEAR(0.5 * (lo + hi), -20.0, 0.05);
+  EXPECT_EQ(table_->read_state().outer.mode, core::AxisMode::kPosition);  // the other axis holds
+  ASSERT_TRUE(table_->stop());
+  EXPECT_TRUE(eventually([&] {
+    const auto st = table_->read_state();
+    return st.inner.mode == core::AxisMode::kRest && st.inner.in_position;
+  }));
+}
+
 }  // namespace
 }  // namespace calstand::drivers
