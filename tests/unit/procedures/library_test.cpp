@@ -59,9 +59,11 @@ void expect_points(const Pose& p, char axis, const Eigen::Vector3d& direction,
 const Eigen::Vector3d kUp(0, 0, 1), kDown(0, 0, -1), kNorth(0, 1, 0), kSouth(0, -1, 0);
 
 TEST(Library, ShipsTheStandardProcedures) {
-  const std::vector<std::string> want{
-      "bandwidth",    "first-look",          "multi-position", "rate-ladder",     "six-position",
-      "static-allan", "thermal-calibration", "thermal-ramp",   "twelve-position", "two-position"};
+  const std::vector<std::string> want{"bandwidth",    "first-look",          "multi-position",
+                                      "rate-ladder",  "repeatability",       "six-position",
+                                      "static-allan", "thermal-calibration", "thermal-hysteresis",
+                                      "thermal-ramp", "twelve-position",     "two-position",
+                                      "warm-up"};
   EXPECT_EQ(library_names(), want);
   EXPECT_FALSE(library_text("no-such-procedure").has_value());
   EXPECT_FALSE(library_text("../six-position").has_value());
