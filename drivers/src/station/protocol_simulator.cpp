@@ -18,6 +18,7 @@
 #include "drivers/chamber_register_map.hpp"
 #include "drivers/imu_frame_streamer.hpp"
 #include "drivers/modbus_chamber_server.hpp"
+#include "drivers/scpi_server.hpp"
 #include "drivers/sim_world_runner.hpp"
 
 namespace calstand::drivers {
@@ -48,6 +49,8 @@ struct ProtocolSimulator::Impl {
   std::unique_ptr<ModbusChamberServer> f4t_server;
   std::unique_ptr<ModbusChamberServer> f4_server;
   std::vector<std::unique_ptr<ImuFrameStreamer>> imu_lines;
+  /// One SCPI server per simulated supply, in the station file's order.
+  std::vector<std::unique_ptr<ScpiServer>> supply_servers;
 #if CALSTAND_WITH_SOCKETCAN
   std::unique_ptr<CanSampleStreamer> can;  // the first IMU on CAN, when asked
 #else
@@ -88,6 +91,20 @@ void ProtocolSimulator::start() {
   for (std::size_t i = 0; i < m.runner.world().imu_count(); ++i) {
     m.imu_lines.push_back(std::make_unique<ImuFrameStreamer>());
   }
+  // Each supply as a bench supply speaking SCPI on TCP, switching its IMU in the world.
+  for (const core::PowerSupplyConfig& supply : m.sim_config.power_supplies) {
+    std::size_t imu_index = 0;
+    while (imu_index < m.sim_config.imus.size() &&
+           m.sim_config.imus[imu_index].name != supply.imu) {
+      ++imu_index;
+    }
+    AcutrolServerOptions supply_options;
+    supply_options.bind_host = m.options.host;
+    m.supply_servers.push_back(
+        std::make_unique<ScpiServer>(m.runner.world(), m.runner.mutex(), imu_index,
+                                     supply.voltage_v, supply.current_limit_a, supply_options));
+    m.supply_servers.back()->start();
+  }
   if (!m.options.can_interface.empty()) {
     if (m.options.can_map_file.empty()) {
       throw core::InputError("--can-map", "a CAN signal map is needed to send IMU frames on CAN");
@@ -120,6 +137,8 @@ void ProtocolSimulator::stop() {
   if (m.table_server) m.table_server->stop();
   if (m.f4t_server) m.f4t_server->stop();
   if (m.f4_server) m.f4_server->stop();
+  for (auto& server : m.supply_servers) server->stop();
+  m.supply_servers.clear();
   m.imu_lines.clear();
   m.can.reset();
   m.started = false;
@@ -140,8 +159,17 @@ json ProtocolSimulator::endpoints() const {
       {"map", "watlow-f4t"}};
   if (m.f4_server)
     chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
+  json supplies = json::array();
+  for (std::size_t i = 0; i < m.supply_servers.size(); ++i) {
+    supplies.push_back(
+        {{"name", m.sim_config.power_supplies[i].name},
+         {"imu", m.sim_config.power_supplies[i].imu},
+         {"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.supply_servers[i]->port())},
+         {"protocol", "scpi"}});
+  }
   return {{"sim_station", m.sim_config.name},
           {"time_scale", m.options.time_scale},
+          {"power_supplies", supplies},
           {"table",
            {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
             {"protocol", "acutrol"}}},
@@ -187,9 +215,14 @@ core::StationConfig ProtocolSimulator::client_station() const {
                       {"sample_rate_hz", truth.sample_rate_hz},
                       {"sequence_modulus", truth.sequence_modulus}};
   }
-  // The SCPI supply simulator (drivers/scpi_server.hpp) is not served here yet: the client
-  // station has no supplies rather than simulated ones a real station cannot hold.
-  c.power_supplies.clear();
+  for (std::size_t i = 0; i < c.power_supplies.size() && i < m.supply_servers.size(); ++i) {
+    auto& supply = c.power_supplies[i];
+    supply.backend = "scpi";
+    supply.connection = {{"transport", "tcp"},
+                         {"host", connect_host(m.options.host)},
+                         {"port", m.supply_servers[i]->port()},
+                         {"model", "generic"}};
+  }
   return c;
 }
 
