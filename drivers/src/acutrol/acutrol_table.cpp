@@ -6,6 +6,8 @@
 #include <exception>
 #include <numbers>
 
+#include "drivers/serial_reopen.hpp"
+
 namespace calstand::drivers {
 
 using acutrol::Command;
@@ -92,21 +94,7 @@ std::map<std::string, std::uint64_t> AcutrolTable::fault_counters() const {
 // ---- link ------------------------------------------------------------------------------------
 
 Result AcutrolTable::open_link() {
-  if (serial_ == nullptr || serial_->is_open()) return Result::success();
-  const auto now = SteadyClock::now();
-  if (!serial_backoff_.may_attempt(now)) {
-    return Result::failure(fmt::format("{}: not open (next attempt in {} ms)",
-                                       serial_->options().path,
-                                       serial_backoff_.wait_left(now).count()));
-  }
-  try {
-    serial_->open();
-    serial_backoff_.succeeded();
-    return Result::success();
-  } catch (const std::exception& e) {
-    serial_backoff_.failed(now);
-    return Result::failure(e.what());
-  }
+  return serial_ == nullptr ? Result::success() : reopen_with_backoff(*serial_, serial_backoff_);
 }
 
 void AcutrolTable::note_link_failure(const std::string& why) {
