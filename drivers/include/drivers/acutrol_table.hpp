@@ -11,6 +11,7 @@
 #include "core/station_config.hpp"
 #include "drivers/acutrol_protocol.hpp"
 #include "drivers/device_support.hpp"
+#include "drivers/line_link.hpp"
 #include "drivers/serial_port.hpp"
 #include "drivers/tcp_client.hpp"
 #include "drivers/turntable.hpp"
@@ -20,19 +21,13 @@ namespace calstand::drivers {
 /// The station file's `table.connection` for the acutrol backend:
 ///   {"transport": "tcp", "host": "127.0.0.1", "port": 5025, "timeout_ms": 500}
 ///   {"transport": "serial", "path": "/dev/ttyS0", "baud": 115200, "parity": "none"}
-struct AcutrolConnection {
-  enum class Transport { kTcp, kSerial };
-  Transport transport = Transport::kTcp;
-  TcpOptions tcp;        ///< when transport is kTcp
-  SerialOptions serial;  ///< when transport is kSerial
+struct AcutrolConnection : LineLink {
   /// How long a command may wait for its reply line [ms]; also bounds each write.
   std::chrono::milliseconds response_timeout{500};
 
   /// Parses and validates (no I/O). Throws core::InputError naming `table.connection.<field>`
   /// and why (missing, wrong type, out of range, unknown transport or parity).
   static AcutrolConnection from_json(const nlohmann::json& connection);
-  /// "tcp 127.0.0.1:5025" or "serial /dev/ttyS0", for messages.
-  std::string describe() const;
 };
 
 /// A dual-axis rate table driven over the ACUTROL-style command language (acutrol_protocol.hpp,

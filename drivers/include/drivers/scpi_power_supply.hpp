@@ -11,6 +11,7 @@
 #include "core/station_config.hpp"
 #include "drivers/acutrol_protocol.hpp"
 #include "drivers/device_support.hpp"
+#include "drivers/line_link.hpp"
 #include "drivers/power_supply.hpp"
 #include "drivers/scpi_commands.hpp"
 #include "drivers/serial_port.hpp"
@@ -21,11 +22,7 @@ namespace calstand::drivers {
 /// The station file's `power_supplies[].connection` for the scpi backend:
 ///   {"transport": "tcp", "host": "192.168.10.30", "port": 5025, "model": "generic"}
 ///   {"transport": "serial", "path": "/dev/ttyUSB1", "baud": 9600}
-struct ScpiConnection {
-  enum class Transport { kTcp, kSerial };
-  Transport transport = Transport::kTcp;
-  TcpOptions tcp;
-  SerialOptions serial;
+struct ScpiConnection : LineLink {
   const scpi::CommandSet* commands = &scpi::kCommandSets[0];
   /// How long a query may wait for its reply line [ms]; also bounds each write.
   std::chrono::milliseconds response_timeout{1000};
@@ -33,7 +30,6 @@ struct ScpiConnection {
   /// Parses and validates (no I/O) against the schema's `scpi_connection`. Throws
   /// core::InputError naming `<where>.<field>`.
   static ScpiConnection from_json(const nlohmann::json& connection, const std::string& where);
-  std::string describe() const;  ///< "tcp 127.0.0.1:5025", "serial /dev/ttyUSB1"
 };
 
 /// A programmable bench supply over SCPI (docs/protocols.md, Power supply over SCPI), over TCP

@@ -13,23 +13,8 @@ AcutrolConnection AcutrolConnection::from_json(const nlohmann::json& j) {
                                j, "", "table.connection");
   AcutrolConnection c;
   c.response_timeout = std::chrono::milliseconds(j.value("timeout_ms", 500));
-  if (j.at("transport") == "tcp") {
-    c.transport = Transport::kTcp;
-    c.tcp.host = j.at("host").get<std::string>();
-    c.tcp.port = j.at("port").get<std::uint16_t>();
-    c.tcp.connect_timeout = std::chrono::milliseconds(j.value("connect_timeout_ms", 1000));
-  } else {
-    c.transport = Transport::kSerial;
-    c.serial.path = j.at("path").get<std::string>();
-    c.serial.baud_rate = j.value("baud", 115200);
-    c.serial.parity = parity_from_name(j.value("parity", "none"));
-  }
+  static_cast<LineLink&>(c) = LineLink::from_json(j, 115200);
   return c;
-}
-
-std::string AcutrolConnection::describe() const {
-  if (transport == Transport::kTcp) return fmt::format("tcp {}:{}", tcp.host, tcp.port);
-  return "serial " + serial.path;
 }
 
 }  // namespace calstand::drivers

@@ -17,23 +17,8 @@ ScpiConnection ScpiConnection::from_json(const nlohmann::json& j, const std::str
   if (c.commands == nullptr) {
     throw core::InputError(where + ".model", "no command table for this model");
   }
-  if (j.at("transport") == "tcp") {
-    c.transport = Transport::kTcp;
-    c.tcp.host = j.at("host").get<std::string>();
-    c.tcp.port = j.at("port").get<std::uint16_t>();
-    c.tcp.connect_timeout = std::chrono::milliseconds(j.value("connect_timeout_ms", 1000));
-  } else {
-    c.transport = Transport::kSerial;
-    c.serial.path = j.at("path").get<std::string>();
-    c.serial.baud_rate = j.value("baud", 9600);
-    c.serial.parity = parity_from_name(j.value("parity", "none"));
-  }
+  static_cast<LineLink&>(c) = LineLink::from_json(j, 9600);
   return c;
-}
-
-std::string ScpiConnection::describe() const {
-  if (transport == Transport::kTcp) return fmt::format("tcp {}:{}", tcp.host, tcp.port);
-  return "serial " + serial.path;
 }
 
 }  // namespace calstand::drivers
