@@ -27,6 +27,27 @@ using calstand::testing::Result;
 using calstand::testing::run;
 using calstand::testing::write_text;
 
+/// The built-in station with its IMU drawn from the LN200 sheet with `seed` and `planted` merged
+/// into that unit's truth (an effect for an analysis to find; null: none). Returns the station
+/// file written into `dir` as NAME.station.json.
+std::string ln200_station(const std::string& dir, const std::string& name, int seed,
+                          const nlohmann::json& planted) {
+  const std::string truth_file = dir + "/" + name + ".truth.json";
+  const Result r =
+      run("truth-from-spec ln200 --seed " + std::to_string(seed) + " --out " + truth_file);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  nlohmann::json truth = nlohmann::json::parse(read_text(truth_file));
+  if (!planted.is_null()) truth.update(planted);
+  write_text(truth_file, truth.dump());
+  nlohmann::json station = nlohmann::json::parse(
+      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
+  station["imus"][0].erase("model");
+  station["imus"][0]["truth_file"] = truth_file;
+  const std::string station_file = dir + "/" + name + ".station.json";
+  write_text(station_file, station.dump());
+  return station_file;
+}
+
 // One 20-minute static-allan run shared by the tests (a fraction of a second of simulation).
 class NoiseCli : public ::testing::Test {
  protected:
@@ -348,7 +369,7 @@ TEST(AnalyzeRepeatabilityCli, TwelvePowerCyclesRecoverTheSheetsTurnOnBiasWithinT
   EXPECT_LE(missed, 3);
   EXPECT_NEAR(std::sqrt(gyro_sq), gyro_truth, 0.2 * gyro_truth);
   EXPECT_NEAR(std::sqrt(accel_sq), accel_truth, 0.2 * accel_truth);
-  // A run without power cycles is refused, saying what it needs.
+  // An IMU the run does not have is refused, by name.
   const Result r = run("analyze repeatability --db " + dir + "/repeat101.db --run 1 --device imu9");
   EXPECT_EQ(r.exit_code, 2) << r.out;
   std::filesystem::remove_all(dir);
@@ -368,28 +389,19 @@ TEST(AnalyzeWarmupCli, RecoversThePowerOnTransientsTimeConstantAndFindsNoneWhenT
   const std::string dir = ::testing::TempDir() + "analyze_warmup-" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  nlohmann::json station = nlohmann::json::parse(
-      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
   const std::vector<double> gyro = {20.0, -15.0, 10.0};
   for (const bool transient : {true, false}) {
     const std::string name = transient ? "with" : "without";
-    const std::string truth_file = dir + "/" + name + ".truth.json";
-    Result r = run("truth-from-spec ln200 --seed 5 --out " + truth_file);
-    ASSERT_EQ(r.exit_code, 0) << r.out;
-    nlohmann::json truth = nlohmann::json::parse(read_text(truth_file));
+    nlohmann::json planted;
     if (transient) {
-      truth["power_on"] = {{"gyro_bias_deg_per_h", gyro},
-                           {"accel_bias_ug", {300.0, -200.0, 100.0}},
-                           {"time_constant_s", 120.0}};
+      planted["power_on"] = {{"gyro_bias_deg_per_h", gyro},
+                             {"accel_bias_ug", {300.0, -200.0, 100.0}},
+                             {"time_constant_s", 120.0}};
     }
-    write_text(truth_file, truth.dump());
-    station["imus"][0].erase("model");
-    station["imus"][0]["truth_file"] = truth_file;
-    const std::string station_file = dir + "/" + name + ".station.json";
-    write_text(station_file, station.dump());
+    const std::string station_file = ln200_station(dir, name, 5, planted);
     const std::string db = dir + "/" + name + ".db";
-    r = run("run warm-up --quiet --set off_s=600 --set capture_s=1800 --station " + station_file +
-            " --db " + db);
+    Result r = run("run warm-up --quiet --set off_s=600 --set capture_s=1800 --station " +
+                   station_file + " --db " + db);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     r = run("analyze warmup --json --db " + db + " --run 1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -430,29 +442,20 @@ TEST(AnalyzeHysteresisCli, FindsTheHysteresisTheUnitWasGivenWhereItShowsAndNoneW
   const std::string dir = ::testing::TempDir() + "analyze_hyst-" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  nlohmann::json station = nlohmann::json::parse(
-      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
   constexpr double kGyroDps = 5.0 / 3600.0;
   constexpr double kAccelMps2 = 1000e-6 * 9.80665;
   for (const bool hysteresis : {true, false}) {
     const std::string name = hysteresis ? "with" : "without";
-    const std::string truth_file = dir + "/" + name + ".truth.json";
-    Result r = run("truth-from-spec ln200 --seed 7 --out " + truth_file);
-    ASSERT_EQ(r.exit_code, 0) << r.out;
-    nlohmann::json truth = nlohmann::json::parse(read_text(truth_file));
+    nlohmann::json planted;
     if (hysteresis) {
-      truth["thermal_hysteresis"] = {{"gyro_bias_deg_per_h", {5.0, 0.0, 0.0}},
-                                     {"accel_bias_ug", {0.0, 0.0, 1000.0}},
-                                     {"width_c", 2.0}};
+      planted["thermal_hysteresis"] = {{"gyro_bias_deg_per_h", {5.0, 0.0, 0.0}},
+                                       {"accel_bias_ug", {0.0, 0.0, 1000.0}},
+                                       {"width_c", 2.0}};
     }
-    write_text(truth_file, truth.dump());
-    station["imus"][0].erase("model");
-    station["imus"][0]["truth_file"] = truth_file;
-    const std::string station_file = dir + "/" + name + ".station.json";
-    write_text(station_file, station.dump());
+    const std::string station_file = ln200_station(dir, name, 7, planted);
     const std::string db = dir + "/" + name + ".db";
-    r = run("run thermal-hysteresis --quiet --set soak_s=600 --station " + station_file + " --db " +
-            db);
+    Result r = run("run thermal-hysteresis --quiet --set soak_s=600 --station " + station_file +
+                   " --db " + db);
     ASSERT_EQ(r.exit_code, 0) << r.out;
     r = run("analyze hysteresis --json --db " + db + " --run 1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -470,7 +473,9 @@ TEST(AnalyzeHysteresisCli, FindsTheHysteresisTheUnitWasGivenWhereItShowsAndNoneW
       const double d = p["difference"];
       const double sigma = p["difference_sigma"];
       EXPECT_LT(std::abs(d - expected), 4.0 * sigma) << name << " " << p.dump();
-      if (expected != 0.0) EXPECT_GT(p["z"].get<double>(), 5.0) << p.dump();
+      if (expected != 0.0) {
+        EXPECT_GT(p["z"].get<double>(), 5.0) << p.dump();
+      }
     }
   }
   std::filesystem::remove_all(dir);
