@@ -66,6 +66,23 @@ void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
                ch.noise_of_means);
   }
   fmt::print("repeatability = sqrt(spread^2 - noise of a mean^2), 1 sigma across power-ups\n");
+  bool header = false;
+  for (std::size_t a = 0; a < r.gyro_scale.size(); ++a) {
+    const auto& s = r.gyro_scale[a];
+    if (!s.measured) continue;
+    if (!header) {
+      fmt::print("\ngyro scale factor, from turns both ways in each cycle:\n");
+      fmt::print("{:<8} {:>16} {:>26} {:>14} {:>16}  {}\n", "axis", "repeatability",
+                 fmt::format("{:.0f} % interval", 100.0 * r.confidence), "spread", "noise of one",
+                 "rates");
+      header = true;
+    }
+    std::string rates;
+    for (double rate : s.rates_dps) rates += fmt::format("{}{:g}", rates.empty() ? "" : ", ", rate);
+    fmt::print("{:<8} {:>10.4g} {:<5} {:>11.4g} .. {:<11.4g} {:>14.4g} {:>16.4g}  {} deg/s\n",
+               fmt::format("g{}", "xyz"[a]), s.repeatability_ppm, "ppm", s.repeatability_lo_ppm,
+               s.repeatability_hi_ppm, s.spread_ppm, s.noise_of_estimates_ppm, rates);
+  }
 }
 
 void print_warmup(const analysis::WarmupAnalysis& w) {
