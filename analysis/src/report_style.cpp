@@ -23,6 +23,7 @@ header code { color: #fff; overflow-wrap: anywhere; }
          font-size: 13px; margin-left: 8px; }
 .badge.good { background: #d8f0dc; color: var(--good); }
 .badge.bad { background: #fbe0dd; color: var(--bad); }
+.badge.neutral { background: #e3ecf5; color: #1f4e79; }
 section { background: #fff; border: 1px solid var(--line); border-radius: 10px;
           padding: 18px 24px 22px; margin-top: 20px; }
 section h2 { margin: 0 0 4px; font-size: 19px; }

@@ -51,9 +51,25 @@ void run_report(const ReportOptions& opt) {
   const analysis::ReportData data = analysis::gather_report(db, opt.request);
   const std::string page = analysis::render_report_html(data);
   write_page(opt.out, page);
-  fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}; {} kB\n",
+  std::string figures;
+  for (const auto kind : analysis::kDatasheetKinds) {
+    if (data.datasheet.has_result(kind)) {
+      figures += fmt::format("{}{}", figures.empty() ? "" : ", ", analysis::to_string(kind));
+    } else if (data.datasheet.applicability_of(kind).applies) {
+      figures += fmt::format("{}{} missing", figures.empty() ? "" : ", ", analysis::to_string(kind));
+    }
+  }
+  figures = figures.empty() ? "" : "; datasheet figures: " + figures;
+  if (!data.fitted()) {
+    fmt::print("{}: run {} ({}), no error model fitted: {}{}{}; {} kB\n", opt.out,
+               data.request.run, data.procedure, data.no_fit_reason, figures,
+               data.noise ? ", Allan deviation of the static step" : "",
+               (page.size() + 512) / 1024);
+    return;
+  }
+  fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}{}; {} kB\n",
              opt.out, data.request.run, data.procedure, data.diagnosis.fit.model,
-             data.diagnosis.fit.chi2_dof, data.history.size(),
+             data.diagnosis.fit.chi2_dof, data.history.size(), figures,
              data.noise ? ", Allan deviation of the static step" : "", (page.size() + 512) / 1024);
 }
 
