@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <set>
 #include <utility>
 
@@ -85,15 +86,17 @@ void analyse_noise(store::Database& db, ReportData& r) {
   }
 }
 
-// The warm-up capture in bins of the analysis's own width, less the settled values.
+// The warm-up capture in bins of the analysis's own width, less the settled values, and the fit.
 WarmupSeries warmup_series(store::Database& db, const ReportData& r, const WarmupAnalysis& w) {
   constexpr double kDegPerHPerDegPerS = 3600.0;
   WarmupSeries out;
+  std::vector<double> temperature_c;
   store::for_each_step_data(db, r.request.run, r.device, [&](const store::StepData& data) {
     if (data.step.index != w.step || data.samples.empty() || !(w.bin_s > 0.0)) return;
     const double t0 = data.samples.front().receive_time_s;
     const auto bins = static_cast<std::size_t>(w.duration_s / w.bin_s) + 1;
     std::vector<double> t_sum(bins, 0.0);
+    std::vector<double> temperature_sum(bins, 0.0);
     std::vector<std::size_t> count(bins, 0);
     std::array<std::vector<double>, 6> sum;
     for (auto& v : sum) v.assign(bins, 0.0);
@@ -101,6 +104,7 @@ WarmupSeries warmup_series(store::Database& db, const ReportData& r, const Warmu
       const double t = s.receive_time_s - t0;
       const auto b = std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, t / w.bin_s)));
       t_sum[b] += t;
+      temperature_sum[b] += s.temperature_c;
       ++count[b];
       for (int c = 0; c < 3; ++c) {
         sum[c][b] += s.gyro_dps[c] * kDegPerHPerDegPerS;
@@ -111,11 +115,33 @@ WarmupSeries warmup_series(store::Database& db, const ReportData& r, const Warmu
       if (count[b] == 0) continue;
       const auto n = static_cast<double>(count[b]);
       out.t_s.push_back(t_sum[b] / n);
+      temperature_c.push_back(temperature_sum[b] / n);
       for (std::size_t c = 0; c < 6; ++c) {
         out.deviation[c].push_back(sum[c][b] / n - w.channels[c].settled);
       }
     }
   });
+  for (std::size_t c = 0; c < 6 && !out.t_s.empty(); ++c) {
+    const ChannelWarmup& ch = w.channels[c];
+    if (!ch.resolved || !(ch.time_constant_s > 0.0)) continue;
+    std::vector<double> transient;
+    for (const double t : out.t_s) transient.push_back(ch.amplitude * std::exp(-t / ch.time_constant_s));
+    out.fitted[c] = transient;
+    if (!ch.temperature_term) continue;
+    // The analysis keeps its temperature coefficient k to itself. At its least-squares optimum
+    // k is also the least-squares k with the settled value and the transient held, which these
+    // bins (the same as the analysis's) give back: k = sum(res * dT) / sum(dT^2).
+    double num = 0.0, den = 0.0;
+    for (std::size_t i = 0; i < out.t_s.size(); ++i) {
+      const double dt = temperature_c[i] - temperature_c.back();
+      num += (out.deviation[c][i] - transient[i]) * dt;
+      den += dt * dt;
+    }
+    const double k = den > 0.0 ? num / den : 0.0;
+    for (std::size_t i = 0; i < out.t_s.size(); ++i) {
+      out.fitted[c][i] += k * (temperature_c[i] - temperature_c.back());
+    }
+  }
   return out;
 }
 

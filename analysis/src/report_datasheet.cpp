@@ -34,7 +34,11 @@ std::string head(std::initializer_list<std::string_view> names) {
 constexpr const char* kTableEnd = "</tbody></table>\n";
 
 const char* sensor_unit(std::size_t channel) { return channel < 3 ? "deg/h" : "ug"; }
-std::string interval(double lo, double hi) { return fmt::format("{:.3g} &ndash; {:.3g}", lo, hi); }
+std::string n(double value, int digits = 3) { return datasheet_number(value, digits); }
+std::string interval(double lo, double hi) { return n(lo) + " &ndash; " + n(hi); }
+std::string plus_minus(double value, double sigma, int digits) {
+  return n(value, digits) + " &plusmn; " + n(sigma, 2);
+}
 
 std::string section_start(DatasheetKind kind, const std::string& lead) {
   return fmt::format("<section id=\"datasheet-{}\"><h2>{}</h2>\n<p class=\"lead\">{}</p>\n",
@@ -57,9 +61,9 @@ std::string repeatability_section(const RepeatabilityAnalysis& r) {
                "noise of a mean", "unit"});
   for (std::size_t c = 0; c < r.channels.size(); ++c) {
     const ChannelRepeatability& ch = r.channels[c];
-    out += row({td(ch.channel), num(fmt::format("{:.3g}", ch.repeatability)),
+    out += row({td(ch.channel), num(n(ch.repeatability)),
                 num(interval(ch.repeatability_lo, ch.repeatability_hi)),
-                num(fmt::format("{:.3g}", ch.spread)), num(fmt::format("{:.3g}", ch.noise_of_means)),
+                num(n(ch.spread)), num(n(ch.noise_of_means)),
                 td(sensor_unit(c))});
   }
   return out + kTableEnd + repeatability_plot(r) + "</section>\n";
@@ -83,8 +87,8 @@ std::string warmup_section(const WarmupAnalysis& w, const std::optional<WarmupSe
     const ChannelWarmup& ch = w.channels[c];
     // Without a resolved transient tau means nothing (warmup.hpp): its cells say so.
     out += row({td(ch.channel),
-                num(fmt::format("{:.3g} &plusmn; {:.2g}", ch.amplitude, ch.amplitude_sigma)),
-                num(ch.resolved ? fmt::format("{:.3g}", ch.time_constant_s) : "&ndash;"),
+                num(plus_minus(ch.amplitude, ch.amplitude_sigma, 3)),
+                num(ch.resolved ? n(ch.time_constant_s) : "&ndash;"),
                 num(ch.resolved ? fmt::format("{:.0f}", ch.time_to_band_s) : "&ndash;"),
                 td(sensor_unit(c)),
                 td(!ch.resolved             ? "no transient resolved"
@@ -100,15 +104,15 @@ std::string warmup_section(const WarmupAnalysis& w, const std::optional<WarmupSe
 
 // The Allan floor: a bound ("<") when the curve never turned up inside the record.
 std::string bias_instability_cells(const ChannelStability& ch) {
-  return num(fmt::format("{}{:.3g}", ch.floor_resolved ? "" : "&lt; ", ch.bias_instability)) +
+  return num((ch.floor_resolved ? "" : "&lt; ") + n(ch.bias_instability)) +
          num(interval(ch.bias_instability_lo, ch.bias_instability_hi)) +
-         num(fmt::format("{:.3g}", ch.min_tau_s));
+         num(n(ch.min_tau_s));
 }
 
 // The Gauss-Markov bias variation and its correlation time.
 std::string bias_variation_cells(const ChannelStability& ch) {
-  return num(fmt::format("{:.3g}", ch.variation_sigma)) +
-         num(fmt::format("{:.3g}", ch.correlation_time_s), ch.correlation_resolved ? "" : "dim");
+  return num(n(ch.variation_sigma)) +
+         num(n(ch.correlation_time_s), ch.correlation_resolved ? "" : "dim");
 }
 
 std::string stability_section(const StabilityAnalysis& s) {
@@ -153,11 +157,9 @@ std::string hysteresis_section(const HysteresisAnalysis& h) {
   for (const HysteresisPoint& p : h.points) {
     const ParameterScale u = parameter_scale(p.unit);
     out += row({num(fmt::format("{:g}", p.temperature_c)), td(p.parameter),
-                num(fmt::format("{:.4g} &plusmn; {:.2g}", u.factor * p.up, u.factor * p.up_sigma)),
-                num(fmt::format("{:.4g} &plusmn; {:.2g}", u.factor * p.down,
-                                u.factor * p.down_sigma)),
-                num(fmt::format("{:.3g} &plusmn; {:.2g}", u.factor * p.difference,
-                                u.factor * p.difference_sigma)),
+                num(plus_minus(u.factor * p.up, u.factor * p.up_sigma, 4)),
+                num(plus_minus(u.factor * p.down, u.factor * p.down_sigma, 4)),
+                num(plus_minus(u.factor * p.difference, u.factor * p.difference_sigma, 3)),
                 num(fmt::format("{:+.1f}", p.z), std::abs(p.z) > kHysteresisZ ? "bad" : ""),
                 td(u.unit)});
   }
@@ -168,12 +170,12 @@ std::string hysteresis_section(const HysteresisAnalysis& h) {
 
 std::string bandwidth_cell(const BandwidthAnalysis& b, std::size_t axis) {
   const auto& fc = b.bandwidth_hz[axis];
-  return fc ? num(fmt::format("{:.3g}", *fc)) : num("beyond the frequencies tested", "dim");
+  return fc ? num(n(*fc)) : num("beyond the frequencies tested", "dim");
 }
 
 std::string delay_cell(const BandwidthAnalysis& b, std::size_t axis) {
   const auto& tau = b.delay_s[axis];
-  return tau ? num(fmt::format("{:.3g}", *tau * 1e3)) : num("&ndash;", "dim");
+  return tau ? num(n(*tau * 1e3)) : num("&ndash;", "dim");
 }
 
 std::string bandwidth_section(const BandwidthAnalysis& b) {
@@ -206,6 +208,14 @@ std::string bandwidth_section(const BandwidthAnalysis& b) {
 }
 
 }  // namespace
+
+std::string datasheet_number(double value, int digits) {
+  if (!std::isfinite(value)) return fmt::format("{}", value);
+  if (value == 0.0) return "0";
+  const int magnitude = static_cast<int>(std::floor(std::log10(std::abs(value))));
+  if (magnitude < -3 || magnitude >= 6) return fmt::format("{:.{}g}", value, digits);
+  return fmt::format("{:.{}f}", value, std::max(0, digits - 1 - magnitude));
+}
 
 ParameterScale parameter_scale(const std::string& unit) {
   if (unit == "deg/s") return {core::convert(1.0, "deg/s", "deg/h"), "deg/h"};

@@ -37,12 +37,16 @@ struct StepGrouping {
   std::size_t value_index(std::size_t step) const;
 };
 
-/// The warm-up capture binned for its plot against the fitted transient.
+/// The warm-up capture binned as the analysis bins it, for its plot against the fit.
 struct WarmupSeries {
   std::vector<double> t_s;  ///< mean time of each bin from the capture's first sample [s]
   /// Per channel (gx .. az), each bin's mean less the channel's settled value, in datasheet
-  /// units (deg/h, ug); NaN where a bin holds no sample of the channel.
+  /// units (deg/h, ug).
   std::array<std::vector<double>, 6> deviation;
+  /// Per channel, the fit less the settled value at each bin: A exp(-t / tau), plus the
+  /// temperature's share k (T - T_end) where the channel has that term; empty for a channel
+  /// without a resolved transient (its tau means nothing).
+  std::array<std::vector<double>, 6> fitted;
 };
 
 struct ReportData {

@@ -17,13 +17,17 @@ struct ParameterScale {
 };
 ParameterScale parameter_scale(const std::string& unit);
 
+/// A figure as the datasheet sections write it: `digits` significant digits, in plain notation
+/// from 0.001 to below 1e6 ("1460", "0.0123"), else in exponent notation ("1.23e-05").
+std::string datasheet_number(double value, int digits = 3);
+
 /// Section "datasheet": one row per analysis of the catalogue: shown below (and what in the run
 /// it comes from), missing (the run looks like it should have it, and why the analysis refused
 /// it) or not applicable (what the run lacks).
 std::string datasheet_overview_section(const DatasheetAnalyses& a);
 
 /// One section per analysis with a result, in kDatasheetKinds order ("datasheet-KIND"): its
-/// figures (values to 3 significant digits, intervals as "lo &ndash; hi") and its plot. Draws
+/// figures (datasheet_number(); intervals as "lo &ndash; hi") and its plot. Draws
 /// with gnuplot: throws core::InputError naming gnuplot when it is missing or fails.
 std::string datasheet_sections(const ReportData& r);
 

@@ -17,12 +17,12 @@ namespace calstand::analysis {
 std::string repeatability_plot(const RepeatabilityAnalysis& r);
 
 /// The warm-up capture's bin means less each channel's settled value against time from
-/// power-up, with the fitted transient A exp(-t / tau) (dashed where no transient is resolved):
-/// gyros [deg/h] above, accelerometers [ug] below.
+/// power-up, with the fit (WarmupSeries::fitted) where a transient is resolved: gyros [deg/h]
+/// above, accelerometers [ug] below.
 std::string warmup_plot(const WarmupAnalysis& w, const WarmupSeries& series);
 
-/// The biases fitted at each set point on the way up and on the way down, with their 1-sigma
-/// bars, against temperature: gyros [deg/h] above, accelerometers [ug] below.
+/// Each bias fitted on the way up less on the way down, with its 1-sigma bar, against the set
+/// point: gyros [deg/h] above, accelerometers [ug] below.
 std::string hysteresis_plot(const HysteresisAnalysis& h);
 
 }  // namespace calstand::analysis
