@@ -11,8 +11,8 @@
 #include "analysis/fit_history.hpp"
 #include "analysis/noise_json.hpp"
 #include "core/error.hpp"
-#include "solver/groups.hpp"
 #include "core/units.hpp"
+#include "solver/groups.hpp"
 #include "solver/signals.hpp"
 #include "store/run_store.hpp"
 #include "store/step_data.hpp"
@@ -62,8 +62,7 @@ void analyse_noise(store::Database& db, ReportData& r) {
     if (s.is_static) r.longest_static_s = std::max(r.longest_static_s, s.duration_s);
   }
   // The capture the stability analysis reads, so that the curve and its figures agree.
-  const DatasheetApplicability& stability =
-      r.datasheet.applicability_of(DatasheetKind::kStability);
+  const DatasheetApplicability& stability = r.datasheet.applicability_of(DatasheetKind::kStability);
   if (!stability.applies && r.procedure != "static-allan") {
     r.noise_note =
         long_enough_for_noise(r.longest_static_s)
@@ -125,7 +124,8 @@ WarmupSeries warmup_series(store::Database& db, const ReportData& r, const Warmu
     const ChannelWarmup& ch = w.channels[c];
     if (!ch.resolved || !(ch.time_constant_s > 0.0)) continue;
     std::vector<double> transient;
-    for (const double t : out.t_s) transient.push_back(ch.amplitude * std::exp(-t / ch.time_constant_s));
+    for (const double t : out.t_s)
+      transient.push_back(ch.amplitude * std::exp(-t / ch.time_constant_s));
     out.fitted[c] = transient;
     if (!ch.temperature_term) continue;
     // The analysis keeps its temperature coefficient k to itself. At its least-squares optimum
@@ -151,7 +151,8 @@ std::vector<std::pair<std::string, std::size_t>> count_step_kinds(
   std::vector<std::pair<std::string, std::size_t>> out;
   for (const auto& s : steps) {
     if (s.status != store::StepStatus::kCompleted) continue;
-    auto it = std::find_if(out.begin(), out.end(), [&](const auto& k) { return k.first == s.kind; });
+    auto it =
+        std::find_if(out.begin(), out.end(), [&](const auto& k) { return k.first == s.kind; });
     if (it == out.end()) {
       out.emplace_back(s.kind, 1);
     } else {
@@ -239,8 +240,8 @@ std::string single_condition_reason(const std::vector<solver::StepSummary>& step
   if (conditions.empty()) return "";
   const solver::StepConditions& first = conditions.front();
   for (const auto& c : conditions) {
-    if (c.plateau != first.plateau || c.orientation != first.orientation ||
-        c.rate != first.rate || c.direction != first.direction || c.axis != first.axis) {
+    if (c.plateau != first.plateau || c.orientation != first.orientation || c.rate != first.rate ||
+        c.direction != first.direction || c.axis != first.axis) {
       return "";
     }
   }

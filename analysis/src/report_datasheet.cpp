@@ -54,17 +54,15 @@ std::string repeatability_section(const RepeatabilityAnalysis& r) {
                   "freedom): the spread of the static means from one power-up to the next less "
                   "the noise of a mean, sqrt(spread&sup2; &minus; noise&sup2;), 1 sigma, with its "
                   "{:.0f} % interval (chi-square). <code>calstand analyze repeatability</code>",
-                  r.cycles, r.positions, r.positions == 1 ? "" : "s", r.dof,
-                  100.0 * r.confidence));
+                  r.cycles, r.positions, r.positions == 1 ? "" : "s", r.dof, 100.0 * r.confidence));
   out += head({"channel", "bias repeatability (1&sigma;)",
                fmt::format("{:.0f} % interval", 100.0 * r.confidence), "spread of the means",
                "noise of a mean", "unit"});
   for (std::size_t c = 0; c < r.channels.size(); ++c) {
     const ChannelRepeatability& ch = r.channels[c];
     out += row({td(ch.channel), num(n(ch.repeatability)),
-                num(interval(ch.repeatability_lo, ch.repeatability_hi)),
-                num(n(ch.spread)), num(n(ch.noise_of_means)),
-                td(sensor_unit(c))});
+                num(interval(ch.repeatability_lo, ch.repeatability_hi)), num(n(ch.spread)),
+                num(n(ch.noise_of_means)), td(sensor_unit(c))});
   }
   return out + kTableEnd + repeatability_plot(r) + "</section>\n";
 }
@@ -86,12 +84,11 @@ std::string warmup_section(const WarmupAnalysis& w, const std::optional<WarmupSe
   for (std::size_t c = 0; c < w.channels.size(); ++c) {
     const ChannelWarmup& ch = w.channels[c];
     // Without a resolved transient tau means nothing (warmup.hpp): its cells say so.
-    out += row({td(ch.channel),
-                num(plus_minus(ch.amplitude, ch.amplitude_sigma, 3)),
+    out += row({td(ch.channel), num(plus_minus(ch.amplitude, ch.amplitude_sigma, 3)),
                 num(ch.resolved ? n(ch.time_constant_s) : "&ndash;"),
                 num(ch.resolved ? fmt::format("{:.0f}", ch.time_to_band_s) : "&ndash;"),
                 td(sensor_unit(c)),
-                td(!ch.resolved             ? "no transient resolved"
+                td(!ch.resolved          ? "no transient resolved"
                    : ch.temperature_term ? "with a temperature term"
                                          : "")});
   }
@@ -105,8 +102,7 @@ std::string warmup_section(const WarmupAnalysis& w, const std::optional<WarmupSe
 // The Allan floor: a bound ("<") when the curve never turned up inside the record.
 std::string bias_instability_cells(const ChannelStability& ch) {
   return num((ch.floor_resolved ? "" : "&lt; ") + n(ch.bias_instability)) +
-         num(interval(ch.bias_instability_lo, ch.bias_instability_hi)) +
-         num(n(ch.min_tau_s));
+         num(interval(ch.bias_instability_lo, ch.bias_instability_hi)) + num(n(ch.min_tau_s));
 }
 
 // The Gauss-Markov bias variation and its correlation time.
@@ -125,9 +121,9 @@ std::string stability_section(const StabilityAnalysis& s) {
                   "the correlation time is outside what the record shows). <code>calstand "
                   "analyze stability</code>",
                   s.step, html_escape(s.step_label), s.duration_s, 100.0 * s.confidence));
-  out += head({"channel", "bias instability",
-               fmt::format("{:.0f} % interval", 100.0 * s.confidence), "at &tau; [s]",
-               "bias variation (1&sigma;)", "correlation time [s]", "unit"});
+  out +=
+      head({"channel", "bias instability", fmt::format("{:.0f} % interval", 100.0 * s.confidence),
+            "at &tau; [s]", "bias variation (1&sigma;)", "correlation time [s]", "unit"});
   for (std::size_t c = 0; c < s.channels.size(); ++c) {
     const ChannelStability& ch = s.channels[c];
     out += "<tr>" + td(ch.channel) + bias_instability_cells(ch) + bias_variation_cells(ch) +
@@ -192,10 +188,10 @@ std::string bandwidth_section(const BandwidthAnalysis& b) {
     const int order = b.low_pass_order[axis];
     out += "<tr>" + td(std::string(1, static_cast<char>('x' + axis))) + bandwidth_cell(b, axis) +
            delay_cell(b, axis) +
-           td(order > 0 ? fmt::format("Butterworth, order {}", order) : "none removed") +
-           "</tr>\n";
+           td(order > 0 ? fmt::format("Butterworth, order {}", order) : "none removed") + "</tr>\n";
   }
-  out += kTableEnd + bandwidth_svg(b);
+  // The gain plot is drawn 700 px wide: at the page's full width its text would be oversized.
+  out += std::string(kTableEnd) + "<div class=\"narrow\">" + bandwidth_svg(b) + "</div>\n";
   out += "<h3>Gain and phase at each frequency</h3>\n";
   out += head({"axis", "frequency [Hz]", "gain", "gain [dB]", "phase [deg]", "step"});
   for (const BandwidthPoint& p : b.points) {
@@ -230,14 +226,16 @@ std::string datasheet_overview_section(const DatasheetAnalyses& a) {
       "one below in datasheet units with its interval.</p>\n";
   out += head({"analysis", "", "from this run"});
   for (const DatasheetApplicability& ap : a.applicability) {
-    const std::string name = fmt::format("{} (<code>{}</code>)", title(ap.kind), to_string(ap.kind));
+    const std::string name =
+        fmt::format("{} (<code>{}</code>)", title(ap.kind), to_string(ap.kind));
     if (!ap.applies) {
       out += "<tr class=\"dim\"><td>" + name + "</td><td>not applicable</td>" + td(ap.evidence) +
              "</tr>\n";
     } else if (a.has_result(ap.kind)) {
-      out += fmt::format("<tr><td><a href=\"#datasheet-{}\">{}</a></td><td class=\"good\">below"
-                         "</td>{}</tr>\n",
-                         to_string(ap.kind), name, td(ap.evidence));
+      out += fmt::format(
+          "<tr><td><a href=\"#datasheet-{}\">{}</a></td><td class=\"good\">below"
+          "</td>{}</tr>\n",
+          to_string(ap.kind), name, td(ap.evidence));
     } else {
       out += "<tr><td>" + name + "</td><td class=\"bad\">missing</td>" +
              td(ap.evidence + ", but the analysis refused it: " + a.failure_of(ap.kind)) +

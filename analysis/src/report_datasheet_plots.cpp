@@ -40,17 +40,18 @@ std::string repeatability_plot(const RepeatabilityAnalysis& r) {
   s += "set key outside right top\n" + horizontal_line(0.0, "#555555", 1);
   for (std::size_t sensor = 0; sensor < 2; ++sensor) {
     s += fmt::format("set ylabel 'turn-on bias [{}]'\n", kUnit[sensor]);
-    s += fmt::format("set title '{}: turn-on bias of each power-up less the mean over the "
-                     "cycles'\n",
-                     kSensor[sensor]);
+    s += fmt::format(
+        "set title '{}: turn-on bias of each power-up less the mean over the "
+        "cycles'\n",
+        kSensor[sensor]);
     std::string plot = "plot ";
     for (std::size_t axis = 0; axis < 3; ++axis) {
       const std::size_t c = sensor * 3 + axis;
-      plot += fmt::format(
-          "{}$c{} using 1:2 with linespoints pt 7 ps 0.8 lw 1.5 lc rgb '{}' title {}",
-          axis ? ", " : "", c, kAxisColour[axis],
-          gnuplot_quote(fmt::format("{}: 1 sigma {:.3g} {}", axis_letter(axis),
-                                    r.channels[c].repeatability, kUnit[sensor])));
+      plot +=
+          fmt::format("{}$c{} using 1:2 with linespoints pt 7 ps 0.8 lw 1.5 lc rgb '{}' title {}",
+                      axis ? ", " : "", c, kAxisColour[axis],
+                      gnuplot_quote(fmt::format("{}: 1 sigma {:.3g} {}", axis_letter(axis),
+                                                r.channels[c].repeatability, kUnit[sensor])));
     }
     s += plot + "\n";
   }
@@ -63,10 +64,9 @@ std::string warmup_plot(const WarmupAnalysis& w, const WarmupSeries& series) {
   for (std::size_t c = 0; c < 6; ++c) {
     std::vector<std::string> rows;
     for (std::size_t i = 0; i < series.t_s.size() && i < series.deviation[c].size(); ++i) {
-      rows.push_back(fmt::format("{} {} {}", gp_number(series.t_s[i]),
-                                 gp_number(series.deviation[c][i]),
-                                 i < series.fitted[c].size() ? gp_number(series.fitted[c][i])
-                                                             : std::string("NaN")));
+      rows.push_back(fmt::format(
+          "{} {} {}", gp_number(series.t_s[i]), gp_number(series.deviation[c][i]),
+          i < series.fitted[c].size() ? gp_number(series.fitted[c][i]) : std::string("NaN")));
     }
     if (rows.empty()) rows.push_back("NaN NaN NaN");
     s += data_block(fmt::format("d{}", c), rows);
@@ -82,17 +82,17 @@ std::string warmup_plot(const WarmupAnalysis& w, const WarmupSeries& series) {
     for (std::size_t axis = 0; axis < 3; ++axis) {
       const std::size_t c = sensor * 3 + axis;
       const ChannelWarmup& ch = w.channels[c];
-      plot += fmt::format("{}$d{} using 1:2 with points pt 7 ps 0.35 lc rgb '{}' title {}",
-                          axis ? ", " : "", c, kAxisColour[axis],
-                          gnuplot_quote(ch.resolved ? fmt::format("{}", axis_letter(axis))
-                                                    : fmt::format("{}: no transient resolved",
-                                                                  axis_letter(axis))));
+      plot += fmt::format(
+          "{}$d{} using 1:2 with points pt 7 ps 0.35 lc rgb '{}' title {}", axis ? ", " : "", c,
+          kAxisColour[axis],
+          gnuplot_quote(ch.resolved ? fmt::format("{}", axis_letter(axis))
+                                    : fmt::format("{}: no transient resolved", axis_letter(axis))));
       if (!series.fitted[c].empty()) {
         plot += fmt::format(", $d{} using 1:3 with lines lw 2.5 lc rgb '{}' title {}", c,
                             kAxisColour[axis],
-                            gnuplot_quote(fmt::format("{} fit: tau {:.3g} s{}", axis_letter(axis),
-                                                      ch.time_constant_s,
-                                                      ch.temperature_term ? " + temperature" : "")));
+                            gnuplot_quote(fmt::format(
+                                "{} fit: tau {:.3g} s{}", axis_letter(axis), ch.time_constant_s,
+                                ch.temperature_term ? " + temperature" : "")));
       }
     }
     s += plot + "\n";

@@ -60,7 +60,8 @@ std::string run_line(const ReportData& r) {
   }
   return fmt::format("<p>{} &middot; {}/{} steps ({}) &middot; started {} &middot; ended {}</p>\n",
                      html_escape(r.run.status), r.run.steps_done, r.run.steps_total,
-                     html_escape(kinds), html_escape(r.run.started_utc.empty() ? "-" : r.run.started_utc),
+                     html_escape(kinds),
+                     html_escape(r.run.started_utc.empty() ? "-" : r.run.started_utc),
                      html_escape(r.run.ended_utc.empty() ? "-" : r.run.ended_utc));
 }
 

@@ -67,9 +67,10 @@ DatasheetApplicability repeatability_of(const PowerUps& p) {
   } else if (p.total == 0) {
     a.evidence = "no power-up (power steps)";
   } else {
-    a.evidence = fmt::format("{} power-up(s) followed by a capture; repeatability compares two "
-                             "or more",
-                             p.with_captures);
+    a.evidence = fmt::format(
+        "{} power-up(s) followed by a capture; repeatability compares two "
+        "or more",
+        p.with_captures);
   }
   return a;
 }
@@ -103,13 +104,14 @@ DatasheetApplicability stability_of(const std::vector<store::StepRecord>& steps,
   a.applies = longest && long_enough_for_noise(capture_length_s(*longest));
   if (a.applies) {
     a.step = longest->index;
-    a.evidence = fmt::format("{} records {:.0f} s static", step_name(*longest),
-                             capture_length_s(*longest));
+    a.evidence =
+        fmt::format("{} records {:.0f} s static", step_name(*longest), capture_length_s(*longest));
     return a;
   }
-  a.evidence = longest ? fmt::format("its longest static capture records {:.0f} s; in-run "
-                                     "stability needs {:.0f} s or more",
-                                     capture_length_s(*longest), kMinNoiseRecordS)
+  a.evidence = longest ? fmt::format(
+                             "its longest static capture records {:.0f} s; in-run "
+                             "stability needs {:.0f} s or more",
+                             capture_length_s(*longest), kMinNoiseRecordS)
                        : std::string("no static capture");
   if (skipped_warmup > 0) a.evidence += " (a record from power-up shows the warm-up instead)";
   return a;
@@ -143,9 +145,10 @@ DatasheetApplicability hysteresis_of(const std::vector<store::StepRecord>& steps
   }
   a.applies = !both.empty();
   if (a.applies) {
-    a.evidence = fmt::format("a temperature staircase with captures at {} degC reached from "
-                             "below and from above",
-                             fmt::join(both, ", "));
+    a.evidence = fmt::format(
+        "a temperature staircase with captures at {} degC reached from "
+        "below and from above",
+        fmt::join(both, ", "));
   } else {
     a.evidence = set_points < 2 ? std::string("no temperature staircase")
                                 : "no set point with captures is reached from both sides";
@@ -168,8 +171,7 @@ std::size_t position(DatasheetKind kind) { return static_cast<std::size_t>(kind)
 // Makes one analysis, keeping its refusal of the run's data (not any other error) as the reason
 // the figure is missing.
 template <typename Analysis, typename Make>
-void attempt(DatasheetAnalyses& out, DatasheetKind kind, std::optional<Analysis>& slot,
-             Make make) {
+void attempt(DatasheetAnalyses& out, DatasheetKind kind, std::optional<Analysis>& slot, Make make) {
   if (!out.applicability_of(kind).applies) return;
   try {
     slot = make();
@@ -182,22 +184,32 @@ void attempt(DatasheetAnalyses& out, DatasheetKind kind, std::optional<Analysis>
 
 std::string_view to_string(DatasheetKind kind) {
   switch (kind) {
-    case DatasheetKind::kRepeatability: return "repeatability";
-    case DatasheetKind::kWarmup: return "warmup";
-    case DatasheetKind::kStability: return "stability";
-    case DatasheetKind::kHysteresis: return "hysteresis";
-    case DatasheetKind::kBandwidth: return "bandwidth";
+    case DatasheetKind::kRepeatability:
+      return "repeatability";
+    case DatasheetKind::kWarmup:
+      return "warmup";
+    case DatasheetKind::kStability:
+      return "stability";
+    case DatasheetKind::kHysteresis:
+      return "hysteresis";
+    case DatasheetKind::kBandwidth:
+      return "bandwidth";
   }
   return "?";
 }
 
 std::string_view title(DatasheetKind kind) {
   switch (kind) {
-    case DatasheetKind::kRepeatability: return "Bias repeatability";
-    case DatasheetKind::kWarmup: return "Warm-up";
-    case DatasheetKind::kStability: return "In-run bias stability";
-    case DatasheetKind::kHysteresis: return "Thermal hysteresis";
-    case DatasheetKind::kBandwidth: return "Bandwidth";
+    case DatasheetKind::kRepeatability:
+      return "Bias repeatability";
+    case DatasheetKind::kWarmup:
+      return "Warm-up";
+    case DatasheetKind::kStability:
+      return "In-run bias stability";
+    case DatasheetKind::kHysteresis:
+      return "Thermal hysteresis";
+    case DatasheetKind::kBandwidth:
+      return "Bandwidth";
   }
   return "?";
 }
@@ -211,11 +223,16 @@ std::vector<DatasheetApplicability> datasheet_applicability(
 
 bool DatasheetAnalyses::has_result(DatasheetKind kind) const {
   switch (kind) {
-    case DatasheetKind::kRepeatability: return repeatability.has_value();
-    case DatasheetKind::kWarmup: return warmup.has_value();
-    case DatasheetKind::kStability: return stability.has_value();
-    case DatasheetKind::kHysteresis: return hysteresis.has_value();
-    case DatasheetKind::kBandwidth: return bandwidth.has_value();
+    case DatasheetKind::kRepeatability:
+      return repeatability.has_value();
+    case DatasheetKind::kWarmup:
+      return warmup.has_value();
+    case DatasheetKind::kStability:
+      return stability.has_value();
+    case DatasheetKind::kHysteresis:
+      return hysteresis.has_value();
+    case DatasheetKind::kBandwidth:
+      return bandwidth.has_value();
   }
   return false;
 }

@@ -56,13 +56,14 @@ void run_report(const ReportOptions& opt) {
     if (data.datasheet.has_result(kind)) {
       figures += fmt::format("{}{}", figures.empty() ? "" : ", ", analysis::to_string(kind));
     } else if (data.datasheet.applicability_of(kind).applies) {
-      figures += fmt::format("{}{} missing", figures.empty() ? "" : ", ", analysis::to_string(kind));
+      figures +=
+          fmt::format("{}{} missing", figures.empty() ? "" : ", ", analysis::to_string(kind));
     }
   }
   figures = figures.empty() ? "" : "; datasheet figures: " + figures;
   if (!data.fitted()) {
-    fmt::print("{}: run {} ({}), no error model fitted: {}{}{}; {} kB\n", opt.out,
-               data.request.run, data.procedure, data.no_fit_reason, figures,
+    fmt::print("{}: run {} ({}), no error model fitted: {}{}{}; {} kB\n", opt.out, data.request.run,
+               data.procedure, data.no_fit_reason, figures,
                data.noise ? ", Allan deviation of the static step" : "",
                (page.size() + 512) / 1024);
     return;

@@ -64,10 +64,10 @@ struct ReportData {
   solver::Diagnosis diagnosis;
   std::vector<solver::StepSummary> steps;  ///< summaries of the diagnosed model, in fit order
   StepGrouping grouping;
-  double longest_static_s = 0.0;          ///< longest static step [s]
-  std::optional<solver::RunNoise> noise;  ///< Allan curves and noise fit, static runs only
-  std::string noise_note;                 ///< why there is no Allan section, or ""
-  DatasheetAnalyses datasheet;            ///< the datasheet analyses that apply, and why not
+  double longest_static_s = 0.0;              ///< longest static step [s]
+  std::optional<solver::RunNoise> noise;      ///< Allan curves and noise fit, static runs only
+  std::string noise_note;                     ///< why there is no Allan section, or ""
+  DatasheetAnalyses datasheet;                ///< the datasheet analyses that apply, and why not
   std::optional<WarmupSeries> warmup_series;  ///< with datasheet.warmup
 
   bool fitted() const { return no_fit_reason.empty(); }

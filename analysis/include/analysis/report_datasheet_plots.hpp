@@ -6,8 +6,8 @@
 #include <string>
 
 #include "analysis/hysteresis.hpp"
-#include "analysis/report_data.hpp"
 #include "analysis/repeatability.hpp"
+#include "analysis/report_data.hpp"
 #include "analysis/warmup.hpp"
 
 namespace calstand::analysis {
