@@ -1,6 +1,7 @@
 // `calstand report`: one self-contained HTML page of a run's fit: how the error fell over the
 // fits of the run, where the model fails, what the residual follows, the parameters, the
-// candidate terms and, for a static run, the Allan deviation with its fitted noise lines.
+// candidate terms, the datasheet figures that apply and, for a static run, the Allan deviation
+// with its fitted noise lines. A run without an error model gets its summary and figures.
 #include <fmt/format.h>
 
 #include <fstream>
@@ -81,7 +82,7 @@ void register_report(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "report",
       "One self-contained HTML page of a run's fit: history, residuals, signals, "
-      "parameters, candidates, Allan deviation (plots by gnuplot)");
+      "parameters, candidates, datasheet figures, Allan deviation (plots by gnuplot)");
   cmd->add_option("--db", opt->request.db, "Database file")->required();
   cmd->add_option("--run", opt->request.run, "Run id")->required();
   cmd->add_option("--model", opt->request.model, "Comma-separated error terms")
