@@ -6,9 +6,7 @@
 // captures, fewer rates and plateaus) so that a procedure takes a second or two; the reductions
 // keep every leg of a procedure, so they excite the same body axes as its defaults.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -17,9 +15,7 @@
 
 #include "analysis/bandwidth.hpp"
 #include "core/error.hpp"
-#include "daemon/campaign.hpp"
-#include "procedures/plan.hpp"
-#include "procedures/procedure.hpp"
+#include "in_process_run.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "solver/fit.hpp"
@@ -27,7 +23,6 @@
 #include "solver/run_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
-#include "store/run_store.hpp"
 
 namespace calstand {
 namespace {
@@ -56,37 +51,9 @@ std::string listed(const std::set<std::string>& names) {
   return out;
 }
 
-/// A fresh database file of this process (ctest runs tests two at a time, each in a process).
-std::string fresh_db(const std::string& name) {
-  const std::string path =
-      ::testing::TempDir() + "calstand_library_" + std::to_string(getpid()) + "_" + name + ".db";
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
-  return path;
-}
-
-void remove_db(const std::string& path) {
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
-}
-
-/// Runs library procedure `name` with `overrides` on the embedded simulated station into the
-/// database at `db_path`, as `calstand run` does; returns the run id.
-std::int64_t run_procedure(const std::string& name, const std::vector<std::string>& overrides,
-                           const std::string& db_path,
-                           const core::StationConfig& station = sim::default_station()) {
-  const auto procedure = procedures::load_procedure(name);
-  const auto plan =
-      procedures::make_plan(procedure, station, procedures::parse_overrides(overrides));
-  EXPECT_TRUE(plan.ok()) << name;
-  std::int64_t run_id = 0;
-  {
-    store::Database db(db_path);
-    store::RunStore runs(db);
-    run_id = daemon::create_run_record(runs, station, procedure, plan);
-  }
-  const auto result = daemon::run_campaign(station, plan, db_path, run_id);
-  EXPECT_EQ(result.state, daemon::RunState::kCompleted) << name << ": " << result.exit_reason;
-  return run_id;
-}
+using testing::fresh_db;
+using testing::remove_db;
+using testing::run_procedure;
 
 class LibraryProcedure : public ::testing::TestWithParam<Documented> {};
 

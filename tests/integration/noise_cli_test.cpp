@@ -520,3 +520,45 @@ TEST(AnalyzeHysteresisCli, FindsTheHysteresisTheUnitWasGivenWhereItShowsAndNoneW
 }
 
 }  // namespace
+
+namespace {
+
+// `calstand analyze` without KIND on a short repeatability run: the one analysis that applies,
+// with the numbers `analyze repeatability` gives, and what the run lacks for each other one;
+// `calstand report` on the same run writes a page of its figures, not an error.
+TEST(AnalyzeAllCli, ListsWhatTheRunSupportsAndReportsARunWithoutAnErrorModel) {
+  const std::string dir = ::testing::TempDir() + "analyze_all-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string db = dir + "/repeat.db";
+  Result r = run("run repeatability --quiet --db " + db +
+                 " --set cycles=3 --set off_s=5 --set settle_s=20 --set capture_s=20");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("analyze --json --db " + db + " --run 1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json all = nlohmann::json::parse(r.out);
+  const Result one = run("analyze repeatability --json --db " + db + " --run 1");
+  ASSERT_EQ(one.exit_code, 0) << one.out;
+  EXPECT_EQ(all["analyses"]["repeatability"], nlohmann::json::parse(one.out));
+  EXPECT_EQ(all["analyses"].size(), 1u) << all.dump(2);
+  EXPECT_TRUE(all["missing"].empty()) << all.dump(2);
+  for (const char* kind : {"warmup", "stability", "hysteresis", "bandwidth"}) {
+    EXPECT_TRUE(all["not_applicable"].contains(kind)) << kind;
+  }
+  EXPECT_EQ(all["not_applicable"]["bandwidth"], "no oscillate step");
+  const Result text = run("analyze all --db " + db + " --run 1");
+  ASSERT_EQ(text.exit_code, 0) << text.out;
+  EXPECT_NE(text.out.find("repeatability  applies: 3 power-ups"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("power cycles"), std::string::npos) << text.out;
+  EXPECT_EQ(run("analyze all --db " + db + " --run 1 --step 3").exit_code, 2);
+
+  r = run("report --db " + db + " --run 1 --out " + dir + "/repeat.html");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("no error model fitted"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("datasheet figures: repeatability"), std::string::npos) << r.out;
+  EXPECT_NE(read_text(dir + "/repeat.html").find("<section id=\"datasheet-repeatability\""),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace

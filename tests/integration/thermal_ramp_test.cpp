@@ -6,19 +6,15 @@
 // IMU's temperature, so heating and cooling each recover the truth's temperature terms and
 // agree with each other; read against the air temperature instead, they disagree by the lag.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <iostream>
 #include <map>
 #include <string>
 #include <vector>
 
-#include "daemon/campaign.hpp"
-#include "procedures/plan.hpp"
-#include "procedures/procedure.hpp"
+#include "in_process_run.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "sim/spec_sheet.hpp"
@@ -56,25 +52,6 @@ core::StationConfig adis_station(std::uint64_t seed, sim::ImuTruth& truth) {
   station.imus[0].model.clear();
   station.imus[0].truth = sim::imu_truth_to_json(truth);
   return station;
-}
-
-std::int64_t run_ramps(const core::StationConfig& station, const std::string& db_path) {
-  const auto procedure = procedures::load_procedure("thermal-ramp");
-  // Two 50 degC ramps of 50 min, each covered by 13 cycles of about 4 min.
-  const auto plan =
-      procedures::make_plan(procedure, station,
-                            procedures::parse_overrides({"low_c=0", "high_c=50", "ramp_c_per_min=1",
-                                                         "cycles=13", "soak_s=600", "final_c=25"}));
-  EXPECT_TRUE(plan.ok());
-  std::int64_t run_id = 0;
-  {
-    store::Database db(db_path);
-    store::RunStore runs(db);
-    run_id = daemon::create_run_record(runs, station, procedure, plan);
-  }
-  const auto result = daemon::run_campaign(station, plan, db_path, run_id);
-  EXPECT_EQ(result.state, daemon::RunState::kCompleted) << result.exit_reason;
-  return run_id;
 }
 
 /// The run's steps whose label starts with `prefix` ("heating", "cooling").
@@ -128,10 +105,12 @@ class ThermalRamp : public ::testing::TestWithParam<std::uint64_t> {};
 TEST_P(ThermalRamp, HeatingAndCoolingEachRecoverTheTemperatureTermsOnTheImuTemperature) {
   sim::ImuTruth truth;
   const core::StationConfig station = adis_station(GetParam(), truth);
-  const std::string db_path = ::testing::TempDir() + "calstand_thermal_ramp_" +
-                              std::to_string(getpid()) + "_" + std::to_string(GetParam()) + ".db";
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(db_path + suffix);
-  const std::int64_t run_id = run_ramps(station, db_path);
+  const std::string db_path = testing::fresh_db("thermal_ramp_" + std::to_string(GetParam()));
+  // Two 50 degC ramps of 50 min, each covered by 13 cycles of about 4 min.
+  const std::int64_t run_id = testing::run_procedure(
+      "thermal-ramp",
+      {"low_c=0", "high_c=50", "ramp_c_per_min=1", "cycles=13", "soak_s=600", "final_c=25"},
+      db_path, station);
   if (HasFailure()) return;
   store::Database db(db_path);
   const solver::RunData data = solver::load_run_data(db, run_id);
@@ -211,7 +190,7 @@ TEST_P(ThermalRamp, HeatingAndCoolingEachRecoverTheTemperatureTermsOnTheImuTempe
     EXPECT_GT(std::abs(on_air), 0.5 * std::abs(coefficient) * loop_width_c) << bias;
   }
   EXPECT_GE(shown, 1);
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(db_path + suffix);
+  testing::remove_db(db_path);
 }
 
 INSTANTIATE_TEST_SUITE_P(Seeds, ThermalRamp, ::testing::Values(3u, 11u));
