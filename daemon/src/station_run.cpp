@@ -26,7 +26,10 @@ StationRun::StationRun(const core::StationConfig& station, const std::string& db
       db_(db_path),
       runs_(db_),
       writer_(db_path),
-      station_(drivers::make_station(config_, start_time_s)),
+      // Each run of a simulated station records its own noise (run 1 the station seed's), as
+      // two recordings of one unit would differ; a resumed run keeps its stream.
+      station_(drivers::make_station(config_, start_time_s,
+                                     run_id > 0 ? static_cast<std::uint64_t>(run_id - 1) : 0)),
       // A simulated station delivers samples as fast as the CPU allows: the journal waits for
       // the writer rather than counting an overflow no real device would cause.
       journal_(runs_, writer_, run_id, kTelemetryPeriodS, station_->clock().is_virtual()) {}

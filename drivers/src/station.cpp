@@ -40,9 +40,12 @@ PowerSupply* Station::supply_of(const std::string& imu_name) {
   return nullptr;
 }
 
-std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s) {
+std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s,
+                                      std::uint64_t noise_stream) {
   // The station file is simulated or real as a whole (StationConfig::from_json checks it).
-  if (config.is_simulated()) return std::make_unique<SimStation>(config, start_time_s);
+  if (config.is_simulated()) {
+    return std::make_unique<SimStation>(config, start_time_s, noise_stream);
+  }
   return std::make_unique<RealStation>(config, start_time_s);
 }
 

@@ -73,22 +73,29 @@ ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_see
   return truth;
 }
 
-std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index) {
+std::uint64_t noise_seed(std::uint64_t station_seed, std::uint64_t stream) {
+  return stream == 0 ? station_seed : derive_seed(station_seed, "noise-stream", stream);
+}
+
+std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index,
+                                     std::uint64_t noise_stream) {
   ImuTruth truth = resolve_imu_truth(config.imus.at(index), config.seed, index);
   try {
-    return std::make_unique<ImuSim>(std::move(truth), config.geometry(index), config.site,
-                                    config.table.tilt_rad,
-                                    derive_seed(config.seed, "imu-noise", index));
+    return std::make_unique<ImuSim>(
+        std::move(truth), config.geometry(index), config.site, config.table.tilt_rad,
+        derive_seed(noise_seed(config.seed, noise_stream), "imu-noise", index));
   } catch (const std::invalid_argument& e) {
     throw core::InputError(fmt::format("imus[{}]", index), e.what());
   }
 }
 
-SimWorld::SimWorld(const core::StationConfig& config, double start_time_s)
+SimWorld::SimWorld(const core::StationConfig& config, double start_time_s,
+                   std::uint64_t noise_stream)
     : config_(config),
       clock_(start_time_s),
       table_(config.table.outer, config.table.inner),
-      chamber_(chamber_params(config.chamber), derive_seed(config.seed, "chamber")) {
+      chamber_(chamber_params(config.chamber),
+               derive_seed(noise_seed(config.seed, noise_stream), "chamber")) {
   require_sim(config.table.backend, "table.backend");
   require_sim(config.chamber.backend, "chamber.backend");
   for (std::size_t i = 0; i < config.imus.size(); ++i) {
@@ -96,7 +103,7 @@ SimWorld::SimWorld(const core::StationConfig& config, double start_time_s)
     require_sim(c.backend, fmt::format("imus[{}].backend", i));
     SimulatedImu imu;
     imu.name = c.name;
-    imu.sim = make_imu_sim(config, i);
+    imu.sim = make_imu_sim(config, i, noise_stream);
     // A world starts (or a run resumes) with its units on for long: warm and settled.
     imu.sim->power_on(start_time_s, /*warm=*/true);
     imu.self_heating_c = config.chamber.imu_self_heating_c;

@@ -15,7 +15,9 @@ namespace calstand::drivers {
 class SimStation final : public Station {
  public:
   /// The simulated station of `config`, its virtual clock starting at `start_time_s`.
-  explicit SimStation(const core::StationConfig& config, double start_time_s = 0.0);
+  /// `noise_stream`: sim::SimWorld's (each recorded run its own).
+  explicit SimStation(const core::StationConfig& config, double start_time_s = 0.0,
+                      std::uint64_t noise_stream = 0);
   ~SimStation() override;
 
   const core::StationConfig& config() const override { return world_.config(); }

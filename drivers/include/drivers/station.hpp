@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -46,6 +47,8 @@ class Station {
 /// The station of `config`: a SimStation when its devices are simulated (its virtual clock
 /// starting at `start_time_s`), a RealStation of drivers otherwise (on the steady clock, which
 /// reads `start_time_s` now). Throws core::InputError naming the device on a bad connection.
-std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s = 0.0);
+/// `noise_stream` picks a simulated station's noise (sim::SimWorld); a real station has its own.
+std::unique_ptr<Station> make_station(const core::StationConfig& config, double start_time_s = 0.0,
+                                      std::uint64_t noise_stream = 0);
 
 }  // namespace calstand::drivers

@@ -240,8 +240,9 @@ class SimStation::SimPowerSupply final : public PowerSupply {
   std::uint64_t refused_ = 0;
 };
 
-SimStation::SimStation(const core::StationConfig& config, double start_time_s)
-    : world_(config, start_time_s),
+SimStation::SimStation(const core::StationConfig& config, double start_time_s,
+                       std::uint64_t noise_stream)
+    : world_(config, start_time_s, noise_stream),
       table_(std::make_unique<SimTurntable>(world_)),
       chamber_(std::make_unique<SimChamber>(world_)) {
   for (std::size_t i = 0; i < world_.imu_count(); ++i) {

@@ -30,11 +30,19 @@ core::StationConfig load_station_or_default(const std::string& path);
 ImuTruth resolve_imu_truth(const core::ImuConfig& imu, std::uint64_t station_seed,
                            std::size_t index);
 
+/// The seed of a station's noise processes (IMU noise, turn-on draws, chamber control noise)
+/// in noise stream `stream`: the station seed itself for stream 0, else one derived from both.
+/// The unit drawn from its model and the table's tilt keep the station seed in every stream: the
+/// same unit on the same table, recorded anew.
+std::uint64_t noise_seed(std::uint64_t station_seed, std::uint64_t stream);
+
 /// The simulator of IMU `index` of a station as SimWorld builds it (truth from
 /// resolve_imu_truth(), the station's geometry with the IMU's mount, the site and the table
-/// tilt, seeded by the station seed), not yet powered. Throws core::InputError naming
-/// `imus[index]` when the truth cannot be simulated (std::invalid_argument from ImuSim).
-std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index);
+/// tilt, its noise seeded by noise_seed(station seed, `noise_stream`)), not yet powered. Throws
+/// core::InputError naming `imus[index]` when the truth cannot be simulated
+/// (std::invalid_argument from ImuSim).
+std::unique_ptr<ImuSim> make_imu_sim(const core::StationConfig& config, std::size_t index,
+                                     std::uint64_t noise_stream = 0);
 
 /// The simulated physical world of one station: table, chamber, the IMUs on the table, and the
 /// virtual clock they share. Time moves only through advance()/advance_to(), as fast as the CPU
@@ -48,8 +56,10 @@ class SimWorld {
   /// Builds the world of `config` (every device backend must be "sim") and powers the IMUs on
   /// at `start_time_s` (the virtual clock starts there: a run resumed after a crash continues
   /// its station time instead of going back to 0). Throws core::InputError when a device is
-  /// not simulated or a truth is invalid.
-  explicit SimWorld(const core::StationConfig& config, double start_time_s = 0.0);
+  /// not simulated or a truth is invalid. `noise_stream` picks the noise (noise_seed()): each
+  /// recorded run of a station has its own, so that two runs are two recordings.
+  explicit SimWorld(const core::StationConfig& config, double start_time_s = 0.0,
+                    std::uint64_t noise_stream = 0);
 
   /// Advances the world by dt_s (>= 0) of virtual time.
   void advance(double dt_s) { advance_to(clock_.now_s() + dt_s); }
