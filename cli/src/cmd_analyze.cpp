@@ -42,15 +42,28 @@ void print_stability(const analysis::StabilityAnalysis& s) {
   for (std::size_t c = 0; c < s.channels.size(); ++c) {
     const auto& ch = s.channels[c];
     const char* unit = c < 3 ? "deg/h" : "ug";
-    fmt::print(
-        "{:<8} {}{:>15.4g} {:<5} {:>11.4g} .. {:<9.4g} {:>8.0f} s  {:>10.4g} {:<5} {:>10.3g} s{}\n",
-        ch.channel, ch.floor_resolved ? " " : "<", ch.bias_instability, unit,
-        ch.bias_instability_lo, ch.bias_instability_hi, ch.min_tau_s, ch.variation_sigma, unit,
-        ch.correlation_time_s, ch.correlation_resolved ? "" : "  (not resolved)");
+    const std::string variation =
+        ch.variation_sigma
+            ? fmt::format("{:>10.4g} {:<5} {:>10.3g} s{}", *ch.variation_sigma, unit,
+                          *ch.correlation_time_s, ch.correlation_resolved ? "" : "  (not resolved)")
+            : fmt::format("{:>10} {:<5} {:>10}", "-", "", "-");
+    fmt::print("{:<8} {}{:>15.4g} {:<5} {:>11.4g} .. {:<9.4g} {:>8.0f} s  {}\n", ch.channel,
+               ch.floor_resolved ? " " : "<", ch.bias_instability, unit, ch.bias_instability_lo,
+               ch.bias_instability_hi, ch.min_tau_s, variation);
   }
   fmt::print(
       "< : no floor inside the record (the deviation still falls at its longest averaging time): "
-      "a bound.\nnot resolved: the correlation time is outside what the record shows.\n");
+      "a bound.\nnot resolved: the correlation time is outside what the record shows.\n"
+      "bias model per channel (a bias variation is stated only for a Gauss-Markov bias):\n");
+  for (std::size_t c = 0; c < s.channels.size(); ++c) {
+    const auto& ch = s.channels[c];
+    const std::string fitted = ch.flicker_b
+                                   ? fmt::format(" B fitted {:.4g} +- {:.2g} {};", *ch.flicker_b,
+                                                 ch.flicker_b_sigma, c < 3 ? "deg/h" : "ug")
+                                   : "";
+    fmt::print("  {:<4} {}:{} {}\n", ch.channel, solver::to_string(ch.bias_model), fitted,
+               ch.bias_model_reason);
+  }
 }
 
 void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
