@@ -18,14 +18,15 @@ namespace {
 // against a 100 ug floor, crossing at 0.2 s) would show a false minimum below the floor
 // between that crossing and 2 s. So the band starts at a fifth of the crossing (N / floor)^2,
 // where white noise holds 5/2 of the variance at the flat part's start, no later than the 1 s
-// it always started at (units whose white noise crosses after 5 s keep the same draws), and no
-// earlier than 10 sample periods (the components need dt << tau).
+// it always started at (units whose white noise crosses after 5 s keep the same draws; a
+// sample period too long for it is refused by BiasInstability as before), and no earlier than
+// 10 sample periods (the components need dt << tau).
 double flicker_band_start_s(double white_density, double flicker_coefficient, double dt_s) {
   constexpr double kLatestStartS = 1.0;
   const double floor = kFlickerAllanFloorPerCoefficient * flicker_coefficient;
   const double ratio = white_density / floor;
   const double crossing_s = ratio * ratio;
-  return std::clamp(0.2 * crossing_s, 10.0 * dt_s, std::max(kLatestStartS, 10.0 * dt_s));
+  return std::min(kLatestStartS, std::max(0.2 * crossing_s, 10.0 * dt_s));
 }
 
 }  // namespace
