@@ -15,6 +15,9 @@ constexpr double kDegPerSToDegPerH = 3600.0;
 constexpr double kMps2ToUg = 1e6 / 9.80665;  ///< per g0, as datasheets count g
 /// IEEE 952: the flicker floor of the Allan deviation is 0.664 B.
 constexpr double kFlickerFloor = 0.664;
+/// Degrees of freedom a point needs to count for the minimum: about +-22 % on the deviation at
+/// one sigma (solver::NoiseTerms reads its minimum so too).
+constexpr double kMinFloorEdf = 10.0;
 
 }  // namespace
 
@@ -44,13 +47,18 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
     s.channel = std::string(solver::to_string(ch.channel));
     const auto& points = ch.allan.points;
     out.confidence = ch.allan.confidence;
-    // The minimum as `calstand noise` reads it (solver::NoiseTerms::min_tau_s: among points
-    // with at least 10 degrees of freedom): the lowest of the last few points, which scatter by
-    // a factor of two or more, would be a minimum of the noise, biased low, and its interval
-    // would not hold the floor.
-    const auto floor = std::find_if(points.begin(), points.end(), [&](const solver::AllanPoint& p) {
-      return p.tau_s == ch.terms.min_tau_s;
-    });
+    // The minimum among the points with at least kMinFloorEdf degrees of freedom (their own,
+    // from the curve's local noise type), or of all when none has: the last few points scatter
+    // by a factor of two and more, and their lowest would be a minimum of the noise, biased
+    // low, whose interval need not hold the floor.
+    const bool any_firm =
+        std::any_of(points.begin(), points.end(),
+                    [](const solver::AllanPoint& p) { return p.edf >= kMinFloorEdf; });
+    auto floor = points.end();
+    for (auto it = points.begin(); it != points.end(); ++it) {
+      if (any_firm && !(it->edf >= kMinFloorEdf)) continue;
+      if (floor == points.end() || it->deviation < floor->deviation) floor = it;
+    }
     if (floor != points.end()) {
       s.bias_instability = k * floor->deviation / kFlickerFloor;
       s.bias_instability_lo = k * floor->lo / kFlickerFloor;

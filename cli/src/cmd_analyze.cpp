@@ -116,22 +116,35 @@ void print_hysteresis(const analysis::HysteresisAnalysis& h) {
 
 void print_bandwidth(const analysis::BandwidthAnalysis& b) {
   fmt::print("run {} {}: gyro against the table encoder\n", b.run, b.device);
-  fmt::print("{:<5} {:>10} {:>9} {:>9} {:>11}\n", "axis", "f [Hz]", "gain", "[dB]", "phase [deg]");
+  fmt::print("{:<5} {:>10} {:>9} {:>9} {:>9} {:>11} {:>9}\n", "axis", "f [Hz]", "gain", "sigma",
+             "[dB]", "phase [deg]", "sigma");
   for (const auto& p : b.points) {
-    fmt::print("{:<5} {:>10.4g} {:>9.4f} {:>9.2f} {:>11.2f}\n", static_cast<char>('x' + p.axis),
-               p.frequency_hz, p.gain, p.gain_db, p.phase_deg);
+    fmt::print("{:<5} {:>10.4g} {:>9.4f} {:>9.2g} {:>9.2f} {:>11.2f} {:>9.2g}\n",
+               static_cast<char>('x' + p.axis), p.frequency_hz, p.gain, p.gain_sigma, p.gain_db,
+               p.phase_deg, p.phase_sigma_deg);
   }
   for (std::size_t a = 0; a < 3; ++a) {
     const auto& fc = b.bandwidth_hz[a];
     const auto& tau = b.delay_s[a];
     if (!fc && !tau) continue;
-    fmt::print("{}: bandwidth {}, delay {}{}\n", static_cast<char>('x' + a),
-               fc ? fmt::format("{:.4g} Hz", *fc) : "beyond the frequencies tested",
-               tau ? fmt::format("{:.3g} ms", *tau * 1e3) : "-",
-               b.low_pass_order[a] > 0
-                   ? fmt::format(" (after a order-{} low-pass's phase)", b.low_pass_order[a])
-                   : "");
+    const auto& fc_interval = b.bandwidth_interval_hz[a];
+    const auto& tau_interval = b.delay_interval_s[a];
+    fmt::print(
+        "{}: bandwidth {}{}, delay {}{}{}\n", static_cast<char>('x' + a),
+        fc ? fmt::format("{:.4g} Hz", *fc) : "beyond the frequencies tested",
+        fc_interval ? fmt::format(" [{:.4g} .. {:.4g}]", (*fc_interval)[0], (*fc_interval)[1]) : "",
+        tau ? fmt::format("{:.3g} ms", *tau * 1e3) : "-",
+        tau_interval
+            ? fmt::format(" [{:.3g} .. {:.3g}]", (*tau_interval)[0] * 1e3, (*tau_interval)[1] * 1e3)
+            : "",
+        b.low_pass_order[a] > 0
+            ? fmt::format(" (after a order-{} low-pass's phase)", b.low_pass_order[a])
+            : "");
   }
+  fmt::print(
+      "sigma: 1 sigma from the scatter of segments of whole periods; [..]: {:.0f} % intervals "
+      "(bootstrap over the points' sigmas)\n",
+      100.0 * b.confidence);
 }
 
 void run_bandwidth(const AnalyzeOptions& opt) {

@@ -19,8 +19,8 @@ namespace calstand::analysis {
 struct ChannelStability {
   std::string channel;  ///< gx ... az
   /// Bias instability: the Allan deviation's minimum / 0.664, with that point's interval; the
-  /// minimum among the points with at least 10 degrees of freedom, as `calstand noise` reads it
-  /// (the last few points scatter too much for their minimum to mean anything).
+  /// minimum among the points with at least 10 degrees of freedom of their own (the last few
+  /// points scatter too much for their minimum to mean anything).
   double bias_instability = 0.0;
   double bias_instability_lo = 0.0;
   double bias_instability_hi = 0.0;
