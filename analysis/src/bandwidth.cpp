@@ -66,11 +66,12 @@ PointSigma segment_sigma(const std::vector<double>& gyro_t, const std::vector<do
                          const std::vector<double>& table_t, const std::vector<double>& table_y,
                          double w, double f, std::complex<double> whole) {
   PointSigma out;
+  // The record spans its periods less one sample period (first to last sample): count a period
+  // that lacks less than a tenth of itself.
   const double span = std::min(gyro_t.back(), table_t.back());
-  const auto periods = static_cast<int>(std::floor(span * f + 1e-6));
+  const auto periods = static_cast<int>(std::floor(span * f + 0.1));
   const int segments = std::min(periods, kMaxSegments);
   if (segments < kMinSegments) return out;
-  const double length = std::floor(periods / segments) / f;
   const auto slice = [](const std::vector<double>& t, const std::vector<double>& y, double a,
                         double b, std::vector<double>& ts, std::vector<double>& ys) {
     ts.clear();
@@ -79,9 +80,15 @@ PointSigma segment_sigma(const std::vector<double>& gyro_t, const std::vector<do
       if (t[i] >= a && t[i] < b) ts.push_back(t[i]), ys.push_back(y[i]);
     }
   };
-  std::vector<double> gains, phases, ts, ys;
+  // Whole periods each, as even as they divide (the record's every sample in one segment);
+  // a segment of n periods weighs n: its variance goes as 1/n.
+  std::vector<double> gains, phases, weights, ts, ys;
+  int start = 0;
   for (int k = 0; k < segments; ++k) {
-    const double a = k * length, b = (k + 1) * length;
+    const int end =
+        static_cast<int>(std::lround(static_cast<double>((k + 1) * periods) / segments));
+    const double a = start / f;
+    const double b = k + 1 == segments ? INFINITY : end / f;
     slice(gyro_t, gyro_y, a, b, ts, ys);
     if (ts.size() < kMinEncoderRows) return out;
     const std::complex<double> gyro = fit_sine(ts, ys, w);
@@ -91,18 +98,20 @@ PointSigma segment_sigma(const std::vector<double>& gyro_t, const std::vector<do
     const std::complex<double> ratio = gyro / table;
     gains.push_back(std::abs(ratio));
     phases.push_back(std::arg(ratio / whole));  // about the whole record's: no wrap
+    weights.push_back(end - start);
+    start = end;
   }
-  const auto spread = [](const std::vector<double>& v) {
-    double mean = 0.0;
-    for (const double x : v) mean += x;
-    mean /= static_cast<double>(v.size());
+  // Standard error of the weighted mean: sum w (x - mean)^2 / (K - 1) / sum w.
+  const auto standard_error = [&](const std::vector<double>& v) {
+    double sw = 0.0, mean = 0.0;
+    for (std::size_t k = 0; k < v.size(); ++k) sw += weights[k], mean += weights[k] * v[k];
+    mean /= sw;
     double ss = 0.0;
-    for (const double x : v) ss += (x - mean) * (x - mean);
-    return std::sqrt(ss / static_cast<double>(v.size() - 1));
+    for (std::size_t k = 0; k < v.size(); ++k) ss += weights[k] * (v[k] - mean) * (v[k] - mean);
+    return std::sqrt(ss / static_cast<double>(v.size() - 1) / sw);
   };
-  const double root_n = std::sqrt(static_cast<double>(segments));
-  out.gain = spread(gains) / root_n;
-  out.phase_rad = spread(phases) / root_n;
+  out.gain = standard_error(gains);
+  out.phase_rad = standard_error(phases);
   out.segments = segments;
   return out;
 }
