@@ -11,6 +11,7 @@
 #include <limits>
 #include <numbers>
 
+#include "bandwidth_curve.hpp"
 #include "core/error.hpp"
 #include "core/rotation.hpp"
 #include "solver/run_setup.hpp"
@@ -21,9 +22,14 @@ namespace calstand::analysis {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kHalfPowerDb = -3.0102999566398120;  // 10 log10(1/2)
 constexpr std::size_t kMinEncoderRows = 8;
-constexpr std::array kLowPassOrders{1, 2, 4, 6, 8};
+/// Segments a point's uncertainty is read from: at most 10 (2 periods each in a 20-period
+/// record), at least 4 (fewer, and the sigma itself would be a guess: no interval then).
+constexpr int kMaxSegments = 10;
+constexpr int kMinSegments = 4;
+/// Bootstrap draws of the intervals: the 2.5 % tail then rests on 100 draws.
+constexpr int kBootstrapDraws = 4000;
+constexpr double kConfidence = 0.95;
 
 // The sine at angular frequency w through (t, y) by least squares, with an offset (bias, Earth
 // rate) in the model: y = a sin(w t) + b cos(w t) + c. Returned as the phasor a + i b, so that
@@ -43,34 +49,71 @@ std::complex<double> fit_sine(const std::vector<double>& t, const std::vector<do
   return {x(0), x(1)};
 }
 
-// Phase [rad] of an analogue Butterworth low-pass of `order` at f / fc = x: its poles lie on the
-// unit circle of the left half plane, and the phase is minus the sum of their angles seen from
-// i x. Order 1 is the first-order lag, -atan(x).
-double butterworth_phase(int order, double x) {
-  double phase = 0.0;
-  for (int k = 1; k <= order; ++k) {
-    const std::complex<double> pole =
-        std::polar(1.0, kPi * (2.0 * k + order - 1.0) / (2.0 * order));
-    phase -= std::arg(std::complex<double>(0.0, x) - pole);
-  }
-  return phase;
-}
+// The uncertainty of one point from the scatter of its parts: the record cut into segments of
+// whole periods, the gyro and encoder sines fitted in each, and the spread of the segments'
+// gain and phase about the whole record's, divided by sqrt(segments) (batch means). The
+// residuals of one fit would not do: the IMU's output filter correlates its noise over many
+// samples, and the least-squares covariance, which takes them as independent, would be several
+// times too small; segments of whole periods are long against that correlation, and they
+// carry the encoder's noise and the table's motion as they are.
+struct PointSigma {
+  double gain = 0.0;       ///< [ratio]
+  double phase_rad = 0.0;  ///< [rad]
+  int segments = 0;
+};
 
-double butterworth_gain_db(int order, double x) {
-  return -10.0 * std::log10(1.0 + std::pow(x, 2.0 * order));
-}
-
-// The -3 dB crossing of one axis's gain curve, interpolated linearly in dB over log frequency
-// between the first two neighbours that straddle it.
-std::optional<double> half_power(const std::vector<const BandwidthPoint*>& curve) {
-  for (std::size_t k = 1; k < curve.size(); ++k) {
-    const double g0 = curve[k - 1]->gain_db, g1 = curve[k]->gain_db;
-    if (g0 >= kHalfPowerDb && g1 < kHalfPowerDb) {
-      const double l0 = std::log(curve[k - 1]->frequency_hz), l1 = std::log(curve[k]->frequency_hz);
-      return std::exp(l0 + (kHalfPowerDb - g0) / (g1 - g0) * (l1 - l0));
+PointSigma segment_sigma(const std::vector<double>& gyro_t, const std::vector<double>& gyro_y,
+                         const std::vector<double>& table_t, const std::vector<double>& table_y,
+                         double w, double f, std::complex<double> whole) {
+  PointSigma out;
+  // The record spans its periods less one sample period (first to last sample): count a period
+  // that lacks less than a tenth of itself.
+  const double span = std::min(gyro_t.back(), table_t.back());
+  const auto periods = static_cast<int>(std::floor(span * f + 0.1));
+  const int segments = std::min(periods, kMaxSegments);
+  if (segments < kMinSegments) return out;
+  const auto slice = [](const std::vector<double>& t, const std::vector<double>& y, double a,
+                        double b, std::vector<double>& ts, std::vector<double>& ys) {
+    ts.clear();
+    ys.clear();
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      if (t[i] >= a && t[i] < b) ts.push_back(t[i]), ys.push_back(y[i]);
     }
+  };
+  // Whole periods each, as even as they divide (the record's every sample in one segment);
+  // a segment of n periods weighs n: its variance goes as 1/n.
+  std::vector<double> gains, phases, weights, ts, ys;
+  int start = 0;
+  for (int k = 0; k < segments; ++k) {
+    const int end =
+        static_cast<int>(std::lround(static_cast<double>((k + 1) * periods) / segments));
+    const double a = start / f;
+    const double b = k + 1 == segments ? INFINITY : end / f;
+    slice(gyro_t, gyro_y, a, b, ts, ys);
+    if (ts.size() < kMinEncoderRows) return out;
+    const std::complex<double> gyro = fit_sine(ts, ys, w);
+    slice(table_t, table_y, a, b, ts, ys);
+    if (ts.size() < kMinEncoderRows) return out;
+    const std::complex<double> table = fit_sine(ts, ys, w);
+    const std::complex<double> ratio = gyro / table;
+    gains.push_back(std::abs(ratio));
+    phases.push_back(std::arg(ratio / whole));  // about the whole record's: no wrap
+    weights.push_back(end - start);
+    start = end;
   }
-  return std::nullopt;
+  // Standard error of the weighted mean: sum w (x - mean)^2 / (K - 1) / sum w.
+  const auto standard_error = [&](const std::vector<double>& v) {
+    double sw = 0.0, mean = 0.0;
+    for (std::size_t k = 0; k < v.size(); ++k) sw += weights[k], mean += weights[k] * v[k];
+    mean /= sw;
+    double ss = 0.0;
+    for (std::size_t k = 0; k < v.size(); ++k) ss += weights[k] * (v[k] - mean) * (v[k] - mean);
+    return std::sqrt(ss / static_cast<double>(v.size() - 1) / sw);
+  };
+  out.gain = standard_error(gains);
+  out.phase_rad = standard_error(phases);
+  out.segments = segments;
+  return out;
 }
 
 // Mean of wrapping angles [deg].
@@ -90,6 +133,7 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
                                     const std::string& device) {
   BandwidthAnalysis out;
   out.run = run;
+  out.confidence = kConfidence;
   out.device = store::choose_device(db, run, device);
   store::RunStore runs(db);
   const solver::RunSetup setup = solver::run_setup(runs.load_run(run), run, out.device);
@@ -129,6 +173,7 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
       y.push_back(s.gyro_dps[body]);
     }
     const std::complex<double> gyro = fit_sine(t, y, w);
+    const std::vector<double> gyro_t = std::move(t), gyro_y = std::move(y);
     t.clear();
     y.clear();
     for (const auto& r : rows) {
@@ -137,6 +182,7 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
       y.push_back((inner ? r.inner.rate_dps : r.outer.rate_dps) * axis_body[body]);
     }
     const std::complex<double> table = fit_sine(t, y, w);
+    const PointSigma sigma = segment_sigma(gyro_t, gyro_y, t, y, w, f, gyro / table);
 
     BandwidthPoint p;
     p.step = data.step.index;
@@ -147,6 +193,9 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
     p.gain_db = 20.0 * std::log10(p.gain);
     p.phase_deg = std::arg(gyro / table) * 180.0 / kPi;
     p.table_amplitude_dps = std::abs(table);
+    p.gain_sigma = sigma.gain;
+    p.phase_sigma_deg = sigma.phase_rad * 180.0 / kPi;
+    p.segments = sigma.segments;
     p.samples = data.samples.size();
     p.encoder_rows = rows.size();
     out.points.push_back(std::move(p));
@@ -175,38 +224,44 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
       while (d > 180.0) d -= 360.0, curve[k]->phase_deg -= 360.0;
       while (d < -180.0) d += 360.0, curve[k]->phase_deg += 360.0;
     }
-    const std::vector<const BandwidthPoint*> points(curve.begin(), curve.end());
-    const auto fc = half_power(points);
-    out.bandwidth_hz[static_cast<std::size_t>(axis)] = fc;
-    int order = 0;
-    if (fc) {
-      double best = std::numeric_limits<double>::infinity();
-      for (const int n : kLowPassOrders) {
-        double cost = 0.0;
-        for (const auto* p : points) {
-          const double r = p->gain_db - butterworth_gain_db(n, p->frequency_hz / *fc);
-          cost += r * r;
-        }
-        if (cost < best) best = cost, order = n;
-      }
+    std::vector<detail::CurvePoint> points;
+    for (const BandwidthPoint* p : curve) {
+      detail::CurvePoint c;
+      c.frequency_hz = p->frequency_hz;
+      c.gain = p->gain;
+      c.phase_rad = p->phase_deg * kPi / 180.0;
+      c.gain_sigma = p->gain_sigma;
+      c.phase_sigma_rad = p->phase_sigma_deg * kPi / 180.0;
+      c.sigma_dof = p->segments - 1.0;
+      points.push_back(c);
     }
-    out.low_pass_order[static_cast<std::size_t>(axis)] = order;
-    if (points.size() < 2) continue;
-    // What the low-pass model does not explain of the phase is the delay: -w tau.
-    double num = 0.0, den = 0.0;
-    for (const auto* p : points) {
-      const double omega = 2.0 * kPi * p->frequency_hz;
-      const double model = order > 0 ? butterworth_phase(order, p->frequency_hz / *fc) : 0.0;
-      num += (p->phase_deg * kPi / 180.0 - model) * omega;
-      den += omega * omega;
+    const auto a = static_cast<std::size_t>(axis);
+    const detail::CurveFigures figures = detail::read_curve(points);
+    out.bandwidth_hz[a] = figures.bandwidth_hz;
+    out.low_pass_order[a] = figures.low_pass_order;
+    out.delay_s[a] = figures.delay_s;
+    // Seeded by run and axis: the same run always gives the same intervals.
+    const detail::CurveIntervals intervals = detail::bootstrap_curve(
+        points, out.confidence, kBootstrapDraws, static_cast<std::uint64_t>(run) * 3U + a);
+    if (intervals.bandwidth_hz) {
+      out.bandwidth_interval_hz[a] = {intervals.bandwidth_hz->lo, intervals.bandwidth_hz->hi};
+      out.bandwidth_sigma_hz[a] = intervals.bandwidth_hz->sigma;
     }
-    out.delay_s[static_cast<std::size_t>(axis)] = -num / den;
+    if (intervals.delay_s) {
+      out.delay_interval_s[a] = {intervals.delay_s->lo, intervals.delay_s->hi};
+      out.delay_sigma_s[a] = intervals.delay_s->sigma;
+    }
   }
   return out;
 }
 
 nlohmann::json to_json(const BandwidthAnalysis& b) {
   const auto triple = [](const std::array<std::optional<double>, 3>& v) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& x : v) j.push_back(x ? nlohmann::json(*x) : nlohmann::json(nullptr));
+    return j;
+  };
+  const auto intervals = [](const std::array<std::optional<std::array<double, 2>>, 3>& v) {
     nlohmann::json j = nlohmann::json::array();
     for (const auto& x : v) j.push_back(x ? nlohmann::json(*x) : nlohmann::json(nullptr));
     return j;
@@ -218,6 +273,9 @@ nlohmann::json to_json(const BandwidthAnalysis& b) {
                       {"gain", p.gain},
                       {"gain_db", p.gain_db},
                       {"phase_deg", p.phase_deg},
+                      {"gain_sigma", p.gain_sigma},
+                      {"phase_sigma_deg", p.phase_sigma_deg},
+                      {"segments", p.segments},
                       {"step", p.step},
                       {"label", p.label}});
   }
@@ -227,6 +285,11 @@ nlohmann::json to_json(const BandwidthAnalysis& b) {
            {{"bandwidth_hz", triple(b.bandwidth_hz)},
             {"delay_s", triple(b.delay_s)},
             {"low_pass_order", b.low_pass_order},
+            {"confidence", b.confidence},
+            {"bandwidth_interval_hz", intervals(b.bandwidth_interval_hz)},
+            {"bandwidth_sigma_hz", triple(b.bandwidth_sigma_hz)},
+            {"delay_interval_s", intervals(b.delay_interval_s)},
+            {"delay_sigma_s", triple(b.delay_sigma_s)},
             {"points", std::move(points)}}}};
 }
 

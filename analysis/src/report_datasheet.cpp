@@ -128,10 +128,16 @@ std::string bias_instability_cells(const ChannelStability& ch) {
          num(interval(ch.bias_instability_lo, ch.bias_instability_hi)) + num(n(ch.min_tau_s));
 }
 
-// The Gauss-Markov bias variation and its correlation time.
+// The bias model the Allan curve shows, then the Gauss-Markov bias variation and its correlation
+// time: a datasheet figure only where that model is chosen (stability.hpp).
 std::string bias_variation_cells(const ChannelStability& ch) {
-  return num(n(ch.variation_sigma)) +
-         num(n(ch.correlation_time_s), ch.correlation_resolved ? "" : "dim");
+  const std::string model = "<td title=\"" + html_escape(ch.bias_model_reason) + "\">" +
+                            html_escape(solver::to_string(ch.bias_model)) + "</td>";
+  if (!ch.variation_sigma || !ch.correlation_time_s) {
+    return model + num("&ndash;", "dim") + num("&ndash;", "dim");
+  }
+  return model + num(n(*ch.variation_sigma)) +
+         num(n(*ch.correlation_time_s), ch.correlation_resolved ? "" : "dim");
 }
 
 std::string stability_section(const StabilityAnalysis& s) {
@@ -139,14 +145,15 @@ std::string stability_section(const StabilityAnalysis& s) {
       DatasheetKind::kStability,
       fmt::format("Step {} ({}): {:.0f} s static. Bias instability: the Allan deviation's "
                   "minimum / 0.664 (IEEE 952) with that point's {:.0f} % interval; "
-                  "&lt;: no floor inside the record, a bound. Bias variation: the sigma and "
-                  "correlation time of a Gauss-Markov bias fitted to the Allan variance (grey: "
-                  "the correlation time is outside what the record shows). <code>calstand "
-                  "analyze stability</code>",
+                  "&lt;: no floor inside the record, a bound. Bias model: a Gauss-Markov bias or a "
+                  "flicker floor, whichever the Allan curve supports by AIC (undecided: neither; "
+                  "hover for why). Bias variation: the sigma and correlation time of the "
+                  "Gauss-Markov bias, only where it is chosen (grey: the correlation time is "
+                  "outside what the record shows). <code>calstand analyze stability</code>",
                   s.step, html_escape(s.step_label), s.duration_s, 100.0 * s.confidence));
-  out +=
-      head({"channel", "bias instability", fmt::format("{:.0f} % interval", 100.0 * s.confidence),
-            "at &tau; [s]", "bias variation (1&sigma;)", "correlation time [s]", "unit"});
+  out += head({"channel", "bias instability",
+               fmt::format("{:.0f} % interval", 100.0 * s.confidence), "at &tau; [s]", "bias model",
+               "bias variation (1&sigma;)", "correlation time [s]", "unit"});
   for (std::size_t c = 0; c < s.channels.size(); ++c) {
     const ChannelStability& ch = s.channels[c];
     out += "<tr>" + td(ch.channel) + bias_instability_cells(ch) + bias_variation_cells(ch) +
@@ -187,14 +194,20 @@ std::string hysteresis_section(const HysteresisAnalysis& h) {
 
 // --- bandwidth -----------------------------------------------------------------------------
 
+// The value, then its interval ("&ndash;" when the bootstrap lost too many draws).
 std::string bandwidth_cell(const BandwidthAnalysis& b, std::size_t axis) {
   const auto& fc = b.bandwidth_hz[axis];
-  return fc ? num(n(*fc)) : num("beyond the frequencies tested", "dim");
+  if (!fc) return num("beyond the frequencies tested", "dim") + num("&ndash;", "dim");
+  const auto& ci = b.bandwidth_interval_hz[axis];
+  return num(n(*fc, 4)) + (ci ? num(interval((*ci)[0], (*ci)[1])) : num("&ndash;", "dim"));
 }
 
 std::string delay_cell(const BandwidthAnalysis& b, std::size_t axis) {
   const auto& tau = b.delay_s[axis];
-  return tau ? num(n(*tau * 1e3)) : num("&ndash;", "dim");
+  if (!tau) return num("&ndash;", "dim") + num("&ndash;", "dim");
+  const auto& ci = b.delay_interval_s[axis];
+  return num(n(*tau * 1e3)) +
+         (ci ? num(interval((*ci)[0] * 1e3, (*ci)[1] * 1e3)) : num("&ndash;", "dim"));
 }
 
 std::string bandwidth_section(const BandwidthAnalysis& b) {
@@ -203,7 +216,8 @@ std::string bandwidth_section(const BandwidthAnalysis& b) {
       "Each gyro against the table encoder, oscillating about its axis: the -3 dB frequency "
       "on the gain curve and the output delay (the phase left after the low-pass model's, "
       "against angular frequency). <code>calstand analyze bandwidth</code>");
-  out += head({"axis", "-3 dB bandwidth [Hz]", "delay [ms]", "low-pass model"});
+  const std::string ci = fmt::format("{:.0f} % interval", 100.0 * b.confidence);
+  out += head({"axis", "-3 dB bandwidth [Hz]", ci, "delay [ms]", ci, "low-pass model"});
   for (std::size_t axis = 0; axis < 3; ++axis) {
     bool oscillated = false;
     for (const auto& p : b.points) oscillated = oscillated || p.axis == static_cast<int>(axis);

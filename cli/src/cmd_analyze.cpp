@@ -46,15 +46,28 @@ void print_stability(const analysis::StabilityAnalysis& s) {
   for (std::size_t c = 0; c < s.channels.size(); ++c) {
     const auto& ch = s.channels[c];
     const char* unit = c < 3 ? "deg/h" : "ug";
-    fmt::print(
-        "{:<8} {}{:>15.4g} {:<5} {:>11.4g} .. {:<9.4g} {:>8.0f} s  {:>10.4g} {:<5} {:>10.3g} s{}\n",
-        ch.channel, ch.floor_resolved ? " " : "<", ch.bias_instability, unit,
-        ch.bias_instability_lo, ch.bias_instability_hi, ch.min_tau_s, ch.variation_sigma, unit,
-        ch.correlation_time_s, ch.correlation_resolved ? "" : "  (not resolved)");
+    const std::string variation =
+        ch.variation_sigma
+            ? fmt::format("{:>10.4g} {:<5} {:>10.3g} s{}", *ch.variation_sigma, unit,
+                          *ch.correlation_time_s, ch.correlation_resolved ? "" : "  (not resolved)")
+            : fmt::format("{:>10} {:<5} {:>10}", "-", "", "-");
+    fmt::print("{:<8} {}{:>15.4g} {:<5} {:>11.4g} .. {:<9.4g} {:>8.0f} s  {}\n", ch.channel,
+               ch.floor_resolved ? " " : "<", ch.bias_instability, unit, ch.bias_instability_lo,
+               ch.bias_instability_hi, ch.min_tau_s, variation);
   }
   fmt::print(
       "< : no floor inside the record (the deviation still falls at its longest averaging time): "
-      "a bound.\nnot resolved: the correlation time is outside what the record shows.\n");
+      "a bound.\nnot resolved: the correlation time is outside what the record shows.\n"
+      "bias model per channel (a bias variation is stated only for a Gauss-Markov bias):\n");
+  for (std::size_t c = 0; c < s.channels.size(); ++c) {
+    const auto& ch = s.channels[c];
+    const std::string fitted = ch.flicker_b
+                                   ? fmt::format(" B fitted {:.4g} +- {:.2g} {};", *ch.flicker_b,
+                                                 ch.flicker_b_sigma, c < 3 ? "deg/h" : "ug")
+                                   : "";
+    fmt::print("  {:<4} {}:{} {}\n", ch.channel, solver::to_string(ch.bias_model), fitted,
+               ch.bias_model_reason);
+  }
 }
 
 void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
@@ -124,22 +137,35 @@ void print_hysteresis(const analysis::HysteresisAnalysis& h) {
 
 void print_bandwidth(const analysis::BandwidthAnalysis& b) {
   fmt::print("run {} {}: gyro against the table encoder\n", b.run, b.device);
-  fmt::print("{:<5} {:>10} {:>9} {:>9} {:>11}\n", "axis", "f [Hz]", "gain", "[dB]", "phase [deg]");
+  fmt::print("{:<5} {:>10} {:>9} {:>9} {:>9} {:>11} {:>9}\n", "axis", "f [Hz]", "gain", "sigma",
+             "[dB]", "phase [deg]", "sigma");
   for (const auto& p : b.points) {
-    fmt::print("{:<5} {:>10.4g} {:>9.4f} {:>9.2f} {:>11.2f}\n", static_cast<char>('x' + p.axis),
-               p.frequency_hz, p.gain, p.gain_db, p.phase_deg);
+    fmt::print("{:<5} {:>10.4g} {:>9.4f} {:>9.2g} {:>9.2f} {:>11.2f} {:>9.2g}\n",
+               static_cast<char>('x' + p.axis), p.frequency_hz, p.gain, p.gain_sigma, p.gain_db,
+               p.phase_deg, p.phase_sigma_deg);
   }
   for (std::size_t a = 0; a < 3; ++a) {
     const auto& fc = b.bandwidth_hz[a];
     const auto& tau = b.delay_s[a];
     if (!fc && !tau) continue;
-    fmt::print("{}: bandwidth {}, delay {}{}\n", static_cast<char>('x' + a),
-               fc ? fmt::format("{:.4g} Hz", *fc) : "beyond the frequencies tested",
-               tau ? fmt::format("{:.3g} ms", *tau * 1e3) : "-",
-               b.low_pass_order[a] > 0
-                   ? fmt::format(" (after a order-{} low-pass's phase)", b.low_pass_order[a])
-                   : "");
+    const auto& fc_interval = b.bandwidth_interval_hz[a];
+    const auto& tau_interval = b.delay_interval_s[a];
+    fmt::print(
+        "{}: bandwidth {}{}, delay {}{}{}\n", static_cast<char>('x' + a),
+        fc ? fmt::format("{:.4g} Hz", *fc) : "beyond the frequencies tested",
+        fc_interval ? fmt::format(" [{:.4g} .. {:.4g}]", (*fc_interval)[0], (*fc_interval)[1]) : "",
+        tau ? fmt::format("{:.3g} ms", *tau * 1e3) : "-",
+        tau_interval
+            ? fmt::format(" [{:.3g} .. {:.3g}]", (*tau_interval)[0] * 1e3, (*tau_interval)[1] * 1e3)
+            : "",
+        b.low_pass_order[a] > 0
+            ? fmt::format(" (after a order-{} low-pass's phase)", b.low_pass_order[a])
+            : "");
   }
+  fmt::print(
+      "sigma: 1 sigma from the scatter of segments of whole periods; [..]: {:.0f} % intervals "
+      "(bootstrap over the points' sigmas)\n",
+      100.0 * b.confidence);
 }
 
 void run_bandwidth(const AnalyzeOptions& opt) {

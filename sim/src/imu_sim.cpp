@@ -8,6 +8,28 @@
 #include "core/rotation.hpp"
 
 namespace calstand::sim {
+namespace {
+
+// Where the simulated flicker's band of correlation times starts [s]. Flicker (1/f) noise has
+// a flat Allan deviation at every averaging time; the simulator's sum of Gauss-Markov
+// components is flat only from twice its shortest correlation time, and falls below the floor
+// under it. Where white noise still dominates there, the missing part does not show; but a
+// unit whose white noise meets the floor early (ADIS16488-class accelerometers: 46 ug/sqrt(Hz)
+// against a 100 ug floor, crossing at 0.2 s) would show a false minimum below the floor
+// between that crossing and 2 s. So the band starts at a fifth of the crossing (N / floor)^2,
+// where white noise holds 5/2 of the variance at the flat part's start, no later than the 1 s
+// it always started at (units whose white noise crosses after 5 s keep the same draws; a
+// sample period too long for it is refused by BiasInstability as before), and no earlier than
+// 10 sample periods (the components need dt << tau).
+double flicker_band_start_s(double white_density, double flicker_coefficient, double dt_s) {
+  constexpr double kLatestStartS = 1.0;
+  const double floor = kFlickerAllanFloorPerCoefficient * flicker_coefficient;
+  const double ratio = white_density / floor;
+  const double crossing_s = ratio * ratio;
+  return std::min(kLatestStartS, std::max(0.2 * crossing_s, 10.0 * dt_s));
+}
+
+}  // namespace
 
 ImuInputModel::ImuInputModel(const ImuTruth& truth, const core::TableGeometry& geometry,
                              const core::Site& site, const Eigen::Vector2d& table_tilt_rad)
@@ -120,8 +142,9 @@ void ImuSim::build_channels() {
                        derive_seed(seed_, stream + "-white", c));
     }
     if (n.bias_instability[axis] > 0.0) {
-      ch.bias_instability.emplace(n.bias_instability[axis], dt,
-                                  derive_seed(seed_, stream + "-bias-instability", c));
+      ch.bias_instability.emplace(
+          n.bias_instability[axis], dt, derive_seed(seed_, stream + "-bias-instability", c),
+          flicker_band_start_s(n.white[axis], n.bias_instability[axis], dt));
     }
     if (n.random_walk[axis] > 0.0) {
       ch.random_walk.emplace(n.random_walk[axis], dt, derive_seed(seed_, stream + "-walk", c));

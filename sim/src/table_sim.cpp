@@ -213,6 +213,17 @@ void TableAxisSim::step_servo(double dt_s, double profile_before_deg) {
   accel_dps2_ = (rate - rate_dps_) / dt_s;
   rate_dps_ = rate;
   angle_deg_ = rate == wanted_rate ? wanted_angle : angle_deg_ + rate * dt_s;
+  // In a sine the axis accelerates all the time, and the mean over the step lags the rate at
+  // its end by about half the step, which differs between an IMU sample and an encoder reading
+  // taken off the sample grid (0.1 ms of false delay in an oscillation test): there the rate
+  // reported is the lag's own equation at the step's end, y' = (p - y) / tau. Elsewhere the
+  // axis holds a rate or settles, and the mean over the step is kept (a reading at rest then
+  // holds still, as the store's interpolation expects); so it is where a limit clamped the
+  // step, or without a lag.
+  instant_rate_dps_ = mode_ == core::AxisMode::kSine && tau > 0.0 && rate == wanted_rate
+                          ? std::clamp((profile_angle_deg_ - angle_deg_) / tau,
+                                       -limits_.max_rate_dps, limits_.max_rate_dps)
+                          : rate_dps_;
 }
 
 void TableAxisSim::step_settling(double dt_s) {
@@ -257,7 +268,7 @@ core::AxisState TableAxisSim::state() const {
     if (angle < -180.0) angle = -180.0;
   }
   s.angle_deg = angle;
-  s.rate_dps = rate_dps_;
+  s.rate_dps = instant_rate_dps_;
   s.mode = mode_;
   s.in_position = in_position_;
   s.fault = mode_ == core::AxisMode::kFault;

@@ -284,28 +284,30 @@ double gauss_markov_allan_variance(double sigma, double tau_c_s, double tau_s) {
   return 2.0 * sigma * sigma * bracket / (x * x);
 }
 
-GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise) {
+GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise,
+                                bool with_rate_random_walk) {
   CurveData d(curve, 0.0);
   const auto n = static_cast<Eigen::Index>(d.tau.size());
   Eigen::VectorXd b(n);
   for (Eigen::Index i = 0; i < n; ++i) b(i) = d.var[static_cast<std::size_t>(i)];
-  const std::vector<bool> allowed = {true, with_white_noise};
+  const std::vector<bool> allowed = {true, with_white_noise, with_rate_random_walk};
 
   const auto design = [&](double tau_c) {
-    Eigen::MatrixXd a(n, 2);
+    Eigen::MatrixXd a(n, 3);
     for (Eigen::Index i = 0; i < n; ++i) {
       const double tau = d.tau[static_cast<std::size_t>(i)];
       a(i, 0) = gauss_markov_allan_variance(1.0, tau_c, tau);
-      a(i, 1) = 1.0 / tau;
+      a(i, 1) = basis(1, tau);
+      a(i, 2) = basis(3, tau);
     }
     return a;
   };
   double best_log_tau = 0.0;
   NnlsResult best;
-  best.c = Eigen::VectorXd::Zero(2);
+  best.c = Eigen::VectorXd::Zero(3);
   const auto model = [&](double tau) {
     return gauss_markov_allan_variance(std::sqrt(best.c(0)), std::exp(best_log_tau), tau) +
-           best.c(1) / tau;
+           best.c(1) * basis(1, tau) + best.c(2) * basis(3, tau);
   };
   for (int pass = 0; pass < 4; ++pass) {
     const bool have_model = pass > 0 && best.c.maxCoeff() > 0.0;
@@ -354,8 +356,10 @@ GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise)
   fit.tau_c_s = std::exp(best_log_tau);
   fit.sigma = std::sqrt(best.c(0));
   fit.white_density = std::sqrt(best.c(1));
-  std::size_t support = 1;  // tau_c
+  fit.rate_random_walk = std::sqrt(best.c(2));
+  std::size_t support = best.support[0] ? 1 : 0;  // tau_c counts only with its process
   for (const bool s : best.support) support += s ? 1 : 0;
+  fit.parameters = support;
   const double dof = static_cast<double>(d.tau.size()) - static_cast<double>(support);
   fit.chi2_dof = dof > 0.0 ? best.cost / dof : 0.0;
   const double peak = 1.89 * fit.tau_c_s;

@@ -177,8 +177,15 @@ TEST(DatasheetReport, StaticRecordShowsStabilityBesideTheAllanDeviationWithoutAF
     EXPECT_NE(s.find(cell(interval(ch.bias_instability_lo, ch.bias_instability_hi))),
               std::string::npos)
         << ch.channel;
-    EXPECT_NE(s.find(datasheet_number(ch.variation_sigma)), std::string::npos) << ch.channel;
-    EXPECT_NE(s.find(datasheet_number(ch.correlation_time_s)), std::string::npos) << ch.channel;
+    // The chosen bias model, and the bias variation only where it is Gauss-Markov.
+    EXPECT_NE(s.find(">" + std::string(solver::to_string(ch.bias_model)) + "</td>"),
+              std::string::npos)
+        << ch.channel;
+    EXPECT_EQ(ch.variation_sigma.has_value(), ch.bias_model == solver::BiasModel::kGaussMarkov);
+    if (ch.variation_sigma) {
+      EXPECT_NE(s.find(cell(datasheet_number(*ch.variation_sigma))), std::string::npos)
+          << ch.channel;
+    }
   }
   remove_db(r.db_path);
 }
@@ -227,8 +234,18 @@ TEST(DatasheetReport, BandwidthRunShowsTheGainCurveAndEachAxisBandwidthAndDelay)
   for (std::size_t axis = 0; axis < 3; ++axis) {
     ASSERT_TRUE(b.delay_s[axis]);
     EXPECT_NE(s.find(cell(datasheet_number(*b.delay_s[axis] * 1e3))), std::string::npos) << axis;
+    ASSERT_TRUE(b.delay_interval_s[axis]) << axis;
+    EXPECT_NE(s.find(cell(interval((*b.delay_interval_s[axis])[0] * 1e3,
+                                   (*b.delay_interval_s[axis])[1] * 1e3))),
+              std::string::npos)
+        << axis;
     if (b.bandwidth_hz[axis]) {
-      EXPECT_NE(s.find(cell(datasheet_number(*b.bandwidth_hz[axis]))), std::string::npos) << axis;
+      EXPECT_NE(s.find(cell(datasheet_number(*b.bandwidth_hz[axis], 4))), std::string::npos)
+          << axis;
+      if (b.bandwidth_interval_hz[axis]) {
+        const auto& ci = *b.bandwidth_interval_hz[axis];
+        EXPECT_NE(s.find(cell(interval(ci[0], ci[1]))), std::string::npos) << axis;
+      }
     }
   }
   for (const auto& p : b.points) {

@@ -7,6 +7,9 @@
 // keep every leg of a procedure, so they excite the same body axes as its defaults.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -221,6 +224,93 @@ TEST(LibraryBandwidth, RecoversTheOutputFilterCutoffAndLatency) {
   // Well below the cutoff the gain is one.
   EXPECT_NEAR(b.points.front().gain, 1.0, 0.02);
   remove_db(db_path);
+}
+
+// The 95 % intervals of the bandwidth and the delay, over six station seeds (each its own noise
+// and its own unit drawn from the sheet) with the same 10 Hz filter and 5 ms latency: each
+// interval should hold the truth, so of the 18 per figure about one misses; three or more
+// would be unlikely by chance (binomial, p < 0.06) and more than that a bias or too narrow an
+// interval. The intervals must also say something (narrower than 10 % of the value), and the
+// sigma they state must be the scatter the estimates show across the seeds (pooled over the
+// axes, 15 degrees of freedom: the ratio lies within 0.65 .. 1.35 at 95 %), within a factor
+// of 2.
+TEST(LibraryBandwidth, IntervalsHoldTheTruthAndTheirSigmaIsTheScatterAcrossSeeds) {
+  constexpr double kCutoffHz = 10.0, kLatencyS = 0.005;
+  constexpr int kSeeds = 6;
+  int bandwidth_misses = 0, delay_misses = 0;
+  std::array<std::vector<double>, 3> bandwidths, delays;
+  double bandwidth_variance = 0.0, delay_variance = 0.0;  // of the stated sigmas, summed
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    core::StationConfig station = sim::default_station();
+    station.seed = static_cast<std::uint64_t>(seed);
+    sim::ImuTruth truth = sim::resolve_imu_truth(station.imus[0], station.seed, 0);
+    truth.gyro_bandwidth_hz = kCutoffHz;
+    truth.filter_order = 2;
+    truth.latency_s = kLatencyS;
+    station.imus[0].model.clear();
+    station.imus[0].truth = sim::imu_truth_to_json(truth);
+    const std::string db_path = fresh_db("bandwidth-interval-" + std::to_string(seed));
+    const std::int64_t run_id = run_procedure(
+        "bandwidth", {"frequencies_hz=[1,2,4,6,8,10,12,15]", "amplitude_deg=0.03", "cycles=20"},
+        db_path, station);
+    if (HasFailure()) return;
+    store::Database db(db_path);
+    const analysis::BandwidthAnalysis b = analysis::analyse_bandwidth(db, run_id, "");
+    EXPECT_DOUBLE_EQ(b.confidence, 0.95);
+    for (const auto& p : b.points) {
+      EXPECT_GT(p.gain_sigma, 0.0) << "seed " << seed << " step " << p.step;
+      EXPECT_GT(p.phase_sigma_deg, 0.0) << "seed " << seed << " step " << p.step;
+      EXPECT_EQ(p.segments, 10);  // 20 periods, two a segment
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      ASSERT_TRUE(b.bandwidth_hz[a] && b.bandwidth_interval_hz[a] && b.bandwidth_sigma_hz[a])
+          << "seed " << seed << " axis " << a;
+      ASSERT_TRUE(b.delay_s[a] && b.delay_interval_s[a] && b.delay_sigma_s[a])
+          << "seed " << seed << " axis " << a;
+      const auto& fc = *b.bandwidth_interval_hz[a];
+      const auto& tau = *b.delay_interval_s[a];
+      std::cout << "seed " << seed << " axis " << a << ": bandwidth " << *b.bandwidth_hz[a]
+                << " Hz [" << fc[0] << ", " << fc[1] << "], delay " << *b.delay_s[a] * 1e3
+                << " ms [" << tau[0] * 1e3 << ", " << tau[1] * 1e3 << "]\n";
+      EXPECT_LE(fc[0], *b.bandwidth_hz[a]);
+      EXPECT_GE(fc[1], *b.bandwidth_hz[a]);
+      EXPECT_LE(tau[0], *b.delay_s[a]);
+      EXPECT_GE(tau[1], *b.delay_s[a]);
+      if (!(fc[0] <= kCutoffHz && kCutoffHz <= fc[1])) ++bandwidth_misses;
+      if (!(tau[0] <= kLatencyS && kLatencyS <= tau[1])) ++delay_misses;
+      EXPECT_LT(fc[1] - fc[0], 0.1 * kCutoffHz) << "seed " << seed << " axis " << a;
+      EXPECT_LT(tau[1] - tau[0], 0.1 * kLatencyS) << "seed " << seed << " axis " << a;
+      bandwidths[a].push_back(*b.bandwidth_hz[a]);
+      delays[a].push_back(*b.delay_s[a]);
+      bandwidth_variance += std::pow(*b.bandwidth_sigma_hz[a], 2);
+      delay_variance += std::pow(*b.delay_sigma_s[a], 2);
+    }
+    remove_db(db_path);
+  }
+  EXPECT_LE(bandwidth_misses, 2);
+  EXPECT_LE(delay_misses, 2);
+  // Scatter about each axis's own mean across the seeds, pooled.
+  const auto pooled_scatter = [](const std::array<std::vector<double>, 3>& values) {
+    double ss = 0.0, dof = 0.0;
+    for (const auto& v : values) {
+      double mean = 0.0;
+      for (const double x : v) mean += x;
+      mean /= static_cast<double>(v.size());
+      for (const double x : v) ss += (x - mean) * (x - mean);
+      dof += static_cast<double>(v.size()) - 1.0;
+    }
+    return std::sqrt(ss / dof);
+  };
+  const double stated_bandwidth = std::sqrt(bandwidth_variance / (3.0 * kSeeds));
+  const double stated_delay = std::sqrt(delay_variance / (3.0 * kSeeds));
+  const double bandwidth_ratio = pooled_scatter(bandwidths) / stated_bandwidth;
+  const double delay_ratio = pooled_scatter(delays) / stated_delay;
+  std::cout << "scatter / stated sigma: bandwidth " << bandwidth_ratio << ", delay " << delay_ratio
+            << "\n";
+  EXPECT_GT(bandwidth_ratio, 0.5);
+  EXPECT_LT(bandwidth_ratio, 2.0);
+  EXPECT_GT(delay_ratio, 0.5);
+  EXPECT_LT(delay_ratio, 2.0);
 }
 
 }  // namespace

@@ -27,6 +27,12 @@ struct BandwidthPoint {
   double table_amplitude_dps = 0.0;  ///< fitted encoder rate amplitude [deg/s]
   std::size_t samples = 0;           ///< IMU samples fitted
   std::size_t encoder_rows = 0;      ///< encoder readings fitted
+  /// One-sigma uncertainties of gain [ratio] and phase [deg], from the scatter of the gain and
+  /// phase fitted in `segments` parts of whole periods (batch means); 0 with fewer than 4
+  /// periods recorded (no interval is given then).
+  double gain_sigma = 0.0;
+  double phase_sigma_deg = 0.0;
+  int segments = 0;
 };
 
 /// What analyse_bandwidth() found, per body axis where the axis was oscillated.
@@ -44,6 +50,17 @@ struct BandwidthAnalysis {
   /// Pure delay [s]: minus the slope of (phase - the low-pass model's phase) against angular
   /// frequency, by least squares through the origin; none with fewer than two frequencies.
   std::array<std::optional<double>, 3> delay_s;
+  /// Probability of the intervals below (0.95).
+  double confidence = 0.0;
+  /// Intervals [lo, hi] of bandwidth_hz [Hz] and delay_s [s] and the standard deviations they
+  /// imply, by a parametric bootstrap over each point's gain and phase uncertainty (Student-t
+  /// with the segments' degrees of freedom) through the same interpolation and phase slope,
+  /// the low-pass order held; none where the figure is none, a point lacks a sigma, or the
+  /// -3 dB crossing leaves the frequencies tested in more than one tail's share of the draws.
+  std::array<std::optional<std::array<double, 2>>, 3> bandwidth_interval_hz;
+  std::array<std::optional<double>, 3> bandwidth_sigma_hz;
+  std::array<std::optional<std::array<double, 2>>, 3> delay_interval_s;
+  std::array<std::optional<double>, 3> delay_sigma_s;
 };
 
 /// Reads every completed oscillate step of `device` ("" = the run's only IMU) in `run`: fits
@@ -57,8 +74,10 @@ BandwidthAnalysis analyse_bandwidth(store::Database& db, std::int64_t run,
                                     const std::string& device);
 
 /// `{"run", "device", "gyro": {"bandwidth_hz": [x,y,z], "delay_s": [x,y,z],
-///   "low_pass_order": [x,y,z], "points": [{"axis", "frequency_hz", "gain", "gain_db",
-///   "phase_deg", "step", "label"}...]}}`, null for an axis without a value.
+///   "low_pass_order": [x,y,z], "confidence": 0.95, "bandwidth_interval_hz": [[lo,hi] x3],
+///   "bandwidth_sigma_hz": [x,y,z], "delay_interval_s": [[lo,hi] x3], "delay_sigma_s": [x,y,z],
+///   "points": [{"axis", "frequency_hz", "gain", "gain_db", "phase_deg", "gain_sigma",
+///   "phase_sigma_deg", "segments", "step", "label"}...]}}`, null for an axis without a value.
 nlohmann::json to_json(const BandwidthAnalysis& b);
 
 /// The gain curves (dB against log frequency, one per axis, with the -3 dB line) as inline

@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "solver/bias_model.hpp"
 #include "store/database.hpp"
 
 namespace calstand::analysis {
@@ -17,7 +18,9 @@ namespace calstand::analysis {
 /// One channel's stability, in datasheet units: deg/h for a gyro, ug for an accelerometer.
 struct ChannelStability {
   std::string channel;  ///< gx ... az
-  /// Bias instability: the Allan deviation's minimum / 0.664, with that point's interval.
+  /// Bias instability: the Allan deviation's minimum / 0.664, with that point's interval; the
+  /// minimum among the points with at least 10 degrees of freedom of their own (the last few
+  /// points scatter too much for their minimum to mean anything).
   double bias_instability = 0.0;
   double bias_instability_lo = 0.0;
   double bias_instability_hi = 0.0;
@@ -26,14 +29,25 @@ struct ChannelStability {
   /// wholly above the minimum's): a floor was seen. Otherwise the deviation has not turned up
   /// within the record and the figure is only a bound.
   bool floor_resolved = false;
-  /// Bias variation: the stationary sigma and correlation time of a Gauss-Markov bias (with
-  /// white noise) fitted to the Allan variance.
-  double variation_sigma = 0.0;
-  double correlation_time_s = 0.0;
+  /// Which wandering bias the Allan curve shows (solver::choose_bias_model(): white + Gauss-
+  /// Markov + rate random walk against white + flicker + rate random walk, by AIC), and why.
+  solver::BiasModel bias_model = solver::BiasModel::kUndecided;
+  std::string bias_model_reason;
+  double bias_model_aic_difference = 0.0;  ///< flicker's AIC minus Gauss-Markov's
+  /// Bias variation: the stationary sigma and correlation time [s] of the Gauss-Markov bias
+  /// fitted with white noise and rate random walk. A datasheet figure only when bias_model is
+  /// Gauss-Markov; none otherwise (fitted to a flicker floor they mean nothing).
+  std::optional<double> variation_sigma;
+  std::optional<double> correlation_time_s;
   /// The process's Allan peak (1.89 tau_c) lies inside the part of the curve the fit uses (from
   /// 20 sample periods, above the anti-aliasing filter): otherwise tau_c is an extrapolation,
-  /// or the fit has taken white noise for a process of vanishing correlation time.
+  /// or the fit has taken white noise for a process of vanishing correlation time. False when
+  /// no bias variation is reported.
   bool correlation_resolved = false;
+  /// The flicker coefficient B fitted to the curve (with white noise and rate random walk) and
+  /// its one-sigma uncertainty, when bias_model is flicker; none otherwise.
+  std::optional<double> flicker_b;
+  double flicker_b_sigma = 0.0;
 };
 
 struct StabilityAnalysis {
@@ -56,8 +70,13 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
 /// `{"run", "device", "step", "step_label", "duration_s", "confidence",
 ///   "gyro": {"bias_instability_deg_per_h": [x,y,z], "bias_instability_interval_deg_per_h":
 ///            [[lo,hi] x3], "floor_tau_s": [...], "bias_variation_deg_per_h": [...],
-///            "correlation_time_s": [...], "correlation_resolved": [...], "floor_resolved": [...]},
-///   "accel": the same in ug}`
+///            "correlation_time_s": [...], "correlation_resolved": [...], "floor_resolved": [...],
+///            "bias_model": ["gauss_markov"|"flicker"|"undecided" x3], "bias_model_reason": [...],
+///            "bias_model_aic_difference": [...], "bias_instability_fit_deg_per_h": [...],
+///            "bias_instability_fit_sigma_deg_per_h": [...]},
+///   "accel": the same in ug}`; the bias variation and correlation time are null unless the
+/// bias model is gauss_markov, the fitted B and its sigma null unless it is flicker.
+
 nlohmann::json to_json(const StabilityAnalysis& s);
 
 }  // namespace calstand::analysis

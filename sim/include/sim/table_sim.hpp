@@ -49,8 +49,11 @@ class TableAxisSim {
   /// Advances the axis by dt_s > 0.
   void step(double dt_s);
 
-  double true_angle_deg() const { return angle_deg_; }    ///< continuous, unquantized [deg]
-  double true_rate_dps() const { return rate_dps_; }      ///< [deg/s]
+  double true_angle_deg() const { return angle_deg_; }  ///< continuous, unquantized [deg]
+  /// The rate [deg/s]: in a sine the rate at the end of the last step (IMU samples and encoder
+  /// readings end steps of different lengths, and a mean over the step would lag each by half
+  /// its own step); elsewhere the mean over the last step.
+  double true_rate_dps() const { return instant_rate_dps_; }
   double true_accel_dps2() const { return accel_dps2_; }  ///< over the last step [deg/s^2]
   /// What the controller reports: wrapped, quantized angle, mode, settling and fault.
   core::AxisState state() const;
@@ -70,6 +73,7 @@ class TableAxisSim {
   core::AxisMode mode_ = core::AxisMode::kRest;
   double angle_deg_ = 0.0;          // true axis, continuous (unwrapped) [deg]
   double rate_dps_ = 0.0;           // true axis, mean over the last step [deg/s]
+  double instant_rate_dps_ = 0.0;   // true axis, as true_rate_dps() reports it [deg/s]
   double accel_dps2_ = 0.0;         // true axis, over the last step [deg/s^2]
   double profile_angle_deg_ = 0.0;  // where the profile is, unwrapped [deg]
   double profile_rate_dps_ = 0.0;   // profile rate over the last step [deg/s]

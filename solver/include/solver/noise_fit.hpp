@@ -80,9 +80,13 @@ NoiseTerms fit_noise_terms(const AllanResult& curve, const NoiseFitOptions& opti
 /// A first-order Gauss-Markov process (correlation time tau_c, stationary sigma), optionally
 /// on top of white noise, fitted to an Allan deviation curve.
 struct GaussMarkovFit {
-  double sigma = 0.0;          ///< stationary standard deviation [u]
-  double tau_c_s = 0.0;        ///< correlation time [s]
-  double white_density = 0.0;  ///< white noise N [u sqrt(s)] (0 when not fitted)
+  double sigma = 0.0;             ///< stationary standard deviation [u]
+  double tau_c_s = 0.0;           ///< correlation time [s]
+  double white_density = 0.0;     ///< white noise N [u sqrt(s)] (0 when not fitted)
+  double rate_random_walk = 0.0;  ///< K [u/sqrt(s)] (0 when not fitted or not resolved)
+  /// Coefficients in the fit's support (sigma, N, K with a positive variance), plus tau_c when
+  /// sigma is among them: the parameters the fit spent.
+  std::size_t parameters = 0;
   double chi2_dof = 0.0;
   /// True when the Allan variance peak of the process (at 1.89 tau_c) lies inside the curve's
   /// tau range; otherwise tau_c is an extrapolation and sigma is poorly determined.
@@ -94,10 +98,12 @@ struct GaussMarkovFit {
 /// evaluated without cancellation for T << tau_c.
 double gauss_markov_allan_variance(double sigma, double tau_c_s, double tau_s);
 
-/// Fits sigma and tau_c (and the white noise density when with_white_noise) by weighted least
-/// squares on the Allan variance: a search over log tau_c (grid, then golden section), with the
-/// variances solved non-negatively at each tau_c. Weights as fit_noise_terms(). Throws
-/// core::InputError as fit_noise_terms().
-GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise = true);
+/// Fits sigma and tau_c (and the white noise density when with_white_noise, the rate random
+/// walk K tau / 3 when with_rate_random_walk) by weighted least squares on the Allan variance:
+/// a search over log tau_c (grid, then golden section), with the variances solved
+/// non-negatively at each tau_c. Weights as fit_noise_terms(). Throws core::InputError as
+/// fit_noise_terms().
+GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise = true,
+                                bool with_rate_random_walk = false);
 
 }  // namespace calstand::solver

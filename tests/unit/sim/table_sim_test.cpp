@@ -467,9 +467,8 @@ TEST(TableAxisSim, SineFollowsTheProfileThroughTheServoLagAboutTheStartAngle) {
     const double s = std::sin(w * t), c = std::cos(w * t);
     ss += s * s, sc += s * c, cc += c * c;
     ys += (axis.true_angle_deg() - 30.0) * s, yc += (axis.true_angle_deg() - 30.0) * c;
-    // The reported rate is the mean over the step: its instant is half a step back.
-    const double sm = std::sin(w * (t - kDt / 2)), cm = std::cos(w * (t - kDt / 2));
-    rs += axis.state().rate_dps * sm, rc += axis.state().rate_dps * cm;
+    // The reported rate is the one at the step's end, like the angle.
+    rs += axis.state().rate_dps * s, rc += axis.state().rate_dps * c;
     lo = std::min(lo, axis.state().angle_deg);
     hi = std::max(hi, axis.state().angle_deg);
   }
