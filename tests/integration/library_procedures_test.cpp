@@ -190,19 +190,28 @@ TEST(LibraryStaticAllan, DeterminesTheNoiseFiguresAndNoErrorModel) {
   remove_db(db_path);
 }
 
-// bandwidth determines no error-model term (its means are static poses): it is documented for
-// `calstand analyze bandwidth`. Its LN200-class unit (noise, bias instability, 400 Hz) is given
-// a gyro output filter of 10 Hz (2nd-order Butterworth) and 5 ms of latency; the analysis must
-// find the cutoff within 10 % and the latency within one sample period (2.5 ms) on each axis.
-TEST(LibraryBandwidth, RecoversTheOutputFilterCutoffAndLatency) {
+// The embedded station with seed `seed` and its LN200-class unit (noise, bias instability,
+// 400 Hz) given a gyro output filter of 10 Hz (2nd-order Butterworth) and 5 ms of latency.
+constexpr double kCutoffHz = 10.0, kLatencyS = 0.005;
+core::StationConfig filtered_station(std::uint64_t seed, sim::ImuTruth& truth) {
   core::StationConfig station = sim::default_station();
-  sim::ImuTruth truth = sim::resolve_imu_truth(station.imus[0], station.seed, 0);
-  constexpr double kCutoffHz = 10.0, kLatencyS = 0.005;
+  station.seed = seed;
+  truth = sim::resolve_imu_truth(station.imus[0], station.seed, 0);
   truth.gyro_bandwidth_hz = kCutoffHz;
   truth.filter_order = 2;
   truth.latency_s = kLatencyS;
   station.imus[0].model.clear();
   station.imus[0].truth = sim::imu_truth_to_json(truth);
+  return station;
+}
+
+// bandwidth determines no error-model term (its means are static poses): it is documented for
+// `calstand analyze bandwidth`. Its LN200-class unit (noise, bias instability, 400 Hz) is given
+// a gyro output filter of 10 Hz (2nd-order Butterworth) and 5 ms of latency; the analysis must
+// find the cutoff within 10 % and the latency within one sample period (2.5 ms) on each axis.
+TEST(LibraryBandwidth, RecoversTheOutputFilterCutoffAndLatency) {
+  sim::ImuTruth truth;
+  const core::StationConfig station = filtered_station(1, truth);
   const std::string db_path = fresh_db("bandwidth");
   const std::int64_t run_id = run_procedure(
       "bandwidth", {"frequencies_hz=[1,2,4,6,8,10,12,15]", "amplitude_deg=0.03", "cycles=20"},
@@ -235,20 +244,13 @@ TEST(LibraryBandwidth, RecoversTheOutputFilterCutoffAndLatency) {
 // axes, 15 degrees of freedom: the ratio lies within 0.65 .. 1.35 at 95 %), within a factor
 // of 2.
 TEST(LibraryBandwidth, IntervalsHoldTheTruthAndTheirSigmaIsTheScatterAcrossSeeds) {
-  constexpr double kCutoffHz = 10.0, kLatencyS = 0.005;
   constexpr int kSeeds = 6;
   int bandwidth_misses = 0, delay_misses = 0;
   std::array<std::vector<double>, 3> bandwidths, delays;
   double bandwidth_variance = 0.0, delay_variance = 0.0;  // of the stated sigmas, summed
   for (int seed = 1; seed <= kSeeds; ++seed) {
-    core::StationConfig station = sim::default_station();
-    station.seed = static_cast<std::uint64_t>(seed);
-    sim::ImuTruth truth = sim::resolve_imu_truth(station.imus[0], station.seed, 0);
-    truth.gyro_bandwidth_hz = kCutoffHz;
-    truth.filter_order = 2;
-    truth.latency_s = kLatencyS;
-    station.imus[0].model.clear();
-    station.imus[0].truth = sim::imu_truth_to_json(truth);
+    sim::ImuTruth truth;
+    const core::StationConfig station = filtered_station(static_cast<std::uint64_t>(seed), truth);
     const std::string db_path = fresh_db("bandwidth-interval-" + std::to_string(seed));
     const std::int64_t run_id = run_procedure(
         "bandwidth", {"frequencies_hz=[1,2,4,6,8,10,12,15]", "amplitude_deg=0.03", "cycles=20"},

@@ -159,14 +159,24 @@ TEST_P(ThermalRamp, HeatingAndCoolingEachRecoverTheTemperatureTermsOnTheImuTempe
   const double loop_width_c = lag_heating_c - lag_cooling_c;
   EXPECT_GT(loop_width_c, 10.0);
 
-  // Each ramp alone recovers the temperature terms, and the two agree.
+  // Each ramp alone recovers the temperature terms. On one ramp the temperature rises (or
+  // falls) steadily with time, so the accelerometers' flicker drift over its 50 minutes (0.1 mg
+  // floor) looks like a temperature slope that the step noise model does not fully weigh: their
+  // bias coefficients are held to a fifth of the sheet's figure there, and to their sigmas only
+  // with both ramps (above), where the drift and the temperature part ways.
   const auto up = fitted(solver::fit_run(heating, model));
   const auto down = fitted(solver::fit_run(cooling, model));
+  constexpr double kAccelSheetMps2PerC = 0.1e-3 * 9.80665;
   for (const std::string& name : kTemperatureTerms) {
     const double want = truth.parameter(name);
-    EXPECT_LT(std::abs(up.at(name).value - want), 4.0 * up.at(name).sigma) << "heating " << name;
-    EXPECT_LT(std::abs(down.at(name).value - want), 4.0 * down.at(name).sigma)
-        << "cooling " << name;
+    for (const auto* ramp : {&up, &down}) {
+      const solver::FittedParameter& p = ramp->at(name);
+      const double allowed = name.rfind("accel_temp_bias", 0) == 0
+                                 ? 4.0 * p.sigma + 0.2 * kAccelSheetMps2PerC
+                                 : 4.0 * p.sigma;
+      EXPECT_LT(std::abs(p.value - want), allowed)
+          << (ramp == &up ? "heating " : "cooling ") << name;
+    }
   }
   // On the air temperature the gyro bias at the reference temperature differs between the
   // ramps by about the coefficient times the loop's width; on the unit's own it does not.
