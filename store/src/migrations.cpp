@@ -21,7 +21,9 @@ std::vector<Migration> parse_migrations(std::string_view text) {
       if (ec != std::errc() || ptr == rest.data() + rest.size() || *ptr != ':') {
         throw std::logic_error("schema: malformed migration marker: " + std::string(line));
       }
-      m.title = std::string(rest.substr(static_cast<std::size_t>(ptr - rest.data()) + 1));
+      std::string_view title = rest.substr(static_cast<std::size_t>(ptr - rest.data()) + 1);
+      while (title.starts_with(' ')) title.remove_prefix(1);
+      m.title = std::string(title);
       if (m.version != static_cast<int>(out.size()) + 1) {
         throw std::logic_error("schema: migration " + std::to_string(m.version) +
                                " out of order; expected " + std::to_string(out.size() + 1));

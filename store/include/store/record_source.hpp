@@ -16,8 +16,9 @@ namespace calstand::store {
 /// PostgreSQL database (fleet::CentralRecords). One interface, so the analyses are written
 /// once and give the same answer on either.
 ///
-/// Ids in the rows are the source's own: local ids on a station file, the central ids (with
-/// CalibrationRow::station set) on the central database. Errors as the implementation says
+/// Calibration ids are the source's own: local ids on a station file, central ids on the
+/// central database (where each row also names its station, and its run is that station's
+/// own run id). Errors as the implementation says
 /// (StoreError from SQLite, fleet::CentralError from PostgreSQL).
 class RecordSource {
  public:
