@@ -15,7 +15,9 @@ void rethrow_as_central(const std::string& operation) {
   } catch (const CentralError&) {
     throw;
   } catch (const pqxx::broken_connection& e) {
-    throw CentralError(operation, std::string("connection lost: ") + e.what());
+    std::string why = e.what();
+    while (!why.empty() && (why.back() == '\n' || why.back() == ' ')) why.pop_back();
+    throw CentralError(operation, "no connection: " + why);
   } catch (const pqxx::sql_error& e) {
     // SQLSTATE first: 42501 (insufficient privilege, a row-level security refusal), 57P01 (the
     // server shut down), ... say more than the text in logs that are grepped.
