@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <future>
 #include <map>
 #include <memory>
@@ -29,6 +30,7 @@
 #include <vector>
 
 #include "cli_runner.hpp"
+#include "daemon_test_support.hpp"
 #include "postgres_server.hpp"
 #include "store/database.hpp"
 #include "store/hash.hpp"
@@ -472,6 +474,48 @@ TEST_F(FleetSync, ACentralSchemaOfAnotherVersionIsRefusedByName) {
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_NE(r.out.find("no calstand schema there"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("calstand fleet migrate"), std::string::npos) << r.out;
+}
+
+TEST_F(FleetSync, TheDaemonPublishesInTheBackgroundAndRetriesWhileTheServerIsDown) {
+  Station s{"line-6", dir_ + "line-6.db", "station_line_6", ""};
+  add_role(s.role, "calstand_station");
+  const std::string log = dir_ + "calstandd-line-6.log";
+  calstand::testing::DaemonProcess daemon(
+      s.db, log, "127.0.0.1:0",
+      {"--publish", server_->url(s.role, kDbName), "--publish-password-file", server_->passfile(),
+       "--publish-name", s.name, "--publish-interval-s", "1", "--publish-samples"});
+  ASSERT_GT(daemon.port(), 0) << calstand::testing::read_text(log);
+  {
+    calstand::store::Database db(s.db);
+    s.uuid = calstand::store::station_uuid(db);
+  }
+  // The server goes away; the station captures on regardless.
+  ASSERT_TRUE(server_->stop("fast"));
+  setenv("CALSTAND_TOKEN", calstand::testing::kTestToken, 1);
+  const std::string at = " --daemon 127.0.0.1:" + std::to_string(daemon.port());
+  Result r = run("submit six-position --unit imu0=U-601" + at);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("watch 1" + at);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  unsetenv("CALSTAND_TOKEN");
+  const auto waited_for = [&](const std::function<bool()>& done) {
+    for (int i = 0; i < 300; ++i) {
+      if (done()) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  };
+  EXPECT_TRUE(waited_for([&] {
+    return calstand::testing::read_text(log).find("failed (2 in a row), retried later") !=
+           std::string::npos;
+  })) << calstand::testing::read_text(log);
+  ASSERT_TRUE(server_->start());
+  // Back: the next pass copies the run, its events and its samples.
+  const auto local = local_counts(s);
+  EXPECT_EQ(local.at("runs"), 1);
+  EXPECT_TRUE(waited_for([&] { return central_counts(s) == local; }))
+      << calstand::testing::read_text(log);
+  EXPECT_EQ(daemon.signal_and_wait(SIGTERM), 0);
 }
 
 TEST_F(FleetSync, APasswordOnTheCommandLineIsRefusedBeforeAnythingIsOpened) {
