@@ -1,5 +1,5 @@
 // The fleet end to end against a real PostgreSQL server started for this test (a temporary
-// cluster on a unix socket, tests/integration/postgres_server.hpp): stations made by the
+// cluster on a unix socket, tests/support/postgres_server.hpp): stations made by the
 // simulator through the calstand command (six-position runs of known units, calibrations,
 // acceptance verdicts, fit history, samples) sync to the central database at once, cut by a
 // server stop and by kill -9 and resumed, and the fleet queries read the union. Row-level
