@@ -53,6 +53,8 @@ struct Options {
   std::string publish_name;
   double publish_interval_s = 300.0;
   bool publish_samples = false;
+  std::string fleet;  ///< the central database shown read-only under /fleet, or none
+  std::string fleet_password_file;
 };
 
 // A secret anyone on the machine can read is no secret; warned rather than refused, since a
@@ -112,6 +114,10 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   api_options.tls_cert_file = opt.tls_cert;
   api_options.tls_key_file = opt.tls_key;
   api_options.allow_plaintext = opt.allow_plaintext;
+  if (!opt.fleet.empty()) {
+    api_options.fleet =
+        calstand::fleet::parse_central_address(opt.fleet, opt.fleet_password_file, "--fleet");
+  }
   // Before anything is opened: refuses an open port without a token, or without TLS.
   api_options.validate();
   if (api_options.allow_plaintext && !api_options.uses_tls() &&
@@ -212,6 +218,11 @@ int main(int argc, char** argv) {
                  "Seconds between publish passes (and a pass when a run ends)")
       ->capture_default_str();
   app.add_flag("--publish-samples", opt.publish_samples, "Publish the sample chunks too");
+  app.add_option("--fleet", opt.fleet,
+                 "Show the fleet's central database read-only under /fleet and in the console "
+                 "(postgresql://READER@HOST/DB, no password)");
+  app.add_option("--fleet-password-file", opt.fleet_password_file,
+                 "Password file of --fleet (libpq's .pgpass format, mode 600)");
   app.set_version_flag("--version", std::string("calstandd ") + calstand::core::kVersion);
   try {
     app.parse(argc, argv);

@@ -31,6 +31,46 @@ void run_migrate(const CentralOptions& central) {
   }
 }
 
+void run_stations(const FleetCliOptions& opt) {
+  opt.filter.validate();
+  auto connection = open_central(opt.central, "--from");
+  const nlohmann::json stations = fleet::fleet_stations(*connection, opt.filter);
+  if (opt.as_json) {
+    fmt::print("{}\n", stations.dump(2));
+    return;
+  }
+  fmt::print("{:<16} {:<36} {:>5} {:>6} {:>6} {:<24} {}\n", "station", "uuid", "runs", "units",
+             "cals", "last run", "status");
+  for (const auto& s : stations["stations"]) {
+    fmt::print("{:<16} {:<36} {:>5} {:>6} {:>6} {:<24} {}\n", s["name"].get<std::string>(),
+               s["uuid"].get<std::string>(), s["runs"].get<std::int64_t>(),
+               s["units"].get<std::int64_t>(), s["calibrations"].get<std::int64_t>(),
+               text(s["last_run_utc"]), text(s["last_run_status"]));
+  }
+}
+
+void run_parameters(const FleetCliOptions& opt) {
+  opt.filter.validate();
+  auto connection = open_central(opt.central, "--from");
+  const nlohmann::json parameters = fleet::fleet_parameters(*connection, opt.filter);
+  if (opt.as_json) {
+    fmt::print("{}\n", parameters.dump(2));
+    return;
+  }
+  fmt::print("{:<28} {:<9} {:<16} {:>4} {:>12} {:>12} {:>12} {:>12}\n", "parameter", "unit",
+             "station", "n", "mean", "std", "min", "max");
+  for (const auto& p : parameters["parameters"]) {
+    for (const auto& s : p["stations"]) {
+      fmt::print(
+          "{:<28} {:<9} {:<16} {:>4} {:>12.5g} {:>12} {:>12.5g} {:>12.5g}\n",
+          p["name"].get<std::string>(), p["unit"].get<std::string>(),
+          s["station"].get<std::string>(), s["n"].get<std::int64_t>(), s["mean"].get<double>(),
+          s["std"].is_null() ? std::string("-") : fmt::format("{:.5g}", s["std"].get<double>()),
+          s["min"].get<double>(), s["max"].get<double>());
+    }
+  }
+}
+
 void run_runs(const FleetCliOptions& opt) {
   opt.filter.validate();
   auto connection = open_central(opt.central, "--from");
@@ -119,12 +159,18 @@ void register_fleet(CLI::App& app) {
     void (*run)(const FleetCliOptions&);
   };
   for (const Query& q :
-       {Query{"runs", "Runs of every station, newest first", run_runs},
+       {Query{"stations", "The stations registered, with their runs, units and last run",
+              run_stations},
+        Query{"runs", "Runs of every station, newest first", run_runs},
         Query{"units", "Units (by serial) with their runs, records and stations", run_units},
         Query{"calibrations",
               "Calibration records of every station, newest first, the one in force per unit "
               "marked",
-              run_calibrations}}) {
+              run_calibrations},
+        Query{"parameters",
+              "Each calibration parameter's distribution per station (every unit's newest "
+              "record)",
+              run_parameters}}) {
     auto opt = std::make_shared<FleetCliOptions>();
     auto* sub = cmd->add_subcommand(q.name, q.help);
     add_central_options(sub, opt->central, "--from", "Central database", true);

@@ -21,6 +21,79 @@ constexpr const char* kStationMatches = "($1 = '' OR s.name = $1 OR s.uuid::text
 
 void FleetFilter::validate() const { analysis::check_lot_since(since_utc, "--since"); }
 
+nlohmann::json fleet_stations(pqxx::connection& connection, const FleetFilter& filter) {
+  filter.validate();
+  try {
+    pqxx::read_transaction tx(connection);
+    const pqxx::result r = tx.exec_params(
+        std::string("SELECT s.name, s.uuid::text, s.registered_utc, "
+                    "(SELECT count(*) FROM runs r WHERE r.station = s.uuid), "
+                    "last.created_utc, last.status, "
+                    "(SELECT count(*) FROM calibrations c WHERE c.station = s.uuid), "
+                    "(SELECT count(DISTINCT u.serial) FROM run_units u WHERE u.station = s.uuid "
+                    "AND u.serial <> '') "
+                    "FROM stations s LEFT JOIN LATERAL (SELECT r.created_utc, r.status FROM runs r "
+                    "WHERE r.station = s.uuid ORDER BY r.created_utc DESC, r.id DESC LIMIT 1) last "
+                    "ON true WHERE ") +
+            kStationMatches + " ORDER BY s.name",
+        filter.station);
+    nlohmann::json stations = nlohmann::json::array();
+    for (const auto& row : r) {
+      stations.push_back({{"name", row[0].as<std::string>()},
+                          {"uuid", row[1].as<std::string>()},
+                          {"registered_utc", row[2].as<std::string>()},
+                          {"runs", row[3].as<std::int64_t>()},
+                          {"last_run_utc", text_or_null(row[4])},
+                          {"last_run_status", text_or_null(row[5])},
+                          {"calibrations", row[6].as<std::int64_t>()},
+                          {"units", row[7].as<std::int64_t>()}});
+    }
+    return {{"stations", std::move(stations)}};
+  } catch (...) {
+    rethrow_as_central("read stations");
+  }
+}
+
+nlohmann::json fleet_parameters(pqxx::connection& connection, const FleetFilter& filter) {
+  filter.validate();
+  try {
+    pqxx::read_transaction tx(connection);
+    // A unit counts once, with its newest record (as in a lot); records without a serial are
+    // nobody's unit and are left out.
+    const pqxx::result r = tx.exec_params(
+        std::string("WITH newest AS (SELECT DISTINCT ON (c.serial) c.record, s.name AS station "
+                    "FROM calibrations c JOIN stations s ON s.uuid = c.station WHERE c.serial <> "
+                    "'' AND c.created_utc >= $3 AND ($2 = '' OR c.serial = $2) AND ") +
+            kStationMatches +
+            " ORDER BY c.serial, c.created_utc DESC, c.id DESC), "
+            "p AS (SELECT station, e->>'name' AS name, e->>'unit' AS unit, "
+            "(e->>'value')::double precision AS value FROM newest, "
+            "jsonb_array_elements(newest.record->'parameters') e WHERE e ? 'value') "
+            "SELECT name, max(unit), station, count(*), avg(value), stddev_samp(value), "
+            "min(value), max(value) FROM p GROUP BY name, station ORDER BY name, station",
+        filter.station, filter.serial, filter.since_utc);
+    nlohmann::json parameters = nlohmann::json::array();
+    for (const auto& row : r) {
+      const std::string name = row[0].as<std::string>();
+      if (parameters.empty() || parameters.back()["name"] != name) {
+        parameters.push_back({{"name", name},
+                              {"unit", row[1].is_null() ? "" : row[1].as<std::string>()},
+                              {"stations", nlohmann::json::array()}});
+      }
+      parameters.back()["stations"].push_back(
+          {{"station", row[2].as<std::string>()},
+           {"n", row[3].as<std::int64_t>()},
+           {"mean", row[4].as<double>()},
+           {"std", row[5].is_null() ? nlohmann::json() : nlohmann::json(row[5].as<double>())},
+           {"min", row[6].as<double>()},
+           {"max", row[7].as<double>()}});
+    }
+    return {{"parameters", std::move(parameters)}};
+  } catch (...) {
+    rethrow_as_central("read parameters");
+  }
+}
+
 nlohmann::json fleet_runs(pqxx::connection& connection, const FleetFilter& filter) {
   filter.validate();
   try {

@@ -518,6 +518,44 @@ TEST_F(FleetSync, TheDaemonPublishesInTheBackgroundAndRetriesWhileTheServerIsDow
   EXPECT_EQ(daemon.signal_and_wait(SIGTERM), 0);
 }
 
+TEST_F(FleetSync, TheDaemonShowsTheFleetReadOnlyAsTheCommandLineDoes) {
+  ASSERT_EQ(stations_.size(), 3u) << "needs the stations of the first test";
+  const std::string log = dir_ + "calstandd-fleet-view.log";
+  calstand::testing::DaemonProcess daemon(
+      dir_ + "fleet-view.db", log, "127.0.0.1:0",
+      {"--fleet", server_->url(kReader, kDbName), "--fleet-password-file", server_->passfile()});
+  ASSERT_GT(daemon.port(), 0) << calstand::testing::read_text(log);
+  calstand::testing::ApiClient api(daemon.port());
+  const std::string from =
+      " --from " + server_->url(kReader, kDbName) + " --password-file " + server_->passfile();
+  for (const auto& [path, command] : std::vector<std::pair<std::string, std::string>>{
+           {"/fleet", "fleet stations --json"},
+           {"/fleet/runs?station=line-1", "fleet runs --json --station line-1"},
+           {"/fleet/units?serial=U-SHARED", "fleet units --json --serial U-SHARED"},
+           {"/fleet/calibrations", "fleet calibrations --json"},
+           {"/fleet/parameters", "fleet parameters --json"}}) {
+    const auto reply = api.get(path);
+    ASSERT_EQ(reply.status, 200) << path << ": " << reply.body.dump();
+    const Result cli = run(command + from);
+    ASSERT_EQ(cli.exit_code, 0) << cli.out;
+    EXPECT_EQ(reply.body, nlohmann::json::parse(cli.out)) << path;
+  }
+  // The spread of a parameter per station: U-SHARED's newest record is line-3's, so line-1
+  // counts one unit (U-101) and line-3 two.
+  const nlohmann::json parameters = api.get("/fleet/parameters").body["parameters"];
+  ASSERT_FALSE(parameters.empty());
+  std::map<std::string, long long> units_per_station;
+  for (const auto& s : parameters[0]["stations"]) {
+    units_per_station[s["station"].get<std::string>()] = s["n"].get<long long>();
+  }
+  EXPECT_EQ(units_per_station["line-1"], 1);
+  EXPECT_EQ(units_per_station["line-2"], 1);
+  EXPECT_EQ(units_per_station["line-3"], 2);
+  EXPECT_EQ(api.get("/fleet/runs?since=2026/01/01").status, 400);
+  // Read-only: nothing under /fleet takes a write.
+  EXPECT_EQ(api.post("/fleet/runs", "{}").status, 404);
+}
+
 TEST_F(FleetSync, APasswordOnTheCommandLineIsRefusedBeforeAnythingIsOpened) {
   const std::string url = "postgresql://station_x:secret@localhost/" + std::string(kDbName);
   const Result r = run("sync --db " + dir_ + "never.db --to " + url);
