@@ -400,6 +400,75 @@ TEST_F(FleetSync, ASyncKilledMidWayResumesWithNothingLostOrDoubled) {
   EXPECT_EQ(calstand::store::sha256_hex(bytes), central_sha256);
 }
 
+TEST_F(FleetSync, ARunCutOffWaitsWhileLaterRunsSyncAndFollowsOnceResumedToItsEnd) {
+  Station s = make_station("line-7", {"U-701"});
+  // Run 2 killed mid-way (a power cut): its row says running, nobody drives it (interrupted).
+  const std::string thermal =
+      " --set 'temperatures=[15,35]' --set soak_s=600 --set capture_s=4"
+      " --set 'outer_angles=[0,90,180]' --set 'inner_angles=[0,90]' --set 'rates=[20,90]'"
+      " --set revolutions=1 --set ramp_c_per_min=2";
+  const std::string command = std::string("exec ") + CALSTAND_BIN +
+                              " run thermal-calibration --quiet --unit imu0=U-702 --db " + s.db +
+                              thermal + " > /dev/null 2>&1";
+  const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ), 0);
+  bool killed = false;
+  for (int i = 0; i < 30000 && !killed; ++i) {
+    int status = 0;
+    if (::waitpid(pid, &status, WNOHANG) == pid) break;  // ended before the cut: a failure
+    if (std::filesystem::exists(s.db)) {
+      calstand::store::Database db(s.db);
+      if (db.sql()
+              .execAndGet("SELECT count(*) FROM steps WHERE run_id = 2 AND status = 'completed'")
+              .getInt() >= 3) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        killed = true;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_TRUE(killed) << "run 2 ended before it could be cut";
+  // Run 3 after it, calibrated.
+  Result r = run("run six-position --quiet --db " + s.db + " --unit imu0=U-703");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("calibrate --db " + s.db + " --run 3 --model " + std::string(kModel) + " --out-dir " +
+          dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+
+  r = run(sync_args(s, "--json"));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["copied"]["runs"], 2);
+  EXPECT_EQ(report["waiting_runs"], nlohmann::json({2}));
+  auto central = central_counts(s);
+  EXPECT_EQ(central["runs"], 2);
+  EXPECT_EQ(central["calibrations"], 2) << "run 3's record does not wait for run 2";
+  const auto cursor = [&] {
+    pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, kDbName));
+    pqxx::read_transaction tx(owner);
+    return tx
+        .exec_params(
+            "SELECT last_local_id FROM sync_cursors WHERE station = $1 AND "
+            "stream = 'runs'",
+            s.uuid)[0][0]
+        .as<long long>();
+  };
+  EXPECT_EQ(cursor(), 1) << "the cursor stops before the run that has not ended";
+
+  // Resumed to its end, the run follows; the cursor passes it.
+  r = run("run --quiet --resume 2 --db " + s.db);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run(sync_args(s, "--json"));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["copied"]["runs"], 1);
+  EXPECT_TRUE(report["waiting_runs"].empty()) << r.out;
+  EXPECT_EQ(cursor(), 3);
+  EXPECT_EQ(central_counts(s), local_counts(s));
+}
+
 TEST_F(FleetSync, AStationRoleInsertsAndReadsOnlyItsOwnRows) {
   ASSERT_EQ(stations_.size(), 3u) << "needs the stations of the first test";
   pqxx::connection as_line2(server_->conninfo(stations_[1].role, kDbName));
