@@ -31,6 +31,41 @@ struct TablePose {
   double inner_deg = 0.0;
 };
 
+/// The unit's temperature as the plan sees it (no chamber or IMU lag, as the plan's durations):
+/// a soaked set point is reached at once; a set point without a soak is ramped to from where
+/// the last one left it, so that the steps recorded during a ramp are points at their own
+/// temperatures (thermal-ramp), not all at its target.
+class PlannedTemperature {
+ public:
+  explicit PlannedTemperature(const core::StationConfig& station)
+      : now_c_(station.chamber.ambient_c),
+        max_ramp_c_per_min_(station.chamber.max_ramp_c_per_min) {}
+
+  void set(const procedures::Step& step, double start_s) {
+    from_c_ = at(start_s);
+    target_c_ = step.target_c;
+    ramp_start_s_ = start_s;
+    ramp_c_per_min_ = step.wait_for_soak ? 0.0 : step.ramp_c_per_min.value_or(max_ramp_c_per_min_);
+    now_c_ = target_c_;
+  }
+
+  /// [degC] at plan time `time_s`.
+  double at(double time_s) const {
+    if (!(ramp_c_per_min_ > 0.0)) return now_c_;
+    const double ramped_c = ramp_c_per_min_ * (time_s - ramp_start_s_) / 60.0;
+    return target_c_ >= from_c_ ? std::min(target_c_, from_c_ + ramped_c)
+                                : std::max(target_c_, from_c_ - ramped_c);
+  }
+
+ private:
+  double now_c_;
+  double max_ramp_c_per_min_;
+  double from_c_ = 0.0;
+  double target_c_ = 0.0;
+  double ramp_start_s_ = 0.0;
+  double ramp_c_per_min_ = 0.0;  ///< 0: at the set point
+};
+
 // The mean regressors and reference of one recording step of a unit.
 solver::StepSummary summarize(const procedures::Step& step, const TablePose& pose,
                               double temperature_c, double start_s,
@@ -87,7 +122,7 @@ UnitCoverage unit_coverage(const procedures::Plan& plan, const core::StationConf
   setup.geometry = station.geometry(imu);
   const solver::SignalBuilder build(setup, model.earth_rate());
   TablePose pose;
-  double temperature_c = station.chamber.ambient_c;
+  PlannedTemperature temperature(station);
   std::vector<solver::StepSummary> steps;
   for (std::size_t i = 0; i < plan.steps.size(); ++i) {
     const procedures::Step& step = plan.steps[i];
@@ -96,12 +131,13 @@ UnitCoverage unit_coverage(const procedures::Plan& plan, const core::StationConf
         pose = {step.outer_deg, step.inner_deg};
         break;
       case procedures::StepKind::kSetTemperature:
-        temperature_c = step.target_c;
+        temperature.set(step, plan.step_start_s.at(i));
         break;
       case procedures::StepKind::kCapture:
       case procedures::StepKind::kRate:
-        steps.push_back(
-            summarize(step, pose, temperature_c, plan.step_start_s.at(i), build, model));
+        steps.push_back(summarize(step, pose,
+                                  temperature.at(plan.step_start_s.at(i) + 0.5 * step.duration_s),
+                                  plan.step_start_s.at(i), build, model));
         break;
       case procedures::StepKind::kWait:
       case procedures::StepKind::kPower:

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "analysis/gnuplot_svg.hpp"
+#include "analysis/report_datasheet.hpp"
 #include "analysis/report_plots.hpp"
 #include "analysis/report_style.hpp"
 #include "analysis/report_tables.hpp"
@@ -49,6 +50,50 @@ std::string header(const ReportData& r) {
       floor ? "at the noise floor"
             : fmt::format("{:.1f} &times; the noise", std::sqrt(fit.chi2_dof)),
       r.history.size(), html_escape(r.request.db));
+}
+
+// The run as `calstand runs` lists it, with its completed steps by kind.
+std::string run_line(const ReportData& r) {
+  std::string kinds;
+  for (const auto& [kind, count] : r.step_kinds) {
+    kinds += fmt::format("{}{} {}", kinds.empty() ? "" : ", ", count, kind);
+  }
+  return fmt::format("<p>{} &middot; {}/{} steps ({}) &middot; started {} &middot; ended {}</p>\n",
+                     html_escape(r.run.status), r.run.steps_done, r.run.steps_total,
+                     html_escape(kinds),
+                     html_escape(r.run.started_utc.empty() ? "-" : r.run.started_utc),
+                     html_escape(r.run.ended_utc.empty() ? "-" : r.run.ended_utc));
+}
+
+// The header of a run without an error model: what it is and what it holds.
+std::string unfitted_header(const ReportData& r) {
+  return fmt::format(
+      "<header><h1>Run {} &middot; {} &middot; {}</h1>\n{}"
+      "<p>No error model fitted<span class=\"badge neutral\">datasheet figures</span></p>\n"
+      "<p>database {}</p></header>\n",
+      r.request.run, html_escape(r.procedure), html_escape(r.device), run_line(r),
+      html_escape(r.request.db));
+}
+
+std::string no_model_section(const ReportData& r) {
+  return "<section id=\"model\" class=\"absent\"><h2>Error model</h2>\n<p class=\"dim\">Not "
+         "fitted: " +
+         html_escape(r.no_fit_reason) + ".</p></section>\n";
+}
+
+// The overview of the datasheet analyses and each one's figures; a line when none applies.
+std::string datasheet_part(const ReportData& r) {
+  const auto& ap = r.datasheet.applicability;
+  if (std::none_of(ap.begin(), ap.end(), [](const auto& a) { return a.applies; })) {
+    std::string why;
+    for (const auto& a : ap) {
+      why += fmt::format("{}{}: {}", why.empty() ? "" : "; ", to_string(a.kind), a.evidence);
+    }
+    return "<section id=\"datasheet\" class=\"absent\"><h2>Datasheet figures</h2>\n<p "
+           "class=\"dim\">None of the test catalogue's analyses applies to this run (" +
+           html_escape(why) + ").</p></section>\n";
+  }
+  return datasheet_overview_section(r.datasheet) + datasheet_sections(r);
 }
 
 std::string history_section(const ReportData& r) {
@@ -117,15 +162,21 @@ std::string allan_section(const ReportData& r) {
 
 std::string render_report_html(const ReportData& r) {
   std::string body;
-  body += header(r);
-  body += history_section(r);
-  body += residual_section(r);
-  body += signals_section(r);
-  body += parameters_section(r);
-  body += candidates_section(r);
+  if (r.fitted()) {
+    body += header(r);
+    body += history_section(r);
+    body += residual_section(r);
+    body += signals_section(r);
+    body += parameters_section(r);
+    body += candidates_section(r);
+  } else {
+    body += unfitted_header(r);
+    body += no_model_section(r);
+  }
+  body += datasheet_part(r);
   body += allan_section(r);
   return report_page(r.request.run, r.procedure, body,
-                     r.history.empty() ? std::string() : r.history.back().created_utc);
+                     r.history.empty() ? r.run.ended_utc : r.history.back().created_utc);
 }
 
 std::string run_report_html(store::Database& db, const ReportRequest& request) {

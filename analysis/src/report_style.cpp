@@ -23,12 +23,14 @@ header code { color: #fff; overflow-wrap: anywhere; }
          font-size: 13px; margin-left: 8px; }
 .badge.good { background: #d8f0dc; color: var(--good); }
 .badge.bad { background: #fbe0dd; color: var(--bad); }
+.badge.neutral { background: #e3ecf5; color: #1f4e79; }
 section { background: #fff; border: 1px solid var(--line); border-radius: 10px;
           padding: 18px 24px 22px; margin-top: 20px; }
 section h2 { margin: 0 0 4px; font-size: 19px; }
 section h3 { margin: 18px 0 6px; font-size: 15px; }
 p.lead { margin: 0 0 12px; color: var(--dim); }
 svg { display: block; width: 100%; height: auto; margin: 8px 0 12px; }
+.narrow svg { max-width: 760px; margin-left: auto; margin-right: auto; }
 .grid { display: grid; grid-template-columns: repeat(auto-fit, minmax(320px, 1fr)); gap: 14px; }
 table { border-collapse: collapse; width: 100%; margin: 8px 0; font-size: 13.5px; }
 th, td { text-align: left; padding: 5px 9px; border-bottom: 1px solid var(--line);

@@ -1,7 +1,8 @@
 // `calstand analyze KIND`: the datasheet analyses of the seed's test catalogue on a stored run.
 // Kinds: stability (in-run bias stability of a long static capture), repeatability (turn-on
 // bias across power cycles), warmup (the power-on transient), hysteresis (up and down a
-// temperature staircase), bandwidth (gain and phase of oscillate steps).
+// temperature staircase), bandwidth (gain and phase of oscillate steps); all (the default):
+// every one the run's steps support (analysis/run_analyses.hpp), as the report shows them.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include "analysis/bandwidth.hpp"
 #include "analysis/hysteresis.hpp"
 #include "analysis/repeatability.hpp"
+#include "analysis/run_analyses.hpp"
 #include "analysis/stability.hpp"
 #include "analysis/warmup.hpp"
 #include "commands.hpp"
@@ -22,13 +24,15 @@ namespace calstand::cli {
 namespace {
 
 struct AnalyzeOptions {
-  std::string kind;
+  std::string kind = "all";
   std::string db;
   std::int64_t run = 0;
   std::string device;
   std::optional<std::size_t> step;
-  double band_deg_per_h = 1.0;  ///< warmup: settled when within this of the final gyro bias
-  double band_ug = 50.0;        ///< warmup: ... and of the final accelerometer bias
+  /// warmup: settled when within this of the final gyro bias
+  double band_deg_per_h = analysis::DatasheetOptions{}.warmup_band_deg_per_h;
+  /// warmup: ... and of the final accelerometer bias
+  double band_ug = analysis::DatasheetOptions{}.warmup_band_ug;
   bool as_json = false;
   std::string html;  ///< bandwidth: the gain-curve page
 };
@@ -66,6 +70,23 @@ void print_repeatability(const analysis::RepeatabilityAnalysis& r) {
                ch.noise_of_means);
   }
   fmt::print("repeatability = sqrt(spread^2 - noise of a mean^2), 1 sigma across power-ups\n");
+  bool header = false;
+  for (std::size_t a = 0; a < r.gyro_scale.size(); ++a) {
+    const auto& s = r.gyro_scale[a];
+    if (!s.measured) continue;
+    if (!header) {
+      fmt::print("\ngyro scale factor, from turns both ways in each cycle:\n");
+      fmt::print("{:<8} {:>16} {:>26} {:>14} {:>16}  {}\n", "axis", "repeatability",
+                 fmt::format("{:.0f} % interval", 100.0 * r.confidence), "spread", "noise of one",
+                 "rates");
+      header = true;
+    }
+    std::string rates;
+    for (double rate : s.rates_dps) rates += fmt::format("{}{:g}", rates.empty() ? "" : ", ", rate);
+    fmt::print("{:<8} {:>10.4g} {:<5} {:>11.4g} .. {:<11.4g} {:>14.4g} {:>16.4g}  {} deg/s\n",
+               fmt::format("g{}", "xyz"[a]), s.repeatability_ppm, "ppm", s.repeatability_lo_ppm,
+               s.repeatability_hi_ppm, s.spread_ppm, s.noise_of_estimates_ppm, rates);
+  }
 }
 
 void print_warmup(const analysis::WarmupAnalysis& w) {
@@ -136,13 +157,44 @@ void run_bandwidth(const AnalyzeOptions& opt) {
   }
 }
 
+void run_all(const AnalyzeOptions& opt) {
+  if (opt.step) {
+    throw core::InputError("--step", "picks the capture of one analysis: give its KIND");
+  }
+  store::Database db = open_existing_database(opt.db);
+  const analysis::DatasheetAnalyses a =
+      analysis::run_datasheet_analyses(db, opt.run, opt.device, {opt.band_deg_per_h, opt.band_ug});
+  if (opt.as_json) {
+    fmt::print("{}\n", analysis::to_json(a).dump(2));
+    return;
+  }
+  fmt::print("run {} {}: the datasheet analyses its steps support\n", a.run, a.device);
+  for (const auto& ap : a.applicability) {
+    const std::string_view kind = analysis::to_string(ap.kind);
+    if (!ap.applies) {
+      fmt::print("  {:<14} not applicable: {}\n", kind, ap.evidence);
+    } else if (a.has_result(ap.kind)) {
+      fmt::print("  {:<14} applies: {}\n", kind, ap.evidence);
+    } else {
+      fmt::print("  {:<14} missing: {}, but the analysis refused it: {}\n", kind, ap.evidence,
+                 a.failure_of(ap.kind));
+    }
+  }
+  if (a.repeatability) fmt::print("\n"), print_repeatability(*a.repeatability);
+  if (a.warmup) fmt::print("\n"), print_warmup(*a.warmup);
+  if (a.stability) fmt::print("\n"), print_stability(*a.stability);
+  if (a.hysteresis) fmt::print("\n"), print_hysteresis(*a.hysteresis);
+  if (a.bandwidth) fmt::print("\n"), print_bandwidth(*a.bandwidth);
+}
+
 void run_analyze(const AnalyzeOptions& opt) {
+  if (opt.kind == "all") return run_all(opt);
   if (opt.kind == "bandwidth") return run_bandwidth(opt);
   if (opt.kind != "stability" && opt.kind != "repeatability" && opt.kind != "warmup" &&
       opt.kind != "hysteresis") {
     throw core::InputError("KIND", "'" + opt.kind +
                                        "' is not an analysis calstand has (stability, "
-                                       "repeatability, warmup, hysteresis, bandwidth)");
+                                       "repeatability, warmup, hysteresis, bandwidth, all)");
   }
   store::Database db = open_existing_database(opt.db);
   if (opt.kind == "hysteresis") {
@@ -192,9 +244,11 @@ void register_analyze(CLI::App& app) {
       "with its correlation time, from a long static capture); repeatability (turn-on bias "
       "spread over power cycles); warmup (the bias transient after power-up); hysteresis (up "
       "and down a temperature staircase); bandwidth (gyro gain and phase against the encoder "
-      "from oscillate steps, -3 dB bandwidth and delay)");
-  cmd->add_option("kind", opt->kind, "stability | repeatability | warmup | hysteresis | bandwidth")
-      ->required();
+      "from oscillate steps, -3 dB bandwidth and delay); all (the default): each one the run's "
+      "steps support, and why the others do not apply");
+  cmd->add_option("kind", opt->kind,
+                  "stability | repeatability | warmup | hysteresis | bandwidth | all")
+      ->capture_default_str();
   cmd->add_option("--db", opt->db, "Database file")->required();
   cmd->add_option("--run", opt->run, "Run id")->required();
   cmd->add_option("--device", opt->device, "IMU (default: the run's first)");

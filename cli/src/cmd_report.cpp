@@ -1,6 +1,7 @@
 // `calstand report`: one self-contained HTML page of a run's fit: how the error fell over the
 // fits of the run, where the model fails, what the residual follows, the parameters, the
-// candidate terms and, for a static run, the Allan deviation with its fitted noise lines.
+// candidate terms, the datasheet figures that apply and, for a static run, the Allan deviation
+// with its fitted noise lines. A run without an error model gets its summary and figures.
 #include <fmt/format.h>
 
 #include <fstream>
@@ -51,9 +52,26 @@ void run_report(const ReportOptions& opt) {
   const analysis::ReportData data = analysis::gather_report(db, opt.request);
   const std::string page = analysis::render_report_html(data);
   write_page(opt.out, page);
-  fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}; {} kB\n",
+  std::string figures;
+  for (const auto kind : analysis::kDatasheetKinds) {
+    if (data.datasheet.has_result(kind)) {
+      figures += fmt::format("{}{}", figures.empty() ? "" : ", ", analysis::to_string(kind));
+    } else if (data.datasheet.applicability_of(kind).applies) {
+      figures +=
+          fmt::format("{}{} missing", figures.empty() ? "" : ", ", analysis::to_string(kind));
+    }
+  }
+  figures = figures.empty() ? "" : "; datasheet figures: " + figures;
+  if (!data.fitted()) {
+    fmt::print("{}: run {} ({}), no error model fitted: {}{}{}; {} kB\n", opt.out, data.request.run,
+               data.procedure, data.no_fit_reason, figures,
+               data.noise ? ", Allan deviation of the static step" : "",
+               (page.size() + 512) / 1024);
+    return;
+  }
+  fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}{}; {} kB\n",
              opt.out, data.request.run, data.procedure, data.diagnosis.fit.model,
-             data.diagnosis.fit.chi2_dof, data.history.size(),
+             data.diagnosis.fit.chi2_dof, data.history.size(), figures,
              data.noise ? ", Allan deviation of the static step" : "", (page.size() + 512) / 1024);
 }
 
@@ -64,7 +82,7 @@ void register_report(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "report",
       "One self-contained HTML page of a run's fit: history, residuals, signals, "
-      "parameters, candidates, Allan deviation (plots by gnuplot)");
+      "parameters, candidates, datasheet figures, Allan deviation (plots by gnuplot)");
   cmd->add_option("--db", opt->request.db, "Database file")->required();
   cmd->add_option("--run", opt->request.run, "Run id")->required();
   cmd->add_option("--model", opt->request.model, "Comma-separated error terms")

@@ -213,6 +213,7 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     p.voltage_v = j.at("voltage_v").get<double>();
     p.current_limit_a = j.at("current_limit_a").get<double>();
     p.safe_state = j.value("safe_state", p.safe_state);
+    p.start_timeout_s = j.value("start_timeout_s", p.start_timeout_s);
     p.connection = resolve_connection_files(j.value("connection", json::object()), base_dir);
     c.power_supplies.push_back(std::move(p));
   }
@@ -271,7 +272,8 @@ json StationConfig::to_json() const {
               {"imu", p.imu},
               {"voltage_v", p.voltage_v},
               {"current_limit_a", p.current_limit_a},
-              {"safe_state", p.safe_state}};
+              {"safe_state", p.safe_state},
+              {"start_timeout_s", p.start_timeout_s}};
     if (!p.connection.empty()) j["connection"] = p.connection;
     supplies_j.push_back(std::move(j));
   }

@@ -560,16 +560,24 @@ void RunEngine::power(const Step& step, std::size_t index) {
     set_phase("waiting for IMU streams after power on");
     const double on_s = station_.clock().now_s();
     const auto started = [&](std::size_t i) { return imu_health_[i].last_sample_s > on_s; };
+    // Each unit's own limit, from the supply that feeds it (station file power_supplies).
+    const auto start_timeout_s = [&](std::size_t i) {
+      for (const core::PowerSupplyConfig& p : station_.config().power_supplies) {
+        if (p.imu == station_.imu(i).name()) return p.start_timeout_s;
+      }
+      return core::PowerSupplyConfig{}.start_timeout_s;
+    };
     for (;;) {
       tick();
       const bool all = std::all_of(units.begin(), units.end(), started);
       if (all) break;
-      if (station_.clock().now_s() - on_s >= options_.power_on_timeout_s) {
-        for (std::size_t i : units) {
-          if (started(i)) continue;
-          throw StepFailed{fmt::format("{} did not start streaming within {:g} s after power on",
-                                       station_.imu(i).name(), options_.power_on_timeout_s)};
-        }
+      const double waited_s = station_.clock().now_s() - on_s;
+      for (std::size_t i : units) {
+        if (started(i) || waited_s < start_timeout_s(i)) continue;
+        throw StepFailed{
+            fmt::format("{} did not start streaming within {:g} s after power on "
+                        "(its supply's start_timeout_s)",
+                        station_.imu(i).name(), start_timeout_s(i))};
       }
     }
   }

@@ -96,7 +96,8 @@ ImuSim::ImuSim(ImuTruth truth, core::TableGeometry geometry, core::Site site,
       site_(std::move(site)),
       input_model_(truth_, geometry_, site_, table_tilt_rad),
       seed_(seed),
-      turn_on_draw_(derive_seed(seed, "turn-on-bias")) {
+      turn_on_draw_(derive_seed(seed, "turn-on-bias")),
+      turn_on_scale_draw_(derive_seed(seed, "turn-on-scale")) {
   if (!(truth_.sample_rate_hz > 0.0) || !std::isfinite(truth_.sample_rate_hz)) {
     throw std::invalid_argument("IMU " + truth_.name + ": sample_rate_hz must be positive");
   }
@@ -143,6 +144,12 @@ void ImuSim::power_on(double time_s, bool warm) {
   for (int i = 0; i < 3; ++i) {
     turn_on_accel_[i] = turn_on_draw_.next() * truth_.accel_noise.turn_on_bias[i];
   }
+  for (int i = 0; i < 3; ++i) {
+    turn_on_gyro_scale_ppm_[i] =
+        turn_on_scale_draw_.next() * truth_.gyro_noise.turn_on_scale_ppm[i];
+    turn_on_accel_scale_ppm_[i] =
+        turn_on_scale_draw_.next() * truth_.accel_noise.turn_on_scale_ppm[i];
+  }
   powered_ = true;
   filter_primed_ = false;
   power_on_time_s_ = time_s;
@@ -173,7 +180,8 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> ImuSim::noise_free_reading(const Tab
                                                                        double temperature_c) const {
   const ImuInputs in = input_model_(table, temperature_c);
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
-  return {in.rate_dps + gyro_error + turn_on_gyro_, in.force_mps2 + accel_error + turn_on_accel_};
+  return {in.rate_dps + gyro_error + turn_on_gyro_ + turn_on_scale_error(in.rate_dps, true),
+          in.force_mps2 + accel_error + turn_on_accel_ + turn_on_scale_error(in.force_mps2, false)};
 }
 
 core::ImuSample ImuSim::sample(double time_s, const TableKinematics& table, double temperature_c) {
@@ -185,14 +193,16 @@ core::ImuSample ImuSim::sample(double time_s, const ImuInputs& in) {
   const auto [gyro_error, accel_error] = deterministic_errors(truth_, in);
   const auto [gyro_transient, accel_transient] = power_on_transient(time_s);
   const double hysteresis = hysteresis_branch(temperature_c);
+  const Eigen::Vector3d gyro_turn_on_scale = turn_on_scale_error(in.rate_dps, true);
+  const Eigen::Vector3d accel_turn_on_scale = turn_on_scale_error(in.force_mps2, false);
 
   std::array<double, 6> value{};
   for (int i = 0; i < 3; ++i) {
     value[static_cast<std::size_t>(i)] = in.rate_dps[i] + gyro_error[i] + turn_on_gyro_[i] +
-                                         gyro_transient[i] +
+                                         gyro_turn_on_scale[i] + gyro_transient[i] +
                                          hysteresis * truth_.gyro_hysteresis_bias[i];
     value[static_cast<std::size_t>(i) + 3] = in.force_mps2[i] + accel_error[i] + turn_on_accel_[i] +
-                                             accel_transient[i] +
+                                             accel_turn_on_scale[i] + accel_transient[i] +
                                              hysteresis * truth_.accel_hysteresis_bias[i];
   }
   for (std::size_t c = 0; c < 6; ++c) {

@@ -126,6 +126,7 @@ TriadNoise noise_from_json(const json& obj, const NoiseUnits& u) {
   n.gauss_markov_sigma = triple(obj, u.gm_sigma, u.gm_scale);
   n.gauss_markov_tau_s = obj.value("gauss_markov_tau_s", 100.0);
   n.turn_on_bias = triple(obj, u.turn_on, u.turn_on_scale);
+  n.turn_on_scale_ppm = triple(obj, "turn_on_scale_ppm", 1.0);
   n.quantization = obj.value(u.quantization, 0.0);
   return n;
 }
@@ -138,6 +139,7 @@ json noise_to_json(const TriadNoise& n, const NoiseUnits& u) {
   obj[u.gm_sigma] = triple_json(n.gauss_markov_sigma, u.gm_scale);
   obj["gauss_markov_tau_s"] = n.gauss_markov_tau_s;
   obj[u.turn_on] = triple_json(n.turn_on_bias, u.turn_on_scale);
+  obj["turn_on_scale_ppm"] = triple_json(n.turn_on_scale_ppm, 1.0);
   obj[u.quantization] = n.quantization;
   return obj;
 }
@@ -220,6 +222,7 @@ void check_noise(const TruthChecker& c, const TriadNoise& n, const NoiseUnits& u
   c.non_negative(at + u.gm_sigma, n.gauss_markov_sigma, u.gm_scale);
   c.positive(at + "gauss_markov_tau_s", n.gauss_markov_tau_s);
   c.non_negative(at + u.turn_on, n.turn_on_bias, u.turn_on_scale);
+  c.non_negative(at + "turn_on_scale_ppm", n.turn_on_scale_ppm, 1.0);
   c.non_negative(at + u.quantization, n.quantization);
 }
 

@@ -117,6 +117,7 @@ void read_noise(const SheetReader& r, std::string_view rate, std::string_view wh
                         "s", Sign::kPositive);
   }
   noise.turn_on_bias.setConstant(r.get("bias_repeatability", rate));
+  noise.turn_on_scale_ppm.setConstant(r.get("scale_factor_repeatability", "ppm"));
   noise.quantization = r.get("quantization", rate);
 }
 
@@ -187,6 +188,19 @@ ImuTruth truth_from_spec(const json& spec, const std::string& file_name, std::ui
   t.gyro_bandwidth_hz = output_filter(gyro);
   t.accel_bandwidth_hz = output_filter(accel);
   t.temperature_ref_c = 25.0;
+  // The warm-up transient: drawn last, and only for a sheet that states it, so that every
+  // other sheet draws the same unit as before the figure existed.
+  if (gyro.has("warm_up_bias") || accel.has("warm_up_bias")) {
+    if (!spec.contains("output") || !spec.at("output").contains("warm_up_time_constant")) {
+      throw core::InputError(file_name,
+                             "a warm_up_bias needs output.warm_up_time_constant: how "
+                             "fast the power-on transient settles");
+    }
+    const SheetReader out(spec.at("output"), file_name, "output");
+    t.power_on_time_constant_s = out.get("warm_up_time_constant", "s", Sign::kPositive);
+    t.gyro_power_on_bias = draw3(draw, gyro.get("warm_up_bias", "deg/s"));
+    t.accel_power_on_bias = draw3(draw, accel.get("warm_up_bias", "m/s^2"));
+  }
   // Every figure was checked above under its sheet name; this catches what a combination of
   // them could still break, named as the truth file would name it.
   t.validate(file_name);

@@ -25,8 +25,8 @@ bool uses_channel(SensorRows rows, int channel) {
 }
 
 /// Parameters the rules of the physics exclude before any numerics: a temperature polynomial of
-/// order k needs k + 1 plateaus, a temperature scale two.
-void temperature_rules(const Model& model, std::size_t plateaus, std::vector<bool>& excluded,
+/// order k needs k + 1 distinct temperatures, a temperature scale two.
+void temperature_rules(const Model& model, std::size_t temperatures, std::vector<bool>& excluded,
                        std::vector<Unidentifiable>& out) {
   for (std::size_t t = 0; t < model.terms().size(); ++t) {
     const ModelTerm& term = model.terms()[t];
@@ -37,12 +37,12 @@ void temperature_rules(const Model& model, std::size_t plateaus, std::vector<boo
       int order = 0;
       if (term.info->polynomial_order) order = static_cast<int>((p - first) / 3) + 1;
       if (n == "gyro_temp_scale" || n == "accel_temp_scale") order = 1;
-      if (order == 0 || static_cast<std::size_t>(order) < plateaus) continue;
+      if (order == 0 || static_cast<std::size_t>(order) < temperatures) continue;
       excluded[p] = true;
       out.push_back({model.parameters()[p].name,
-                     fmt::format("temperature order {} needs at least {} temperature plateaus; "
-                                 "the run has {}",
-                                 order, order + 1, plateaus),
+                     fmt::format("temperature order {} needs at least {} temperature plateaus "
+                                 "(or step temperatures {} degC apart on a ramp); the run has {}",
+                                 order, order + 1, kPlateauGapC, temperatures),
                      {}});
     }
   }
@@ -126,6 +126,21 @@ std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) 
   return plateaus;
 }
 
+std::size_t distinct_temperatures(const std::vector<StepSummary>& steps) {
+  std::vector<double> temps;
+  for (const auto& s : steps) temps.push_back(s.signals[0]);
+  std::sort(temps.begin(), temps.end());
+  std::size_t clusters = 0;
+  double cluster_start = 0.0;
+  for (std::size_t i = 0; i < temps.size(); ++i) {
+    if (i == 0 || temps[i] - cluster_start > kPlateauGapC) {
+      ++clusters;
+      cluster_start = temps[i];
+    }
+  }
+  return clusters;
+}
+
 FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
                     const NoiseFloor& floor, const FitOptions& options) {
   return fit_model(steps, model, StepNoise::white_only(floor, "white noise only, as asked"),
@@ -184,7 +199,7 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   // Identifiability: rules first, then columns in model order against the span of the ones
   // accepted before them (Gram-Schmidt on normalised columns, orthogonalised twice).
   std::vector<bool> excluded(P, false);
-  temperature_rules(model, temperature_plateaus(steps).size(), excluded, fit.unidentifiable);
+  temperature_rules(model, distinct_temperatures(steps), excluded, fit.unidentifiable);
   std::vector<Eigen::Index> accepted;
   Eigen::MatrixXd basis(rows, 0);
   double largest_column = 0.0;

@@ -13,6 +13,9 @@ namespace {
 constexpr double kUpCosine = 0.985;
 // A step turns when the table rate reaches this [deg/s].
 constexpr double kTurningDps = 1e-3;
+// A plateau wider than this [degC] is a ramp: its steps are grouped in bands of kRampBandC.
+constexpr double kRampSpanC = 2.0 * kPlateauGapC;
+constexpr double kRampBandC = 10.0;
 
 std::string axis_name(int i) { return std::string(1, static_cast<char>('x' + i)); }
 
@@ -30,6 +33,21 @@ std::vector<int> fit_channels(SensorRows rows) {
 
 std::vector<StepConditions> step_conditions(const std::vector<StepSummary>& steps) {
   const std::vector<double> plateaus = temperature_plateaus(steps);
+  // Each plateau's span: a ramp recorded step after step is one plateau tens of degrees wide,
+  // whose steps are grouped by temperature band instead of all under its mean.
+  std::vector<std::pair<double, double>> spans(plateaus.size(), {1e300, -1e300});
+  const auto nearest_plateau = [&](double t) {
+    std::size_t best = 0;
+    for (std::size_t p = 1; p < plateaus.size(); ++p) {
+      if (std::abs(plateaus[p] - t) < std::abs(plateaus[best] - t)) best = p;
+    }
+    return best;
+  };
+  for (const auto& s : steps) {
+    auto& [lo, hi] = spans[nearest_plateau(s.signals[0])];
+    lo = std::min(lo, s.signals[0]);
+    hi = std::max(hi, s.signals[0]);
+  }
   double t_first = 0.0, t_last = 0.0;
   if (!steps.empty()) {
     t_first = t_last = steps.front().signals[2];
@@ -41,16 +59,13 @@ std::vector<StepConditions> step_conditions(const std::vector<StepSummary>& step
   std::vector<StepConditions> out;
   for (const StepSummary& s : steps) {
     StepConditions c;
-    // The plateau nearest the step's temperature.
-    double best = 0.0;
-    double best_distance = 1e300;
-    for (double p : plateaus) {
-      if (std::abs(p - s.signals[0]) < best_distance) {
-        best_distance = std::abs(p - s.signals[0]);
-        best = p;
-      }
+    const std::size_t p = nearest_plateau(s.signals[0]);
+    if (spans[p].second - spans[p].first <= kRampSpanC) {
+      c.plateau = fmt::format("T {:.0f} degC", plateaus[p]);
+    } else {
+      const double band_lo = kRampBandC * std::floor(s.signals[0] / kRampBandC);
+      c.plateau = fmt::format("T {:.0f}..{:.0f} degC", band_lo, band_lo + kRampBandC);
     }
-    c.plateau = fmt::format("T {:.0f} degC", best);
     const Eigen::Vector3d force(s.signals[6], s.signals[7], s.signals[8]);
     c.orientation = "turning";
     if (force.norm() > 0.0) {

@@ -6,9 +6,7 @@
 // captures, fewer rates and plateaus) so that a procedure takes a second or two; the reductions
 // keep every leg of a procedure, so they excite the same body axes as its defaults.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <filesystem>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -17,9 +15,7 @@
 
 #include "analysis/bandwidth.hpp"
 #include "core/error.hpp"
-#include "daemon/campaign.hpp"
-#include "procedures/plan.hpp"
-#include "procedures/procedure.hpp"
+#include "in_process_run.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "solver/fit.hpp"
@@ -27,7 +23,6 @@
 #include "solver/run_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
-#include "store/run_store.hpp"
 
 namespace calstand {
 namespace {
@@ -50,50 +45,15 @@ std::set<std::string> components(const std::string& term, const std::vector<std:
   return out;
 }
 
-std::set<std::string> xyz(const std::string& term) { return components(term, {"x", "y", "z"}); }
-
-std::set<std::string> operator+(std::set<std::string> a, const std::set<std::string>& b) {
-  a.insert(b.begin(), b.end());
-  return a;
-}
-
 std::string listed(const std::set<std::string>& names) {
   std::string out;
   for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
   return out;
 }
 
-/// A fresh database file of this process (ctest runs tests two at a time, each in a process).
-std::string fresh_db(const std::string& name) {
-  const std::string path =
-      ::testing::TempDir() + "calstand_library_" + std::to_string(getpid()) + "_" + name + ".db";
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
-  return path;
-}
-
-void remove_db(const std::string& path) {
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path + suffix);
-}
-
-/// Runs library procedure `name` with `overrides` on the embedded simulated station into the
-/// database at `db_path`, as `calstand run` does; returns the run id.
-std::int64_t run_procedure(const std::string& name, const std::vector<std::string>& overrides,
-                           const std::string& db_path,
-                           const core::StationConfig& station = sim::default_station()) {
-  const auto procedure = procedures::load_procedure(name);
-  const auto plan =
-      procedures::make_plan(procedure, station, procedures::parse_overrides(overrides));
-  EXPECT_TRUE(plan.ok()) << name;
-  std::int64_t run_id = 0;
-  {
-    store::Database db(db_path);
-    store::RunStore runs(db);
-    run_id = daemon::create_run_record(runs, station, procedure, plan);
-  }
-  const auto result = daemon::run_campaign(station, plan, db_path, run_id);
-  EXPECT_EQ(result.state, daemon::RunState::kCompleted) << name << ": " << result.exit_reason;
-  return run_id;
-}
+using testing::fresh_db;
+using testing::remove_db;
+using testing::run_procedure;
 
 class LibraryProcedure : public ::testing::TestWithParam<Documented> {};
 
@@ -177,16 +137,18 @@ INSTANTIATE_TEST_SUITE_P(
                    "accel_temp_scale",
                    {},
                    {}},
-        // Bias curves of order 2 from five segments a ramp, the hysteresis as a bias following
-        // the temperature rate; one static orientation separates no scale factor from a bias.
+        // Two 20 degC ramps with the table indexing through the six positions and turning
+        // about each body axis: the classical model with bias curves of order 2 and linear
+        // scale terms; a bias still differing between heating and cooling follows the
+        // temperature rate.
         Documented{"thermal-ramp",
-                   {"low_c=15", "high_c=35", "ramp_c_per_min=1", "segments=[1,2,3,4,5]",
-                    "capture_s=240", "soak_s=300"},
-                   "gyro_bias,gyro_scale,earth_rate,accel_bias,accel_scale,gyro_temp_bias:2,"
-                   "accel_temp_bias:2,gyro_temp_scale,accel_temp_scale,gyro_lag,accel_lag",
+                   {"low_c=15", "high_c=35", "ramp_c_per_min=1", "cycles=10", "capture_s=10",
+                    "rates=[60]", "soak_s=300"},
+                   "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,"
+                   "accel_misalignment,gyro_temp_bias:2,accel_temp_bias:2,gyro_temp_scale,"
+                   "accel_temp_scale,gyro_lag,accel_lag",
                    {"gyro_lag=gyro:temperature_rate", "accel_lag=accel:temperature_rate"},
-                   xyz("gyro_scale") + xyz("accel_scale") + xyz("gyro_temp_scale") +
-                       xyz("accel_temp_scale")}),
+                   {}}),
     [](const auto& info) {
       std::string n = info.param.procedure;
       std::erase(n, '-');

@@ -329,26 +329,42 @@ TEST(AnalyzeStabilityCli, RecoversTheSheetsBiasVariationAndCorrelationTimeAndFin
 namespace {
 
 // Twelve power cycles of the LN200-class unit (turn-on bias 3 deg/h and 500 ug, 1 sigma, a new
-// draw at every power-up) on three station seeds: each axis's 95 % interval should hold the
-// sheet's figure, so of the 18 intervals about one misses; more than three missing is a bias,
-// not chance (binomial, p < 0.01). Pooled over seeds and axes the estimate is within 20 %.
-TEST(AnalyzeRepeatabilityCli, TwelvePowerCyclesRecoverTheSheetsTurnOnBiasWithinTheirIntervals) {
+// draw at every power-up), given a turn-on gyro scale change of 100 ppm (its sheet's "scale
+// factor stability"), on three seeds: each axis's 95 % interval should hold the truth, so of
+// the 18 bias intervals about one misses; more than three missing is a bias, not chance
+// (binomial, p < 0.01); of the 9 scale intervals at most two (p < 0.01). Pooled over seeds and
+// axes each estimate is within 20 %. A unit without the scale change shows none.
+TEST(AnalyzeRepeatabilityCli, TwelvePowerCyclesRecoverTheTurnOnBiasAndScaleWithinTheirIntervals) {
   const std::string dir = ::testing::TempDir() + "analyze_repeat-" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const nlohmann::json truth =
-      nlohmann::json::parse(run("station --json").out)["derived"]["imus"][0]["truth"]["noise"];
-  const double gyro_truth = truth["gyro"]["turn_on_bias_deg_per_h"];
-  const double accel_truth = truth["accel"]["turn_on_bias_ug"];
-  nlohmann::json station = nlohmann::json::parse(
-      read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
-  int missed = 0;
-  double gyro_sq = 0.0;
-  double accel_sq = 0.0;
-  for (int seed : {101, 202, 303}) {
+  constexpr double kScaleTruthPpm = 100.0;
+  const auto station_of = [&](int seed, double turn_on_scale_ppm) {
+    const std::string truth_file = dir + "/truth" + std::to_string(seed) + ".json";
+    const Result r =
+        run("truth-from-spec ln200 --seed " + std::to_string(seed) + " --out " + truth_file);
+    EXPECT_EQ(r.exit_code, 0) << r.out;
+    nlohmann::json truth = nlohmann::json::parse(read_text(truth_file));
+    truth["noise"]["gyro"]["turn_on_scale_ppm"] = {turn_on_scale_ppm, turn_on_scale_ppm,
+                                                   turn_on_scale_ppm};
+    write_text(truth_file, truth.dump());
+    nlohmann::json station = nlohmann::json::parse(
+        read_text(std::string(CALSTAND_SOURCE_DIR) + "/sim/stations/default.json"));
     station["seed"] = seed;
+    station["imus"][0].erase("model");
+    station["imus"][0]["truth_file"] = truth_file;
     const std::string file = dir + "/station" + std::to_string(seed) + ".json";
     write_text(file, station.dump());
+    return std::make_pair(file, truth["noise"]);
+  };
+  int missed = 0, scale_missed = 0;
+  double gyro_sq = 0.0, accel_sq = 0.0, scale_sq = 0.0;
+  double gyro_truth = 0.0, accel_truth = 0.0;
+  for (int seed : {101, 202, 303}) {
+    const auto [file, noise] = station_of(seed, kScaleTruthPpm);
+    // The sheet's figure, the same on every axis (the truth file writes it once).
+    gyro_truth = noise["gyro"]["turn_on_bias_deg_per_h"];
+    accel_truth = noise["accel"]["turn_on_bias_ug"];
     const std::string db = dir + "/repeat" + std::to_string(seed) + ".db";
     Result r = run("run repeatability --quiet --station " + file + " --db " + db);
     ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -359,16 +375,38 @@ TEST(AnalyzeRepeatabilityCli, TwelvePowerCyclesRecoverTheSheetsTurnOnBiasWithinT
     for (int axis = 0; axis < 3; ++axis) {
       const auto& gi = a["gyro"]["interval_deg_per_h"][axis];
       const auto& ai = a["accel"]["interval_ug"][axis];
+      const auto& si = a["gyro"]["scale_interval_ppm"][axis];
       missed += (gyro_truth < gi[0].get<double>() || gyro_truth > gi[1].get<double>()) ? 1 : 0;
       missed += (accel_truth < ai[0].get<double>() || accel_truth > ai[1].get<double>()) ? 1 : 0;
+      scale_missed +=
+          (kScaleTruthPpm < si[0].get<double>() || kScaleTruthPpm > si[1].get<double>()) ? 1 : 0;
       gyro_sq += std::pow(a["gyro"]["bias_repeatability_deg_per_h"][axis].get<double>(), 2) / 9;
       accel_sq += std::pow(a["accel"]["bias_repeatability_ug"][axis].get<double>(), 2) / 9;
+      scale_sq += std::pow(a["gyro"]["scale_factor_repeatability_ppm"][axis].get<double>(), 2) / 9;
       EXPECT_EQ(a["gyro"]["turn_on_bias_deg_per_h"][axis].size(), 12u);
+      EXPECT_EQ(a["gyro"]["scale_per_cycle_ppm"][axis].size(), 12u);
+      EXPECT_EQ(a["gyro"]["scale_rates_dps"][axis], nlohmann::json::array({100.0}));
     }
   }
   EXPECT_LE(missed, 3);
+  EXPECT_LE(scale_missed, 2);
   EXPECT_NEAR(std::sqrt(gyro_sq), gyro_truth, 0.2 * gyro_truth);
   EXPECT_NEAR(std::sqrt(accel_sq), accel_truth, 0.2 * accel_truth);
+  EXPECT_NEAR(std::sqrt(scale_sq), kScaleTruthPpm, 0.2 * kScaleTruthPpm);
+  {
+    // Without a turn-on scale change, the interval's upper end stays at the few ppm the white
+    // noise of two 7 s means at 100 deg/s allows.
+    const auto [file, noise] = station_of(404, 0.0);
+    const std::string db = dir + "/repeat404.db";
+    Result r = run("run repeatability --quiet --set cycles=6 --station " + file + " --db " + db);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    r = run("analyze repeatability --json --db " + db + " --run 1");
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const nlohmann::json a = nlohmann::json::parse(r.out);
+    for (int axis = 0; axis < 3; ++axis) {
+      EXPECT_LT(a["gyro"]["scale_interval_ppm"][axis][1].get<double>(), 15.0) << axis;
+    }
+  }
   // An IMU the run does not have is refused, by name.
   const Result r = run("analyze repeatability --db " + dir + "/repeat101.db --run 1 --device imu9");
   EXPECT_EQ(r.exit_code, 2) << r.out;
@@ -478,6 +516,48 @@ TEST(AnalyzeHysteresisCli, FindsTheHysteresisTheUnitWasGivenWhereItShowsAndNoneW
       }
     }
   }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+
+namespace {
+
+// `calstand analyze` without KIND on a short repeatability run: the one analysis that applies,
+// with the numbers `analyze repeatability` gives, and what the run lacks for each other one;
+// `calstand report` on the same run writes a page of its figures, not an error.
+TEST(AnalyzeAllCli, ListsWhatTheRunSupportsAndReportsARunWithoutAnErrorModel) {
+  const std::string dir = ::testing::TempDir() + "analyze_all-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string db = dir + "/repeat.db";
+  Result r = run("run repeatability --quiet --db " + db +
+                 " --set cycles=3 --set off_s=5 --set settle_s=20 --set capture_s=20");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("analyze --json --db " + db + " --run 1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json all = nlohmann::json::parse(r.out);
+  const Result one = run("analyze repeatability --json --db " + db + " --run 1");
+  ASSERT_EQ(one.exit_code, 0) << one.out;
+  EXPECT_EQ(all["analyses"]["repeatability"], nlohmann::json::parse(one.out));
+  EXPECT_EQ(all["analyses"].size(), 1u) << all.dump(2);
+  EXPECT_TRUE(all["missing"].empty()) << all.dump(2);
+  for (const char* kind : {"warmup", "stability", "hysteresis", "bandwidth"}) {
+    EXPECT_TRUE(all["not_applicable"].contains(kind)) << kind;
+  }
+  EXPECT_EQ(all["not_applicable"]["bandwidth"], "no oscillate step");
+  const Result text = run("analyze all --db " + db + " --run 1");
+  ASSERT_EQ(text.exit_code, 0) << text.out;
+  EXPECT_NE(text.out.find("repeatability  applies: 3 power-ups"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("power cycles"), std::string::npos) << text.out;
+  EXPECT_EQ(run("analyze all --db " + db + " --run 1 --step 3").exit_code, 2);
+
+  r = run("report --db " + db + " --run 1 --out " + dir + "/repeat.html");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("no error model fitted"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("datasheet figures: repeatability"), std::string::npos) << r.out;
+  EXPECT_NE(read_text(dir + "/repeat.html").find("<section id=\"datasheet-repeatability\""),
+            std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

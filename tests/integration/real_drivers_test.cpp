@@ -442,7 +442,8 @@ TEST_F(RealDrivers, PowerCyclesThroughTheScpiSupplyGiveANewTurnOnBiasEachTime) {
   EXPECT_EQ(lab_doc["power_supplies"][0]["backend"], "scpi");
   const std::string db = dir_ + "psu-real.db";
   const auto r =
-      run("run repeatability --set cycles=3 --set off_s=2 --set settle_s=5 "
+      run("run repeatability --set cycles=3 --set off_s=2 --set settle_s=5 --set rates=[200] "
+          "--set revolutions=1 "
           "--set capture_s=20 --quiet --station " +
           lab + " --db " + db);
   ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -454,6 +455,9 @@ TEST_F(RealDrivers, PowerCyclesThroughTheScpiSupplyGiveANewTurnOnBiasEachTime) {
     EXPECT_GT(rep["accel"]["spread_ug"][axis].get<double>(),
               3.0 * rep["accel"]["noise_of_means_ug"][axis].get<double>())
         << "axis " << axis << ": " << rep["accel"].dump();
+    // The turns through the ACUTROL driver give each cycle's gyro scale about every body axis.
+    EXPECT_EQ(rep["gyro"]["scale_rates_dps"][axis], json::array({200.0})) << rep["gyro"].dump();
+    EXPECT_EQ(rep["gyro"]["scale_per_cycle_ppm"][axis].size(), 3u);
   }
 }
 

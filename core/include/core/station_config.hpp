@@ -76,6 +76,10 @@ struct PowerSupplyConfig {
   /// What the safe state does with the output: "off" switches it off, "on" leaves it as it is
   /// (a unit that must stay warm, or whose heaters must not cycle).
   std::string safe_state = "off";
+  /// After the supply switches its unit on, the unit's stream must start within this, or the
+  /// run fails to the safe state: the unit's boot time plus margin (a navigation-grade unit
+  /// aligning its gyros may take minutes) [s].
+  double start_timeout_s = 10.0;
   nlohmann::json connection = nlohmann::json::object();
 };
 

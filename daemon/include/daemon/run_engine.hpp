@@ -58,9 +58,6 @@ struct EngineOptions {
   /// Before repeating a capture invalidated by a stale stream, wait up to this long for the
   /// stream to come back [s].
   double stream_recovery_timeout_s = 30.0;
-  /// After a `power` step switches a unit on, its stream must start within this, or the run
-  /// fails to the safe state [s].
-  double power_on_timeout_s = 10.0;
   /// When the station cannot be made safe at the end of a run (a device's link is down), the
   /// engine keeps trying for this long in real seconds before giving up and saying so.
   double safe_state_retry_s = 30.0;

@@ -111,6 +111,9 @@ class ImuSim {
   /// The turn-on bias in force since the last power_on() [deg/s, m/s^2].
   const Eigen::Vector3d& turn_on_gyro_bias() const { return turn_on_gyro_; }
   const Eigen::Vector3d& turn_on_accel_bias() const { return turn_on_accel_; }
+  /// The turn-on scale-factor changes in force since the last power_on() [ppm].
+  const Eigen::Vector3d& turn_on_gyro_scale_ppm() const { return turn_on_gyro_scale_ppm_; }
+  const Eigen::Vector3d& turn_on_accel_scale_ppm() const { return turn_on_accel_scale_ppm_; }
 
   const ImuTruth& truth() const { return truth_; }
   const core::TableGeometry& geometry() const { return geometry_; }
@@ -119,6 +122,11 @@ class ImuSim {
   /// The hysteresis branch at `temperature_c`: (T - y) / width of the play operator y, which
   /// this advances, in [-1/2, 1/2].
   double hysteresis_branch(double temperature_c);
+  /// The turn-on scale-factor change's part of a reading of true input `input` (gyro or
+  /// accelerometer) [deg/s, m/s^2].
+  Eigen::Vector3d turn_on_scale_error(const Eigen::Vector3d& input, bool gyro) const {
+    return 1e-6 * (gyro ? turn_on_gyro_scale_ppm_ : turn_on_accel_scale_ppm_).cwiseProduct(input);
+  }
   double play_c_ = 0.0;  ///< the play operator's state [degC]
   bool play_started_ = false;
 
@@ -144,6 +152,10 @@ class ImuSim {
   NormalSource turn_on_draw_;
   Eigen::Vector3d turn_on_gyro_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d turn_on_accel_ = Eigen::Vector3d::Zero();
+  // Its own stream: a truth without a turn-on scale draws the same turn-on biases as before.
+  NormalSource turn_on_scale_draw_;
+  Eigen::Vector3d turn_on_gyro_scale_ppm_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d turn_on_accel_scale_ppm_ = Eigen::Vector3d::Zero();
   bool powered_ = false;
   bool filter_primed_ = false;
   int power_cycles_ = 0;

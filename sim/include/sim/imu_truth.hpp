@@ -16,7 +16,9 @@ struct TriadNoise {
   Eigen::Vector3d gauss_markov_sigma = Eigen::Vector3d::Zero();  ///< [unit]
   double gauss_markov_tau_s = 100.0;                             ///< correlation time [s]
   Eigen::Vector3d turn_on_bias = Eigen::Vector3d::Zero();  ///< new constant per power-up [unit]
-  double quantization = 0.0;                               ///< output LSB [unit]; 0: none
+  /// Scale-factor change drawn anew at each power-up, on top of the calibratable scale [ppm].
+  Eigen::Vector3d turn_on_scale_ppm = Eigen::Vector3d::Zero();
+  double quantization = 0.0;  ///< output LSB [unit]; 0: none
 };
 
 /// Everything the simulator knows about one IMU: the true values of every error-model term

@@ -87,7 +87,7 @@ struct FitResult {
 /// Generalised least squares of `model` on step summaries built for it: per channel, the step
 /// means are whitened by the Cholesky factor of their covariance under `noise` (white noise
 /// on the diagonal, a wandering bias between steps). Parameters the run cannot determine
-/// (temperature orders at or above the number of temperature plateaus, columns collinear or
+/// (temperature orders at or above the number of distinct temperatures, columns collinear or
 /// nearly collinear with earlier ones, columns with no excitation) are reported in
 /// `unidentifiable` and held at zero. Throws core::InputError when there are fewer rows than
 /// parameters.
@@ -102,7 +102,14 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
 inline constexpr double kPlateauGapC = 2.0;
 
 /// Temperature plateaus of a run: step mean temperatures clustered with gaps over kPlateauGapC.
+/// A ramp recorded step after step is one plateau: consecutive steps are never that far apart.
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps);
+
+/// How many distinct temperatures a run's steps give a temperature polynomial: the step mean
+/// temperatures in clusters no wider than kPlateauGapC, taken from the coldest up. A staircase
+/// gives its plateaus; a ramp one per kPlateauGapC it covers (the ramp's steps are points of the
+/// curve at their own temperatures, which a plateau count would merge into one).
+std::size_t distinct_temperatures(const std::vector<StepSummary>& steps);
 
 /// True when a chi-square of `chi2_dof` per degree of freedom over `dof` degrees is above what
 /// the noise alone gives one time in a thousand: the model misses something (or the noise model

@@ -77,5 +77,29 @@ TEST(PlanCoverage, SixPositionsDetermineTheAccelerometerOfEveryRightAngleMountBu
   EXPECT_EQ(j["units"][1]["imu"], "imu1");
 }
 
+// The steps recorded while the chamber ramps are points at their own temperatures: two ramps
+// with rotations determine bias curves of order 3 and the temperature scale terms, which the
+// same steps all put at the ramp's target would not (one temperature each way: order 1 at
+// most), and a staircase of two plateaus determines order 1 only.
+TEST(PlanCoverage, StepsRecordedDuringARampArePointsAtTheirOwnTemperatures) {
+  const core::StationConfig station = sim::default_station();
+  const solver::Model model = solver::Model::parse(
+      "gyro_bias,gyro_scale,gyro_misalignment,earth_rate,accel_bias,accel_scale,"
+      "accel_misalignment,gyro_temp_bias:3,accel_temp_bias:3,gyro_temp_scale,accel_temp_scale");
+  const auto ramp = plan_coverage(
+      procedures::make_plan(procedures::load_procedure("thermal-ramp"), station,
+                            procedures::parse_overrides({"low_c=15", "high_c=35", "cycles=5"})),
+      station, model);
+  ASSERT_EQ(ramp.units.size(), 1u);
+  EXPECT_TRUE(ramp.units[0].undetermined.empty());
+  const auto staircase = plan_coverage(
+      procedures::make_plan(procedures::load_procedure("thermal-calibration"), station,
+                            procedures::parse_overrides({"temperatures=[15,35]"})),
+      station, model);
+  EXPECT_EQ(undetermined_of(staircase.units[0], "gyro_temp_bias"),
+            (std::set<std::string>{"gyro_temp_bias.x2", "gyro_temp_bias.y2", "gyro_temp_bias.z2",
+                                   "gyro_temp_bias.x3", "gyro_temp_bias.y3", "gyro_temp_bias.z3"}));
+}
+
 }  // namespace
 }  // namespace calstand::analysis

@@ -72,13 +72,18 @@ TEST(StationConfig, PowerSuppliesRoundTrip) {
   EXPECT_EQ(a.supply_of("other"), nullptr);
   const StationConfig b = StationConfig::from_json(a.to_json(), "b.json");
   EXPECT_EQ(a.to_json(), b.to_json());
-  // Defaults: safe state off.
+  // Defaults: safe state off, 10 s for the unit to start streaming.
   json plain = sim_supply();
   plain.erase("safe_state");
-  EXPECT_EQ(StationConfig::from_json(with_supply(minimal_station(), plain), "c.json")
-                .power_supplies[0]
-                .safe_state,
-            "off");
+  const StationConfig c = StationConfig::from_json(with_supply(minimal_station(), plain), "c.json");
+  EXPECT_EQ(c.power_supplies[0].safe_state, "off");
+  EXPECT_DOUBLE_EQ(c.power_supplies[0].start_timeout_s, 10.0);
+  json slow = sim_supply();
+  slow["start_timeout_s"] = 180;
+  EXPECT_DOUBLE_EQ(StationConfig::from_json(with_supply(minimal_station(), slow), "d.json")
+                       .power_supplies[0]
+                       .start_timeout_s,
+                   180.0);
 }
 
 // Each bad supply is refused naming its field.
@@ -97,6 +102,9 @@ TEST(StationConfig, BadPowerSuppliesNameTheField) {
   s = sim_supply();
   s["voltage_v"] = -5;
   EXPECT_NE(error_of(s).find("power_supplies[0].voltage_v"), std::string::npos) << error_of(s);
+  s = sim_supply();
+  s["start_timeout_s"] = 0;
+  EXPECT_NE(error_of(s).find("start_timeout_s"), std::string::npos) << error_of(s);
   s = sim_supply();
   s["safe_state"] = "maybe";
   EXPECT_NE(error_of(s).find("safe_state"), std::string::npos) << error_of(s);

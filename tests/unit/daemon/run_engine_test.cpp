@@ -672,16 +672,23 @@ TEST(RunEngine, PowerStepsCycleTheUnitAndTheCaptureAfterwardsIsWhole) {
   EXPECT_FALSE(station.world().imu_powered(0)) << "safe state \"off\" switches the supply off";
 }
 
+// The unit's start limit is its supply's start_timeout_s (station file): the run waits that long
+// in station time, then fails to the safe state naming the unit and the limit.
 TEST(RunEngine, AUnitThatDoesNotComeBackFailsTheRunSafeWithTheReason) {
-  drivers::SimStation station(station_with_supply_safe("off"));
+  core::StationConfig config = station_with_supply_safe("off");
+  config.power_supplies.at(0).start_timeout_s = 3.0;
+  drivers::SimStation station(config);
   MemoryJournal journal;
   station.world().set_imu_stalled(0, true);  // powered, but its stream never starts
-  EngineOptions options;
-  options.power_on_timeout_s = 3.0;
-  RunEngine engine(station, journal, plan_of({power(false, 1.0), power(true, 1.0), capture(1.0)}),
-                   options);
+  RunEngine engine(station, journal, plan_of({power(false, 1.0), power(true, 1.0), capture(1.0)}));
+  const double off_s = station.clock().now_s();
   EXPECT_EQ(engine.run(), RunState::kFailed);
-  EXPECT_EQ(engine.exit_reason(), "imu0 did not start streaming within 3 s after power on");
+  EXPECT_EQ(engine.exit_reason(),
+            "imu0 did not start streaming within 3 s after power on (its supply's "
+            "start_timeout_s)");
+  // 1 s off, then 3 s waiting for the stream (and the safe state's own time).
+  EXPECT_GE(station.clock().now_s() - off_s, 4.0);
+  EXPECT_LT(station.clock().now_s() - off_s, 10.0);
   EXPECT_EQ(journal.completed.size(), 1u);
   EXPECT_FALSE(station.world().imu_powered(0)) << "the safe state switched the supply off";
   EXPECT_EQ(station.chamber().read_state().mode, core::ChamberMode::kStandby);

@@ -308,37 +308,67 @@ TEST(Library, ThermalCalibrationLadderTurnsAboutEachBodyAxisOnEachPlateau) {
     EXPECT_EQ(plateaus, 2) << key.first << " " << key.second;
 }
 
-TEST(Library, ThermalRampRecordsEachRampInSegmentsWhileTheChamberRamps) {
-  const Procedure p = load_procedure("thermal-ramp");
-  const Plan plan = make_plan(p, default_station());
+// Each ramp (a set_temperature that does not soak, up to the soak at its end) is covered by
+// the rotation cycles: every cycle points each body axis up and down and turns about each body
+// axis both ways, so every temperature of the ramp sees the whole classical model.
+TEST(Library, ThermalRampIndexesAndTurnsThroughEachRampWhileTheChamberRamps) {
+  const Plan plan = make_plan(load_procedure("thermal-ramp"), default_station());
   ASSERT_TRUE(plan.ok()) << test::lines(plan.violations);
-  // Runs of captures after a set_temperature that does not soak: the ramps.
-  std::vector<double> ramp_s;
-  std::vector<std::size_t> segments;
-  std::size_t soaks_at_ramp_end = 0;
-  for (std::size_t i = 1; i < plan.steps.size(); ++i) {
-    const Step& start = plan.steps[i - 1];
-    if (plan.steps[i].kind != StepKind::kCapture || start.kind != StepKind::kSetTemperature ||
-        start.wait_for_soak)
-      continue;
-    std::size_t j = i;
-    double recorded = 0.0;
-    for (; j < plan.steps.size() && plan.steps[j].kind == StepKind::kCapture; ++j) {
-      recorded += plan.steps[j].duration_s;
+  const core::TableGeometry g = default_station().geometry(0);
+  constexpr int kCycles = 31;
+  const double ramp_s = 60.0 * (85.0 - -40.0) / 1.0;
+  int ramps = 0;
+  for (std::size_t i = 0; i < plan.steps.size(); ++i) {
+    const Step& start = plan.steps[i];
+    if (start.kind != StepKind::kSetTemperature || start.wait_for_soak) continue;
+    ++ramps;
+    std::size_t end = i + 1;
+    double recorded_through_s = 0.0;
+    for (; end < plan.steps.size() && plan.steps[end].kind != StepKind::kSetTemperature; ++end)
+      recorded_through_s += plan.step_duration_s[end];
+    ASSERT_LT(end, plan.steps.size()) << start.label << ": no soak after the ramp";
+    EXPECT_TRUE(plan.steps[end].wait_for_soak)
+        << "the step after the ramp: " << plan.steps[end].label;
+    // The cycles cover the ramp and stop within one cycle of its end.
+    const double cycle_s = recorded_through_s / kCycles;
+    EXPECT_GE(recorded_through_s, ramp_s) << start.label;
+    EXPECT_LT(recorded_through_s, ramp_s + cycle_s) << start.label;
+
+    std::map<std::string, int> poses;  // body direction up -> captures
+    std::map<std::pair<char, double>, int> turns;
+    std::vector<Step> ramp_steps(plan.steps.begin() + static_cast<std::ptrdiff_t>(i + 1),
+                                 plan.steps.begin() + static_cast<std::ptrdiff_t>(end));
+    for (const auto& r : body_rotations(ramp_steps)) ++turns[{r.axis, r.rate_dps}];
+    double outer = 0.0, inner = 0.0;
+    for (const Step& s : ramp_steps) {
+      if (s.kind == StepKind::kMove) {
+        outer = s.outer_deg;
+        inner = s.inner_deg;
+      }
+      if (s.kind != StepKind::kCapture) continue;
+      const Eigen::Vector3d up =
+          g.body_to_level(outer, inner).transpose() * Eigen::Vector3d::UnitZ();
+      Eigen::Index k = 0;
+      up.cwiseAbs().maxCoeff(&k);
+      EXPECT_NEAR(std::abs(up[k]), 1.0, 1e-9) << s.label;
+      ++poses[std::string(up[k] > 0 ? "+" : "-") + static_cast<char>('x' + k)];
     }
-    ramp_s.push_back(recorded);
-    segments.push_back(j - i);
-    // The default segments cover the whole ramp, so a soak at its end needs only its stable time.
-    if (j < plan.steps.size() && plan.steps[j].kind == StepKind::kSetTemperature &&
-        plan.steps[j].target_c == start.target_c) {
-      EXPECT_DOUBLE_EQ(plan.step_duration_s[j], plan.steps[j].soak.stable_s);
-      ++soaks_at_ramp_end;
-    }
+    EXPECT_EQ(poses, (std::map<std::string, int>{{"+x", kCycles},
+                                                 {"-x", kCycles},
+                                                 {"+y", kCycles},
+                                                 {"-y", kCycles},
+                                                 {"+z", kCycles},
+                                                 {"-z", kCycles}}))
+        << start.label;
+    EXPECT_EQ(turns, (std::map<std::pair<char, double>, int>{{{'x', 60}, kCycles},
+                                                             {{'x', -60}, kCycles},
+                                                             {{'y', 60}, kCycles},
+                                                             {{'y', -60}, kCycles},
+                                                             {{'z', 60}, kCycles},
+                                                             {{'z', -60}, kCycles}}))
+        << start.label;
   }
-  // Each ramp: 60 * (85 - -40) / 0.5 s in 10 segments, each a point of the bias curve.
-  EXPECT_EQ(ramp_s, (std::vector<double>{60.0 * 125.0 / 0.5, 60.0 * 125.0 / 0.5}));
-  EXPECT_EQ(segments, (std::vector<std::size_t>{10, 10}));
-  EXPECT_EQ(soaks_at_ramp_end, 1u);  // the top; after the ramp down the chamber goes to final_c
+  EXPECT_EQ(ramps, 2);  // heating and cooling
 }
 
 TEST(Library, StaticAllanIsOneLongCapture) {

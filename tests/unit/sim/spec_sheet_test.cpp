@@ -54,6 +54,41 @@ TEST(SpecSheet, Adis16488InRunStabilityBecomesTheFlickerCoefficient) {
   EXPECT_GT(t.gyro_g_sensitivity.cwiseAbs().maxCoeff(), 0.0);
 }
 
+// The repeatability and warm-up figures: a turn-on scale change per power-up, and a power-on
+// bias transient drawn per axis with the sheet's time constant. They are drawn after every
+// other figure, so the same sheet without them draws the same unit as before.
+TEST(SpecSheet, ScaleRepeatabilityAndWarmUpBecomeTheTurnOnScaleAndThePowerOnTransient) {
+  nlohmann::json spec = *builtin_spec("ln200");
+  const ImuTruth plain = truth_from_spec(spec, "ln200", 4);
+  spec["gyro"]["scale_factor_repeatability"] = "100 ppm";
+  spec["accel"]["scale_factor_repeatability"] = "0.02 %";
+  spec["gyro"]["warm_up_bias"] = "20 deg/h";
+  spec["accel"]["warm_up_bias"] = "0.2 mg";
+  spec["output"]["warm_up_time_constant"] = "2 min";
+  const ImuTruth t = truth_from_spec(spec, "mine.json", 4);
+  EXPECT_DOUBLE_EQ(t.gyro_noise.turn_on_scale_ppm.x(), 100.0);
+  EXPECT_DOUBLE_EQ(t.accel_noise.turn_on_scale_ppm.z(), 200.0);
+  EXPECT_DOUBLE_EQ(t.power_on_time_constant_s, 120.0);
+  EXPECT_TRUE(t.gyro_bias.isApprox(plain.gyro_bias));
+  EXPECT_TRUE(t.accel_scale.isApprox(plain.accel_scale));
+  // Drawn from N(0, figure): nonzero, and within 5 sigma.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NE(t.gyro_power_on_bias[i], 0.0);
+    EXPECT_LT(std::abs(t.gyro_power_on_bias[i]) * 3600.0, 5.0 * 20.0);
+    EXPECT_LT(std::abs(t.accel_power_on_bias[i]), 5.0 * 0.2e-3 * core::kStandardGravity);
+  }
+  EXPECT_TRUE(plain.gyro_power_on_bias.isZero());
+  // A warm-up without its time constant is refused, naming what is missing.
+  spec["output"].erase("warm_up_time_constant");
+  try {
+    (void)truth_from_spec(spec, "mine.json", 4);
+    ADD_FAILURE() << "accepted a warm-up bias without a time constant";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("output.warm_up_time_constant"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SpecSheet, DrawnErrorsScatterAsTheFiguresSay) {
   // Over many drawn units, the misalignment spread equals the nonorthogonality figure.
   const auto spec = *builtin_spec("ln200");
