@@ -127,7 +127,6 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
         "network readable by anyone on it",
         opt.listen);
   }
-  std::unique_ptr<svc::FleetPublisher> publisher;
   svc::PublisherOptions publisher_options;
   if (!opt.publish.empty()) {
     // Checked before anything is opened, as the API options: a password in the URL is refused.
@@ -149,6 +148,12 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
 
   svc::EventHub hub;
   svc::RunService service(service_options, hub);
+  // Made before the API (it does no I/O until started), so that GET /station/publish reads it.
+  std::unique_ptr<svc::FleetPublisher> publisher;
+  if (!opt.publish.empty()) {
+    publisher = std::make_unique<svc::FleetPublisher>(publisher_options, hub);
+    api_options.publish_status = [&publisher] { return publisher->status(); };
+  }
   api::ApiServer server(service, hub, api_options);
   const int port = server.start();
   // One line on stdout that scripts and tests read (the port when --listen asked for 0).
@@ -158,8 +163,7 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   spdlog::info("station {} ({} IMUs), database {}, recovery {}", service_options.station.name,
                service_options.station.imus.size(), opt.db, opt.recovery);
   service.start();
-  if (!opt.publish.empty()) {
-    publisher = std::make_unique<svc::FleetPublisher>(publisher_options, hub);
+  if (publisher) {
     publisher->start();
     spdlog::info("publishing to {} every {} s and when a run ends{}",
                  publisher_options.central.display, opt.publish_interval_s,

@@ -578,12 +578,23 @@ TEST_F(FleetSync, TheDaemonPublishesInTheBackgroundAndRetriesWhileTheServerIsDow
     return calstand::testing::read_text(log).find("failed (2 in a row), retried later") !=
            std::string::npos;
   })) << calstand::testing::read_text(log);
+  calstand::testing::ApiClient api(daemon.port());
+  nlohmann::json publish = api.get("/station/publish").body;
+  EXPECT_GE(publish["failures_in_a_row"].get<int>(), 2) << publish.dump();
+  EXPECT_NE(publish["last_error"].get<std::string>().find("central: connect to"), std::string::npos)
+      << publish.dump();
   ASSERT_TRUE(server_->start());
   // Back: the next pass copies the run, its events and its samples.
   const auto local = local_counts(s);
   EXPECT_EQ(local.at("runs"), 1);
   EXPECT_TRUE(waited_for([&] { return central_counts(s) == local; }))
       << calstand::testing::read_text(log);
+  EXPECT_TRUE(waited_for([&] {
+    publish = api.get("/station/publish").body;
+    return publish["failures_in_a_row"] == 0;
+  })) << publish.dump();
+  EXPECT_TRUE(publish["last_error"].is_null()) << publish.dump();
+  EXPECT_TRUE(publish["last_success_utc"].is_string()) << publish.dump();
   EXPECT_EQ(daemon.signal_and_wait(SIGTERM), 0);
 }
 

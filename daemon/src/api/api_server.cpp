@@ -89,6 +89,7 @@ struct ApiServer::Impl {
     ctx.access.tokens = options.all_tokens();
     ctx.access.reads_need_token = !is_loopback_address(options.host);
     ctx.fleet = options.fleet;
+    ctx.publish_status = options.publish_status;
   }
 
   ApiOptions options;

@@ -7,6 +7,7 @@
 #include <httplib.h>
 // clang-format on
 #include <atomic>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -34,11 +35,13 @@ struct RouteContext {
   AccessPolicy access{};
   /// The fleet's central database shown under /fleet, or none (ApiOptions::fleet).
   std::optional<fleet::CentralAddress> fleet{};
+  /// The fleet publisher's state (ApiOptions::publish_status), or empty.
+  std::function<nlohmann::json()> publish_status{};
 };
 
 /// /runs, /runs/{id}, /runs/{id}/steps|events|export, /runs/{id}/pause|resume|abort|skip.
 void register_run_routes(httplib::Server& server, const RouteContext& ctx);
-/// /station, /calibrations/{id}, /events (server-sent events).
+/// /station, /station/publish, /calibrations/{id}, /events (server-sent events).
 void register_station_routes(httplib::Server& server, const RouteContext& ctx);
 /// /procedures (the library with its parameters) and /plan (a plan preview, nothing queued).
 void register_procedure_routes(httplib::Server& server, const RouteContext& ctx);
