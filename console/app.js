@@ -1,7 +1,8 @@
 // The console's entry point: the token field, the message banner, the live stream indicator,
 // and the router that shows one page per location hash (#/station, #/runs, #/runs/ID,
-// #/loop/ID, #/lot, #/lot/YYYY-MM-DD, #/units/SERIAL).
+// #/loop/ID, #/lot, #/lot/YYYY-MM-DD, #/units/SERIAL, #/fleet, #/fleet/YYYY-MM-DD).
 import { setToken, token } from './api.js';
+import { showFleet } from './fleet_page.js';
 import { connect, onStreamState, reconnect } from './live.js';
 import { showLot, showUnit } from './lot_page.js';
 import { showLoop } from './loop_page.js';
@@ -38,7 +39,7 @@ function route() {
   const [, page = 'station', id] = (location.hash || '#/station').split('/');
   // A unit's page belongs to the lot's tab.
   const tab = page === 'units' ? 'lot' : page;
-  for (const name of ['station', 'runs', 'loop', 'lot']) {
+  for (const name of ['station', 'runs', 'loop', 'lot', 'fleet']) {
     document.getElementById(`nav-${name}`).classList.toggle('current', name === tab);
   }
   leavePage();
@@ -50,6 +51,7 @@ function route() {
   if (page === 'runs') leavePage = showRuns(ctx, runId);
   else if (page === 'loop') leavePage = showLoop(ctx, runId);
   else if (page === 'lot') leavePage = showLot(ctx, id || '');
+  else if (page === 'fleet') leavePage = showFleet(ctx, id || '');
   // The serial is percent-encoded in the address (a '/' in it would split it).
   else if (page === 'units' && id) leavePage = showUnit(ctx, decoded(id));
   else if (page === 'units') leavePage = showLot(ctx);

@@ -16,6 +16,7 @@ set(CALSTAND_CONSOLE_FILES
   ${calstand_console_dir}/app.js
   ${calstand_console_dir}/charts.js
   ${calstand_console_dir}/dom.js
+  ${calstand_console_dir}/fleet_page.js
   ${calstand_console_dir}/live.js
   ${calstand_console_dir}/lot_page.js
   ${calstand_console_dir}/loop_page.js

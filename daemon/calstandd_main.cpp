@@ -11,11 +11,13 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include "core/error.hpp"
@@ -23,6 +25,7 @@
 #include "daemon/api/api_server.hpp"
 #include "daemon/api/tokens_file.hpp"
 #include "daemon/service/event_hub.hpp"
+#include "daemon/service/fleet_publisher.hpp"
 #include "daemon/service/run_service.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
@@ -45,6 +48,13 @@ struct Options {
   std::string log_dir;
   std::string recovery = "auto";
   std::string log_level = "info";
+  std::string publish;  ///< the fleet's central database (postgresql://...), or none
+  std::string publish_password_file;
+  std::string publish_name;
+  double publish_interval_s = 300.0;
+  bool publish_samples = false;
+  std::string fleet;  ///< the central database shown read-only under /fleet, or none
+  std::string fleet_password_file;
 };
 
 // A secret anyone on the machine can read is no secret; warned rather than refused, since a
@@ -104,6 +114,10 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   api_options.tls_cert_file = opt.tls_cert;
   api_options.tls_key_file = opt.tls_key;
   api_options.allow_plaintext = opt.allow_plaintext;
+  if (!opt.fleet.empty()) {
+    api_options.fleet =
+        calstand::fleet::parse_central_address(opt.fleet, opt.fleet_password_file, "--fleet");
+  }
   // Before anything is opened: refuses an open port without a token, or without TLS.
   api_options.validate();
   if (api_options.allow_plaintext && !api_options.uses_tls() &&
@@ -113,6 +127,19 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
         "network readable by anyone on it",
         opt.listen);
   }
+  svc::PublisherOptions publisher_options;
+  if (!opt.publish.empty()) {
+    // Checked before anything is opened, as the API options: a password in the URL is refused.
+    publisher_options.central =
+        calstand::fleet::parse_central_address(opt.publish, opt.publish_password_file, "--publish");
+    publisher_options.db_path = opt.db;
+    publisher_options.sync.station_name =
+        opt.publish_name.empty() ? service_options.station.name : opt.publish_name;
+    publisher_options.sync.samples = opt.publish_samples;
+    publisher_options.interval_s = opt.publish_interval_s;
+    publisher_options.max_retry_s = std::max(600.0, opt.publish_interval_s);
+    publisher_options.validate();
+  }
   // This daemon alone drives the database's station (released by the kernel if it dies).
   const calstand::store::DatabaseLock owner(
       opt.db, calstand::store::DatabaseLock::Mode::kExclusive,
@@ -121,6 +148,12 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
 
   svc::EventHub hub;
   svc::RunService service(service_options, hub);
+  // Made before the API (it does no I/O until started), so that GET /station/publish reads it.
+  std::unique_ptr<svc::FleetPublisher> publisher;
+  if (!opt.publish.empty()) {
+    publisher = std::make_unique<svc::FleetPublisher>(publisher_options, hub);
+    api_options.publish_status = [&publisher] { return publisher->status(); };
+  }
   api::ApiServer server(service, hub, api_options);
   const int port = server.start();
   // One line on stdout that scripts and tests read (the port when --listen asked for 0).
@@ -130,12 +163,19 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   spdlog::info("station {} ({} IMUs), database {}, recovery {}", service_options.station.name,
                service_options.station.imus.size(), opt.db, opt.recovery);
   service.start();
+  if (publisher) {
+    publisher->start();
+    spdlog::info("publishing to {} every {} s and when a run ends{}",
+                 publisher_options.central.display, opt.publish_interval_s,
+                 opt.publish_samples ? ", samples included" : "");
+  }
 
   int sig = 0;
   sigwait(&stop_signals, &sig);
   const std::string why = sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "SIGHUP";
   spdlog::info("{} received: checkpointing the run in progress and stopping", why);
   service.stop(why);
+  if (publisher) publisher->stop();
   server.stop();
   spdlog::info("stopped cleanly");
   return 0;
@@ -171,6 +211,22 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--log-level", opt.log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
+  app.add_option("--publish", opt.publish,
+                 "Copy ended runs, records, verdicts and fits to the fleet's central database "
+                 "(postgresql://USER@HOST/DB, no password) in the background");
+  app.add_option("--publish-password-file", opt.publish_password_file,
+                 "Password file of --publish (libpq's .pgpass format, mode 600)");
+  app.add_option("--publish-name", opt.publish_name,
+                 "Name the station registers with (default: the station file's name)");
+  app.add_option("--publish-interval-s", opt.publish_interval_s,
+                 "Seconds between publish passes (and a pass when a run ends)")
+      ->capture_default_str();
+  app.add_flag("--publish-samples", opt.publish_samples, "Publish the sample chunks too");
+  app.add_option("--fleet", opt.fleet,
+                 "Show the fleet's central database read-only under /fleet and in the console "
+                 "(postgresql://READER@HOST/DB, no password)");
+  app.add_option("--fleet-password-file", opt.fleet_password_file,
+                 "Password file of --fleet (libpq's .pgpass format, mode 600)");
   app.set_version_flag("--version", std::string("calstandd ") + calstand::core::kVersion);
   try {
     app.parse(argc, argv);

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The benchmarks (bench/), from a bare machine. Extra arguments go to Google Benchmark,
-# e.g. --benchmark_filter=World; `daemon-load [ARGS]` runs the calstandd load bench instead.
+# e.g. --benchmark_filter=World; `daemon-load [ARGS]` runs the calstandd load bench instead,
+# `fleet-sync [--hours H]` the sync to the fleet's central database.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Explicit: the test command configures the same build folder without benchmarks.
@@ -11,5 +12,10 @@ bench="${CALSTAND_BUILD_DIR:-$root/build}/bench"
 if [ "${1:-}" = "daemon-load" ]; then
   shift
   exec "$bench/calstand_daemon_load_bench" "$@"
+fi
+# `run-bench.sh fleet-sync [--hours H]`: the sync to a throw-away PostgreSQL server.
+if [ "${1:-}" = "fleet-sync" ]; then
+  shift
+  exec "$bench/calstand_fleet_sync_bench" "$@"
 fi
 exec "$bench/calstand_bench" "$@"

@@ -15,6 +15,8 @@ export CALSTAND_REQUIRE_SCHEMA_SUITE=1
 export CALSTAND_REQUIRE_SSE_CLIENT=1
 # ... and chromium, chromium-driver and python3-selenium: the console's browser test must run too.
 export CALSTAND_REQUIRE_BROWSER=1
+# ... and postgresql: the fleet tests start a throw-away PostgreSQL server and must not skip.
+export CALSTAND_REQUIRE_POSTGRES=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600
 # Fuzzing itself (clang, libFuzzer, sanitizers: a build of its own) is not part of this command:
 # `bash scripts/run-fuzz.sh [SECONDS]`. ctest above replays every fuzz target's kept seeds.

@@ -11,6 +11,7 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev openssl sqlite3 libfast-float-dev
+  libpqxx-dev postgresql
   libmuparser-dev libfftw3-dev libboost-math-dev libceres-dev
   libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev
   json-schema-test-suite

@@ -260,3 +260,21 @@ CREATE TABLE acceptances (
   created_utc    TEXT NOT NULL
 );
 CREATE INDEX acceptances_by_calibration ON acceptances (calibration_id, id);
+
+-- migration 6: station identity for the fleet
+-- The station's identity across a fleet (docs/fleet.md): a random UUID (version 4) made once,
+-- when the database is created or first brought to this version. The central database knows
+-- a run as (station uuid, local run id), never by the local id alone. A copied database file
+-- copies the identity too: make a fresh database for a new station.
+CREATE TABLE station_identity (
+  only_row    INTEGER PRIMARY KEY CHECK (only_row = 1),
+  uuid        TEXT NOT NULL CHECK (length(uuid) = 36),
+  created_utc TEXT NOT NULL
+);
+INSERT INTO station_identity (only_row, uuid, created_utc)
+SELECT 1,
+       lower(substr(h, 1, 8) || '-' || substr(h, 9, 4) || '-4' || substr(h, 14, 3) || '-' ||
+             substr('89ab', 1 + (abs(random()) % 4), 1) || substr(h, 18, 3) || '-' ||
+             substr(h, 21, 12)),
+       strftime('%Y-%m-%dT%H:%M:%fZ', 'now')
+FROM (SELECT hex(randomblob(16)) AS h);

@@ -103,6 +103,11 @@ void check_lot_since(const std::string& since_utc, const std::string& where) {
 }
 
 LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) {
+  store::DatabaseRecords records(db);
+  return lot_statistics(records, since_utc);
+}
+
+LotStatistics lot_statistics(store::RecordSource& records, const std::string& since_utc) {
   check_lot_since(since_utc, "since");
   LotStatistics lot;
   lot.since_utc = since_utc;
@@ -110,7 +115,7 @@ LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) 
   // of its newest record in the calibration order (the control chart's x).
   std::map<std::string, store::CalibrationRow> newest;
   std::vector<std::string> order;
-  for (store::CalibrationRow& row : store::calibrations_since(db, since_utc)) {
+  for (store::CalibrationRow& row : records.calibrations_since(since_utc)) {
     if (row.serial.empty()) {
       ++lot.records_without_serial;
       continue;
@@ -129,7 +134,8 @@ LotStatistics lot_statistics(store::Database& db, const std::string& since_utc) 
     u.calibration = row.id;
     u.run = row.run;
     u.created_utc = row.created_utc;
-    if (const auto a = store::latest_acceptance(db, row.id)) u.verdict = a->verdict;
+    u.station = row.station;
+    if (const auto a = records.latest_acceptance(row.id)) u.verdict = a->verdict;
     if (u.verdict == "pass") {
       ++lot.passed;
     } else if (u.verdict == "fail") {
@@ -171,6 +177,7 @@ nlohmann::json to_json(const LotStatistics& lot) {
          {"run", u.run},
          {"created_utc", u.created_utc},
          {"verdict", u.verdict.empty() ? nlohmann::json() : nlohmann::json(u.verdict)}});
+    if (!u.station.empty()) units.back()["station"] = u.station;
   }
   nlohmann::json parameters = nlohmann::json::array();
   for (const LotParameter& p : lot.parameters) {

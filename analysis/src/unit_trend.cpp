@@ -10,7 +10,13 @@
 namespace calstand::analysis {
 
 UnitTrend unit_trend(store::Database& db, const std::string& serial) {
-  std::vector<UnitRecord> rows = unit_records(db, serial);
+  store::DatabaseRecords records(db);
+  return unit_trend(records, serial);
+}
+
+UnitTrend unit_trend(store::RecordSource& records, const std::string& serial) {
+  std::vector<UnitRecord> rows =
+      serial.empty() ? std::vector<UnitRecord>() : unit_records(records, serial);
   if (serial.empty() || rows.empty()) {
     throw core::InputError("--serial " + serial, "no calibration record of that unit");
   }
@@ -21,7 +27,8 @@ UnitTrend unit_trend(store::Database& db, const std::string& serial) {
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const store::CalibrationRow& c = rows[r].calibration;
     trend.records.push_back({c.id, c.run, c.created_utc,
-                             rows[r].acceptance ? rows[r].acceptance->verdict : std::string()});
+                             rows[r].acceptance ? rows[r].acceptance->verdict : std::string(),
+                             c.station});
     for (const auto& p : c.record.value("parameters", nlohmann::json::array())) {
       const std::string name = p.value("name", "");
       auto [it, added] = index.emplace(name, trend.parameters.size());
@@ -72,6 +79,7 @@ nlohmann::json to_json(const UnitTrend& trend) {
          {"run", r.run},
          {"created_utc", r.created_utc},
          {"verdict", r.verdict.empty() ? nlohmann::json() : nlohmann::json(r.verdict)}});
+    if (!r.station.empty()) records.back()["station"] = r.station;
   }
   nlohmann::json parameters = nlohmann::json::array();
   for (const TrendParameter& p : trend.parameters) {

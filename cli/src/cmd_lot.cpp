@@ -8,8 +8,10 @@
 #include <string>
 
 #include "analysis/lot.hpp"
+#include "central_option.hpp"
 #include "commands.hpp"
 #include "core/file_output.hpp"
+#include "fleet/central_records.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -17,6 +19,7 @@ namespace {
 
 struct LotOptions {
   std::string db;
+  CentralOptions central;  ///< --from: the fleet's central database instead of --db
   std::string since;
   std::string html;
   bool as_json = false;
@@ -24,8 +27,16 @@ struct LotOptions {
 
 void run_lot(const LotOptions& opt) {
   analysis::check_lot_since(opt.since, "--since");
-  store::Database db = open_existing_database(opt.db);
-  const analysis::LotStatistics lot = analysis::lot_statistics(db, opt.since);
+  require_one_source(opt.db, opt.central, "lot");
+  analysis::LotStatistics lot;
+  if (!opt.central.url.empty()) {
+    auto connection = open_central(opt.central, "--from");
+    fleet::CentralRecords records(*connection);
+    lot = analysis::lot_statistics(records, opt.since);
+  } else {
+    store::Database db = open_existing_database(opt.db);
+    lot = analysis::lot_statistics(db, opt.since);
+  }
   if (!opt.html.empty()) {
     core::write_file_whole(opt.html, analysis::lot_html(lot));
   }
@@ -63,7 +74,10 @@ void register_lot(CLI::App& app) {
       "lot",
       "Every unit calibrated (its newest record): each parameter's distribution, units far from "
       "their siblings, yield, control charts");
-  cmd->add_option("--db", opt->db, "Database file")->required();
+  auto* db = cmd->add_option("--db", opt->db, "Database file");
+  add_central_options(cmd, opt->central, "--from", "The fleet's central database instead of --db",
+                      false);
+  cmd->get_option("--from")->excludes(db);
   cmd->add_option(
       "--since", opt->since,
       "Only records made since this UTC date (YYYY-MM-DD) or time (YYYY-MM-DDTHH:MM[:SS])");

@@ -5,7 +5,9 @@
 #include <string>
 
 #include "analysis/unit_trend.hpp"
+#include "central_option.hpp"
 #include "commands.hpp"
+#include "fleet/central_records.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {
@@ -13,13 +15,22 @@ namespace {
 
 struct TrendOptions {
   std::string db;
+  CentralOptions central;  ///< --from: the fleet's central database instead of --db
   std::string serial;
   bool as_json = false;
 };
 
 void run_trend(const TrendOptions& opt) {
-  store::Database db = open_existing_database(opt.db);
-  const analysis::UnitTrend trend = analysis::unit_trend(db, opt.serial);
+  require_one_source(opt.db, opt.central, "trend");
+  analysis::UnitTrend trend;
+  if (!opt.central.url.empty()) {
+    auto connection = open_central(opt.central, "--from");
+    fleet::CentralRecords records(*connection);
+    trend = analysis::unit_trend(records, opt.serial);
+  } else {
+    store::Database db = open_existing_database(opt.db);
+    trend = analysis::unit_trend(db, opt.serial);
+  }
   if (opt.as_json) {
     fmt::print("{}\n", analysis::to_json(trend).dump(2));
     return;
@@ -27,8 +38,9 @@ void run_trend(const TrendOptions& opt) {
   fmt::print("unit {}: {} records\n", trend.serial, trend.records.size());
   for (std::size_t r = 0; r < trend.records.size(); ++r) {
     const auto& rec = trend.records[r];
-    fmt::print("  [{}] calibration {} of run {}, {}{}\n", r + 1, rec.calibration, rec.run,
-               rec.created_utc, rec.verdict.empty() ? "" : " (" + rec.verdict + ")");
+    fmt::print("  [{}] calibration {} of run {}{}, {}{}\n", r + 1, rec.calibration, rec.run,
+               rec.station.empty() ? "" : " at " + rec.station, rec.created_utc,
+               rec.verdict.empty() ? "" : " (" + rec.verdict + ")");
   }
   fmt::print("\n{:<28} {:<9}", "parameter", "unit");
   for (std::size_t r = 0; r < trend.records.size(); ++r)
@@ -52,7 +64,10 @@ void register_trend(CLI::App& app) {
   auto opt = std::make_shared<TrendOptions>();
   auto* cmd = app.add_subcommand(
       "trend", "How a unit's calibration parameters moved across its records, with their sigmas");
-  cmd->add_option("--db", opt->db, "Database file")->required();
+  auto* db = cmd->add_option("--db", opt->db, "Database file");
+  add_central_options(cmd, opt->central, "--from", "The fleet's central database instead of --db",
+                      false);
+  cmd->get_option("--from")->excludes(db);
   cmd->add_option("--serial", opt->serial, "The unit's serial")->required();
   cmd->add_flag("--json", opt->as_json, "Print the trend as JSON");
   cmd->callback([opt] { run_trend(*opt); });

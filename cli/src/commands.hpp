@@ -20,6 +20,7 @@ void register_device(CLI::App& app);
 void register_diagnose(CLI::App& app);  // diagnose and history
 void register_export_calibration(CLI::App& app);
 void register_fit(CLI::App& app);
+void register_fleet(CLI::App& app);  // the central database: migrate, runs, units, calibrations
 void register_lot(CLI::App& app);
 void register_import_export(CLI::App& app);  // import and export
 void register_noise_study(CLI::App& app);
@@ -30,6 +31,7 @@ void register_runs(CLI::App& app);         // runs and show
 void register_sim_session(CLI::App& app);  // hand-held / Ferraris sessions, no table
 void register_sim_station(CLI::App& app);
 void register_station(CLI::App& app);
+void register_sync(CLI::App& app);  // a station's database to the central one
 void register_trend(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_diagnose(app);
   calstand::cli::register_export_calibration(app);
   calstand::cli::register_fit(app);
+  calstand::cli::register_fleet(app);
   calstand::cli::register_lot(app);
   calstand::cli::register_import_export(app);
   calstand::cli::register_noise_study(app);
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_sim_session(app);
   calstand::cli::register_sim_station(app);
   calstand::cli::register_station(app);
+  calstand::cli::register_sync(app);
   calstand::cli::register_trend(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);

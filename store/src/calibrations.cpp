@@ -17,7 +17,8 @@ CalibrationRow row_of(SQLite::Statement& q) {
           q.getColumn(3).getString(),
           nlohmann::json::parse(q.getColumn(4).getString()),
           q.getColumn(5).getString(),
-          q.getColumn(6).getString()};
+          q.getColumn(6).getString(),
+          std::string()};
 }
 
 constexpr const char* kSelect =

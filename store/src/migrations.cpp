@@ -2,9 +2,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "sql_util.hpp"
+#include "store/migration_blocks.hpp"
 
-namespace calstand::store::detail {
+namespace calstand::store {
 
 std::vector<Migration> parse_migrations(std::string_view text) {
   static constexpr std::string_view kMarker = "-- migration ";
@@ -19,11 +19,13 @@ std::vector<Migration> parse_migrations(std::string_view text) {
       Migration m;
       const auto [ptr, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), m.version);
       if (ec != std::errc() || ptr == rest.data() + rest.size() || *ptr != ':') {
-        throw std::logic_error("schema.sql: malformed migration marker: " + std::string(line));
+        throw std::logic_error("schema: malformed migration marker: " + std::string(line));
       }
-      m.title = std::string(rest.substr(static_cast<std::size_t>(ptr - rest.data()) + 1));
+      std::string_view title = rest.substr(static_cast<std::size_t>(ptr - rest.data()) + 1);
+      while (title.starts_with(' ')) title.remove_prefix(1);
+      m.title = std::string(title);
       if (m.version != static_cast<int>(out.size()) + 1) {
-        throw std::logic_error("schema.sql: migration " + std::to_string(m.version) +
+        throw std::logic_error("schema: migration " + std::to_string(m.version) +
                                " out of order; expected " + std::to_string(out.size() + 1));
       }
       out.push_back(std::move(m));
@@ -35,4 +37,4 @@ std::vector<Migration> parse_migrations(std::string_view text) {
   return out;
 }
 
-}  // namespace calstand::store::detail
+}  // namespace calstand::store

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "store/error.hpp"
+#include "store/migration_blocks.hpp"
 
 namespace calstand::store::detail {
 
@@ -48,15 +49,9 @@ inline std::string text_or_empty(const SQLite::Column& c) {
   return c.isNull() ? std::string() : c.getString();
 }
 
-/// One migration block of schema.sql.
-struct Migration {
-  int version = 0;
-  std::string title;
-  std::string sql;
-};
-
-/// The `-- migration N: title` blocks of `schema_text`, in order. Throws std::logic_error when
-/// the numbering does not run 1, 2, 3, ... (a broken build, not a user error).
-std::vector<Migration> parse_migrations(std::string_view schema_text);
+// The blocks of schema.sql (store/migration_blocks.hpp: the central database's schema uses
+// the same form).
+using store::Migration;
+using store::parse_migrations;
 
 }  // namespace calstand::store::detail

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "store/database.hpp"
+#include "store/record_source.hpp"
 
 namespace calstand::analysis {
 
@@ -20,6 +21,7 @@ struct LotUnit {
   std::int64_t run = 0;
   std::string created_utc;
   std::string verdict;  ///< its record's latest acceptance verdict; empty when not judged
+  std::string station;  ///< the station that made the record (central database only)
 };
 
 /// A unit whose value lies far from its siblings' (robust z beyond kLotOutlierZ).
@@ -76,9 +78,12 @@ void check_lot_since(const std::string& since_utc, const std::string& where);
 /// The lot of every unit (serial) calibrated at or after `since_utc` (check_lot_since; empty:
 /// all), each with its newest record. Throws core::InputError naming `since` for a malformed
 /// start.
+LotStatistics lot_statistics(store::RecordSource& records, const std::string& since_utc);
+/// The same on a station's own file.
 LotStatistics lot_statistics(store::Database& db, const std::string& since_utc);
 
-/// `{"since", "units": [...], "records_without_serial", "verdicts": {"pass", "fail",
+/// `{"since", "units": [{"serial", "device", "calibration", "run", "created_utc", "verdict",
+///   "station" (central database only)}], "records_without_serial", "verdicts": {"pass", "fail",
 ///   "indeterminate", "not_judged"}, "yield", "parameters": [{"name", "unit", "n", "mean",
 ///   "std", "median", "robust_sigma", "min", "max", "control": {"centre", "lower", "upper"},
 ///   "values": [{"serial", "value"}], "outliers": [{"serial", "value", "robust_z", "verdict"}]}]}`

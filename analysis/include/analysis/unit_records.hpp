@@ -12,6 +12,7 @@
 #include "store/acceptances.hpp"
 #include "store/calibrations.hpp"
 #include "store/database.hpp"
+#include "store/record_source.hpp"
 
 namespace calstand::analysis {
 
@@ -29,10 +30,13 @@ bool may_be_in_force(const std::optional<store::AcceptanceRow>& acceptance);
 /// The records of unit `serial`, newest first; the newest that may be in force is marked.
 /// Empty `serial`: every record in the database, newest first, one in force per serial (none
 /// for records without a serial: nobody knows which unit they belong to).
+std::vector<UnitRecord> unit_records(store::RecordSource& records, const std::string& serial);
+/// The same on a station's own file.
 std::vector<UnitRecord> unit_records(store::Database& db, const std::string& serial);
 
 /// `{"id", "run", "imu", "serial", "model", "created_utc", "verdict" (or null), "spec" (or null),
-///   "in_force"}`, the record itself left out (GET /calibrations/{id} has it).
+///   "in_force", "station" (central database only)}`, the record itself left out (GET
+///   /calibrations/{id} has it).
 nlohmann::json to_json(const UnitRecord& record);
 
 /// `{"serial", "calibrations": [to_json(record), ...]}`: the lookup of unit `serial` (empty:

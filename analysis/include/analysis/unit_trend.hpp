@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "store/database.hpp"
+#include "store/record_source.hpp"
 
 namespace calstand::analysis {
 
@@ -18,6 +19,7 @@ struct TrendRecord {
   std::int64_t run = 0;
   std::string created_utc;
   std::string verdict;  ///< latest acceptance verdict; empty when not judged
+  std::string station;  ///< the station that made the record (central database only)
 };
 
 /// A parameter across the unit's records: its value and sigma in each record that fitted it
@@ -42,9 +44,12 @@ struct UnitTrend {
 
 /// The trend of unit `serial` over every record of it. Throws core::InputError naming the
 /// serial when it has no record.
+UnitTrend unit_trend(store::RecordSource& records, const std::string& serial);
+/// The same on a station's own file.
 UnitTrend unit_trend(store::Database& db, const std::string& serial);
 
-/// `{"serial", "records": [{"calibration", "run", "created_utc", "verdict"}], "parameters":
+/// `{"serial", "records": [{"calibration", "run", "created_utc", "verdict", "station" (central
+///   database only)}], "parameters":
 ///   [{"name", "unit", "values": [value|null...], "sigmas": [...], "change", "change_sigma",
 ///   "change_z"}]}`
 nlohmann::json to_json(const UnitTrend& trend);

@@ -88,6 +88,8 @@ struct ApiServer::Impl {
         server(*server_ptr) {
     ctx.access.tokens = options.all_tokens();
     ctx.access.reads_need_token = !is_loopback_address(options.host);
+    ctx.fleet = options.fleet;
+    ctx.publish_status = options.publish_status;
   }
 
   ApiOptions options;
@@ -179,6 +181,7 @@ ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOp
   register_console_routes(server, impl_->ctx);
   register_analysis_routes(server, impl_->ctx);
   register_factory_routes(server, impl_->ctx);
+  register_fleet_routes(server, impl_->ctx);
 }
 
 ApiServer::~ApiServer() { stop(); }

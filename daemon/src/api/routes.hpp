@@ -7,11 +7,14 @@
 #include <httplib.h>
 // clang-format on
 #include <atomic>
+#include <functional>
+#include <optional>
 #include <string>
 
 #include "daemon/api/access.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
+#include "fleet/central_address.hpp"
 
 namespace calstand::daemon::api {
 
@@ -30,11 +33,15 @@ struct RouteContext {
   /// Who may do what (set before the server starts; read-only afterwards). Handlers learn who
   /// asked from request_context.hpp, never from the request's headers themselves.
   AccessPolicy access{};
+  /// The fleet's central database shown under /fleet, or none (ApiOptions::fleet).
+  std::optional<fleet::CentralAddress> fleet{};
+  /// The fleet publisher's state (ApiOptions::publish_status), or empty.
+  std::function<nlohmann::json()> publish_status{};
 };
 
 /// /runs, /runs/{id}, /runs/{id}/steps|events|export, /runs/{id}/pause|resume|abort|skip.
 void register_run_routes(httplib::Server& server, const RouteContext& ctx);
-/// /station, /calibrations/{id}, /events (server-sent events).
+/// /station, /station/publish, /calibrations/{id}, /events (server-sent events).
 void register_station_routes(httplib::Server& server, const RouteContext& ctx);
 /// /procedures (the library with its parameters) and /plan (a plan preview, nothing queued).
 void register_procedure_routes(httplib::Server& server, const RouteContext& ctx);
@@ -45,5 +52,8 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx);
 /// The factory line: /lot, /units/{serial}/calibrations, /calibrations/{id}/certificate
 /// (routes_factory.cpp).
 void register_factory_routes(httplib::Server& server, const RouteContext& ctx);
+/// The fleet's central database, read-only: /fleet (stations), /fleet/runs, /fleet/units,
+/// /fleet/calibrations, /fleet/parameters (routes_fleet.cpp).
+void register_fleet_routes(httplib::Server& server, const RouteContext& ctx);
 
 }  // namespace calstand::daemon::api

@@ -101,6 +101,17 @@ void register_station_routes(httplib::Server& server, const RouteContext& ctx) {
                send_json(res, 200, station_json(ctx));
              }));
 
+  // How publishing to the fleet's central database goes (calstandd --publish): a failure is
+  // otherwise only in the log.
+  server.Get("/station/publish",
+             guarded([&ctx](const httplib::Request& req, httplib::Response& res) {
+               if (!ctx.publish_status) {
+                 throw BadRequest(404, req.path,
+                                  "this calstandd does not publish: start it with --publish");
+               }
+               send_json(res, 200, ctx.publish_status());
+             }));
+
   // The operator's deliberate close of latched table interlocks, between runs (409 while a
   // run is on the station or when the controller refuses: the cause is still present).
   server.Post("/station/interlock/close",

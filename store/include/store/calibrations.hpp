@@ -18,6 +18,9 @@ struct CalibrationRow {
   nlohmann::json record;
   std::string created_utc;
   std::string serial;  ///< the unit's serial (the record's device.serial); empty when unknown
+  /// The station that made it, when read from the fleet's central database (the name it
+  /// registered with); empty for a row of a station's own file.
+  std::string station;
 };
 
 /// Stores a calibration record (schemas/calibration.schema.json) of `imu` fitted on `run`;

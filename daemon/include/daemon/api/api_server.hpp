@@ -1,13 +1,17 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "daemon/api/access.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/run_service.hpp"
+#include "fleet/central_address.hpp"
 
 namespace calstand::daemon::api {
 
@@ -36,6 +40,12 @@ struct ApiOptions {
   /// requests, is closed [s].
   int read_timeout_s = 5;
   int keep_alive_timeout_s = 5;
+  /// The fleet's central database to show read-only under /fleet (`--fleet`): checked by
+  /// fleet::parse_central_address; none: /fleet answers 404.
+  std::optional<fleet::CentralAddress> fleet;
+  /// The publisher's state for GET /station/publish (`--publish`: FleetPublisher::status);
+  /// empty: that route answers 404. Called from connection threads: must be thread safe.
+  std::function<nlohmann::json()> publish_status;
 
   /// Throws core::InputError naming the option: a host beyond loopback without a token, or
   /// without TLS unless allow_plaintext; half a TLS pair; a token file's names or secrets
