@@ -1,5 +1,7 @@
 #include "daemon/run_state.hpp"
 
+#include "store/records.hpp"
+
 namespace calstand::daemon {
 
 std::string_view to_string(RunState state) {
@@ -39,9 +41,6 @@ bool is_terminal(RunState state) {
   return state == RunState::kCompleted || state == RunState::kAborted || state == RunState::kFailed;
 }
 
-bool has_ended(std::string_view status) {
-  const auto state = run_state_named(status);
-  return (state && is_terminal(*state)) || status == "imported";
-}
+bool has_ended(std::string_view status) { return store::run_has_ended(status); }
 
 }  // namespace calstand::daemon

@@ -20,12 +20,6 @@
 namespace calstand::fleet {
 namespace {
 
-// Runs in these states never change again (daemon/run_state.hpp has_ended: only an
-// interrupted run resumes); only they are copied, so a central row is final when written.
-bool has_ended(const std::string& status) {
-  return status == "completed" || status == "aborted" || status == "failed" || status == "imported";
-}
-
 template <class T>
 std::optional<T> optional_field(const pqxx::field& f) {
   if (f.is_null()) return std::nullopt;
@@ -318,7 +312,7 @@ class StationSync {
       LocalRef r;
       r.id = q.getColumn(0).getInt64();
       if (runs) {
-        r.eligible = has_ended(q.getColumn(1).getString());
+        r.eligible = store::run_has_ended(q.getColumn(1).getString());
       } else {
         r.parent = q.getColumn(1).getInt64();
       }

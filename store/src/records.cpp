@@ -7,6 +7,10 @@
 #include "store/error.hpp"
 
 namespace calstand::store {
+
+bool run_has_ended(std::string_view status) {
+  return status == "completed" || status == "aborted" || status == "failed" || status == "imported";
+}
 namespace {
 
 constexpr std::array<std::pair<StepStatus, std::string_view>, 6> kStepStatus{{

@@ -28,6 +28,12 @@ struct DeviceRecord {
   std::string backend;  ///< e.g. "sim", "modbus"
 };
 
+/// Whether a run whose stored status (runs.status) is `status` is over for good: completed,
+/// aborted or failed (the run engine's terminal states), or imported (recorded elsewhere, never
+/// run here). Interrupted and held runs are not: the daemon or an operator resumes them. Its
+/// rows then never change again (what the fleet's sync relies on).
+bool run_has_ended(std::string_view status);
+
 /// What a new run records about itself.
 struct NewRun {
   std::optional<std::int64_t> station_id;  ///< from RunStore::upsert_station, or none

@@ -25,6 +25,12 @@ TEST(RunState, OnlyTerminalAndImportedRunsHaveEnded) {
        {"queued", "running", "paused", "aborting", "interrupted", "held", "idle", ""}) {
     EXPECT_FALSE(has_ended(open)) << open;
   }
+  // The store's list (which the fleet's sync reads) is the engine's terminal states.
+  for (auto s : {RunState::kIdle, RunState::kRunning, RunState::kPaused, RunState::kAborting,
+                 RunState::kCompleted, RunState::kAborted, RunState::kFailed,
+                 RunState::kInterrupted, RunState::kHeld}) {
+    EXPECT_EQ(has_ended(to_string(s)), is_terminal(s)) << to_string(s);
+  }
 }
 
 }  // namespace
