@@ -8,11 +8,9 @@
 #include <string>
 
 #include "analysis/lot.hpp"
-#include "central_option.hpp"
 #include "commands.hpp"
 #include "core/file_output.hpp"
-#include "fleet/central_records.hpp"
-#include "open_database.hpp"
+#include "record_source_option.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -27,16 +25,9 @@ struct LotOptions {
 
 void run_lot(const LotOptions& opt) {
   analysis::check_lot_since(opt.since, "--since");
-  require_one_source(opt.db, opt.central, "lot");
-  analysis::LotStatistics lot;
-  if (!opt.central.url.empty()) {
-    auto connection = open_central(opt.central, "--from");
-    fleet::CentralRecords records(*connection);
-    lot = analysis::lot_statistics(records, opt.since);
-  } else {
-    store::Database db = open_existing_database(opt.db);
-    lot = analysis::lot_statistics(db, opt.since);
-  }
+  const analysis::LotStatistics lot = with_record_source(
+      opt.db, opt.central, "lot",
+      [&](store::RecordSource& records) { return analysis::lot_statistics(records, opt.since); });
   if (!opt.html.empty()) {
     core::write_file_whole(opt.html, analysis::lot_html(lot));
   }

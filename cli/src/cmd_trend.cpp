@@ -5,10 +5,8 @@
 #include <string>
 
 #include "analysis/unit_trend.hpp"
-#include "central_option.hpp"
 #include "commands.hpp"
-#include "fleet/central_records.hpp"
-#include "open_database.hpp"
+#include "record_source_option.hpp"
 
 namespace calstand::cli {
 namespace {
@@ -21,16 +19,9 @@ struct TrendOptions {
 };
 
 void run_trend(const TrendOptions& opt) {
-  require_one_source(opt.db, opt.central, "trend");
-  analysis::UnitTrend trend;
-  if (!opt.central.url.empty()) {
-    auto connection = open_central(opt.central, "--from");
-    fleet::CentralRecords records(*connection);
-    trend = analysis::unit_trend(records, opt.serial);
-  } else {
-    store::Database db = open_existing_database(opt.db);
-    trend = analysis::unit_trend(db, opt.serial);
-  }
+  const analysis::UnitTrend trend = with_record_source(
+      opt.db, opt.central, "trend",
+      [&](store::RecordSource& records) { return analysis::unit_trend(records, opt.serial); });
   if (opt.as_json) {
     fmt::print("{}\n", analysis::to_json(trend).dump(2));
     return;
