@@ -10,7 +10,9 @@
 #include <map>
 
 #include "core/error.hpp"
+#include "solver/effect_or_wander.hpp"
 #include "solver/noise_estimate.hpp"
+#include "solver/noise_rows.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -177,8 +179,20 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     }
   }
   const std::vector<StepSummary> all = summarize_steps(data, superset);
-  const StepNoise noise = model.earth_rate() ? estimate_step_noise(all, superset, options.rows)
-                                             : estimate_run_noise(data, model, options.rows);
+  // The noise rows: the steps, with a long static capture by its segments (noise_rows.hpp),
+  // summarised for the noise superset (which `superset` is when the model has the Earth rate).
+  const Model noise_model_terms = model.earth_rate() ? superset : noise_superset(model);
+  const std::vector<StepSummary> noise_steps =
+      model.earth_rate() ? all : summarize_steps(data, noise_model_terms);
+  const CaptureSegments segments = segment_long_captures(data, noise_steps);
+  std::vector<NoiseRowSource> sources;
+  std::vector<StepSummary> rows =
+      noise_rows(noise_steps, segments,
+                 segments.empty() ? std::vector<StepSummary>{}
+                                  : summarize_steps(segments.segments, noise_model_terms),
+                 &sources);
+  const StepNoise noise = estimate_step_noise(rows, noise_model_terms, options.rows);
+  const EffectOrWander evidence(std::move(rows), noise_model_terms, options.rows);
   const std::vector<StepSummary> steps = select_parameters(all, superset, model);
 
   Diagnosis d;
@@ -208,6 +222,33 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     k.added_parameters = added;
     k.chi2_dof_after = after.chi2_dof;
     k.delta_bic = after.chi2 - d.fit.chi2 + static_cast<double>(added) * std::log(n_rows);
+    if (c.info->name != "earth_rate") {
+      std::vector<std::string> added_names;
+      for (const ParameterInfo& p : c.model.parameters()) {
+        const auto& had = model.parameters();
+        if (std::none_of(had.begin(), had.end(),
+                         [&](const ParameterInfo& q) { return q.name == p.name; })) {
+          added_names.push_back(p.name);
+        }
+      }
+      // A temperature order k: without it means without every order from k up, which the noise
+      // superset also holds (with three plateaus, orders 2 and 3 would fit the offsets of order
+      // 1 as well).
+      if (c.info->polynomial_order) {
+        const int order = c.model.find(c.info->name)->order;
+        const std::string prefix = std::string(c.info->name) + ".";
+        for (const ParameterInfo& p : evidence.superset().parameters()) {
+          if (p.name.rfind(prefix, 0) == 0 && p.name.back() - '0' > order) {
+            added_names.push_back(p.name);
+          }
+        }
+      }
+      const std::array<bool, kChannels> acting = evidence.channels_of(added_names);
+      if (std::find(acting.begin(), acting.end(), true) != acting.end()) {
+        k.delta_bic_against_wander =
+            delta_bic(evidence.base(acting), evidence.without(added_names));
+      }
+    }
     if (added > 0 && after.dof > 0 && after.chi2 > 0.0) {
       const double F = ((d.fit.chi2 - after.chi2) / added) / (after.chi2 / after.dof);
       const boost::math::fisher_f_distribution<double> dist(added, after.dof);
@@ -232,15 +273,30 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
   d.explained = model_fits || best_fits || best_dominates;
   // Strong evidence (BIC lower by more than 10, F-test p under 1e-6) recommends a term even when
   // the model is already near the floor: with hundreds of rows, chi2/dof 1.2 is still a signal.
+  // A catalogue term is judged against the noise model of the richest catalogue model, not
+  // against a wander re-estimated without it: with a few plateaus hours apart, a slow wander
+  // re-estimated freely explains plateau offsets nearly as well as a temperature term (MEMS
+  // class: +3 to +16 against the wander for a 1 deg/h/degC bias the fixed weights find at -150),
+  // and the catalogue's physics is the prior a lab holds. delta_bic_against_wander says how far
+  // the run alone tells the two apart.
   const bool strong = !d.candidates.empty() && d.candidates.front().delta_bic < kStrongDeltaBic &&
                       d.candidates.front().p_value < 1e-6;
   if (strong && (!model_fits || d.candidates.front().chi2_dof_after < d.fit.chi2_dof)) {
     d.recommended = d.candidates.front().term;
   }
-  const std::vector<std::string> wandering = wander_outweighing_white(d.fit, steps);
+  std::vector<std::string> wandering = wander_outweighing_white(d.fit, steps);
+  if (wandering.empty()) {
+    for (int c : fit_channels(d.fit.rows)) {
+      if (noise.channels[static_cast<std::size_t>(c)].wander.kind != WanderKind::kNone) {
+        wandering.emplace_back(channel_name(c));
+      }
+    }
+  }
+  // A wander may hold an effect the catalogue lacks (effect_or_wander.hpp): wherever the noise
+  // model has one, the search runs and judges its forms against it.
   const bool search = diagnose_options.custom_search == CustomSearch::kAlways ||
                       (diagnose_options.custom_search == CustomSearch::kWhenUnexplained &&
-                       (!d.explained || !wandering.empty()));
+                       (!d.explained || noise.correlated()));
   if (search) {
     SuggestInput in;
     in.data = &data;
@@ -249,8 +305,17 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     in.fit = &d.fit;
     in.catalogue = &superset;
     in.catalogue_steps = &all;
-    in.best_catalogue_delta_bic = d.candidates.empty() ? std::numeric_limits<double>::infinity()
-                                                       : d.candidates.front().delta_bic;
+    // The catalogue's best on the same footing as the suggestions: against the wander.
+    in.best_catalogue_delta_bic = std::numeric_limits<double>::infinity();
+    for (const Candidate& c : d.candidates) {
+      if (std::isfinite(c.delta_bic_against_wander)) {
+        in.best_catalogue_delta_bic =
+            std::min(in.best_catalogue_delta_bic, c.delta_bic_against_wander);
+      }
+    }
+    in.evidence = &evidence;
+    in.evidence_sources = &sources;
+    in.segments = &segments;
     SuggestionSearch found = suggest_custom_terms(in, options, diagnose_options.suggest);
     d.custom_searched = found.ran;
     d.custom_forms_tried = found.forms_tried;
@@ -267,8 +332,12 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
   const bool noise_posed = !d.suggestions.empty() && d.explained;
   if (!d.suggestions.empty()) {
     d.explained = false;
+    const double catalogue_best = d.candidates.empty() ? std::numeric_limits<double>::infinity()
+                                  : std::isfinite(d.candidates.front().delta_bic_against_wander)
+                                      ? d.candidates.front().delta_bic_against_wander
+                                      : d.candidates.front().delta_bic;
     if (!d.recommended.empty() &&
-        d.suggestions.front().delta_bic < d.candidates.front().delta_bic + kStrongDeltaBic) {
+        d.suggestions.front().delta_bic < catalogue_best + kStrongDeltaBic) {
       d.recommended.clear();
     }
   }
@@ -348,12 +417,16 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
                        {"accel", d.fit.residual_rms_accel_mps2}};
   j["candidates"] = nlohmann::json::array();
   for (const auto& c : d.candidates) {
-    j["candidates"].push_back({{"term", c.term},
-                               {"delta_bic", c.delta_bic},
-                               {"p_value", c.p_value},
-                               {"chi2_dof_after", c.chi2_dof_after},
-                               {"added_parameters", c.added_parameters},
-                               {"explanation", c.explanation}});
+    j["candidates"].push_back(
+        {{"term", c.term},
+         {"delta_bic", c.delta_bic},
+         {"delta_bic_against_wander", std::isfinite(c.delta_bic_against_wander)
+                                          ? nlohmann::json(c.delta_bic_against_wander)
+                                          : nlohmann::json(nullptr)},
+         {"p_value", c.p_value},
+         {"chi2_dof_after", c.chi2_dof_after},
+         {"added_parameters", c.added_parameters},
+         {"explanation", c.explanation}});
   }
   j["untestable"] = d.untestable;
   j["signals"] = nlohmann::json::array();

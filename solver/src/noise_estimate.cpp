@@ -8,18 +8,12 @@
 #include <limits>
 
 #include "core/error.hpp"
-#include "variance_component.hpp"
+#include "solver/noise_rows.hpp"
+#include "wander_kernels.hpp"
 
 namespace calstand::solver {
 namespace {
 
-// The wander's size is searched as the ratio r of its variance (mean over the steps' means) to
-// a typical step mean's white variance (variance_component.hpp: 10^-3 .. 10^4; below, it
-// changes no weight; above, the white noise would not matter and the run would be a random
-// walk with samples attached).
-// Gauss-Markov correlation times tried per decade: the likelihood is flat in log tau at this
-// resolution (a factor 1.8), far finer than a run of tens of steps can tell.
-constexpr double kGaussMarkovTausPerDecade = 4.0;
 // An independent extra variance per step must beat the best wander by this much penalised log
 // likelihood (a BIC difference of 10: "very strong" on the Kass-Raftery scale) before the
 // excess is called an effect rather than noise. Real wanders (flicker above all, whose fast
@@ -27,139 +21,21 @@ constexpr double kGaussMarkovTausPerDecade = 4.0;
 constexpr double kNotWanderMargin = 5.0;
 // Penalised log likelihood within which flicker is preferred to another wander (see there).
 constexpr double kCautiousFlickerMargin = 3.0;
-// A column below this share of the largest acting on a channel is rounding, not a regressor.
-constexpr double kRoundingShare = 1e-12;
-// Columns of a channel's design within this (QR pivot relative to the largest) of the span of
-// the others are dropped, so that X^T C^-1 X stays well conditioned for its log-determinant.
-constexpr double kRankThreshold = 1e-6;
 
-/// A wander process of unit amplitude (its variance parameter 1: sigma^2, B^2 or K^2) and the
-/// eigen-decomposition of its step-mean covariance scaled by the step counts,
-/// G = N^1/2 K N^1/2 = U diag(lambda) U^T, which turns every trial of amplitude into diagonal
-/// arithmetic and serves all channels at once (their white parts differ only by a factor).
-struct Kernel {
-  WanderModel unit;
-  Eigen::VectorXd lambda;
-  Eigen::MatrixXd U;
-  double mean_variance = 1.0;  ///< mean of K's diagonal: one step mean's wander variance
-  int parameters = 1;          ///< of the wander: amplitude, and tau for Gauss-Markov
-};
+using detail::ChannelProblem;
+using detail::Kernel;
+using detail::Likelihood;
 
-Kernel make_kernel(const WanderModel& unit, const std::vector<StepSummary>& steps, int parameters) {
-  const auto S = static_cast<Eigen::Index>(steps.size());
-  Eigen::MatrixXd G(S, S);
-  double diag = 0.0;
-  for (Eigen::Index i = 0; i < S; ++i) {
-    const StepSummary& a = steps[static_cast<std::size_t>(i)];
-    for (Eigen::Index j = 0; j <= i; ++j) {
-      const StepSummary& b = steps[static_cast<std::size_t>(j)];
-      const double k = unit.interval_mean_covariance(a.start_s, a.end_s, b.start_s, b.end_s);
-      if (i == j) diag += k;
-      G(i, j) = G(j, i) =
-          k * std::sqrt(static_cast<double>(a.count) * static_cast<double>(b.count));
-    }
-  }
-  Kernel out;
-  out.unit = unit;
-  out.parameters = parameters;
-  out.mean_variance = diag / static_cast<double>(S);
-  detail::KernelBasis basis = detail::kernel_basis(G);
-  out.lambda = std::move(basis.lambda);
-  out.U = std::move(basis.U);
-  return out;
-}
-
-/// One channel's regression: N^1/2 X and N^1/2 y (X: the superset's columns that act on the
-/// channel, scaled and reduced to full rank), and its white variance per sample.
-struct ChannelProblem {
-  Eigen::MatrixXd Xs;
-  Eigen::VectorXd ys;
-  double white = 1.0;
-  int parameters = 0;
-};
-
-struct Trial {
-  double log_likelihood = -std::numeric_limits<double>::infinity();
-  double amplitude = 0.0;  ///< the wander's variance parameter
-};
-
-/// The best amplitude of `kernel` for one channel: a grid over the variance ratio, then golden
-/// section between the best point's neighbours.
-Trial best_amplitude(const Kernel& kernel, const ChannelProblem& p, double typical_count) {
-  const Eigen::MatrixXd Xh = kernel.U.transpose() * p.Xs;
-  const Eigen::VectorXd yh = kernel.U.transpose() * p.ys;
-  // rho for a log10 ratio r: amplitude * mean_variance = 10^r * white / typical_count.
-  const auto rho_of = [&](double r) {
-    return std::pow(10.0, r) / (typical_count * kernel.mean_variance);
-  };
-  const detail::RatioFit best = detail::best_log10_ratio([&](double r) {
-    return detail::restricted_log_likelihood(kernel.lambda, Xh, yh, p.white, rho_of(r));
-  });
-  Trial t;
-  t.log_likelihood = best.log_likelihood;
-  t.amplitude = rho_of(best.log10_ratio) * p.white;
-  return t;
-}
-
-/// The columns of `superset`'s parameters that `fit` determined and that act on `channel`,
-/// as N^1/2 X reduced to full rank.
-ChannelProblem channel_problem(const std::vector<StepSummary>& steps, const Model& superset,
-                               const FitResult& fit, int channel, double white) {
+/// The columns of `superset`'s parameters that `fit` determined.
+std::vector<Eigen::Index> determined_columns(const Model& superset, const FitResult& fit) {
   std::vector<Eigen::Index> columns;
+  const auto& all = superset.parameters();
   for (const FittedParameter& fp : fit.parameters) {
-    const auto& all = superset.parameters();
     const auto it = std::find_if(all.begin(), all.end(),
                                  [&](const ParameterInfo& q) { return q.name == fp.name; });
-    if (it == all.end()) continue;
-    columns.push_back(it - all.begin());
+    if (it != all.end()) columns.push_back(it - all.begin());
   }
-  // Columns that act on this channel: beyond rounding of the largest (a force component at 90
-  // degrees is 6e-16 g, and normalised it would take a parameter and a degree of freedom).
-  std::vector<double> norms;
-  double largest = 0.0;
-  for (Eigen::Index col : columns) {
-    double sum = 0.0;
-    for (const StepSummary& s : steps)
-      sum += s.regressors(channel, col) * s.regressors(channel, col);
-    norms.push_back(std::sqrt(sum));
-    largest = std::max(largest, norms.back());
-  }
-  std::vector<Eigen::Index> acting;
-  for (std::size_t k = 0; k < columns.size(); ++k) {
-    if (norms[k] > kRoundingShare * largest) acting.push_back(columns[k]);
-  }
-  columns = std::move(acting);
-  const auto S = static_cast<Eigen::Index>(steps.size());
-  Eigen::MatrixXd X(S, static_cast<Eigen::Index>(columns.size()));
-  ChannelProblem p;
-  p.white = white;
-  p.ys.resize(S);
-  for (Eigen::Index i = 0; i < S; ++i) {
-    const StepSummary& s = steps[static_cast<std::size_t>(i)];
-    const double root_n = std::sqrt(static_cast<double>(s.count));
-    p.ys[i] = root_n * (s.measured[channel] - s.reference[channel]);
-    for (std::size_t k = 0; k < columns.size(); ++k) {
-      X(i, static_cast<Eigen::Index>(k)) = root_n * s.regressors(channel, columns[k]);
-    }
-  }
-  for (Eigen::Index k = 0; k < X.cols(); ++k) {
-    const double norm = X.col(k).norm();
-    if (norm > 0.0) X.col(k) /= norm;
-  }
-  // Full rank: parameters acting on several channels (tilt) may be collinear on one alone.
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X.rows(), X.cols());
-  qr.setThreshold(kRankThreshold);
-  qr.compute(X);
-  const auto rank = static_cast<Eigen::Index>(qr.rank());
-  p.Xs.resize(S, rank);
-  for (Eigen::Index k = 0; k < rank; ++k) p.Xs.col(k) = X.col(qr.colsPermutation().indices()[k]);
-  p.parameters = static_cast<int>(rank);
-  return p;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
+  return columns;
 }
 
 std::string describe(const WanderModel& w, int channel) {
@@ -233,48 +109,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
         white.steps_used, white.from_static_steps ? "static steps" : "steps", steps.size());
   }
 
-  std::vector<double> durations, counts;
-  double span = 0.0;
-  for (const StepSummary& s : steps) {
-    durations.push_back(std::max(s.duration_s, 1e-3));
-    counts.push_back(static_cast<double>(s.count));
-    span = std::max(span, s.end_s);
-  }
-  const double typical_count = median(counts);
-  // Correlation times shorter than a step would show inside the steps, where the white part is
-  // measured; longer than a few run spans, a process is a constant the bias absorbs.
-  const double tau_lo = std::max(1.0, median(durations));
-  const double tau_hi = std::max(10.0 * tau_lo, 3.0 * span);
-
-  std::vector<Kernel> kernels;
-  const int gm_count = std::max(
-      2, static_cast<int>(std::ceil(kGaussMarkovTausPerDecade * std::log10(tau_hi / tau_lo))) + 1);
-  for (int i = 0; i < gm_count; ++i) {
-    WanderModel gm;
-    gm.kind = WanderKind::kGaussMarkov;
-    gm.sigma = 1.0;
-    gm.tau_s = tau_lo * std::pow(tau_hi / tau_lo, static_cast<double>(i) / (gm_count - 1));
-    kernels.push_back(make_kernel(gm, steps, 2));
-  }
-  WanderModel flicker;
-  flicker.kind = WanderKind::kFlicker;
-  flicker.flicker_b = 1.0;
-  flicker.tau_min_s = tau_lo;
-  flicker.tau_max_s = std::max(10.0 * span, 10.0 * tau_lo);
-  kernels.push_back(make_kernel(flicker, steps, 1));
-  WanderModel walk;
-  walk.kind = WanderKind::kRandomWalk;
-  walk.random_walk_k = 1.0;
-  kernels.push_back(make_kernel(walk, steps, 1));
-  // The alternative that is not a wander: an extra variance of each step mean on its own.
-  Kernel independent;
-  {
-    const auto S = static_cast<Eigen::Index>(steps.size());
-    independent.lambda.resize(S);
-    for (Eigen::Index i = 0; i < S; ++i)
-      independent.lambda[i] = counts[static_cast<std::size_t>(i)];
-    independent.U = Eigen::MatrixXd::Identity(S, S);
-  }
+  const detail::WanderKernels kernels = detail::make_wander_kernels(steps);
+  const std::vector<Eigen::Index> columns = determined_columns(superset, fit);
 
   for (int c = 0; c < kChannels; ++c) {
     const bool used = rows == SensorRows::kBoth || (rows == SensorRows::kGyro) == (c < kAx);
@@ -289,7 +125,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           "cannot be told from a missing effect; weights from the white noise alone";
       continue;
     }
-    const ChannelProblem p = channel_problem(steps, superset, fit, c, white.density[c]);
+    const ChannelProblem p = detail::channel_problem(steps, columns, c, white.density[c]);
     const int dof = static_cast<int>(steps.size()) - p.parameters;
     if (dof < options.min_dof) {
       ch.note = fmt::format(
@@ -299,21 +135,17 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
       continue;
     }
-    const double white_ll = detail::restricted_log_likelihood(
-        Eigen::VectorXd::Zero(static_cast<Eigen::Index>(steps.size())), p.Xs, p.ys, p.white, 0.0);
+    const double white_ll = detail::white_log_likelihood(p, Likelihood::kRestricted);
     const double penalty_per_parameter = 0.5 * std::log(static_cast<double>(dof));
     double best_score = white_ll;
     WanderModel best;
     WanderModel flicker_fit;
     double flicker_score = -std::numeric_limits<double>::infinity();
-    for (const Kernel& k : kernels) {
-      const Trial t = best_amplitude(k, p, typical_count);
+    for (const Kernel& k : kernels.wanders) {
+      const detail::Trial t =
+          detail::best_amplitude(k, p, kernels.typical_count, Likelihood::kRestricted);
       const double score = t.log_likelihood - penalty_per_parameter * k.parameters;
-      WanderModel w = k.unit;
-      const double root = std::sqrt(t.amplitude);
-      if (w.kind == WanderKind::kGaussMarkov) w.sigma = root;
-      if (w.kind == WanderKind::kFlicker) w.flicker_b = root;
-      if (w.kind == WanderKind::kRandomWalk) w.random_walk_k = root;
+      const WanderModel w = detail::with_amplitude(k, t.amplitude);
       if (w.kind == WanderKind::kFlicker) {
         flicker_score = score;
         flicker_fit = w;
@@ -333,7 +165,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       best = flicker_fit;
       best_score = flicker_score;
     }
-    const Trial excess = best_amplitude(independent, p, typical_count);
+    const detail::Trial excess = detail::best_amplitude(
+        kernels.independent, p, kernels.typical_count, Likelihood::kRestricted);
     const double excess_score = excess.log_likelihood - penalty_per_parameter;
     ch.source = fmt::format("restricted likelihood of {} step means ({} parameters act on {})",
                             steps.size(), p.parameters, channel_name(c));
@@ -343,7 +176,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           "the step means scatter {:.2g} times more than the white noise inside the steps, but "
           "neighbouring steps do not share the excess as a wandering bias would: an effect the "
           "model lacks, not noise; weights from the white noise alone",
-          std::sqrt(1.0 + excess.amplitude / (p.white / typical_count)));
+          std::sqrt(1.0 + excess.amplitude / (p.white / kernels.typical_count)));
       continue;
     }
     ch.determined = true;
@@ -357,7 +190,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
 StepNoise estimate_run_noise(const RunData& data, const Model& model, SensorRows rows,
                              const NoiseEstimateOptions& options) {
   const Model superset = noise_superset(model);
-  return estimate_step_noise(summarize_steps(data, superset), superset, rows, options);
+  const std::vector<StepSummary> steps = summarize_steps(data, superset);
+  return estimate_step_noise(summarize_noise_rows(data, superset, steps), superset, rows, options);
 }
 
 FitResult fit_run(const RunData& data, const Model& model, const FitOptions& options,
@@ -365,7 +199,8 @@ FitResult fit_run(const RunData& data, const Model& model, const FitOptions& opt
                   std::vector<StepSummary>* model_steps) {
   const Model superset = noise_superset(model);
   const std::vector<StepSummary> all = summarize_steps(data, superset);
-  const StepNoise noise = estimate_step_noise(all, superset, options.rows, noise_options);
+  const StepNoise noise = estimate_step_noise(summarize_noise_rows(data, superset, all), superset,
+                                              options.rows, noise_options);
   const std::vector<StepSummary> steps =
       model.earth_rate() ? select_parameters(all, superset, model) : summarize_steps(data, model);
   FitResult fit = fit_model(steps, model, noise, options);

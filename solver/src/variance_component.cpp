@@ -28,8 +28,11 @@ KernelBasis kernel_basis(const Eigen::MatrixXd& G) {
   return out;
 }
 
-double restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
-                                 const Eigen::VectorXd& yh, double white, double rho) {
+namespace {
+
+/// -0.5 (log det C + [log det M] + quadratic) for restricted or profile.
+double gls_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
+                          const Eigen::VectorXd& yh, double white, double rho, bool restricted) {
   const Eigen::ArrayXd one_plus = 1.0 + rho * lambda.array();
   const Eigen::VectorXd w = one_plus.inverse().matrix();
   const double log_det_c = one_plus.log().sum();
@@ -39,11 +42,23 @@ double restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::Mat
   if (M.rows() > 0) {
     const Eigen::LLT<Eigen::MatrixXd> llt(M);
     if (llt.info() != Eigen::Success) return -std::numeric_limits<double>::infinity();
-    log_det_m = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+    if (restricted) log_det_m = 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
     fitted = b.dot(llt.solve(b));
   }
   const double quadratic = (yh.dot(w.cwiseProduct(yh)) - fitted) / white;
   return -0.5 * (log_det_c + log_det_m + quadratic);
+}
+
+}  // namespace
+
+double restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
+                                 const Eigen::VectorXd& yh, double white, double rho) {
+  return gls_log_likelihood(lambda, Xh, yh, white, rho, true);
+}
+
+double profile_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
+                              const Eigen::VectorXd& yh, double white, double rho) {
+  return gls_log_likelihood(lambda, Xh, yh, white, rho, false);
 }
 
 RatioFit best_log10_ratio(const std::function<double(double)>& log_likelihood) {

@@ -24,6 +24,12 @@ KernelBasis kernel_basis(const Eigen::MatrixXd& G);
 double restricted_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
                                  const Eigen::VectorXd& yh, double white, double rho);
 
+/// Profile log likelihood (the full likelihood with the design's parameters at their GLS
+/// values, up to the same constant): restricted_log_likelihood() without log det(X^T C^-1 X),
+/// for comparing designs (see wander_kernels.hpp).
+double profile_log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
+                              const Eigen::VectorXd& yh, double white, double rho);
+
 /// The best log10 of the variance ratio r over [-3, 4] (below, the component changes no
 /// weight; above, white noise would not matter): a grid of 15, then Brent's method between the
 /// best point's neighbours (the likelihood is unimodal in log r there). `log_likelihood` of r.

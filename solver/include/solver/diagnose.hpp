@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -14,7 +15,10 @@ namespace calstand::solver {
 struct Candidate {
   std::string term;        ///< e.g. "gyro_g_sensitivity", "gyro_temp_bias:2"
   double delta_bic = 0.0;  ///< BIC after - before (chi2 + k ln n); negative is better
-  double p_value = 1.0;    ///< F-test of the added parameters
+  /// BIC with the term - without, the wander re-estimated under each (effect_or_wander.hpp);
+  /// NaN for the Earth rate (it changes the reference, not the design).
+  double delta_bic_against_wander = std::numeric_limits<double>::quiet_NaN();
+  double p_value = 1.0;  ///< F-test of the added parameters
   double chi2_dof_after = 0.0;
   int added_parameters = 0;  ///< identified parameters the term adds
   std::string explanation;   ///< the physical effect and which steps it fixes, in words

@@ -16,23 +16,32 @@
 // the model's columns, against the whitened residual. A form whose column lies in the span of
 // the catalogue terms is that catalogue effect in disguise and is left out.
 //
-// The guards. The best few are refitted exactly (fit_model with the diagnosis's noise model) and
-// must lower BIC, as diagnose ranks catalogue terms (chi2 after - before + k ln n, k counting a
-// searched time constant), by "very strong" evidence (10) more than the best catalogue
-// candidate does (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
+// Screening ranks the forms twice, with the diagnosis's noise model and with white noise alone:
+// the wander fitted without the term may have swallowed the effect (effect_or_wander.hpp), and
+// a form screened only against those weights would look weak.
+//
+// The guards. The best few of both rankings are judged against the wander on the same footing
+// (effect_or_wander.hpp: BIC on the profile likelihood, the wander re-estimated with the term
+// and without it, on the noise rows where a long static capture enters by its segments) and
+// must lower BIC by "very strong" evidence (10) more than the best catalogue candidate does,
+// judged the same way (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
 // plateaus as a temperature term does), and by more than very strong evidence plus the
 // look-elsewhere cost of the search (2 ln of the forms tried). Then they must hold on data they
-// were not fitted on: leave one temperature plateau out when the run has three or more, else
-// five folds of interleaved steps; the held-out chi-square must fall by more than the
-// parameters the term adds. The survivors' figures are those of fit_run with the term, the
-// path `calstand fit --custom` takes (its noise model re-estimated with the term).
+// were not fitted on, judged against the noise that remains with the term: leave one
+// temperature plateau out when the run has three or more (a transient in elapsed time
+// extrapolates in time, not temperature: five folds of interleaved steps for it, as for a run
+// with fewer plateaus); the held-out chi-square must fall by more than the parameters the term
+// adds. The survivors' figures are those of fit_run with the term, the path `calstand fit
+// --custom` takes (its noise model re-estimated with the term).
 
 #include <array>
 #include <string>
 #include <vector>
 
+#include "solver/effect_or_wander.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
+#include "solver/noise_rows.hpp"
 #include "solver/step_summary.hpp"
 
 namespace calstand::solver {
@@ -42,8 +51,8 @@ struct Suggestion {
   std::string custom;  ///< NAME=SENSOR[.AXES]:EXPRESSION, as `calstand fit --custom` takes it
   /// chi2/dof of fit_run with the term: what `calstand fit --custom` reports.
   double chi2_dof_after = 0.0;
-  /// BIC after - before (chi2 + k ln n), both with the diagnosis's noise model, as the catalogue
-  /// candidates are ranked; negative is better.
+  /// BIC with the term - without (effect_or_wander.hpp: profile likelihood, the wander
+  /// re-estimated under each); negative is better.
   double delta_bic = 0.0;
   double p_value = 1.0;  ///< F-test of the added parameters, with the diagnosis's noise model
   int added_parameters = 0;
@@ -81,8 +90,14 @@ struct SuggestInput {
   /// summaries for it: a form inside its span is a catalogue effect.
   const Model* catalogue = nullptr;
   const std::vector<StepSummary>* catalogue_steps = nullptr;
-  /// delta_bic of the best catalogue candidate (+infinity when there is none).
+  /// delta_bic of the best catalogue candidate (+infinity when there is none), on the same
+  /// footing as the suggestions' (effect_or_wander.hpp).
   double best_catalogue_delta_bic = 0.0;
+  /// The term against the wander on the noise rows (summaries for `catalogue`), where each row
+  /// came from, and the long captures' segments (the rows that are not whole steps).
+  const EffectOrWander* evidence = nullptr;
+  const std::vector<NoiseRowSource>* evidence_sources = nullptr;
+  const CaptureSegments* segments = nullptr;
 };
 
 /// Searches the custom terms that explain the residual of `in.fit`. Nothing is suggested when no

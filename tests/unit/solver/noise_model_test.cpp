@@ -132,20 +132,6 @@ std::vector<SimStep> thermal_campaign(const std::vector<double>& temperatures,
   return steps;
 }
 
-/// A MEMS part whose Gauss-Markov bias moves a 30 s step mean more than its white noise does
-/// (gyro 3x, accelerometer 4x), with LN200-class calibratable errors.
-sim::ImuTruth mems_gauss_markov_unit(std::uint64_t seed) {
-  sim::ImuTruth t =
-      testing::white_noise_truth(5e-3, 1e-3, 100.0);           // 0.3 deg/sqrt(h), 100 ug/sqrt(Hz)
-  t.gyro_noise.gauss_markov_sigma.setConstant(10.0 / 3600.0);  // 10 deg/h
-  t.accel_noise.gauss_markov_sigma.setConstant(700e-6 * 9.80665);  // 700 ug
-  t.gyro_noise.gauss_markov_tau_s = 300.0;
-  t.accel_noise.gauss_markov_tau_s = 300.0;
-  sim::NormalSource n(seed);
-  testing::draw_classical_errors(t, n);
-  return t;
-}
-
 struct Honesty {
   double chi2_dof = 0.0, chi2_dof_gyro = 0.0, chi2_dof_accel = 0.0;
   std::vector<double> z;  ///< (fitted - truth) / sigma of every parameter
@@ -215,7 +201,7 @@ TEST(HonestNoise, Adis16488ClassTrueModelFitsAtTheNoiseFloor) {
 }
 
 TEST(HonestNoise, MemsGaussMarkovTrueModelFitsAtTheNoiseFloor) {
-  expect_honest("MEMS GM", mems_gauss_markov_unit, 4);
+  expect_honest("MEMS GM", testing::mems_gauss_markov_unit, 4);
 }
 
 }  // namespace
@@ -245,6 +231,11 @@ void expect_found(const char* what, sim::ImuTruth truth, const std::string& hidd
   const std::string all = true_terms(truth);
   const Diagnosis before = diagnose(data, Model::parse(without(all, hidden)));
   ASSERT_FALSE(before.candidates.empty()) << what;
+  for (std::size_t i = 0; i < 3 && i < before.candidates.size(); ++i) {
+    std::printf("   candidate %s: delta BIC %.1f, against the wander %.1f, p %.2g\n",
+                before.candidates[i].term.c_str(), before.candidates[i].delta_bic,
+                before.candidates[i].delta_bic_against_wander, before.candidates[i].p_value);
+  }
   EXPECT_EQ(before.recommended, hidden) << what << ": " << before.advice;
   EXPECT_EQ(before.candidates.front().term, hidden) << what;
   const Diagnosis after = diagnose(data, Model::parse(all));
@@ -266,7 +257,7 @@ TEST(HonestNoise, AHiddenEffectIsStillFoundOnRealNoise) {
                  300 + seed);
     // The MEMS part's gyro bias following temperature by about 1 deg/h per degC (a tenth of
     // the ADIS16488-class sheet's coefficient).
-    sim::ImuTruth mems = mems_gauss_markov_unit(seed);
+    sim::ImuTruth mems = testing::mems_gauss_markov_unit(seed);
     mems.gyro_temp_bias = {Eigen::Vector3d(3e-4, -3e-4, 2e-4)};
     expect_found("MEMS GM + gyro_temp_bias", mems, "gyro_temp_bias", 400 + seed);
   }

@@ -83,6 +83,19 @@ inline sim::ImuTruth datasheet_unit(const char* sheet, std::uint64_t seed, doubl
   return t;
 }
 
+/// A MEMS part whose Gauss-Markov bias moves a 30 s step mean more than its white noise does
+/// (gyro 3x, accelerometer 4x), with LN200-class calibratable errors.
+inline sim::ImuTruth mems_gauss_markov_unit(std::uint64_t seed) {
+  sim::ImuTruth t = white_noise_truth(5e-3, 1e-3, 100.0);      // 0.3 deg/sqrt(h), 100 ug/sqrt(Hz)
+  t.gyro_noise.gauss_markov_sigma.setConstant(10.0 / 3600.0);  // 10 deg/h
+  t.accel_noise.gauss_markov_sigma.setConstant(700e-6 * 9.80665);  // 700 ug
+  t.gyro_noise.gauss_markov_tau_s = 300.0;
+  t.accel_noise.gauss_markov_tau_s = 300.0;
+  sim::NormalSource n(seed);
+  draw_classical_errors(t, n);
+  return t;
+}
+
 /// The catalogue terms (and temperature orders) the truth has, with the Earth rate and both
 /// biases: the model that should fit it to the noise.
 inline std::string true_terms(const sim::ImuTruth& truth) {

@@ -214,7 +214,9 @@ void expect_transient(const RunData& data, const Model& model) {
   const double tau = tau_of(top.custom);
   EXPECT_GT(tau, 900.0 / 1.5) << top.custom;
   EXPECT_LT(tau, 900.0 * 1.5) << top.custom;
-  expect_as_reported(data, model, top);
+  // A transient in elapsed time extrapolates in time, not in temperature: held out by folds of
+  // interleaved steps (issue 28), not by plateaus.
+  expect_as_reported(data, model, top, "folds of interleaved steps");
 }
 
 TEST(Suggest, AWarmUpTransientGetsExpOfElapsedWithItsTimeConstant) {

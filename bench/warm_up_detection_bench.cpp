@@ -1,0 +1,67 @@
+// How often diagnose finds a gyro warm-up (issue 28), by noise class, amplitude (times a static
+// step mean's noise, white and wander), time constant and whether the run starts with a 30 min
+// static capture; and how often it suggests anything on the same runs without a warm-up (false
+// alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] prints one line per cell
+// and a JSON line per cell. A run "finds" the warm-up when diagnose says NOT explained and its
+// first suggestion is exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "../tests/unit/solver/warm_up_campaign.hpp"
+#include "solver/diagnose.hpp"
+
+namespace {
+
+using namespace calstand;
+
+bool found(const solver::Diagnosis& d, double tau_s) {
+  if (d.explained || d.suggestions.empty()) return false;
+  const std::string& top = d.suggestions.front().custom;
+  const auto at = top.find(":exp(-elapsed/");
+  if (top.find("=gyro") == std::string::npos || at == std::string::npos) return false;
+  const double tau = std::stod(top.substr(at + 14));
+  return tau > tau_s / 2.0 && tau < 2.0 * tau_s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
+  for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
+    for (double capture_s : {0.0, 1800.0}) {
+      for (double tau_s : {300.0, 900.0, 1800.0}) {
+        for (double times : {5.0, 10.0, 20.0}) {
+          int hits = 0, false_alarms = 0;
+          for (int k = 0; k < seeds; ++k) {
+            const auto seed = static_cast<std::uint64_t>(7000 + 97 * k);
+            const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
+            const double amplitude = times * solver::testing::step_mean_noise_dps(truth, seed + 1);
+            const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+            const solver::RunData data =
+                solver::testing::warm_up_run(truth, capture_s, tau_s, amplitude, seed + 2);
+            hits += found(solver::diagnose(data, model), tau_s) ? 1 : 0;
+            if (times == 5.0) {
+              const solver::RunData clean =
+                  solver::testing::warm_up_run(truth, capture_s, tau_s, 0.0, seed + 2);
+              false_alarms += solver::diagnose(clean, model).suggestions.empty() ? 0 : 1;
+            }
+          }
+          fmt::print("{:10} capture {:5.0f} s tau {:5.0f} s {:4.0f}x: found {}/{}{}\n", noise,
+                     capture_s, tau_s, times, hits, seeds,
+                     times == 5.0
+                         ? fmt::format(", false alarms without it {}/{}", false_alarms, seeds)
+                         : std::string());
+          fmt::print(
+              "{{\"noise\": \"{}\", \"capture_s\": {}, \"tau_s\": {}, \"times\": {}, \"found\": "
+              "{}, "
+              "\"runs\": {}}}\n",
+              noise, capture_s, tau_s, times, hits, seeds);
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  return 0;
+}

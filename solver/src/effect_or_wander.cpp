@@ -1,0 +1,129 @@
+#include "solver/effect_or_wander.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+#include "wander_kernels.hpp"
+
+namespace calstand::solver {
+
+struct EffectOrWander::Kernels : detail::WanderKernels {};
+
+EffectOrWander::EffectOrWander(std::vector<StepSummary> rows, const Model& superset,
+                               SensorRows sensor_rows)
+    : rows_(std::move(rows)), superset_(superset), sensor_rows_(sensor_rows) {
+  white_ = measure_noise_floor(rows_);
+  FitOptions fo;
+  fo.rows = sensor_rows;
+  try {
+    const FitResult fit = fit_model(rows_, superset_, white_, fo);
+    const auto& all = superset_.parameters();
+    for (const FittedParameter& fp : fit.parameters) {
+      const auto it = std::find_if(all.begin(), all.end(),
+                                   [&](const ParameterInfo& q) { return q.name == fp.name; });
+      if (it != all.end()) columns_.push_back(it - all.begin());
+    }
+  } catch (const core::InputError&) {
+    // More catalogue parameters than rows: every column, and the comparison is as weak as the run.
+    for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(superset_.size()); ++k) {
+      columns_.push_back(k);
+    }
+  }
+  log_rows_ = std::log(static_cast<double>(rows_.size() * fit_channels(sensor_rows).size()));
+  auto kernels = std::make_shared<Kernels>();
+  static_cast<detail::WanderKernels&>(*kernels) = detail::make_wander_kernels(rows_);
+  kernels_ = std::move(kernels);
+}
+
+Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
+                                 const std::vector<Eigen::Index>& columns,
+                                 const std::array<Eigen::MatrixXd, kChannels>* extra,
+                                 int nonlinear) const {
+  Hypothesis h;
+  h.noise = StepNoise::white_only(white_, "");
+  h.noise.method =
+      "white noise from inside the steps; wandering bias re-estimated under the design";
+  h.fixed_parameters = nonlinear;
+  for (int c : fit_channels(sensor_rows_)) {
+    const auto uc = static_cast<std::size_t>(c);
+    if (!channels[uc]) continue;
+    h.scored[uc] = true;
+    const Eigen::MatrixXd* more = extra && (*extra)[uc].cols() > 0 ? &(*extra)[uc] : nullptr;
+    const detail::ChannelProblem p =
+        detail::channel_problem(rows_, columns, c, white_.density[c], more);
+    h.fixed_parameters += p.parameters;
+    double best = detail::white_log_likelihood(p, detail::Likelihood::kProfile);
+    int best_parameters = 0;
+    WanderModel best_wander;
+    // A channel's wander is informed by its own rows: its parameters cost ln(rows of the
+    // channel) each, as the noise model's choice of process charges them.
+    const double log_channel_rows = std::log(static_cast<double>(rows_.size()));
+    for (const detail::Kernel& k : kernels_->wanders) {
+      const detail::Trial t =
+          detail::best_amplitude(k, p, kernels_->typical_count, detail::Likelihood::kProfile);
+      if (t.log_likelihood - 0.5 * k.parameters * log_channel_rows >
+          best - 0.5 * best_parameters * log_channel_rows) {
+        best = t.log_likelihood;
+        best_parameters = k.parameters;
+        best_wander = detail::with_amplitude(k, t.amplitude);
+      }
+    }
+    h.log_likelihood += best;
+    h.noise_parameters += best_parameters;
+    h.noise_penalty += best_parameters * log_channel_rows;
+    ChannelStepNoise& ch = h.noise.channels[uc];
+    ch.determined = true;
+    ch.wander = best_wander;
+    ch.note = "re-estimated under the design (profile likelihood)";
+  }
+  h.bic = -2.0 * h.log_likelihood + h.fixed_parameters * log_rows_ + h.noise_penalty;
+  return h;
+}
+
+Hypothesis EffectOrWander::base(const std::array<bool, kChannels>& channels) const {
+  return score(channels, columns_, nullptr, 0);
+}
+
+Hypothesis EffectOrWander::with_columns(const std::array<Eigen::MatrixXd, kChannels>& extra,
+                                        int nonlinear) const {
+  std::array<bool, kChannels> channels{};
+  for (int c = 0; c < kChannels; ++c) {
+    channels[static_cast<std::size_t>(c)] = extra[static_cast<std::size_t>(c)].cols() > 0;
+  }
+  return score(channels, columns_, &extra, nonlinear);
+}
+
+std::array<bool, kChannels> EffectOrWander::channels_of(
+    const std::vector<std::string>& parameters) const {
+  std::array<bool, kChannels> out{};
+  for (Eigen::Index col : columns_) {
+    const std::string& name = superset_.parameters()[static_cast<std::size_t>(col)].name;
+    if (std::find(parameters.begin(), parameters.end(), name) == parameters.end()) continue;
+    for (int c = 0; c < kChannels; ++c) {
+      for (const StepSummary& s : rows_) {
+        if (s.regressors(c, col) != 0.0) {
+          out[static_cast<std::size_t>(c)] = true;
+          break;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+Hypothesis EffectOrWander::without(const std::vector<std::string>& parameters) const {
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index col : columns_) {
+    const std::string& name = superset_.parameters()[static_cast<std::size_t>(col)].name;
+    if (std::find(parameters.begin(), parameters.end(), name) == parameters.end()) {
+      kept.push_back(col);
+    }
+  }
+  return score(channels_of(parameters), kept, nullptr, 0);
+}
+
+}  // namespace calstand::solver
