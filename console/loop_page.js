@@ -254,7 +254,8 @@ export function showLoop(ctx, runId) {
     state.diagnosis = d;
     const recommended = d.recommended || '';
     const candidates = (d.candidates || []).map((c) => [
-      c.term === recommended ? el('b', {}, c.term, ' (recommended)') : c.term, num(c.delta_bic, 4), num(c.p_value, 2), num(c.chi2_dof_after, 4),
+      c.term === recommended ? el('b', {}, c.term, ' (recommended)') : c.term, num(c.delta_bic, 4),
+      c.delta_bic_against_wander == null ? '–' : num(c.delta_bic_against_wander, 4), num(c.p_value, 2), num(c.chi2_dof_after, 4),
       c.explanation || '', el('button', { id: `add-${c.term.replace(':', '-')}`, class: c.term === recommended ? 'primary' : '',
         onclick: () => addAndFit(() => addTerm(c.term)) }, 'Add and fit')]);
     const suggestions = (d.suggestions || []).map((s, i) => [s.custom, num(s.delta_bic, 4), num(s.chi2_dof_after, 4),
@@ -263,10 +264,10 @@ export function showLoop(ctx, runId) {
     replaceChildren(diagnosisBox, el('h3', {}, 'Diagnosis'),
       el('p', { id: 'advice' }, d.advice || ''),
       el('p', {}, d.explained === false ? el('span', { class: 'state-failed' }, 'No catalogue term explains the residual.') : null),
-      candidates.length ? table(['candidate', 'ΔBIC', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(0, TOP_CANDIDATES), { id: 'candidates' }) : el('p', {}, 'No candidate term left to test.'),
+      candidates.length ? table(['candidate', 'ΔBIC', 'ΔBIC vs wander', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(0, TOP_CANDIDATES), { id: 'candidates' }) : el('p', {}, 'No candidate term left to test.'),
       candidates.length > TOP_CANDIDATES ? el('details', {}, el('summary', {}, `${candidates.length - TOP_CANDIDATES} more candidates, ranked lower`),
-        table(['candidate', 'ΔBIC', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(TOP_CANDIDATES), { id: 'more-candidates' })) : null,
-      suggestions.length ? [el('h3', {}, 'Custom terms tried'), table(['custom term', 'ΔBIC', 'chi2/dof after', 'held out', 'why', ''], suggestions, { id: 'suggestions' })] : null,
+        table(['candidate', 'ΔBIC', 'ΔBIC vs wander', 'p', 'chi2/dof after', 'effect', ''], candidates.slice(TOP_CANDIDATES), { id: 'more-candidates' })) : null,
+      suggestions.length ? [el('h3', {}, 'Custom terms tried'), table(['custom term', 'ΔBIC vs wander', 'chi2/dof after', 'held out', 'why', ''], suggestions, { id: 'suggestions' })] : null,
       (d.signals || []).length ? [el('h3', {}, 'Signals the residual follows'),
         table(['signal', 'channel', 'correlation'], d.signals.slice(0, 8).map((s) => [s.signal, s.channel, num(s.correlation, 3)]))] : null);
     // Draw the residual against the signal it follows most, when the page can show that one.

@@ -43,7 +43,8 @@ void print_suggestions(const solver::Diagnosis& d) {
     const solver::Suggestion& s = d.suggestions[i];
     fmt::print("  --custom '{}'\n", s.custom);
     fmt::print(
-        "      delta BIC {:.1f}, chi2/dof after {:.3g}; held out ({}): chi2/dof {:.3g} -> "
+        "      delta BIC {:.1f} against the wander, chi2/dof after {:.3g}; held out ({}): "
+        "chi2/dof {:.3g} -> "
         "{:.3g}\n",
         s.delta_bic, s.chi2_dof_after, s.held_out, s.held_out_chi2_dof_before,
         s.held_out_chi2_dof_after);
@@ -88,12 +89,15 @@ void run_diagnose(const DiagnoseOptions& opt) {
              d.fit.chi2_dof, d.fit.residual_rms_gyro_dps, d.fit.residual_rms_accel_mps2);
   print_groups(d.groups, solver::worst_steps(d.fit), 5);
   fmt::print("\ncandidates (each added in turn, best first):\n");
-  fmt::print("  {:<24} {:>11} {:>9} {:>14}  {}\n", "term", "delta BIC", "p", "chi2/dof after",
-             "what it is");
+  fmt::print("  {:<24} {:>11} {:>10} {:>9} {:>14}  {}\n", "term", "delta BIC", "vs wander", "p",
+             "chi2/dof after", "what it is");
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     const auto& c = d.candidates[i];
-    fmt::print("  {:<24} {:>11.1f} {:>9.2g} {:>14.3g}  {}\n", c.term, c.delta_bic, c.p_value,
-               c.chi2_dof_after, c.explanation);
+    fmt::print("  {:<24} {:>11.1f} {:>10} {:>9.2g} {:>14.3g}  {}\n", c.term, c.delta_bic,
+               std::isfinite(c.delta_bic_against_wander)
+                   ? fmt::format("{:.1f}", c.delta_bic_against_wander)
+                   : std::string("-"),
+               c.p_value, c.chi2_dof_after, c.explanation);
   }
   if (!d.untestable.empty()) {
     fmt::print("  not testable on this run: {}\n", fmt::join(d.untestable, ", "));
