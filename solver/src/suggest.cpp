@@ -448,9 +448,7 @@ Screened make_screened(const Form& f, const Screen& s) {
     if (!s.axes[static_cast<std::size_t>(a)]) continue;
     out.key += fmt::format(":{}{}", "xyz"[a], f.block[static_cast<std::size_t>(a)]);
   }
-  // One transient per sensor and axes: the two screenings may refine its time constant to
-  // slightly different values.
-  if (f.tau_s > 0.0) out.key += ":transient";
+  if (f.tau_s > 0.0) out.key += ":tau" + format_tau(f.tau_s);
   return out;
 }
 
@@ -845,13 +843,22 @@ std::optional<Screened> transient_on_noise_rows(const SuggestInput& in, core::Te
   return make_screened(f, screen);
 }
 
-/// The two rankings taken in turn, each term once.
+/// The two rankings taken in turn, each term once, with the better of its two screenings (a
+/// warm-up the wander swallowed screens weakly against the diagnosis's weights, strongly
+/// against white noise or on the noise rows).
 std::vector<Screened> interleave(const std::vector<Screened>& a, const std::vector<Screened>& b) {
   std::vector<Screened> out;
-  std::set<std::string> keys;
+  std::map<std::string, std::size_t> position;
   for (std::size_t i = 0; i < std::max(a.size(), b.size()); ++i) {
     for (const auto* list : {&a, &b}) {
-      if (i < list->size() && keys.insert((*list)[i].key).second) out.push_back((*list)[i]);
+      if (i >= list->size()) continue;
+      const Screened& s = (*list)[i];
+      const auto [at, fresh] = position.emplace(s.key, out.size());
+      if (fresh) {
+        out.push_back(s);
+      } else if (s.screen_delta_bic < out[at->second].screen_delta_bic) {
+        out[at->second] = s;
+      }
     }
   }
   return out;
@@ -942,7 +949,14 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   // The wander alone, per set of channels a term acts on (the hypothesis without the term).
   std::map<std::array<bool, kChannels>, Hypothesis> without_term;
   for (const Screened& c : screened) {
-    if (checked >= suggest.max_checked || passed.size() >= suggest.max_suggestions) break;
+    // The transient of each screening is checked (each weighting finds its own time constant,
+    // and only the comparison against the wander can tell which holds): they are a few, and do
+    // not count against the forms checked.
+    const bool transient = c.form.tau_s > 0.0;
+    if (!transient &&
+        (checked >= suggest.max_checked || passed.size() >= suggest.max_suggestions)) {
+      continue;
+    }
     if (!keys.insert(c.key).second) continue;
     if (c.screen_delta_bic >= screen_bar) {
       if (best_rejected.empty()) {
@@ -953,7 +967,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       }
       continue;
     }
-    ++checked;
+    if (!transient) ++checked;
     const std::string name = name_of(c.expression, names);
     CustomTermSpec spec;
     spec.name = name;
@@ -1030,8 +1044,8 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     // Held out, on the noise rows (a long capture by its segments, where a warm-up may be all
     // there is to see), against the noise that remains with the term (the wander without it
     // may hold the effect, and would excuse the model's misses on the held-out part).
-    const bool on_rows = !held_rows.empty();
-    const std::vector<StepSummary>& held_steps = on_rows ? held_rows : steps;
+    const bool held_on_rows = !held_rows.empty();
+    const std::vector<StepSummary>& held_steps = held_on_rows ? held_rows : steps;
     const Folds* folds = in_elapsed_time(c) ? &held_step_folds : &held_plateau_folds;
     auto held_before = held_out_chi2(held_steps, *in.model, remaining, options, *folds);
     // Without one of its plateaus the run may not determine the model (a temperature term
@@ -1047,7 +1061,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       break;
     }
     const std::vector<StepSummary> held_aug =
-        on_rows ? with_columns(held_rows, spec.sensor, spec.axes, V) : aug;
+        held_on_rows ? with_columns(held_rows, spec.sensor, spec.axes, V) : aug;
     const auto [held_after, rows_after] = held_out_chi2(held_aug, with, remaining, options, *folds);
     s.held_out = folds->how;
     s.held_out_chi2_dof_before = held_before.second > 0 ? held_before.first / held_before.second
@@ -1069,6 +1083,18 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     names.insert(name);
     passed.push_back({std::move(s), c.form.tau_s, spec});
   }
+  // One transient per sensor and axes: the one that beats the wander by most.
+  std::stable_sort(passed.begin(), passed.end(),
+                   [](const Passed& a, const Passed& b) { return a.s.delta_bic < b.s.delta_bic; });
+  std::set<std::string> transients;
+  std::vector<Passed> kept;
+  for (Passed& p : passed) {
+    if (p.tau_s > 0.0 && !transients.insert(sensor_text(p.spec.sensor, p.spec.axes)).second) {
+      continue;
+    }
+    if (kept.size() < suggest.max_suggestions) kept.push_back(std::move(p));
+  }
+  passed = std::move(kept);
   // The figures reported are those of the path `calstand fit --custom` takes.
   for (Passed& p : passed) {
     const Model with =
