@@ -179,7 +179,15 @@ TableFreeDiagnosis diagnose_table_free(store::Database& db, std::int64_t run,
   TableFreeDiagnosis d;
   d.fit = table_free_fit(db, run, request);
   d.worst = worst_of(d.fit);
-  d.untestable.push_back("earth_rate: the heading of the poses is not known");
+  // The Earth rate is physics, not a candidate: modelled in every fit with a latitude.
+  d.untestable.push_back(
+      d.fit.ferraris ? "earth_rate: the heading of the holds is not known (the Ferraris method "
+                       "leaves it in the gyro bias)"
+      : d.fit.gyro && d.fit.gyro->earth_rate_modelled
+          ? "earth_rate: no candidate, modelled in every fit (vertical part from the site "
+            "latitude, the initial rest's heading fitted)"
+          : "earth_rate: the run has no site latitude (and the heading of the poses is not "
+            "known): not modelled");
   for (const std::string& term : table_free_optional_terms()) {
     if (has_table_free_term(request.terms, term)) continue;
     if (d.fit.ferraris) {

@@ -37,6 +37,10 @@ struct TableFreeFitRequest {
   std::vector<std::pair<double, double>> intervals_s;
   /// The optional terms to fit (table_free_model.hpp); the Ferraris method takes none.
   TableFreeTerms terms;
+  /// Model the Earth rate in the integration between poses (the model holds `earth_rate`, as
+  /// the default one does), from the run's site latitude; a run without one is fitted without
+  /// it and says so in the notes.
+  bool earth_rate = true;
   /// What the model as given left out, and why (table_free_model()); copied to the fit.
   std::vector<std::string> notes;
   /// The command recorded in the run's fit history ("fit", "diagnose", "calibrate"); empty:
@@ -61,6 +65,8 @@ struct TableFreeFit {
   std::string method;
   double gravity_mps2 = 0.0;
   TableFreeTerms terms;                    ///< the optional terms fitted
+  bool earth_rate = true;                  ///< asked for (TableFreeFitRequest::earth_rate)
+  std::optional<double> latitude_deg;      ///< the run's site latitude, when it has one
   std::vector<std::string> notes;          ///< what the model as given left out, and why
   std::optional<std::int64_t> history_id;  ///< the history row written, if any
   /// Range of the samples' temperatures [degC]; NaN when the recording has none.

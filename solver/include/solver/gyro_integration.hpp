@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -50,6 +51,9 @@ struct GyroIntegrationOptions {
   /// the calibrated specific force of each sample (imucal's K_ga). The rest mean then holds
   /// b + G f_rest / g0, so the turns see G (f - f_rest) / g0.
   bool fit_g_sensitivity = false;
+  /// The site's latitude [deg] (the import's site.latitude_deg): the Earth rate is modelled
+  /// (see above). Empty: not modelled, as before, and the summary says so.
+  std::optional<double> latitude_deg;
   bool scale_sigmas_by_residual = true;
   bool propagate_accel_covariance = true;
   double null_tolerance = 1e-5;
@@ -85,6 +89,18 @@ struct GyroIntegrationResult {
   Eigen::Vector3d rest_bias_dps = Eigen::Vector3d::Zero();
   Eigen::Vector3d rest_bias_sigma_dps = Eigen::Vector3d::Zero();
   double rest_duration_s = 0.0;
+  /// The Earth rate (with a latitude): whether modelled, the latitude, the azimuth of North
+  /// about gravity at the rest [deg] (from the horizontal projection of frame A's x axis, or
+  /// its y axis when x is within 26 deg of the vertical, counter-clockwise seen from above)
+  /// with its sigma, whether the turns determine it (sigma below 0.5 rad), and the Earth rate
+  /// at the rest taken out of the rest mean to give gyro_bias [deg/s, frame A].
+  bool earth_rate_modelled = false;
+  double latitude_deg = 0.0;
+  double rest_north_azimuth_deg = 0.0;
+  double rest_north_azimuth_sigma_deg = 0.0;
+  bool heading_determined = false;
+  Eigen::Vector3d rest_earth_rate_dps = Eigen::Vector3d::Zero();
+  double hold_sway_rad = 0.0;  ///< RMS net turn of a hold by the hand, per axis [rad]
   std::vector<GyroTurn> turns;
   double rms_residual_deg = 0.0;
   double max_residual_deg = 0.0;

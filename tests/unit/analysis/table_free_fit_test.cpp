@@ -23,11 +23,11 @@ using testing::import_session;
 // of a wandering-bias sensor's estimates is honest only to a factor near one).
 void expect_session_truth(const sim::SimSession& s,
                           const std::vector<solver::TriadEstimate>& estimates, const char* prefix,
-                          bool counts) {
+                          bool counts, bool earth_rate_modelled = false) {
   int checked = 0;
   for (const auto& e : estimates) {
     if (e.status != solver::EstimateStatus::kEstimated || e.name.rfind(prefix, 0) != 0) continue;
-    double truth = solver::testing::session_truth(s, e.name);
+    double truth = solver::testing::session_truth(s, e.name, earth_rate_modelled);
     // Counts are written whole: the nominal conversion's rounding is part of the bias.
     if (counts && e.name.find("_bias.") != std::string::npos) continue;
     EXPECT_NEAR(e.value, truth, 4.5 * e.sigma) << e.name << " sigma " << e.sigma;
@@ -52,7 +52,10 @@ TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
   EXPECT_EQ(fit.poses->detection.intervals.size(), session.holds.size());
   EXPECT_TRUE(fit.poses->detection.intervals.front().initial_rest);
   expect_session_truth(session, fit.accel->parameters, "accel_", false);
-  expect_session_truth(session, fit.gyro->parameters, "gyro_", false);
+  // The import carries the site's latitude: the Earth rate is modelled, and the gyro bias is
+  // the rest mean less the Earth rate there.
+  ASSERT_TRUE(fit.gyro->earth_rate_modelled);
+  expect_session_truth(session, fit.gyro->parameters, "gyro_", false, true);
   EXPECT_LT(fit.accel->rms_residual_mg, 1.0);
 
   const nlohmann::json j = to_json(fit);
