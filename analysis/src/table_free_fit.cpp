@@ -184,8 +184,10 @@ TableFreePoses poses_of(std::int64_t run, std::string device, RunSamples&& r,
   return poses;
 }
 
-// The gravity norm and the integration between `fit.poses` with `fit.terms`.
-void calibrate_poses(TableFreeFit& fit) {
+// The gravity norm and the integration between `fit.poses` with `fit.terms`; `referrals`:
+// the poses referred as another fit referred them (a candidate judged on its base's data).
+void calibrate_poses(TableFreeFit& fit,
+                     const std::vector<solver::GyroHoldReferral>& referrals = {}) {
   solver::GravityNormOptions accel_options;
   accel_options.gravity_mps2 = fit.gravity_mps2;
   accel_options.fit_quadratic = fit.terms.accel_quadratic;
@@ -194,6 +196,7 @@ void calibrate_poses(TableFreeFit& fit) {
   solver::GyroIntegrationOptions gyro_options;
   gyro_options.fit_g_sensitivity = fit.terms.gyro_g_sensitivity;
   if (fit.earth_rate) gyro_options.latitude_deg = fit.latitude_deg;
+  gyro_options.referrals = referrals;
   fit.gyro = solver::calibrate_gyro_integration(fit.poses->samples, fit.poses->detection.intervals,
                                                 *fit.accel, gyro_options);
 }
@@ -216,7 +219,9 @@ TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& ter
   TableFreeFit out = fit;
   out.terms = terms;
   out.history_id.reset();
-  calibrate_poses(out);
+  // The same poses referred the same way: a candidate is judged on the data and weights of
+  // the model it extends (the referral's known still rate moves with the terms fitted).
+  calibrate_poses(out, fit.gyro ? fit.gyro->referrals : std::vector<solver::GyroHoldReferral>{});
   return out;
 }
 

@@ -353,8 +353,11 @@ TriadModel gyro_model(const double* p, bool fit_bias, const Eigen::Vector3d& res
 struct GyroHold {
   std::size_t interval;
   double duration_s = 0.0;
-  Eigen::Vector3d mean_rate_dps = Eigen::Vector3d::Zero();   // raw gyro mean
+  Eigen::Vector3d mean_rate_dps = Eigen::Vector3d::Zero();    // raw gyro mean
   Eigen::Vector3d mean_accel_mps2 = Eigen::Vector3d::Zero();  // raw accel mean
+  // Mean square (per axis) of the angle the gyro turns within the pose, its mean rate removed,
+  // about its mean [rad^2]: the sway and the gyro's noise, what a net turn is bounded by.
+  double excursion_rad2 = 0.0;
   Eigen::Vector3d m_start;  // raw accel means referred to the first / last sample
   Eigen::Vector3d m_end;
   double sigma_dir;  // rad, per component across gravity
@@ -409,6 +412,21 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
       h.duration_s = in.duration_s();
       h.mean_rate_dps = static_mean(samples, in.begin, in.end, TriadSensor::kGyro).mean;
       h.mean_accel_mps2 = am.mean;
+      {
+        std::vector<Eigen::Vector3d> phi(1, Eigen::Vector3d::Zero());
+        for (std::size_t k = in.begin + 1; k < in.end; ++k) {
+          const double dt = samples[k].receive_time_s - samples[k - 1].receive_time_s;
+          phi.push_back(
+              phi.back() +
+              0.5 * (samples[k].gyro_dps + samples[k - 1].gyro_dps - 2.0 * h.mean_rate_dps) * dt *
+                  core::kDegToRad);
+        }
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const Eigen::Vector3d& x : phi) mean += x;
+        mean /= static_cast<double>(phi.size());
+        for (const Eigen::Vector3d& x : phi) h.excursion_rad2 += (x - mean).squaredNorm();
+        h.excursion_rad2 /= 3.0 * static_cast<double>(phi.size());
+      }
       // The accel mean's white noise and the wander its pose means share (the gravity norm's
       // noise model, REML): the wander moves the direction as much as the norm.
       double v =
@@ -432,6 +450,13 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   std::vector<double> referral_var(intervals.size(), 0.0);
   for (std::size_t i = 0; i < intervals.size(); ++i) {
     referral_var[i] = density_rad * density_rad * intervals[i].duration_s() / 12.0;
+  }
+  const bool referrals_given = o.referrals.size() == intervals.size();
+  if (referrals_given) {
+    for (std::size_t i = 0; i < intervals.size(); ++i) {
+      still_dps[i] = o.referrals[i].still_rate_dps;
+      referral_var[i] = o.referrals[i].variance_rad2;
+    }
   }
   std::vector<GyroHold> holds = refer_holds(still_dps, referral_var);
 
@@ -599,18 +624,22 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
   } else {
     solve(fixed, o.max_iterations, J, r);  // undetermined ones held at nominal (0)
   }
-  if (earth && o.refer_hold_means && !turns.empty()) {
+  // Two rounds: the second with the gyro, G and heading the first one found with better holds.
+  for (int round = 0;
+       round < 2 && earth && o.refer_hold_means && !referrals_given && !turns.empty(); ++round) {
     // The holds again, each referred with the rate it has when still. A hand's hold turns a
     // little over the interval the detector found (the sway does not end where it cuts), and
     // its own mean rate takes that net turn for bias: the referred direction is then off by
     // half of it. The rate a still hold has is also known from the rest (its mean plus the
-    // change of the Earth rate, now that the heading is fitted), to the bias's wander. Each
-    // hold takes the mix of the two with the least variance, the hand's net turn estimated
-    // from how far the holds' mean rates stray from the known rate beyond both noises.
+    // change of the Earth rate, now that the heading is fitted, and of G f), to the bias's
+    // wander and what the fit leaves uncertain. Each hold takes the mix of the two with the
+    // least variance, the hand's net turn estimated from how far the holds' mean rates stray
+    // from the known rate beyond both noises.
     std::vector<Eigen::Vector3d> hold_earth;
     carry(turns, accel.accel, accel.quadratic_ug_per_g2, &hold_earth);
     double psi_sigma = 10.0;
-    if (fit_psi) {
+    Eigen::Matrix3d g_var = Eigen::Matrix3d::Zero();  // ((deg/s)/g)^2 of each G element
+    {
       std::vector<int> cols;
       for (int j = 0; j < np; ++j) {
         if (std::find(fixed.begin(), fixed.end(), j) == fixed.end()) cols.push_back(j);
@@ -623,14 +652,23 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
       const Eigen::MatrixXd Hci = Hc.ldlt().solve(Eigen::MatrixXd::Identity(Hc.rows(), Hc.cols()));
       const int dof = static_cast<int>(J.rows()) - static_cast<int>(cols.size());
       const double scale = dof > 0 ? std::max(1.0, r.squaredNorm() / dof) : 1.0;
-      psi_sigma = std::sqrt(std::max(0.0, Hci(Hc.rows() - 1, Hc.cols() - 1) * scale));
+      for (std::size_t c = 0; c < cols.size(); ++c) {
+        const auto C = static_cast<Eigen::Index>(c);
+        const double v = std::max(0.0, Hci(C, C) * scale);
+        if (cols[c] == psi_index) psi_sigma = std::sqrt(v);
+        if (g_offset >= 0 && cols[c] >= g_offset && cols[c] < g_offset + 9) {
+          g_var((cols[c] - g_offset) / 3, (cols[c] - g_offset) % 3) = v;
+        }
+      }
     }
     const Eigen::Matrix3d T_g = gyro_model(p.data(), o.fit_bias, out.rest_bias_dps).matrix();
     const double n2 = density_rad * density_rad;
     const double heading_var = w_cos_lat * w_cos_lat * std::pow(std::min(psi_sigma, 1.5), 2.0);
-    const double var_known =
+    const double var_rest =
         wander_rad * wander_rad + n2 / std::max(out.rest_duration_s, 1e-3) + heading_var;
     std::vector<Eigen::Vector3d> known(holds.size());
+    std::vector<double> var_known(holds.size(), var_rest);  // per component [(rad/s)^2]
+    std::vector<bool> trusted(holds.size(), true);
     double sway_sum = 0.0;
     int sway_n = 0;
     for (std::size_t k = 0; k < holds.size() && k < hold_earth.size(); ++k) {
@@ -643,24 +681,37 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
         for (int i = 0; i < 3; ++i) {
           for (int c = 0; c < 3; ++c) {
             known[k][i] += p[static_cast<std::size_t>(g_offset + 3 * i + c)] * df[c];
+            var_known[k] += g_var(i, c) * df[c] * df[c] / 3.0 * core::kDegToRad * core::kDegToRad;
           }
         }
       }
       if (k == 0) continue;
       const double T = holds[k].duration_s;
       const Eigen::Vector3d D = (holds[k].mean_rate_dps - known[k]) * core::kDegToRad;
-      sway_sum += T * T * D.squaredNorm() / 3.0 - n2 * T - var_known * T * T;
+      // A net turn the hold's own excursion cannot hold is no sway: the known rate misses an
+      // effect the model lacks (a g-sensitivity not fitted), and the hold keeps its mean.
+      const double net2 = T * T * D.squaredNorm() / 3.0;
+      if (net2 > 9.0 * (4.0 * holds[k].excursion_rad2 + n2 * T + var_known[k] * T * T)) {
+        trusted[k] = false;
+        continue;
+      }
+      sway_sum += net2 - n2 * T - var_known[k] * T * T;
       ++sway_n;
     }
     const double sway_var = sway_n > 0 ? std::max(0.0, sway_sum / sway_n) : 0.0;
     out.hold_sway_rad = std::sqrt(sway_var);
     for (std::size_t k = 1; k < holds.size() && k < hold_earth.size(); ++k) {
       const double T = holds[k].duration_s;
+      if (!trusted[k]) {
+        still_dps[k].reset();
+        referral_var[k] = n2 * T / 12.0;
+        continue;
+      }
       double best_w = 1.0, best_var = 1e300;
       for (int step = 0; step <= 20; ++step) {
         const double w = step / 20.0;
         const double v = n2 * T * (1.0 / 3.0 - w / 2.0 + w * w / 4.0) + w * w * sway_var / 4.0 +
-                         (1.0 - w) * (1.0 - w) * var_known * T * T / 4.0;
+                         (1.0 - w) * (1.0 - w) * var_known[k] * T * T / 4.0;
         if (v < best_var) {
           best_var = v;
           best_w = w;
@@ -675,8 +726,9 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
     for (const TurnData& d : turns) costs.emplace_back(make_turn_cost(&d, np));
     carry(turns, accel.accel, accel.quadratic_ug_per_g2);
     solve(fixed, o.max_iterations, J, r);
-    carry(turns, accel.accel, accel.quadratic_ug_per_g2);
-    solve(fixed, o.max_iterations, J, r);
+  }
+  for (std::size_t i = 0; i < intervals.size(); ++i) {
+    out.referrals.push_back({still_dps[i], referral_var[i]});
   }
   std::vector<bool> is_fixed(static_cast<std::size_t>(np), false);
   for (int j : fixed) is_fixed[static_cast<std::size_t>(j)] = true;

@@ -78,8 +78,10 @@ struct TableFreeFit {
   std::optional<solver::FerrarisResult> ferraris;
 };
 
-/// `fit` (gravity norm) again with other optional terms, on the same samples and static poses:
-/// no database read, no detection, nothing recorded (a diagnosis tries each candidate so).
+/// `fit` (gravity norm) again with other optional terms, on the same samples and static poses,
+/// the poses' accel means referred to their ends as `fit` referred them (so the candidate's
+/// chi2 is on the same data and weights as its base's): no database read, no detection,
+/// nothing recorded (a diagnosis tries each candidate so).
 /// Throws core::InputError (where "model") for a Ferraris fit, which takes no optional term.
 TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& terms);
 

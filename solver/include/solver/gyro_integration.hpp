@@ -43,6 +43,14 @@
 ///   give its size against the residual. g-sensitivity only with fit_g_sensitivity.
 namespace calstand::solver {
 
+/// How one static pose's accel mean was referred to its ends (see the header): the still rate
+/// removed from the gyro within it [deg/s] (empty: the pose's own mean rate) and the variance
+/// the referral adds to its gravity direction, per component [rad^2].
+struct GyroHoldReferral {
+  std::optional<Eigen::Vector3d> still_rate_dps;
+  double variance_rad2 = 0.0;
+};
+
 struct GyroIntegrationOptions {
   int min_poses = 9;             ///< static poses (turns + 1) needed
   bool refer_hold_means = true;  ///< see above
@@ -54,6 +62,10 @@ struct GyroIntegrationOptions {
   /// The site's latitude [deg] (the import's site.latitude_deg): the Earth rate is modelled
   /// (see above). Empty: not modelled, as before, and the summary says so.
   std::optional<double> latitude_deg;
+  /// The poses referred as another fit of the same intervals referred them (its
+  /// GyroIntegrationResult::referrals): a diagnosis judges a candidate term on the same data
+  /// and weights as the model it extends. Ignored unless one per interval.
+  std::vector<GyroHoldReferral> referrals;
   bool scale_sigmas_by_residual = true;
   bool propagate_accel_covariance = true;
   double null_tolerance = 1e-5;
@@ -100,7 +112,8 @@ struct GyroIntegrationResult {
   double rest_north_azimuth_sigma_deg = 0.0;
   bool heading_determined = false;
   Eigen::Vector3d rest_earth_rate_dps = Eigen::Vector3d::Zero();
-  double hold_sway_rad = 0.0;  ///< RMS net turn of a hold by the hand, per axis [rad]
+  double hold_sway_rad = 0.0;               ///< RMS net turn of a hold by the hand, per axis [rad]
+  std::vector<GyroHoldReferral> referrals;  ///< per interval, as used
   std::vector<GyroTurn> turns;
   double rms_residual_deg = 0.0;
   double max_residual_deg = 0.0;
