@@ -142,8 +142,8 @@ void print_table_free_fit(const analysis::TableFreeFit& fit) {
 void print_table_free_quality(const analysis::TableFreeFit& fit) {
   const analysis::TableFreeQuality q = analysis::table_free_quality(fit);
   fmt::print(
-      "\nfit quality: chi2/dof {} against the white noise ({:.1f} over {} degrees of "
-      "freedom){}, {} parameters; |f| - g rms {:.3g} mg{}\n",
+      "\nfit quality: chi2/dof {} against the white noise (the turns: their noise model; {:.1f} "
+      "over {} degrees of freedom){}, {} parameters; |f| - g rms {:.3g} mg{}\n",
       q.dof > 0 ? fmt::format("{:.3g}", q.chi2_per_dof) : std::string("-"), q.chi2, q.dof,
       q.accel_chi2_per_dof_noise_model
           ? fmt::format("; accel {:.3g} against its noise model", *q.accel_chi2_per_dof_noise_model)

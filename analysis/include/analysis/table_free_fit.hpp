@@ -88,8 +88,9 @@ TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& ter
 /// A table-free fit's quality in a few numbers, both sensors together (the fit history's row
 /// and the calibration record's `fit`).
 struct TableFreeQuality {
-  /// Accel and gyro, each against its white noise alone: the one yardstick that compares fits
-  /// of one run (each fit estimates its own noise model, against which it is near 1).
+  /// The accelerometers against their white noise alone (each fit estimates its own pose
+  /// noise model, against which it is near 1), the gyros against their turns' noise model
+  /// (gyro_integration.hpp: from the rest, the poses and the accel fit).
   double chi2 = 0.0;
   int dof = 0;
   double chi2_per_dof = 0.0;
