@@ -148,6 +148,28 @@ TEST(GyroIntegration, FitsTheGSensitivityWhenAsked) {
   for (const testing::Pull& p : pulls) EXPECT_LT(std::abs(p.pull), 4.0) << p.name;
 }
 
+// The same with the Earth rate modelled: G and the Earth rate's vertical part (an isotropic
+// G of W sin(lat) per g) are told apart, since the latter is known; the bias is b, the rest
+// mean less G f_rest / g0 and the Earth rate there.
+TEST(GyroIntegration, FitsTheGSensitivityBesideTheEarthRate) {
+  sim::HandSessionOptions o = hand_options("adis16488", 24);
+  o.imu.keep_unmodelled_terms = true;  // the sheet's 0.009 (deg/s)/g g-sensitivity
+  sim::SimSession s = sim::simulate_hand_session(o, 26);
+  const StaticDetection d = detect_static_intervals(s.samples, {});
+  GravityNormOptions a;
+  a.gravity_mps2 = s.gravity_mps2;
+  const GravityNormResult accel = calibrate_accel_gravity_norm(s.samples, d.intervals, a);
+  GyroIntegrationOptions g = at_site(s);
+  g.fit_g_sensitivity = true;
+  const GyroIntegrationResult r = calibrate_gyro_integration(s.samples, d.intervals, accel, g);
+  ASSERT_EQ(r.parameters.size(), 21U);
+  EXPECT_TRUE(r.earth_rate_modelled);
+  EXPECT_LT(r.chi2_per_dof, 2.0);
+  const auto pulls = testing::session_pulls(s, r.parameters, true);
+  EXPECT_EQ(pulls.size(), 21U);
+  for (const testing::Pull& p : pulls) EXPECT_LT(std::abs(p.pull), 4.0) << p.name;
+}
+
 TEST(GyroIntegration, RefusesWithoutRestOrPoses) {
   const HandFit f = hand_fit(hand_options("ln200", 10), 27);
   std::vector<StaticInterval> no_rest = f.detection.intervals;
