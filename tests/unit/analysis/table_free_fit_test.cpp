@@ -65,6 +65,43 @@ TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
   EXPECT_EQ(j.at("poses").at("detection").at("intervals").size(), session.holds.size());
 }
 
+// The Earth rate comes from the run's site latitude (the import's site.latitude_deg): with
+// it the fit models the Earth rate and says so; a run that carries none (a station snapshot
+// without it) is fitted as before, the rest's Earth rate left in the gyro bias, with a note.
+TEST(TableFreeFit, TheEarthRateComesFromTheSiteLatitudeOrIsLeftOutWithANote) {
+  testing::TempDatabase file("table-free-latitude");
+  store::Database db(file.path());
+  sim::HandSessionOptions options;
+  options.poses = 12;
+  options.imu.sample_rate_hz = 200.0;
+  options.imu.latitude_deg = -33.9;
+  const sim::SimSession session = sim::simulate_hand_session(options, 13);
+  const std::int64_t run = import_session(session, db, "latitude");
+
+  const TableFreeFit with = table_free_fit(db, run, {});
+  ASSERT_TRUE(with.gyro);
+  EXPECT_TRUE(with.gyro->earth_rate_modelled);
+  ASSERT_TRUE(with.latitude_deg.has_value());
+  EXPECT_DOUBLE_EQ(*with.latitude_deg, -33.9);
+  EXPECT_DOUBLE_EQ(with.gyro->latitude_deg, -33.9);
+  EXPECT_TRUE(to_json(with).at("earth_rate_modelled").get<bool>());
+  EXPECT_NE(with.gyro->summary.find("-33.90 deg"), std::string::npos) << with.gyro->summary;
+
+  db.sql().exec(
+      "UPDATE runs SET station_snapshot = json_remove(station_snapshot, '$.site.latitude_deg')");
+  const TableFreeFit without = table_free_fit(db, run, {});
+  ASSERT_TRUE(without.gyro);
+  EXPECT_FALSE(without.latitude_deg.has_value());
+  EXPECT_FALSE(without.gyro->earth_rate_modelled);
+  EXPECT_FALSE(to_json(without).at("earth_rate_modelled").get<bool>());
+  ASSERT_FALSE(without.notes.empty());
+  EXPECT_NE(without.notes.back().find("no site latitude"), std::string::npos);
+  EXPECT_NE(without.gyro->summary.find("latitude is not known"), std::string::npos);
+  // As before: the bias is the rest mean, the Earth rate there included.
+  expect_session_truth(session, without.gyro->parameters, "gyro_", false, false);
+  expect_session_truth(session, with.gyro->parameters, "gyro_", false, true);
+}
+
 TEST(TableFreeFit, OperatorIntervalsReplaceTheDetectorAndAreCheckedAgainstTheRecording) {
   testing::TempDatabase file("table-free-given");
   store::Database db(file.path());
