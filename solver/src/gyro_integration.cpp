@@ -968,8 +968,8 @@ GyroIntegrationResult calibrate_gyro_integration(std::span<const core::ImuSample
     quality = "no redundancy: sigmas from the noise alone";
   } else if (out.sigmas_scaled) {
     quality = fmt::format(
-        "chi2/dof {:.3g} against the accel direction and gyro white noise: "
-        "sigmas scaled by {:.3g}",
+        "chi2/dof {:.3g} against the turns' noise model (gyro noise and bias wander, the "
+        "poses' accel noise and wander, the holds' referral): sigmas scaled by {:.3g}",
         out.chi2_per_dof, out.sigma_scale);
   } else {
     quality = fmt::format("chi2/dof {:.3g}: the turns agree to their noise", out.chi2_per_dof);
