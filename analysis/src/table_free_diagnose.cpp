@@ -124,13 +124,17 @@ std::string accel_noise_text(const solver::GravityNormResult& a) {
       a.dof > 0 ? a.chi2_noise_model / a.dof : 0.0, a.noise.description, a.chi2_per_dof);
 }
 
-// The gyros have no noise model of their own: the turns' scatter over the integrated white
-// noise, which hand turns exceed (time stamps, output filter, sway within a turn), said as such.
+// The gyros against their turns' noise model (solver/gyro_integration.hpp: the gyro's white
+// noise and bias wander over each turn, the pose means' accel noise and wander, the referral of
+// the holds with the hand's sway), in words.
 std::string gyro_noise_text(const solver::GyroIntegrationResult& g) {
   return fmt::format(
-      "the turns scatter {:.3g} times what the gyro white noise alone explains (chi2/dof "
-      "{:.3g}), the gyro sigmas scaled by it",
-      std::sqrt(std::max(g.chi2_per_dof, 0.0)), g.chi2_per_dof);
+      "the turns scatter with chi2/dof {:.3g} against their noise model (gyro white noise and "
+      "bias wander over each turn, the poses' accel noise and wander, the hand's sway in the "
+      "holds){}",
+      g.chi2_per_dof,
+      g.earth_rate_modelled ? std::string()
+                            : std::string("; the Earth rate is not modelled (no site latitude)"));
 }
 
 std::string advice_of(const TableFreeDiagnosis& d) {
@@ -179,7 +183,15 @@ TableFreeDiagnosis diagnose_table_free(store::Database& db, std::int64_t run,
   TableFreeDiagnosis d;
   d.fit = table_free_fit(db, run, request);
   d.worst = worst_of(d.fit);
-  d.untestable.push_back("earth_rate: the heading of the poses is not known");
+  // The Earth rate is physics, not a candidate: modelled in every fit with a latitude.
+  d.untestable.push_back(
+      d.fit.ferraris ? "earth_rate: the heading of the holds is not known (the Ferraris method "
+                       "leaves it in the gyro bias)"
+      : d.fit.gyro && d.fit.gyro->earth_rate_modelled
+          ? "earth_rate: no candidate, modelled in every fit (vertical part from the site "
+            "latitude, the initial rest's heading fitted)"
+          : "earth_rate: the run has no site latitude (and the heading of the poses is not "
+            "known): not modelled");
   for (const std::string& term : table_free_optional_terms()) {
     if (has_table_free_term(request.terms, term)) continue;
     if (d.fit.ferraris) {
@@ -212,11 +224,13 @@ TableFreeDiagnosis diagnose_table_free(store::Database& db, std::int64_t run,
         d.candidates.front().p_value < kStrongPValue) {
       d.recommended = d.candidates.front().term;
     }
-    // The accelerometers are judged against their noise model (a wandering bias is noise, not
-    // a missing effect); the gyros have none, only the candidates speak for them.
+    // Each sensor is judged against its noise model (a wandering bias is noise, not a missing
+    // effect): the accelerometers' pose means by REML, the turns by theirs.
     const solver::GravityNormResult& a = *d.fit.accel;
-    d.explained =
-        d.recommended.empty() && a.dof > 0 && a.chi2_noise_model / a.dof <= kExplainedChi2Dof;
+    const solver::GyroIntegrationResult& g = *d.fit.gyro;
+    d.explained = d.recommended.empty() && a.dof > 0 &&
+                  a.chi2_noise_model / a.dof <= kExplainedChi2Dof && g.dof > 0 &&
+                  g.chi2_per_dof <= kExplainedChi2Dof;
   }
   d.advice = advice_of(d);
   return d;

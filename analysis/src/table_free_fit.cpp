@@ -30,6 +30,20 @@ double run_gravity(store::Database& db, std::int64_t run) {
   return (*site)["gravity_mps2"].get<double>();
 }
 
+// The site's latitude [deg] of a run (the import's site.latitude_deg, the station's site):
+// the integration between poses models the Earth rate with it. Empty when the run does not
+// carry one.
+std::optional<double> run_latitude(store::Database& db, std::int64_t run) {
+  store::RunStore runs(db);
+  const nlohmann::json snapshot = runs.load_run(run).station_snapshot;
+  const auto site = snapshot.find("site");
+  if (site == snapshot.end() || !site->is_object() || !site->contains("latitude_deg") ||
+      !(*site)["latitude_deg"].is_number()) {
+    return std::nullopt;
+  }
+  return (*site)["latitude_deg"].get<double>();
+}
+
 // Every sample of the run's completed steps, in time order, with the step each came from.
 struct RunSamples {
   std::vector<core::ImuSample> samples;
@@ -170,8 +184,10 @@ TableFreePoses poses_of(std::int64_t run, std::string device, RunSamples&& r,
   return poses;
 }
 
-// The gravity norm and the integration between `fit.poses` with `fit.terms`.
-void calibrate_poses(TableFreeFit& fit) {
+// The gravity norm and the integration between `fit.poses` with `fit.terms`; `referrals`:
+// the poses referred as another fit referred them (a candidate judged on its base's data).
+void calibrate_poses(TableFreeFit& fit,
+                     const std::vector<solver::GyroHoldReferral>& referrals = {}) {
   solver::GravityNormOptions accel_options;
   accel_options.gravity_mps2 = fit.gravity_mps2;
   accel_options.fit_quadratic = fit.terms.accel_quadratic;
@@ -179,6 +195,8 @@ void calibrate_poses(TableFreeFit& fit) {
                                                    fit.poses->detection.intervals, accel_options);
   solver::GyroIntegrationOptions gyro_options;
   gyro_options.fit_g_sensitivity = fit.terms.gyro_g_sensitivity;
+  if (fit.earth_rate) gyro_options.latitude_deg = fit.latitude_deg;
+  gyro_options.referrals = referrals;
   fit.gyro = solver::calibrate_gyro_integration(fit.poses->samples, fit.poses->detection.intervals,
                                                 *fit.accel, gyro_options);
 }
@@ -201,7 +219,9 @@ TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& ter
   TableFreeFit out = fit;
   out.terms = terms;
   out.history_id.reset();
-  calibrate_poses(out);
+  // The same poses referred the same way: a candidate is judged on the data and weights of
+  // the model it extends (the referral's known still rate moves with the terms fitted).
+  calibrate_poses(out, fit.gyro ? fit.gyro->referrals : std::vector<solver::GyroHoldReferral>{});
   return out;
 }
 
@@ -225,6 +245,15 @@ TableFreeFit table_free_fit(store::Database& db, std::int64_t run,
   fit.gravity_mps2 = run_gravity(db, run);
   fit.terms = request.terms;
   fit.notes = request.notes;
+  fit.earth_rate = request.earth_rate;
+  fit.latitude_deg = run_latitude(db, run);
+  if (fit.earth_rate && !fit.latitude_deg) {
+    fit.notes.push_back(
+        "earth_rate not modelled: the run has no site latitude, so not even its vertical part "
+        "(W sin(latitude) along gravity) is known; the gyro integration leaves it out (on a "
+        "tactical-grade gyro it then looks like an isotropic g-sensitivity of about 0.003 "
+        "(deg/s)/g)");
+  }
   RunSamples r = read_samples(db, run, fit.device);  // once, for whichever method
   for (const core::ImuSample& sample : r.samples) {
     if (!std::isfinite(sample.temperature_c)) continue;
@@ -325,6 +354,7 @@ nlohmann::json to_json(const TableFreeFit& fit) {
                       {"model", terms},
                       {"notes", fit.notes},
                       {"gravity_mps2", fit.gravity_mps2},
+                      {"earth_rate_modelled", fit.gyro && fit.gyro->earth_rate_modelled},
                       {"frame", solver::kAccelTriadFrameText},
                       {"chi2_dof", chi2_dof},
                       {"dof", q.dof}};

@@ -74,8 +74,10 @@ TableFreeModel table_free_model(const solver::Model& model) {
     }
     if (name == "earth_rate") {
       out.notes.push_back(
-          "earth_rate left out: the heading of the poses is not known; the Earth rate stays in "
-          "the gyro bias of the initial rest (at most 15.04 deg/h)");
+          "earth_rate is no fitted term here: the integration between poses models the Earth "
+          "rate whenever the run has a site latitude (W sin(latitude) along gravity; across "
+          "it W cos(latitude) towards North, whose heading at the initial rest is fitted as a "
+          "nuisance parameter), and takes it out of the gyro bias of the initial rest");
       continue;
     }
     throw core::InputError(

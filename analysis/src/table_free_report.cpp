@@ -48,8 +48,8 @@ std::string turn_plot(const TableFreeFit& fit) {
   std::vector<std::string> rows;
   for (std::size_t k = 0; k < fit.gyro->turns.size(); ++k) {
     const auto& t = fit.gyro->turns[k];
-    // The residual is an angle with two components of sigma_deg each, scaled by the turns'
-    // own scatter over the white noise as the fit's sigmas are.
+    // The residual is an angle with two components of sigma_deg each (the turns' noise model),
+    // scaled as the fit's sigmas are when the turns scatter more.
     rows.push_back(
         fmt::format("{} {} {}", k + 1, gp_number(t.residual_deg),
                     gp_number(2.0 * std::sqrt(2.0) * t.sigma_deg * fit.gyro->sigma_scale)));

@@ -126,15 +126,24 @@ void print_table_free_fit(const analysis::TableFreeFit& fit) {
   print_list("not determined by these turns", fit.gyro->undetermined);
   print_list("moves with an undetermined accelerometer parameter", fit.gyro->frame_open);
   fmt::print("{}\n", fit.gyro->summary);
-  fmt::print("earth_rate is not offered: the heading of the poses is not known.\n");
+  if (fit.gyro->earth_rate_modelled) {
+    fmt::print(
+        "earth_rate is no term here: modelled in the integration (latitude {:.4f} deg; North at "
+        "the initial rest {:.1f} +- {:.1f} deg about gravity{}).\n",
+        fit.gyro->latitude_deg, fit.gyro->rest_north_azimuth_deg,
+        fit.gyro->rest_north_azimuth_sigma_deg,
+        fit.gyro->heading_determined ? "" : ", not determined by these turns");
+  } else {
+    fmt::print("earth_rate is not modelled: the run has no site latitude.\n");
+  }
   print_table_free_quality(fit);
 }
 
 void print_table_free_quality(const analysis::TableFreeFit& fit) {
   const analysis::TableFreeQuality q = analysis::table_free_quality(fit);
   fmt::print(
-      "\nfit quality: chi2/dof {} against the white noise ({:.1f} over {} degrees of "
-      "freedom){}, {} parameters; |f| - g rms {:.3g} mg{}\n",
+      "\nfit quality: chi2/dof {} against the white noise (the turns: their noise model; {:.1f} "
+      "over {} degrees of freedom){}, {} parameters; |f| - g rms {:.3g} mg{}\n",
       q.dof > 0 ? fmt::format("{:.3g}", q.chi2_per_dof) : std::string("-"), q.chi2, q.dof,
       q.accel_chi2_per_dof_noise_model
           ? fmt::format("; accel {:.3g} against its noise model", *q.accel_chi2_per_dof_noise_model)

@@ -37,6 +37,10 @@ struct TableFreeFitRequest {
   std::vector<std::pair<double, double>> intervals_s;
   /// The optional terms to fit (table_free_model.hpp); the Ferraris method takes none.
   TableFreeTerms terms;
+  /// Model the Earth rate in the integration between poses (the model holds `earth_rate`, as
+  /// the default one does), from the run's site latitude; a run without one is fitted without
+  /// it and says so in the notes.
+  bool earth_rate = true;
   /// What the model as given left out, and why (table_free_model()); copied to the fit.
   std::vector<std::string> notes;
   /// The command recorded in the run's fit history ("fit", "diagnose", "calibrate"); empty:
@@ -61,6 +65,8 @@ struct TableFreeFit {
   std::string method;
   double gravity_mps2 = 0.0;
   TableFreeTerms terms;                    ///< the optional terms fitted
+  bool earth_rate = true;                  ///< asked for (TableFreeFitRequest::earth_rate)
+  std::optional<double> latitude_deg;      ///< the run's site latitude, when it has one
   std::vector<std::string> notes;          ///< what the model as given left out, and why
   std::optional<std::int64_t> history_id;  ///< the history row written, if any
   /// Range of the samples' temperatures [degC]; NaN when the recording has none.
@@ -72,16 +78,19 @@ struct TableFreeFit {
   std::optional<solver::FerrarisResult> ferraris;
 };
 
-/// `fit` (gravity norm) again with other optional terms, on the same samples and static poses:
-/// no database read, no detection, nothing recorded (a diagnosis tries each candidate so).
+/// `fit` (gravity norm) again with other optional terms, on the same samples and static poses,
+/// the poses' accel means referred to their ends as `fit` referred them (so the candidate's
+/// chi2 is on the same data and weights as its base's): no database read, no detection,
+/// nothing recorded (a diagnosis tries each candidate so).
 /// Throws core::InputError (where "model") for a Ferraris fit, which takes no optional term.
 TableFreeFit refit_table_free(const TableFreeFit& fit, const TableFreeTerms& terms);
 
 /// A table-free fit's quality in a few numbers, both sensors together (the fit history's row
 /// and the calibration record's `fit`).
 struct TableFreeQuality {
-  /// Accel and gyro, each against its white noise alone: the one yardstick that compares fits
-  /// of one run (each fit estimates its own noise model, against which it is near 1).
+  /// The accelerometers against their white noise alone (each fit estimates its own pose
+  /// noise model, against which it is near 1), the gyros against their turns' noise model
+  /// (gyro_integration.hpp: from the rest, the poses and the accel fit).
   double chi2 = 0.0;
   int dof = 0;
   double chi2_per_dof = 0.0;

@@ -2,8 +2,10 @@
 // Which error terms a run without a table can be fitted with. Such a run knows no orientation:
 // its calibration (table_free_fit.hpp) always fits the bias, scale factor and misalignment of
 // both triads, and can add the few terms its methods support; the others need what the run
-// lacks (a heading for the Earth rate, a table for the lever arm and tilt, temperature steps for
-// thermal terms). A model given as `--model` or in a request is read against that list.
+// lacks (a table for the lever arm and tilt, temperature steps for thermal terms). The Earth
+// rate is no term of such a fit: the integration between poses models it from the site
+// latitude whatever the model says (table_free_fit.hpp). A model given as `--model` or in a request
+// is read against that list.
 
 #include <string>
 #include <vector>
@@ -35,12 +37,14 @@ bool has_table_free_term(const TableFreeTerms& terms, const std::string& name);
 /// A model read for a run without a table.
 struct TableFreeModel {
   TableFreeTerms terms;
-  /// What was left out of the model as given, and why (earth_rate: the heading is unknown).
+  /// What was left out of the model as given, and why (earth_rate: modelled from the latitude
+  /// with the heading fitted, not a term).
   std::vector<std::string> notes;
 };
 
 /// Reads `model` for a run without a table: the base terms are fitted whether listed or not,
-/// `earth_rate` (in the default model) is left out with a note, the optional terms are taken.
+/// `earth_rate` (in the default model) is no term here (a note says how the Earth rate is
+/// handled), the optional terms are taken.
 /// Throws core::InputError (where "model") naming any other term and what it needs that the
 /// run lacks, and for custom terms (their signals are table signals).
 TableFreeModel table_free_model(const solver::Model& model);

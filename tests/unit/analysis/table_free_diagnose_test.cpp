@@ -109,6 +109,52 @@ TEST(TableFreeDiagnose, NothingIsRecommendedWhenTheModelLacksNoEffect) {
   EXPECT_TRUE(store::fit_history(db, 1).empty()) << "nothing recorded without a command";
 }
 
+// An LN200-class unit turned by hand, without any g-sensitivity: the vertical Earth rate,
+// omega_ie sin(latitude) along gravity, looks exactly like an isotropic g-sensitivity to an
+// integration that leaves it out (gyro_g_sensitivity was recommended at p ~1e-6). Modelled
+// (the import carries the site's latitude), nothing is recommended, on the session
+// `calstand sim-session --kind hand --model ln200` writes (30 poses, 400 Hz) and on a longer one
+// (60 poses, 200 Hz), whose gyro triad relative to the accelerometers is then within 100 ppm and
+// 1e-4 rad of the truth (30 poses leave the misalignments a sigma of about 3.5e-5 rad: the worst
+// of six passes 1e-4 rad on some seeds).
+TEST(TableFreeDiagnose, ATacticalGyroWithoutGSensitivityGetsNothingRecommended) {
+  testing::TempDatabase file("tf-diagnose-ln200");
+  store::Database db(file.path());
+  for (const int poses : {30, 60}) {
+    for (std::uint64_t seed : {1, 2, 3}) {
+      SCOPED_TRACE(std::to_string(poses) + " poses, seed " + std::to_string(seed));
+      sim::HandSessionOptions options;
+      options.imu.spec = "ln200";
+      options.poses = poses;
+      if (poses > 30) options.imu.sample_rate_hz = 200.0;  // decimated: a shorter test
+      const sim::SimSession session = sim::simulate_hand_session(options, seed);
+      const std::int64_t run = import_session(
+          session, db, "ln200-" + std::to_string(poses) + "-" + std::to_string(seed));
+      const TableFreeDiagnosis d = diagnose_table_free(db, run, {});
+      ASSERT_TRUE(d.fit.gyro);
+      EXPECT_TRUE(d.fit.gyro->earth_rate_modelled);
+      EXPECT_EQ(d.recommended, "") << to_json(d).at("candidates").dump(1);
+      for (const auto& c : d.candidates) EXPECT_GT(c.p_value, 1e-3) << c.term;
+      EXPECT_EQ(d.untestable.front().rfind("earth_rate: no candidate, modelled", 0), 0u);
+      // The turns fit to their noise model.
+      EXPECT_LT(d.fit.gyro->chi2_per_dof, 2.0);
+      if (poses < 60) continue;
+      int checked = 0;
+      for (const auto& e : d.fit.gyro->parameters) {
+        const double error = std::abs(e.value - solver::testing::session_truth(session, e.name));
+        if (e.name.rfind("gyro_scale.", 0) == 0) {
+          EXPECT_LT(error, 100.0) << e.name;
+          ++checked;
+        } else if (e.name.rfind("gyro_misalignment.", 0) == 0) {
+          EXPECT_LT(error, 1e-4) << e.name;
+          ++checked;
+        }
+      }
+      EXPECT_EQ(checked, 9);
+    }
+  }
+}
+
 TEST(TableFreeDiagnose, AFerrarisSessionHasNoRedundancyForFurtherTerms) {
   testing::TempDatabase file("tf-diagnose-ferraris");
   store::Database db(file.path());

@@ -23,11 +23,11 @@ using testing::import_session;
 // of a wandering-bias sensor's estimates is honest only to a factor near one).
 void expect_session_truth(const sim::SimSession& s,
                           const std::vector<solver::TriadEstimate>& estimates, const char* prefix,
-                          bool counts) {
+                          bool counts, bool earth_rate_modelled = false) {
   int checked = 0;
   for (const auto& e : estimates) {
     if (e.status != solver::EstimateStatus::kEstimated || e.name.rfind(prefix, 0) != 0) continue;
-    double truth = solver::testing::session_truth(s, e.name);
+    double truth = solver::testing::session_truth(s, e.name, earth_rate_modelled);
     // Counts are written whole: the nominal conversion's rounding is part of the bias.
     if (counts && e.name.find("_bias.") != std::string::npos) continue;
     EXPECT_NEAR(e.value, truth, 4.5 * e.sigma) << e.name << " sigma " << e.sigma;
@@ -52,7 +52,10 @@ TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
   EXPECT_EQ(fit.poses->detection.intervals.size(), session.holds.size());
   EXPECT_TRUE(fit.poses->detection.intervals.front().initial_rest);
   expect_session_truth(session, fit.accel->parameters, "accel_", false);
-  expect_session_truth(session, fit.gyro->parameters, "gyro_", false);
+  // The import carries the site's latitude: the Earth rate is modelled, and the gyro bias is
+  // the rest mean less the Earth rate there.
+  ASSERT_TRUE(fit.gyro->earth_rate_modelled);
+  expect_session_truth(session, fit.gyro->parameters, "gyro_", false, true);
   EXPECT_LT(fit.accel->rms_residual_mg, 1.0);
 
   const nlohmann::json j = to_json(fit);
@@ -60,6 +63,43 @@ TEST(TableFreeFit, AHandHeldSessionImportedWithoutATableRecoversTheTruth) {
   EXPECT_TRUE(j.at("accel").contains("parameters"));
   EXPECT_TRUE(j.at("gyro").contains("parameters"));
   EXPECT_EQ(j.at("poses").at("detection").at("intervals").size(), session.holds.size());
+}
+
+// The Earth rate comes from the run's site latitude (the import's site.latitude_deg): with
+// it the fit models the Earth rate and says so; a run that carries none (a station snapshot
+// without it) is fitted as before, the rest's Earth rate left in the gyro bias, with a note.
+TEST(TableFreeFit, TheEarthRateComesFromTheSiteLatitudeOrIsLeftOutWithANote) {
+  testing::TempDatabase file("table-free-latitude");
+  store::Database db(file.path());
+  sim::HandSessionOptions options;
+  options.poses = 12;
+  options.imu.sample_rate_hz = 200.0;
+  options.imu.latitude_deg = -33.9;
+  const sim::SimSession session = sim::simulate_hand_session(options, 13);
+  const std::int64_t run = import_session(session, db, "latitude");
+
+  const TableFreeFit with = table_free_fit(db, run, {});
+  ASSERT_TRUE(with.gyro);
+  EXPECT_TRUE(with.gyro->earth_rate_modelled);
+  ASSERT_TRUE(with.latitude_deg.has_value());
+  EXPECT_DOUBLE_EQ(*with.latitude_deg, -33.9);
+  EXPECT_DOUBLE_EQ(with.gyro->latitude_deg, -33.9);
+  EXPECT_TRUE(to_json(with).at("earth_rate_modelled").get<bool>());
+  EXPECT_NE(with.gyro->summary.find("-33.90 deg"), std::string::npos) << with.gyro->summary;
+
+  db.sql().exec(
+      "UPDATE runs SET station_snapshot = json_remove(station_snapshot, '$.site.latitude_deg')");
+  const TableFreeFit without = table_free_fit(db, run, {});
+  ASSERT_TRUE(without.gyro);
+  EXPECT_FALSE(without.latitude_deg.has_value());
+  EXPECT_FALSE(without.gyro->earth_rate_modelled);
+  EXPECT_FALSE(to_json(without).at("earth_rate_modelled").get<bool>());
+  ASSERT_FALSE(without.notes.empty());
+  EXPECT_NE(without.notes.back().find("no site latitude"), std::string::npos);
+  EXPECT_NE(without.gyro->summary.find("latitude is not known"), std::string::npos);
+  // As before: the bias is the rest mean, the Earth rate there included.
+  expect_session_truth(session, without.gyro->parameters, "gyro_", false, false);
+  expect_session_truth(session, with.gyro->parameters, "gyro_", false, true);
 }
 
 TEST(TableFreeFit, OperatorIntervalsReplaceTheDetectorAndAreCheckedAgainstTheRecording) {

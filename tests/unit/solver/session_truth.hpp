@@ -26,8 +26,10 @@ inline sim::SimSession hand_session_200hz(const char* spec, std::uint64_t seed, 
 /// The truth of `name` in frame A for this session: the fixed value, plus for biases what the
 /// session itself adds to them: the slow noise averaged over the holds (accel; gyro in a
 /// Ferraris session), or over the initial rest together with the Earth rate there (gyro of a
-/// hand session, whose bias comes from the rest).
-inline double session_truth(const sim::SimSession& s, const std::string& name) {
+/// hand session, whose bias comes from the rest; `earth_rate_modelled`: a fit that models the
+/// Earth rate takes it out of the rest mean, leaving the slow noise only).
+inline double session_truth(const sim::SimSession& s, const std::string& name,
+                            bool earth_rate_modelled = false) {
   double t = 0.0;
   for (const auto& [n, v] : s.truth.parameters()) {
     if (n == name) t = v;
@@ -36,7 +38,8 @@ inline double session_truth(const sim::SimSession& s, const std::string& name) {
   if (name.rfind("accel_bias.", 0) == 0) t += s.slow_noise_mean_holds[3 + axis];
   if (name.rfind("gyro_bias.", 0) == 0) {
     if (s.kind == "hand") {
-      t += s.slow_noise_mean_rest[axis] + s.rest_true_rate_A_dps[static_cast<Eigen::Index>(axis)];
+      t += s.slow_noise_mean_rest[axis];
+      if (!earth_rate_modelled) t += s.rest_true_rate_A_dps[static_cast<Eigen::Index>(axis)];
     } else {
       t += s.slow_noise_mean_holds[axis];
     }
@@ -51,11 +54,12 @@ struct Pull {
 
 /// (estimate - truth) / sigma of every estimated parameter with a sigma.
 inline std::vector<Pull> session_pulls(const sim::SimSession& s,
-                                       const std::vector<TriadEstimate>& estimates) {
+                                       const std::vector<TriadEstimate>& estimates,
+                                       bool earth_rate_modelled = false) {
   std::vector<Pull> out;
   for (const TriadEstimate& e : estimates) {
     if (e.status != EstimateStatus::kEstimated || !(e.sigma > 0.0)) continue;
-    out.push_back({e.name, (e.value - session_truth(s, e.name)) / e.sigma});
+    out.push_back({e.name, (e.value - session_truth(s, e.name, earth_rate_modelled)) / e.sigma});
   }
   return out;
 }
