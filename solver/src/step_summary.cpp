@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "solver/step_regressors.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::solver {
@@ -45,7 +46,9 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       run_start_s = std::min(run_start_s, sample.receive_time_s);
   }
   const auto P = static_cast<Eigen::Index>(model.size());
-  Eigen::MatrixXd g(kChannels, P);
+  // The regressors' step means from sums of the few signal products they are made of, not from
+  // every parameter's regressor at every sample (step_regressors.hpp).
+  StepRegressorSums regressor_sums(model);
   std::vector<StepSummary> out;
   out.reserve(data.steps.size());
   for (const store::StepData& step : data.steps) {
@@ -58,7 +61,8 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     s.duration_s = step.samples.back().receive_time_s - step.samples.front().receive_time_s;
     s.start_s = step.samples.front().receive_time_s - run_start_s;
     s.end_s = step.samples.back().receive_time_s - run_start_s;
-    s.regressors = Eigen::MatrixXd::Zero(kChannels, P);
+    s.regressors.resize(kChannels, P);
+    regressor_sums.clear();
     // Block means of measurement - reference for the batch-means variance.
     const int blocks =
         n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock) ? kBatchBlocks : 0;
@@ -77,10 +81,7 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       const Vector6d ref = model.reference(sig);
       s.measured += meas;
       s.reference += ref;
-      if (P > 0) {
-        model.regressors(sig, g);
-        s.regressors += g;
-      }
+      regressor_sums.add(sig);
       const auto values = signal_values(sig);
       for (std::size_t k = 0; k < kSignalCount; ++k) {
         s.signals[k] += values[k];
@@ -97,7 +98,7 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     const double inv_n = 1.0 / static_cast<double>(n);
     s.measured *= inv_n;
     s.reference *= inv_n;
-    s.regressors *= inv_n;
+    regressor_sums.mean(s.count, s.regressors);
     for (std::size_t k = 0; k < kSignalCount; ++k) {
       s.signals[k] *= inv_n;
       s.signals_sq[k] *= inv_n;
