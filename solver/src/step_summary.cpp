@@ -21,6 +21,11 @@ constexpr int kMinSamplesPerBlock = 4;
 // A table axis slower than this is at rest (encoder noise at rest is far below it) [deg/s].
 constexpr double kStaticRateDps = 1e-3;
 
+bool same_table_state(const store::TableSample& a, const store::TableSample& b) {
+  return a.outer_deg == b.outer_deg && a.inner_deg == b.inner_deg &&
+         a.outer_rate_dps == b.outer_rate_dps && a.inner_rate_dps == b.inner_rate_dps;
+}
+
 }  // namespace
 
 RunData load_run_data(store::Database& db, std::int64_t run, const std::string& device) {
@@ -69,13 +74,17 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     std::vector<Vector6d> block_sum(static_cast<std::size_t>(blocks), Vector6d::Zero());
     std::vector<double> block_count(static_cast<std::size_t>(blocks), 0.0);
     double max_rate = 0.0;
+    Signals sig;
     for (std::size_t i = 0; i < n; ++i) {
       const core::ImuSample& sample = step.samples[i];
       const store::TableSample& table = step.table[i];
       max_rate =
           std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
-      const Signals sig =
-          build(sample, table, temperature_rates[i], sample.receive_time_s - run_start_s);
+      const double elapsed_s = sample.receive_time_s - run_start_s;
+      // A static step's samples share one table state: its rotations are computed once.
+      sig = i > 0 && same_table_state(table, step.table[i - 1])
+                ? build.at_same_table(sig, sample, temperature_rates[i], elapsed_s)
+                : build(sample, table, temperature_rates[i], elapsed_s);
       Vector6d meas;
       meas << sample.gyro_dps, sample.accel_mps2;
       const Vector6d ref = model.reference(sig);
