@@ -21,7 +21,7 @@ struct StepRegressorSums::Layout {
   int abs_rate = -1;     ///< |w_i|, 3
   int abs_force = -1;    ///< |f_i|, 3
   int rate_sq = -1;      ///< w_i^2, 3
-  int force_sq = -1;     ///< (f_i / g0)^2, 3
+  int force_sq = -1;     ///< (f_i / g0)^2 [g^2], 3
   int temp_powers = -1;  ///< dT^1 .. dT^temp_order
   int temp_order = 0;
   int temp_rate = -1;      ///< dT w_i, 3
@@ -151,7 +151,7 @@ StepRegressorSums::StepRegressorSums(const Model& model) : layout_(std::make_uni
               }
             } else {
               add(kAx + r, p + c, sq + table_rate_pair(r, c), 1.0);
-              // [a x](r, c) = -e_rck a_k: +a_k for (r, c, k) cyclic (x y z), else -a_k.
+              // [a x](r, c) = -e_rck a_k: -a_k for (r, c, k) cyclic in (x, y, z), else +a_k.
               const int k = 3 - r - c;
               add(kAx + r, p + c, alpha + k, (c - r + 3) % 3 == 2 ? 1.0 : -1.0);
             }
