@@ -31,7 +31,10 @@ struct RecordedRun {
   std::string db_path;
   std::int64_t run_id = 0;
   ~RecordedRun() {
-    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(db_path + suffix);
+    // The database, its WAL files and the lock file store::Database takes beside it.
+    for (const char* suffix : {"", "-wal", "-shm", ".lock"}) {
+      std::filesystem::remove(db_path + suffix);
+    }
   }
 };
 

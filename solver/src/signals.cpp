@@ -38,14 +38,12 @@ Signals SignalBuilder::operator()(const core::ImuSample& sample, const store::Ta
   return s;
 }
 
-Signals SignalBuilder::at_same_table(const Signals& previous, const core::ImuSample& sample,
-                                     double temperature_rate_cpm, double elapsed_s) const {
-  Signals s = previous;
-  s.temperature_c = sample.temperature_c;
-  s.dT_c = sample.temperature_c - temperature_ref_c_;
-  s.temperature_rate_cpm = temperature_rate_cpm;
-  s.elapsed_s = elapsed_s;
-  return s;
+void SignalBuilder::advance_at_same_table(Signals& signals, const core::ImuSample& sample,
+                                          double temperature_rate_cpm, double elapsed_s) const {
+  signals.temperature_c = sample.temperature_c;
+  signals.dT_c = sample.temperature_c - temperature_ref_c_;
+  signals.temperature_rate_cpm = temperature_rate_cpm;
+  signals.elapsed_s = elapsed_s;
 }
 
 Signals SignalBuilder::with_inputs(const Eigen::Vector3d& rate_dps,

@@ -73,6 +73,13 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
         n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock) ? kBatchBlocks : 0;
     std::vector<Vector6d> block_sum(static_cast<std::size_t>(blocks), Vector6d::Zero());
     std::vector<double> block_count(static_cast<std::size_t>(blocks), 0.0);
+    // Sample i belongs to block i * blocks / n, which reaches block b + 1 at the first i with
+    // i * blocks >= (b + 1) n: found once per block instead of a division per sample.
+    std::size_t block = 0;
+    const auto block_start = [&](std::size_t b) {
+      return (b * n + static_cast<std::size_t>(blocks) - 1) / static_cast<std::size_t>(blocks);
+    };
+    std::size_t next_block_start = blocks > 0 ? block_start(1) : n;
     double max_rate = 0.0;
     Signals sig;
     for (std::size_t i = 0; i < n; ++i) {
@@ -82,9 +89,11 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
           std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
       const double elapsed_s = sample.receive_time_s - run_start_s;
       // A static step's samples share one table state: its rotations are computed once.
-      sig = i > 0 && same_table_state(table, step.table[i - 1])
-                ? build.at_same_table(sig, sample, temperature_rates[i], elapsed_s)
-                : build(sample, table, temperature_rates[i], elapsed_s);
+      if (i > 0 && same_table_state(table, step.table[i - 1])) {
+        build.advance_at_same_table(sig, sample, temperature_rates[i], elapsed_s);
+      } else {
+        sig = build(sample, table, temperature_rates[i], elapsed_s);
+      }
       Vector6d meas;
       meas << sample.gyro_dps, sample.accel_mps2;
       const Vector6d ref = model.reference(sig);
@@ -98,10 +107,9 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
         s.signals_abs[k] += std::abs(values[k]);
       }
       if (blocks > 0) {
-        const auto b = std::min<std::size_t>(i * static_cast<std::size_t>(blocks) / n,
-                                             static_cast<std::size_t>(blocks - 1));
-        block_sum[b] += meas - ref;
-        block_count[b] += 1.0;
+        while (i >= next_block_start) next_block_start = block_start(++block + 1);
+        block_sum[block] += meas - ref;
+        block_count[block] += 1.0;
       }
     }
     const double inv_n = 1.0 / static_cast<double>(n);

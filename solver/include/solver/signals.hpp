@@ -54,11 +54,12 @@ class SignalBuilder {
                       const store::TableSample& table, double temperature_c,
                       double temperature_rate_cpm, double elapsed_s) const;
 
-  /// The signals of a sample at the same table state as the one `previous` was built for: the
-  /// same as operator() (the rotations, rates and forces copied, the temperature and time of
-  /// this sample), without the trigonometry. The samples of a static step share one state.
-  Signals at_same_table(const Signals& previous, const core::ImuSample& sample,
-                        double temperature_rate_cpm, double elapsed_s) const;
+  /// Moves `signals`, built for the previous sample, on to `sample` at the same table state:
+  /// the same as operator() (the rotations, rates and forces kept, the temperature and time of
+  /// this sample), without the trigonometry. The samples of a static step share one state;
+  /// updated in place, a long run's samples are not copied twice more.
+  void advance_at_same_table(Signals& signals, const core::ImuSample& sample,
+                             double temperature_rate_cpm, double elapsed_s) const;
 
   double temperature_ref_c() const { return temperature_ref_c_; }
 

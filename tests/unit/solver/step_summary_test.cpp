@@ -64,6 +64,8 @@ struct PerSampleMeans {
   std::vector<Eigen::MatrixXd> scales;  ///< mean magnitude of each regressor
   std::vector<Vector6d> reference;
   std::vector<std::array<double, kSignalCount>> signals;
+  /// The step mean's variance by batch means: 10 blocks, sample i in block i * 10 / n.
+  std::vector<Vector6d> mean_variance;
 };
 
 PerSampleMeans per_sample_means(const RunData& data, const Model& model) {
@@ -81,6 +83,10 @@ PerSampleMeans per_sample_means(const RunData& data, const Model& model) {
     Eigen::MatrixXd abs_sum = Eigen::MatrixXd::Zero(kChannels, P);
     Vector6d reference = Vector6d::Zero();
     std::array<double, kSignalCount> signals{};
+    constexpr std::size_t kBlocks = 10;
+    std::array<Vector6d, kBlocks> block_sum;
+    block_sum.fill(Vector6d::Zero());
+    std::array<double, kBlocks> block_count{};
     for (std::size_t i = 0; i < step.samples.size(); ++i) {
       const Signals sig = build(step.samples[i], step.table[i], rates[i],
                                 step.samples[i].receive_time_s - run_start_s);
@@ -90,7 +96,19 @@ PerSampleMeans per_sample_means(const RunData& data, const Model& model) {
       reference += model.reference(sig);
       const auto values = signal_values(sig);
       for (std::size_t k = 0; k < kSignalCount; ++k) signals[k] += values[k];
+      Vector6d meas;
+      meas << step.samples[i].gyro_dps, step.samples[i].accel_mps2;
+      const std::size_t b = i * kBlocks / step.samples.size();
+      block_sum[b] += meas - model.reference(sig);
+      block_count[b] += 1.0;
     }
+    Vector6d avar = Vector6d::Zero();
+    for (std::size_t b = 0; b + 1 < kBlocks; ++b) {
+      const Vector6d d = block_sum[b + 1] / block_count[b + 1] - block_sum[b] / block_count[b];
+      avar += 0.5 * d.cwiseProduct(d);
+    }
+    out.mean_variance.push_back(avar / static_cast<double>(kBlocks - 1) /
+                                static_cast<double>(kBlocks));
     const double n = static_cast<double>(step.samples.size());
     out.regressors.push_back(sum / n);
     out.scales.push_back(abs_sum / n);
@@ -135,8 +153,12 @@ TEST(StepSummary, RegressorMeansAreThoseOfEverySample) {
   // Every parameter acts somewhere in this run (nothing was compared against zeros only).
   EXPECT_GT(nonzero, static_cast<int>(model.size()));
   // The signals of a static step's samples come from its first sample's table state: the
-  // reference and the signals' means are those of every sample's own.
+  // reference and the signals' means are those of every sample's own; the batch means take
+  // the same samples.
   for (std::size_t k = 0; k < steps.size(); ++k) {
+    EXPECT_LE((steps[k].mean_variance - means.mean_variance[k]).cwiseAbs().maxCoeff(),
+              1e-9 * means.mean_variance[k].cwiseAbs().maxCoeff())
+        << "step " << k;
     EXPECT_LE((steps[k].reference - means.reference[k]).cwiseAbs().maxCoeff(),
               1e-12 * std::max(1.0, means.reference[k].cwiseAbs().maxCoeff()))
         << "step " << k;
@@ -210,7 +232,8 @@ TEST(SignalBuilder, AtTheSameTableStateAsTheFullComputation) {
   second.temperature_c = 20.5;
   const Signals previous = build(first, table, 0.1, 4.0);
   const Signals full = build(second, table, 0.3, 4.0025);
-  const Signals same = build.at_same_table(previous, second, 0.3, 4.0025);
+  Signals same = previous;
+  build.advance_at_same_table(same, second, 0.3, 4.0025);
   EXPECT_EQ(same.temperature_c, full.temperature_c);
   EXPECT_EQ(same.dT_c, full.dT_c);
   EXPECT_EQ(same.temperature_rate_cpm, full.temperature_rate_cpm);
