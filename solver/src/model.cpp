@@ -11,8 +11,12 @@
 #include "core/site.hpp"
 #include "core/suggest.hpp"
 #include "core/text.hpp"
+#include "term_kind.hpp"
 
 namespace calstand::solver {
+
+using detail::TermKind;
+
 namespace {
 
 constexpr int kMaxTemperatureOrder = 9;
@@ -33,43 +37,29 @@ std::string unknown_term_message(std::string_view name,
                                   : fmt::format(" (did you mean \"{}\"?)", best));
 }
 
-/// What a catalogue term contributes, as regressors() dispatches on it.
-enum class Kind : unsigned char {
-  kBias,
-  kScale,
-  kMisalignment,
-  kAsymmetry,
-  kGyroQuadratic,
-  kAccelQuadratic,
-  kGSensitivity,
-  kTempBias,
-  kTempScale,
-  kLeverArm,
-  kTilt,
-  kNoParameters
-};
-
-Kind kind_of_name(std::string_view n) {
-  if (n == "gyro_bias" || n == "accel_bias") return Kind::kBias;
-  if (n == "gyro_scale" || n == "accel_scale") return Kind::kScale;
-  if (n == "gyro_misalignment" || n == "accel_misalignment") return Kind::kMisalignment;
-  if (n == "gyro_scale_asymmetry" || n == "accel_scale_asymmetry") return Kind::kAsymmetry;
-  if (n == "gyro_quadratic") return Kind::kGyroQuadratic;
-  if (n == "accel_quadratic") return Kind::kAccelQuadratic;
-  if (n == "gyro_g_sensitivity") return Kind::kGSensitivity;
-  if (n == "gyro_temp_bias" || n == "accel_temp_bias") return Kind::kTempBias;
-  if (n == "gyro_temp_scale" || n == "accel_temp_scale") return Kind::kTempScale;
-  if (n == "accel_lever_arm") return Kind::kLeverArm;
-  if (n == "table_tilt") return Kind::kTilt;
-  return Kind::kNoParameters;  // earth_rate changes the reference (SignalBuilder)
+TermKind kind_of_name(std::string_view n) {
+  if (n == "gyro_bias" || n == "accel_bias") return TermKind::kBias;
+  if (n == "gyro_scale" || n == "accel_scale") return TermKind::kScale;
+  if (n == "gyro_misalignment" || n == "accel_misalignment") return TermKind::kMisalignment;
+  if (n == "gyro_scale_asymmetry" || n == "accel_scale_asymmetry") return TermKind::kAsymmetry;
+  if (n == "gyro_quadratic") return TermKind::kGyroQuadratic;
+  if (n == "accel_quadratic") return TermKind::kAccelQuadratic;
+  if (n == "gyro_g_sensitivity") return TermKind::kGSensitivity;
+  if (n == "gyro_temp_bias" || n == "accel_temp_bias") return TermKind::kTempBias;
+  if (n == "gyro_temp_scale" || n == "accel_temp_scale") return TermKind::kTempScale;
+  if (n == "accel_lever_arm") return TermKind::kLeverArm;
+  if (n == "table_tilt") return TermKind::kTilt;
+  return TermKind::kNoParameters;  // earth_rate changes the reference (SignalBuilder)
 }
 
-/// The kind of a catalogue term by its place in the catalogue: regressors() runs for every term
-/// at every sample, where comparing the names took a tenth of a fit's time.
-Kind kind_of(const core::ErrorTermInfo* info) {
+}  // namespace
+
+namespace detail {
+
+TermKind term_kind(const core::ErrorTermInfo* info) {
   static const std::vector<core::ErrorTermInfo>& catalogue = core::error_term_catalogue();
-  static const std::vector<Kind> kinds = [] {
-    std::vector<Kind> out;
+  static const std::vector<TermKind> kinds = [] {
+    std::vector<TermKind> out;
     for (const auto& t : catalogue) out.push_back(kind_of_name(t.name));
     return out;
   }();
@@ -80,7 +70,7 @@ Kind kind_of(const core::ErrorTermInfo* info) {
   return kind_of_name(info->name);
 }
 
-}  // namespace
+}  // namespace detail
 
 std::string_view channel_name(int channel) {
   static constexpr std::string_view kNames[kChannels] = {"gx", "gy", "gz", "ax", "ay", "az"};
@@ -277,14 +267,14 @@ void Model::regressors(const Signals& s, Eigen::Ref<Eigen::MatrixXd> out) const 
     const bool gyro = t.info->sensor == core::TermSensor::kGyro;
     const int row = gyro ? kGx : kAx;
     const Eigen::Vector3d& in = gyro ? w : f;  // the sensor's own input
-    switch (kind_of(t.info)) {
-      case Kind::kBias:
+    switch (detail::term_kind(t.info)) {
+      case TermKind::kBias:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = 1.0;
         break;
-      case Kind::kScale:
+      case TermKind::kScale:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = ppm * in[i];
         break;
-      case Kind::kMisalignment:
+      case TermKind::kMisalignment:
         // Components xy xz yx yz zx zy: M[i][j] couples input j into axis i.
         for (int i = 0; i < 3; ++i) {
           for (int j = 0; j < 3; ++j) {
@@ -292,21 +282,21 @@ void Model::regressors(const Signals& s, Eigen::Ref<Eigen::MatrixXd> out) const 
           }
         }
         break;
-      case Kind::kAsymmetry:
+      case TermKind::kAsymmetry:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = ppm * std::abs(in[i]);
         break;
-      case Kind::kGyroQuadratic:
+      case TermKind::kGyroQuadratic:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = ppm * w[i] * w[i];
         break;
-      case Kind::kAccelQuadratic:
+      case TermKind::kAccelQuadratic:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = ppm * g0 * (f[i] / g0) * (f[i] / g0);
         break;
-      case Kind::kGSensitivity:
+      case TermKind::kGSensitivity:
         for (int i = 0; i < 3; ++i) {
           for (int j = 0; j < 3; ++j) out(kGx + i, p++) = f[j] / g0;
         }
         break;
-      case Kind::kTempBias: {
+      case TermKind::kTempBias: {
         double power = 1.0;
         for (int k = 1; k <= t.order; ++k) {
           power *= s.dT_c;
@@ -314,10 +304,10 @@ void Model::regressors(const Signals& s, Eigen::Ref<Eigen::MatrixXd> out) const 
         }
         break;
       }
-      case Kind::kTempScale:
+      case TermKind::kTempScale:
         for (int i = 0; i < 3; ++i) out(row + i, p + i) = ppm * s.dT_c * in[i];
         break;
-      case Kind::kLeverArm: {
+      case TermKind::kLeverArm: {
         // wt x (wt x r) + dwt/dt x r = ([wt x]^2 + [dwt/dt x]) r, rates in rad/s. Within a step
         // the axis rates are constant; dwt/dt is the outer axis carrying the inner one.
         const Eigen::Vector3d wt = s.table_rate_dps * core::kDegToRad;
@@ -326,7 +316,7 @@ void Model::regressors(const Signals& s, Eigen::Ref<Eigen::MatrixXd> out) const 
         out.block(kAx, p, 3, 3) = K * K + core::skew(alpha);
         break;
       }
-      case Kind::kTilt: {
+      case TermKind::kTilt: {
         // f = C_BL (I - [t x]) f_L, so df/dt_k = C_BL (f_L x e_k). The tilted base turns the
         // Earth rate with gravity; that part enters the gyro rows when the model has earth_rate.
         const Eigen::Vector3d f_L = s.C_BL.transpose() * f;
@@ -338,7 +328,7 @@ void Model::regressors(const Signals& s, Eigen::Ref<Eigen::MatrixXd> out) const 
         }
         break;
       }
-      case Kind::kNoParameters:  // earth_rate: it changes the reference (SignalBuilder)
+      case TermKind::kNoParameters:  // earth_rate: it changes the reference (SignalBuilder)
         break;
     }
   }

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "solver/step_regressors.hpp"
 #include "store/run_store.hpp"
 
 namespace calstand::solver {
@@ -19,6 +20,11 @@ constexpr int kBatchBlocks = 10;
 constexpr int kMinSamplesPerBlock = 4;
 // A table axis slower than this is at rest (encoder noise at rest is far below it) [deg/s].
 constexpr double kStaticRateDps = 1e-3;
+
+bool same_table_state(const store::TableSample& a, const store::TableSample& b) {
+  return a.outer_deg == b.outer_deg && a.inner_deg == b.inner_deg &&
+         a.outer_rate_dps == b.outer_rate_dps && a.inner_rate_dps == b.inner_rate_dps;
+}
 
 }  // namespace
 
@@ -45,7 +51,9 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       run_start_s = std::min(run_start_s, sample.receive_time_s);
   }
   const auto P = static_cast<Eigen::Index>(model.size());
-  Eigen::MatrixXd g(kChannels, P);
+  // The regressors' step means from sums of the few signal products they are made of, not from
+  // every parameter's regressor at every sample (step_regressors.hpp).
+  StepRegressorSums regressor_sums(model);
   std::vector<StepSummary> out;
   out.reserve(data.steps.size());
   for (const store::StepData& step : data.steps) {
@@ -58,29 +66,40 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
     s.duration_s = step.samples.back().receive_time_s - step.samples.front().receive_time_s;
     s.start_s = step.samples.front().receive_time_s - run_start_s;
     s.end_s = step.samples.back().receive_time_s - run_start_s;
-    s.regressors = Eigen::MatrixXd::Zero(kChannels, P);
+    s.regressors.resize(kChannels, P);
+    regressor_sums.clear();
     // Block means of measurement - reference for the batch-means variance.
     const int blocks =
         n >= static_cast<std::size_t>(kBatchBlocks * kMinSamplesPerBlock) ? kBatchBlocks : 0;
     std::vector<Vector6d> block_sum(static_cast<std::size_t>(blocks), Vector6d::Zero());
     std::vector<double> block_count(static_cast<std::size_t>(blocks), 0.0);
+    // Sample i belongs to block i * blocks / n, which reaches block b + 1 at the first i with
+    // i * blocks >= (b + 1) n: found once per block instead of a division per sample.
+    std::size_t block = 0;
+    const auto block_start = [&](std::size_t b) {
+      return (b * n + static_cast<std::size_t>(blocks) - 1) / static_cast<std::size_t>(blocks);
+    };
+    std::size_t next_block_start = blocks > 0 ? block_start(1) : n;
     double max_rate = 0.0;
+    Signals sig;
     for (std::size_t i = 0; i < n; ++i) {
       const core::ImuSample& sample = step.samples[i];
       const store::TableSample& table = step.table[i];
       max_rate =
           std::max({max_rate, std::abs(table.outer_rate_dps), std::abs(table.inner_rate_dps)});
-      const Signals sig =
-          build(sample, table, temperature_rates[i], sample.receive_time_s - run_start_s);
+      const double elapsed_s = sample.receive_time_s - run_start_s;
+      // A static step's samples share one table state: its rotations are computed once.
+      if (i > 0 && same_table_state(table, step.table[i - 1])) {
+        build.advance_at_same_table(sig, sample, temperature_rates[i], elapsed_s);
+      } else {
+        sig = build(sample, table, temperature_rates[i], elapsed_s);
+      }
       Vector6d meas;
       meas << sample.gyro_dps, sample.accel_mps2;
       const Vector6d ref = model.reference(sig);
       s.measured += meas;
       s.reference += ref;
-      if (P > 0) {
-        model.regressors(sig, g);
-        s.regressors += g;
-      }
+      regressor_sums.add(sig);
       const auto values = signal_values(sig);
       for (std::size_t k = 0; k < kSignalCount; ++k) {
         s.signals[k] += values[k];
@@ -88,16 +107,15 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
         s.signals_abs[k] += std::abs(values[k]);
       }
       if (blocks > 0) {
-        const auto b = std::min<std::size_t>(i * static_cast<std::size_t>(blocks) / n,
-                                             static_cast<std::size_t>(blocks - 1));
-        block_sum[b] += meas - ref;
-        block_count[b] += 1.0;
+        while (i >= next_block_start) next_block_start = block_start(++block + 1);
+        block_sum[block] += meas - ref;
+        block_count[block] += 1.0;
       }
     }
     const double inv_n = 1.0 / static_cast<double>(n);
     s.measured *= inv_n;
     s.reference *= inv_n;
-    s.regressors *= inv_n;
+    regressor_sums.mean(s.count, s.regressors);
     for (std::size_t k = 0; k < kSignalCount; ++k) {
       s.signals[k] *= inv_n;
       s.signals_sq[k] *= inv_n;

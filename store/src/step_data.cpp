@@ -9,6 +9,7 @@
 #include <iterator>
 #include <limits>
 #include <span>
+#include <utility>
 
 #include "core/error.hpp"
 #include "sql_util.hpp"
@@ -128,8 +129,12 @@ std::string choose_device(Database& db, std::int64_t run, const std::string& dev
   return devices.front();
 }
 
-void for_each_step_data(Database& db, std::int64_t run, const std::string& device,
-                        const std::function<void(const StepData&)>& use) {
+namespace {
+
+/// for_each_step_data() handing each step's data over: read_step_data() keeps it without a
+/// copy of every sample (a long run's samples are hundreds of megabytes).
+void for_each_owned_step_data(Database& db, std::int64_t run, const std::string& device,
+                              const std::function<void(StepData&&)>& use) {
   RunStore runs(db);
   const std::vector<StepRecord> steps = runs.load_steps(run);
   const std::vector<TimedTable> run_table =
@@ -156,13 +161,21 @@ void for_each_step_data(Database& db, std::int64_t run, const std::string& devic
                                            : commanded_table(step.commanded));
     }
     data.step = step;
-    use(data);
+    use(std::move(data));
   }
+}
+
+}  // namespace
+
+void for_each_step_data(Database& db, std::int64_t run, const std::string& device,
+                        const std::function<void(const StepData&)>& use) {
+  for_each_owned_step_data(db, run, device, [&](StepData&& data) { use(data); });
 }
 
 std::vector<StepData> read_step_data(Database& db, std::int64_t run, const std::string& device) {
   std::vector<StepData> out;
-  for_each_step_data(db, run, device, [&](const StepData& data) { out.push_back(data); });
+  for_each_owned_step_data(db, run, device,
+                           [&](StepData&& data) { out.push_back(std::move(data)); });
   return out;
 }
 

@@ -54,6 +54,13 @@ class SignalBuilder {
                       const store::TableSample& table, double temperature_c,
                       double temperature_rate_cpm, double elapsed_s) const;
 
+  /// Moves `signals`, built for the previous sample, on to `sample` at the same table state:
+  /// the same as operator() (the rotations, rates and forces kept, the temperature and time of
+  /// this sample), without the trigonometry. The samples of a static step share one state;
+  /// updated in place, a long run's samples are not copied twice more.
+  void advance_at_same_table(Signals& signals, const core::ImuSample& sample,
+                             double temperature_rate_cpm, double elapsed_s) const;
+
   double temperature_ref_c() const { return temperature_ref_c_; }
 
  private:
@@ -62,6 +69,10 @@ class SignalBuilder {
   Eigen::Vector3d earth_level_dps_;
   double temperature_ref_c_;
   bool with_earth_rate_;
+  /// The outer axis normalised, and whether normalising it again changes it (then the table's
+  /// angular acceleration turns about that one, as TableGeometry computes it).
+  Eigen::Vector3d outer_unit_;
+  bool outer_unit_renormalises_ = false;
 };
 
 /// dT/dt at each sample of a step [degC/min]: the least-squares slope of the IMU temperature
