@@ -222,7 +222,9 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     k.added_parameters = added;
     k.chi2_dof_after = after.chi2_dof;
     k.delta_bic = after.chi2 - d.fit.chi2 + static_cast<double>(added) * std::log(n_rows);
-    if (c.info->name != "earth_rate") {
+    // Against the wander only where the term helps with the noise model's weights: against a
+    // wander re-estimated without it, it helps less (the wander takes what it can).
+    if (c.info->name != "earth_rate" && k.delta_bic < 0.0) {
       std::vector<std::string> added_names;
       for (const ParameterInfo& p : c.model.parameters()) {
         const auto& had = model.parameters();

@@ -39,6 +39,31 @@ EffectOrWander::EffectOrWander(std::vector<StepSummary> rows, const Model& super
   kernels_ = std::move(kernels);
 }
 
+EffectOrWander::ChannelScore EffectOrWander::score_channel(int channel,
+                                                           const std::vector<Eigen::Index>& columns,
+                                                           const Eigen::MatrixXd* extra) const {
+  const detail::ChannelProblem p =
+      detail::channel_problem(rows_, columns, channel, white_.density[channel], extra);
+  ChannelScore out;
+  out.fixed_parameters = p.parameters;
+  out.log_likelihood = detail::white_log_likelihood(p, detail::Likelihood::kProfile);
+  // A channel's wander is informed by its own rows: its parameters cost ln(rows of the
+  // channel) each, as the noise model's choice of process charges them.
+  const double log_channel_rows = std::log(static_cast<double>(rows_.size()));
+  for (const detail::Kernel& k : kernels_->wanders) {
+    const detail::Trial t =
+        detail::best_amplitude(k, p, kernels_->typical_count, detail::Likelihood::kProfile);
+    if (t.log_likelihood - 0.5 * k.parameters * log_channel_rows >
+        out.log_likelihood - 0.5 * out.noise_parameters * log_channel_rows) {
+      out.log_likelihood = t.log_likelihood;
+      out.noise_parameters = k.parameters;
+      out.wander = detail::with_amplitude(k, t.amplitude);
+    }
+  }
+  out.noise_penalty = out.noise_parameters * log_channel_rows;
+  return out;
+}
+
 Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
                                  const std::vector<Eigen::Index>& columns,
                                  const std::array<Eigen::MatrixXd, kChannels>* extra,
@@ -48,36 +73,27 @@ Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
   h.noise.method =
       "white noise from inside the steps; wandering bias re-estimated under the design";
   h.fixed_parameters = nonlinear;
+  const bool base_design = !extra && columns == columns_;
   for (int c : fit_channels(sensor_rows_)) {
     const auto uc = static_cast<std::size_t>(c);
     if (!channels[uc]) continue;
     h.scored[uc] = true;
     const Eigen::MatrixXd* more = extra && (*extra)[uc].cols() > 0 ? &(*extra)[uc] : nullptr;
-    const detail::ChannelProblem p =
-        detail::channel_problem(rows_, columns, c, white_.density[c], more);
-    h.fixed_parameters += p.parameters;
-    double best = detail::white_log_likelihood(p, detail::Likelihood::kProfile);
-    int best_parameters = 0;
-    WanderModel best_wander;
-    // A channel's wander is informed by its own rows: its parameters cost ln(rows of the
-    // channel) each, as the noise model's choice of process charges them.
-    const double log_channel_rows = std::log(static_cast<double>(rows_.size()));
-    for (const detail::Kernel& k : kernels_->wanders) {
-      const detail::Trial t =
-          detail::best_amplitude(k, p, kernels_->typical_count, detail::Likelihood::kProfile);
-      if (t.log_likelihood - 0.5 * k.parameters * log_channel_rows >
-          best - 0.5 * best_parameters * log_channel_rows) {
-        best = t.log_likelihood;
-        best_parameters = k.parameters;
-        best_wander = detail::with_amplitude(k, t.amplitude);
-      }
+    // The superset alone is the hypothesis every term is compared with: scored once a channel.
+    ChannelScore cs;
+    if (base_design && base_scores_[uc]) {
+      cs = *base_scores_[uc];
+    } else {
+      cs = score_channel(c, columns, more);
+      if (base_design) base_scores_[uc] = cs;
     }
-    h.log_likelihood += best;
-    h.noise_parameters += best_parameters;
-    h.noise_penalty += best_parameters * log_channel_rows;
+    h.fixed_parameters += cs.fixed_parameters;
+    h.log_likelihood += cs.log_likelihood;
+    h.noise_parameters += cs.noise_parameters;
+    h.noise_penalty += cs.noise_penalty;
     ChannelStepNoise& ch = h.noise.channels[uc];
     ch.determined = true;
-    ch.wander = best_wander;
+    ch.wander = cs.wander;
     ch.note = "re-estimated under the design (profile likelihood)";
   }
   h.bic = -2.0 * h.log_likelihood + h.fixed_parameters * log_rows_ + h.noise_penalty;

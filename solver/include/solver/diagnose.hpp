@@ -16,7 +16,9 @@ struct Candidate {
   std::string term;        ///< e.g. "gyro_g_sensitivity", "gyro_temp_bias:2"
   double delta_bic = 0.0;  ///< BIC after - before (chi2 + k ln n); negative is better
   /// BIC with the term - without, the wander re-estimated under each (effect_or_wander.hpp);
-  /// NaN for the Earth rate (it changes the reference, not the design).
+  /// NaN for the Earth rate (it changes the reference, not the design) and for a term that
+  /// does not lower BIC with the noise model's weights (not computed: it cannot do better
+  /// against a wander that may take what it explains).
   double delta_bic_against_wander = std::numeric_limits<double>::quiet_NaN();
   double p_value = 1.0;  ///< F-test of the added parameters
   double chi2_dof_after = 0.0;

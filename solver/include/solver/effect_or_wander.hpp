@@ -36,6 +36,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,7 +85,20 @@ class EffectOrWander {
                    const std::vector<Eigen::Index>& columns,
                    const std::array<Eigen::MatrixXd, kChannels>* extra, int nonlinear) const;
 
+  /// One channel under one design: its profile log likelihood with the best wander.
+  struct ChannelScore {
+    double log_likelihood = 0.0;
+    int fixed_parameters = 0;
+    int noise_parameters = 0;
+    double noise_penalty = 0.0;
+    WanderModel wander;
+  };
+  ChannelScore score_channel(int channel, const std::vector<Eigen::Index>& columns,
+                             const Eigen::MatrixXd* extra) const;
+
   std::vector<StepSummary> rows_;
+  /// The superset alone per channel, once scored (a diagnosis compares every term with it).
+  mutable std::array<std::optional<ChannelScore>, kChannels> base_scores_;
   Model superset_;
   SensorRows sensor_rows_;
   NoiseFloor white_;
