@@ -1,9 +1,10 @@
 // How often diagnose finds a gyro warm-up (issue 28), by noise class, amplitude (times a static
 // step mean's noise, white and wander), time constant and whether the run starts with a 30 min
 // static capture; and how often it suggests anything on the same runs without a warm-up (false
-// alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] prints one line per cell
-// and a JSON line per cell. A run "finds" the warm-up when diagnose says NOT explained and its
-// first suggestion is exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
+// alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] [CLASS] (CLASS: white,
+// ln200, adis16488 or mems; all by default) prints one line per cell and a JSON line per cell. A
+// run "finds" the warm-up when diagnose says NOT explained and its first suggestion is
+// exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -29,7 +30,9 @@ bool found(const solver::Diagnosis& d, double tau_s) {
 
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
+  const std::string only = argc > 2 ? argv[2] : "";
   for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
+    if (!only.empty() && only != noise) continue;
     for (double capture_s : {0.0, 1800.0}) {
       for (double tau_s : {300.0, 900.0, 1800.0}) {
         for (double times : {5.0, 10.0, 20.0}) {
