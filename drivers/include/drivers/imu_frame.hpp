@@ -56,11 +56,19 @@ class FrameDecoder {
                            std::vector<core::ImuSample>& out) = 0;
   /// Named counters since construction (e.g. "frames", "crc_errors", "sequence_gaps").
   virtual std::map<std::string, std::uint64_t> counters() const = 0;
+  /// The reader (re)starts after the line's input was flushed: the bytes before the next good
+  /// frame are the tail of a frame cut by the flush, not garbage. They are dropped uncounted,
+  /// and the sequence starts afresh (no gap against the last run's last frame).
+  virtual void restart() = 0;
+  /// What the device said about itself since the last call, in its own words: an error
+  /// message, a status word flagging a sensor fault ("gyro x out of range"), a restart. Each
+  /// becomes a fault event of the IMU.
+  virtual std::vector<std::string> take_device_reports() { return {}; }
 };
 
 /// Counters of a CalstandFrameDecoder. Invariant: every byte fed is in exactly one of a good
-/// frame, garbage_bytes, or buffered(): bytes_fed == frames * kFrameSize + garbage_bytes +
-/// buffered.
+/// frame, garbage_bytes, start_bytes, or buffered(): bytes_fed == frames * kFrameSize +
+/// garbage_bytes + start_bytes + buffered.
 struct ImuFrameCounters {
   std::uint64_t bytes_fed = 0;      ///< bytes given to feed() [bytes]
   std::uint64_t frames = 0;         ///< valid frames decoded (one sample each)
@@ -69,6 +77,7 @@ struct ImuFrameCounters {
   std::uint64_t garbage_bytes = 0;  ///< bytes discarded while hunting for a frame [bytes]
   std::uint64_t resyncs = 0;        ///< runs of discarded bytes (each loss of frame lock)
   std::uint64_t sequence_gaps = 0;  ///< decoded frames whose sequence was not last + 1
+  std::uint64_t start_bytes = 0;    ///< dropped before the first frame after restart() [bytes]
 };
 
 /// Decoder of the calstand frame. Hunts for the sync bytes; a candidate with an impossible
@@ -82,6 +91,7 @@ class CalstandFrameDecoder final : public FrameDecoder {
 
   std::size_t feed(std::span<const std::uint8_t> bytes, std::vector<core::ImuSample>& out) override;
   std::map<std::string, std::uint64_t> counters() const override;
+  void restart() override;
 
   const ImuFrameCounters& stats() const { return stats_; }
   /// Bytes held back waiting for the rest of a frame [bytes].
@@ -95,6 +105,7 @@ class CalstandFrameDecoder final : public FrameDecoder {
   std::vector<std::uint8_t> buffer_;
   std::size_t start_ = 0;  // first unconsumed byte in buffer_ (compacted lazily)
   bool hunting_ = false;   // discarding bytes since the last good frame
+  bool quiet_ = false;     // after restart(): bytes before the first good frame are uncounted
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
   ImuFrameCounters stats_;

@@ -24,11 +24,15 @@ struct BaudCode {
   speed_t code;
 };
 
-// termios wants symbolic speeds; only these are offered on every Linux serial driver.
+// termios wants symbolic speeds. Up to 921600 every Linux serial driver offers them; the
+// megabaud rates are Linux's own (an MTi at 2 kHz, a STIM300 or an Epson at 2 kHz need more
+// than 921600 bit/s) and the USB adapters these units ship with (FTDI) take them.
 constexpr std::array kBaudCodes{
-    BaudCode{9600, B9600},     BaudCode{19200, B19200},   BaudCode{38400, B38400},
-    BaudCode{57600, B57600},   BaudCode{115200, B115200}, BaudCode{230400, B230400},
-    BaudCode{460800, B460800}, BaudCode{921600, B921600},
+    BaudCode{9600, B9600},       BaudCode{19200, B19200},     BaudCode{38400, B38400},
+    BaudCode{57600, B57600},     BaudCode{115200, B115200},   BaudCode{230400, B230400},
+    BaudCode{460800, B460800},   BaudCode{921600, B921600},   BaudCode{1000000, B1000000},
+    BaudCode{1500000, B1500000}, BaudCode{2000000, B2000000}, BaudCode{3000000, B3000000},
+    BaudCode{4000000, B4000000},
 };
 
 std::optional<speed_t> baud_code(int rate_bps) {

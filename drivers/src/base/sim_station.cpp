@@ -126,7 +126,7 @@ class SimStation::SimImu final : public Imu {
  public:
   SimImu(sim::SimWorld& world, std::size_t index, const core::ImuConfig& config)
       : world_(world), index_(index), name_(world.imu_name(index)) {
-    if (!config.serial.empty()) identity_ = UnitIdentity{config.model, config.serial};
+    if (!config.serial.empty()) identity_ = UnitIdentity{config.model, config.serial, {}};
   }
   const std::string& name() const override { return name_; }
   Result configure() override { return life_.configure(); }

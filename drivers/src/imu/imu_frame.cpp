@@ -69,11 +69,24 @@ std::vector<std::uint8_t> encode_imu_frame(const core::ImuSample& sample) {
 CalstandFrameDecoder::CalstandFrameDecoder(std::uint64_t sequence_modulus)
     : sequence_modulus_(sequence_modulus == 0 ? std::uint64_t{1} << 32 : sequence_modulus) {}
 
+void CalstandFrameDecoder::restart() {
+  buffer_.clear();
+  start_ = 0;
+  quiet_ = true;
+  hunting_ = false;
+  have_sequence_ = false;
+}
+
 void CalstandFrameDecoder::discard(std::size_t count) {
+  start_ += count;
+  if (quiet_) {
+    // Still the tail of a frame cut by the input flush: not a fault of the line.
+    stats_.start_bytes += count;
+    return;
+  }
   if (!hunting_) ++stats_.resyncs;
   hunting_ = true;
   stats_.garbage_bytes += count;
-  start_ += count;
 }
 
 void CalstandFrameDecoder::check_sequence(std::uint32_t sequence) {
@@ -114,7 +127,7 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     if (avail < kHeaderSize) break;
     if (p[2] != kPayloadSize) {
       // Checked before waiting for the body: an impossible length must not stall the stream.
-      ++stats_.length_errors;
+      if (!quiet_) ++stats_.length_errors;
       discard(1);
       continue;
     }
@@ -123,7 +136,7 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     const auto sent_crc = static_cast<std::uint16_t>(get_le(p + kHeaderSize + kPayloadSize, 2));
     if (crc16_ccitt_false({p + 2, 1 + kPayloadSize}) != sent_crc) {
       // Drop only the first sync byte: a real frame may begin inside this bad candidate.
-      ++stats_.crc_errors;
+      if (!quiet_) ++stats_.crc_errors;
       discard(1);
       continue;
     }
@@ -140,6 +153,7 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     ++decoded;
     ++stats_.frames;
     hunting_ = false;
+    quiet_ = false;
     start_ += kFrameSize;
   }
   return decoded;
@@ -149,7 +163,7 @@ std::map<std::string, std::uint64_t> CalstandFrameDecoder::counters() const {
   return {{"bytes_fed", stats_.bytes_fed},         {"frames", stats_.frames},
           {"crc_errors", stats_.crc_errors},       {"length_errors", stats_.length_errors},
           {"garbage_bytes", stats_.garbage_bytes}, {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps}};
+          {"sequence_gaps", stats_.sequence_gaps}, {"start_bytes", stats_.start_bytes}};
 }
 
 }  // namespace calstand::drivers

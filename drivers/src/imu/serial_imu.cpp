@@ -7,13 +7,14 @@
 
 #include "core/error.hpp"
 #include "core/schemas.hpp"
+#include "drivers/imu_wire_format.hpp"
 
 namespace calstand::drivers {
 using nlohmann::json;
 
 SerialImuConnection SerialImuConnection::from_json(const json& c, const std::string& where) {
-  // The schema checks every field (path and rate required, a supported baud rate, the frame
-  // format, the sequence modulus range); what is left is reading them, with the defaults.
+  // The schema checks every field (path and rate required, a supported baud rate, the wire
+  // format and its own options); what is left is reading them, with the defaults.
   core::validate_part_or_throw(
       core::schema_definition("station.schema.json", "serial_imu_connection"), c, "", where);
   SerialImuConnection out;
@@ -21,54 +22,81 @@ SerialImuConnection SerialImuConnection::from_json(const json& c, const std::str
   out.serial.baud_rate = c.value("baud", 115200);
   out.serial.parity = parity_from_name(c.value("parity", "none"), where + ".parity");
   out.format = c.value("format", "calstand");
-  out.sample_rate_hz = c.at("sample_rate_hz").get<double>();
+  out.settings.sample_rate_hz = c.at("sample_rate_hz").get<double>();
+  out.settings.options = c.value(out.format, json::object());
+  out.settings.where = where + "." + out.format;
   out.sequence_modulus = c.value("sequence_modulus", out.sequence_modulus);
+  if (out.format != "calstand" && c.contains("sequence_modulus")) {
+    throw core::InputError(where + ".sequence_modulus",
+                           fmt::format("only for format calstand: a {} device's counter is the "
+                                       "format's own (docs/protocols.md)",
+                                       out.format));
+  }
   return out;
-}
-
-std::unique_ptr<FrameDecoder> make_frame_decoder(const std::string& format,
-                                                 std::uint64_t sequence_modulus,
-                                                 const std::string& where) {
-  if (format == "calstand") return std::make_unique<CalstandFrameDecoder>(sequence_modulus);
-  throw core::InputError(where,
-                         fmt::format("unknown frame format \"{}\" (known: calstand)", format));
 }
 
 SerialImu::SerialImu(const core::ImuConfig& config, core::Clock& clock, const std::string& where)
     : StreamingImu(config.name, clock) {
   const auto c = SerialImuConnection::from_json(config.connection, where);
+  const ImuWireFormat& format = imu_wire_format(c.format, where + ".format");
   auto port = std::make_unique<SerialPort>(c.serial);
   port_ = port.get();
   transport_ = std::move(port);
-  decoder_ = make_frame_decoder(c.format, c.sequence_modulus, where + ".format");
-  sample_rate_hz_ = c.sample_rate_hz;
-  sequence_modulus_ = c.sequence_modulus;
+  sample_rate_hz_ = c.settings.sample_rate_hz;
+  if (c.format == "calstand") {
+    decoder_ = std::make_unique<CalstandFrameDecoder>(c.sequence_modulus);
+    sequence_modulus_ = c.sequence_modulus;
+  } else {
+    decoder_ = format.make_decoder(c.settings);
+    sequence_modulus_ = format.sequence_modulus(c.settings);
+  }
+  configurator_ = format.make_configurator(c.settings);
 }
 
 SerialImu::SerialImu(std::string name, std::unique_ptr<ByteTransport> transport,
                      std::unique_ptr<FrameDecoder> decoder, double sample_rate_hz,
-                     std::uint64_t sequence_modulus, core::Clock& clock)
+                     std::uint64_t sequence_modulus, core::Clock& clock,
+                     std::unique_ptr<ImuConfigurator> configurator)
     : StreamingImu(std::move(name), clock),
       transport_(std::move(transport)),
       decoder_(std::move(decoder)),
+      configurator_(std::move(configurator)),
       sample_rate_hz_(sample_rate_hz),
       sequence_modulus_(sequence_modulus) {}
 
 SerialImu::~SerialImu() { stop_reader(); }
 
+std::optional<UnitIdentity> SerialImu::identity() const {
+  std::lock_guard lock(identity_mutex_);
+  return identity_;
+}
+
+void SerialImu::configure_device() {
+  if (!configurator_) return;
+  UnitIdentity id = configurator_->configure(*transport_);
+  std::lock_guard lock(identity_mutex_);
+  identity_ = std::move(id);
+}
+
 void SerialImu::on_reader_start() {
-  // Bytes the line received while the device was inactive belong to nobody, like the buffer.
+  // Bytes the line received while the device was inactive belong to nobody, like the buffer;
+  // the flush may cut a frame, whose tail the decoder then drops uncounted.
   if (port_) port_->discard_input();
+  decoder_->restart();
 }
 
 void SerialImu::open_link(bool /*after_error*/) {
   // SerialPort::open() reopens an open port, so a dead one needs no closing first.
   if (port_) port_->open();
+  configure_device();
 }
 
 bool SerialImu::reopen_link() {
   if (!port_) return false;  // an injected link cannot be reopened: wait for deactivate()
   port_->open();
+  // A device that lost power with its link forgot its configuration: say it again.
+  configure_device();
+  decoder_->restart();
   return true;
 }
 
@@ -81,6 +109,9 @@ Result SerialImu::read_step() {
   stamp(decoded_, arrival_s);
   deliver(decoded_);
   publish_protocol_counters(decoder_->counters());
+  for (const std::string& report : decoder_->take_device_reports()) {
+    events().push(arrival_s, true, "the device reports: " + report);
+  }
   return Result::success();
 }
 

@@ -167,8 +167,18 @@ TEST(SerialImuConnection, EveryMistakeNamesItsField) {
   EXPECT_NE(error_of({{"path", "/dev/x"}}).find("sample_rate_hz"), std::string::npos);
   EXPECT_NE(error_of({{"path", "/dev/x"}, {"sample_rate_hz", "fast"}}).find("sample_rate_hz"),
             std::string::npos);
-  EXPECT_NE(error_of({{"path", "/dev/x"}, {"sample_rate_hz", 100}, {"format", "xsens"}})
+  EXPECT_NE(error_of({{"path", "/dev/x"}, {"sample_rate_hz", 100}, {"format", "nmea"}})
                 .find("imus[1].connection.format"),
+            std::string::npos);
+  // A format's options sit under its own name, and only the calstand frame has a modulus.
+  EXPECT_NE(error_of({{"path", "/dev/x"}, {"sample_rate_hz", 100}, {"xsens", {{"nope", 1}}}})
+                .find("imus[1].connection.xsens"),
+            std::string::npos);
+  EXPECT_NE(error_of({{"path", "/dev/x"},
+                      {"sample_rate_hz", 100},
+                      {"format", "epson"},
+                      {"sequence_modulus", 65536}})
+                .find("imus[1].connection.sequence_modulus"),
             std::string::npos);
   EXPECT_NE(error_of({{"path", "/dev/x"}, {"sample_rate_hz", 100}, {"sequence_modulus", 1}})
                 .find("sequence_modulus"),

@@ -1,0 +1,31 @@
+// PLACEHOLDER until the vectornav format lands (issue 29): refuses to be used.
+#include <stdexcept>
+
+#include "drivers/imu_wire_format.hpp"
+
+namespace calstand::drivers {
+namespace {
+
+class Missing_vectornav final : public ImuWireFormat {
+ public:
+  std::string name() const override { return "vectornav"; }
+  std::uint64_t sequence_modulus(const WireFormatSettings&) const override { return 0; }
+  std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings&) const override {
+    throw std::logic_error("vectornav: not built yet");
+  }
+  std::unique_ptr<ImuConfigurator> make_configurator(const WireFormatSettings&) const override {
+    throw std::logic_error("vectornav: not built yet");
+  }
+  std::unique_ptr<ImuDeviceEmulator> make_emulator(const EmulatedUnit&) const override {
+    throw std::logic_error("vectornav: not built yet");
+  }
+};
+
+}  // namespace
+
+const ImuWireFormat& vectornav_wire_format() {
+  static const Missing_vectornav format;
+  return format;
+}
+
+}  // namespace calstand::drivers
