@@ -5,6 +5,7 @@
 //   calstand device --station lab.json table get|move --outer D --inner D|rate --axis A --dps
 //   R|stop|close-interlock [--by NAME]
 //   calstand device --station lab.json imu stream --count N [--imu NAME]
+//   calstand device --station lab.json imu info [--imu NAME]
 // Output is JSON (one object, or JSON lines for `imu stream`), so scripts can read it.
 #include <fmt/format.h>
 
@@ -238,21 +239,35 @@ void table_close_interlock(const DeviceOptions& opt) {
          {"table", core::to_json(table.read_state())}});
 }
 
+/// The IMU named --imu, else the first.
+drivers::Imu& chosen_imu(drivers::Station& station, const DeviceOptions& opt) {
+  if (opt.imu_name.empty()) return station.imu(0);
+  for (std::size_t i = 0; i < station.imu_count(); ++i) {
+    if (station.imu(i).name() == opt.imu_name) return station.imu(i);
+  }
+  throw core::InputError("--imu", fmt::format("no IMU \"{}\" in the station", opt.imu_name));
+}
+
+void imu_info(const DeviceOptions& opt) {
+  auto station = open_station(opt);
+  auto& imu = chosen_imu(*station, opt);
+  configure(imu);  // the configuration dialogue reads the identity; no streaming needed
+  const std::optional<drivers::UnitIdentity> id = imu.identity();
+  if (!id) {
+    throw std::runtime_error(imu.name() +
+                             ": its wire format carries no identity (the calstand frame, a CAN "
+                             "map); the station file's \"serial\" names the unit instead");
+  }
+  print({{"imu", imu.name()},
+         {"model", id->model},
+         {"serial", id->serial},
+         {"firmware", id->firmware},
+         {"sample_rate_hz", imu.sample_rate_hz()}});
+}
+
 void imu_stream(const DeviceOptions& opt) {
   auto station = open_station(opt);
-  std::size_t index = 0;
-  if (!opt.imu_name.empty()) {
-    bool found = false;
-    for (std::size_t i = 0; i < station->imu_count(); ++i) {
-      if (station->imu(i).name() == opt.imu_name) {
-        index = i;
-        found = true;
-      }
-    }
-    if (!found)
-      throw core::InputError("--imu", fmt::format("no IMU \"{}\" in the station", opt.imu_name));
-  }
-  auto& imu = station->imu(index);
+  auto& imu = chosen_imu(*station, opt);
   bring_up(imu);
   const double period_s = 1.0 / imu.sample_rate_hz();
   const auto deadline =
@@ -345,6 +360,10 @@ void register_device(CLI::App& app) {
   stream->add_option("--count", opt->count, "samples to print")->capture_default_str();
   stream->add_option("--imu", opt->imu_name, "IMU name (default: the first)");
   stream->callback([opt] { imu_stream(*opt); });
+  auto* info =
+      imu->add_subcommand("info", "the unit's model, serial and firmware as read over the wire");
+  info->add_option("--imu", opt->imu_name, "IMU name (default: the first)");
+  info->callback([opt] { imu_info(*opt); });
 }
 
 }  // namespace calstand::cli

@@ -1,7 +1,8 @@
 // `calstand sim-station`: one simulated world behind the real protocols (table command server,
-// chamber over Modbus TCP and RTU, IMU frames on pseudo-terminals), so that the real drivers and
-// the engine can be rehearsed end to end on this machine. Prints the endpoints as one line of
-// JSON on start; `--station-out` writes the station file that points the real drivers at them.
+// chamber over Modbus TCP and RTU, IMUs on pseudo-terminals in their wire format), so that the real
+// drivers and the engine can be rehearsed end to end on this machine. Prints the endpoints as one
+// line of JSON on start; `--station-out` writes the station file that points the real drivers at
+// them.
 //
 // While it runs, lines on stdin rehearse faults (one JSON line answers each):
 //   interlock open outer|inner [WHY...]   interlock clear outer|inner
@@ -12,6 +13,7 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -26,6 +28,7 @@
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "drivers/imu_wire_format.hpp"
 #include "drivers/protocol_simulator.hpp"
 #include "drivers/sim_world_runner.hpp"
 #include "sim/sim_world.hpp"
@@ -37,6 +40,7 @@ using nlohmann::json;
 
 struct SimStationOptions {
   std::string station_file;
+  std::vector<std::string> imu_formats;  // "FORMAT" (every IMU) or "NAME=FORMAT"
   std::string station_out;
   drivers::ProtocolSimOptions serve;
   bool no_rtu = false;
@@ -120,6 +124,21 @@ void run_sim_station(SimStationOptions opt) {
                            "backend must be \"sim\"");
   }
   opt.serve.f4_rtu = !opt.no_rtu;
+  for (const std::string& given : opt.imu_formats) {
+    const auto eq = given.find('=');
+    const std::string name = eq == std::string::npos ? "*" : given.substr(0, eq);
+    const std::string format = eq == std::string::npos ? given : given.substr(eq + 1);
+    drivers::imu_wire_format(format, "--imu-format " + given);  // throws naming the known ones
+    if (name != "*") {
+      const bool known = std::any_of(config.imus.begin(), config.imus.end(),
+                                     [&](const core::ImuConfig& imu) { return imu.name == name; });
+      if (!known) {
+        throw core::InputError("--imu-format " + given,
+                               fmt::format("no IMU \"{}\" in the station", name));
+      }
+    }
+    opt.serve.imu_formats[name] = format;
+  }
   drivers::ProtocolSimulator sim(config, opt.serve);
   sim.start();
   if (!opt.station_out.empty()) {
@@ -205,6 +224,9 @@ void register_sim_station(CLI::App& app) {
   cmd->add_option("--can", opt->serve.can_interface,
                   "also send the first IMU's samples on this CAN interface (e.g. vcan0)");
   cmd->add_option("--can-map", opt->serve.can_map_file, "CAN signal map for --can");
+  cmd->add_option("--imu-format", opt->imu_formats,
+                  "the IMUs' wire format: calstand (default), xsens, vectornav, epson, stim300; "
+                  "FORMAT for every IMU or NAME=FORMAT for one (repeatable)");
   cmd->add_option("--station-out", opt->station_out,
                   "write the station file for the real drivers here");
   cmd->add_option("--duration", opt->duration_s, "stop after this many wall seconds (0: never)");

@@ -4,32 +4,37 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "drivers/imu_wire_format.hpp"
 #include "drivers/pseudo_terminal.hpp"
 
 namespace calstand::drivers {
 
-/// The serial end of a simulated IMU: calstand frames (docs/protocols.md) written on a
-/// pseudo-terminal whose slave path a SerialImu opens. push() is called by the world as samples
-/// are produced and never blocks; a writer thread sends them. As on a real line, what nobody
-/// reads is lost: beyond `max_queued_frames` the oldest frames are dropped (counted), and the
-/// receiver sees a sequence gap.
+/// The serial end of a simulated IMU: a device emulator (imu_wire_format.hpp; the calstand
+/// frame unless another format is given) on a pseudo-terminal whose slave path a SerialImu
+/// opens. The host's bytes (configuration, identity requests) are answered by the emulator;
+/// push() is called by the world as samples are produced and never blocks; a writer thread
+/// sends what the emulator makes of them. As on a real line, what nobody reads is lost: beyond
+/// `max_queued_frames` the oldest frames are dropped (counted), and the receiver sees a
+/// sequence gap.
 class ImuFrameStreamer {
  public:
-  explicit ImuFrameStreamer(std::size_t max_queued_frames = 100000);
+  explicit ImuFrameStreamer(std::unique_ptr<ImuDeviceEmulator> emulator,
+                            std::size_t max_queued_frames = 100000);
   ~ImuFrameStreamer();
   ImuFrameStreamer(const ImuFrameStreamer&) = delete;
   ImuFrameStreamer& operator=(const ImuFrameStreamer&) = delete;
 
   const std::string& path() const { return pty_.slave_path(); }
   void push(const core::ImuSample& sample);
-  /// Stops sending (frames pushed meanwhile are dropped, as from an IMU that stopped talking)
-  /// or resumes.
+  /// Stops sending and answering (frames pushed meanwhile are dropped, as from an IMU that
+  /// stopped talking) or resumes.
   void set_silent(bool silent) { silent_ = silent; }
   /// Writes `bytes` on the line as they are (fault rehearsal: garbage, corrupted frames).
   void inject(std::vector<std::uint8_t> bytes);
@@ -47,12 +52,20 @@ class ImuFrameStreamer {
 
  private:
   void loop();
+  void host_loop();
+  void queue(std::vector<std::uint8_t> bytes, bool is_frame);
 
   PseudoTerminal pty_;
+  std::mutex emulator_mutex_;  // the world's thread (push) and the host thread share it
+  std::unique_ptr<ImuDeviceEmulator> emulator_;
   std::size_t max_queued_;
   std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<std::vector<std::uint8_t>> queue_;
+  struct Queued {
+    std::vector<std::uint8_t> bytes;
+    bool is_frame;  // a sample's frame (counted as sent or dropped), not a reply
+  };
+  std::deque<Queued> queue_;
   std::atomic<bool> silent_{false};
   std::atomic<bool> held_{false};
   std::atomic<double> clock_offset_s_{0.0};  ///< added to the device time stamps [s]
@@ -60,6 +73,7 @@ class ImuFrameStreamer {
   std::atomic<std::uint64_t> sent_{0};
   std::atomic<std::uint64_t> dropped_{0};
   std::thread thread_;
+  std::thread host_thread_;
 };
 
 }  // namespace calstand::drivers

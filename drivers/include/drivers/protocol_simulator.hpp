@@ -1,5 +1,6 @@
 #pragma once
 
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -21,12 +22,16 @@ struct ProtocolSimOptions {
   bool f4_rtu = true;              ///< also serve the chamber as a Watlow F4 over RTU on a pty
   std::string can_interface;       ///< the first IMU's frames also on this CAN interface
   std::string can_map_file;        ///< the CAN signal map for them (docs/protocols.md)
+  /// Each IMU's wire format on its line (imu_wire_format.hpp) by IMU name, "*" for every IMU
+  /// not named; "calstand" where none applies.
+  std::map<std::string, std::string> imu_formats;
 };
 
 /// One simulated world (the sim/ physics of a station file) behind the real protocols: the
 /// table command server on TCP, the chamber over Modbus TCP (F4T map) and RTU on a
-/// pseudo-terminal (F4 map), every IMU's calstand frames on a pseudo-terminal (and on CAN
-/// where an interface is given). The real drivers, pointed at client_station(), cannot tell it
+/// pseudo-terminal (F4 map), every IMU on a pseudo-terminal in its wire format (calstand
+/// frames, or a real unit's protocol answering its configuration dialogue) and on CAN where an
+/// interface is given. The real drivers, pointed at client_station(), cannot tell it
 /// from a lab, except that time runs time_scale times faster.
 class ProtocolSimulator {
  public:

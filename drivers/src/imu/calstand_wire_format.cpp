@@ -23,7 +23,8 @@ class CalstandWireFormat final : public ImuWireFormat {
   std::uint64_t sequence_modulus(const WireFormatSettings& /*settings*/) const override {
     return std::uint64_t{1} << 32;
   }
-  std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings& /*settings*/) const override {
+  std::unique_ptr<FrameDecoder> make_decoder(
+      const WireFormatSettings& /*settings*/) const override {
     return std::make_unique<CalstandFrameDecoder>();
   }
   std::unique_ptr<ImuConfigurator> make_configurator(

@@ -29,8 +29,7 @@ std::optional<std::vector<std::uint8_t>> read_reply(ByteTransport& link,
   }
 }
 
-std::vector<std::uint8_t> request_reply(ByteTransport& link,
-                                        std::span<const std::uint8_t> request,
+std::vector<std::uint8_t> request_reply(ByteTransport& link, std::span<const std::uint8_t> request,
                                         const ReplyFinder& find_reply,
                                         std::chrono::milliseconds timeout, int attempts,
                                         const std::string& what) {

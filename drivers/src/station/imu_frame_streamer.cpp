@@ -1,18 +1,22 @@
 #include "drivers/imu_frame_streamer.hpp"
 
+#include <array>
 #include <chrono>
-
-#include "drivers/imu_frame.hpp"
 
 namespace calstand::drivers {
 
-ImuFrameStreamer::ImuFrameStreamer(std::size_t max_queued_frames)
-    : max_queued_(max_queued_frames), thread_([this] { loop(); }) {}
+ImuFrameStreamer::ImuFrameStreamer(std::unique_ptr<ImuDeviceEmulator> emulator,
+                                   std::size_t max_queued_frames)
+    : emulator_(std::move(emulator)),
+      max_queued_(max_queued_frames),
+      thread_([this] { loop(); }),
+      host_thread_([this] { host_loop(); }) {}
 
 ImuFrameStreamer::~ImuFrameStreamer() {
   running_ = false;
   wake_.notify_all();
   thread_.join();
+  host_thread_.join();
 }
 
 void ImuFrameStreamer::push(const core::ImuSample& sample) {
@@ -20,25 +24,48 @@ void ImuFrameStreamer::push(const core::ImuSample& sample) {
     ++dropped_;
     return;
   }
-  if (const double offset = clock_offset_s_.load(); offset != 0.0) {
-    core::ImuSample shifted = sample;
-    shifted.device_time_s += offset;
-    inject(encode_imu_frame(shifted));
-    return;
+  core::ImuSample shifted = sample;
+  shifted.device_time_s += clock_offset_s_.load();
+  std::vector<std::uint8_t> bytes;
+  {
+    std::lock_guard lock(emulator_mutex_);
+    bytes = emulator_->on_sample(shifted);
   }
-  inject(encode_imu_frame(sample));
+  if (!bytes.empty()) queue(std::move(bytes), true);
 }
 
-void ImuFrameStreamer::inject(std::vector<std::uint8_t> bytes) {
+void ImuFrameStreamer::inject(std::vector<std::uint8_t> bytes) { queue(std::move(bytes), false); }
+
+void ImuFrameStreamer::queue(std::vector<std::uint8_t> bytes, bool is_frame) {
   {
     std::lock_guard lock(mutex_);
     if (queue_.size() >= max_queued_) {
+      if (queue_.front().is_frame) ++dropped_;
       queue_.pop_front();
-      ++dropped_;
     }
-    queue_.push_back(std::move(bytes));
+    queue_.push_back({std::move(bytes), is_frame});
   }
   wake_.notify_one();
+}
+
+void ImuFrameStreamer::host_loop() {
+  using namespace std::chrono_literals;
+  std::array<std::uint8_t, 1024> chunk{};
+  while (running_) {
+    const IoResult r = pty_.read(chunk, 50ms);
+    if (!r.ok() || r.bytes == 0) {
+      // No client has the line open (the master reads an error then): wait for one.
+      if (!r.ok()) std::this_thread::sleep_for(20ms);
+      continue;
+    }
+    if (silent_) continue;  // a unit that stopped talking does not answer either
+    std::vector<std::uint8_t> reply;
+    {
+      std::lock_guard lock(emulator_mutex_);
+      reply = emulator_->on_host_bytes(std::span(chunk.data(), r.bytes));
+    }
+    if (!reply.empty()) queue(std::move(reply), false);
+  }
 }
 
 void ImuFrameStreamer::loop() {
@@ -53,9 +80,9 @@ void ImuFrameStreamer::loop() {
       // Batch what is queued into one write: a few syscalls per millisecond, not per frame.
       batch.clear();
       while (!queue_.empty() && batch.size() < 64 * 1024) {
-        batch.insert(batch.end(), queue_.front().begin(), queue_.front().end());
+        batch.insert(batch.end(), queue_.front().bytes.begin(), queue_.front().bytes.end());
+        if (queue_.front().is_frame) ++frames;
         queue_.pop_front();
-        ++frames;
       }
     }
     if (batch.empty()) continue;

@@ -17,6 +17,7 @@
 #endif
 #include "drivers/chamber_register_map.hpp"
 #include "drivers/imu_frame_streamer.hpp"
+#include "drivers/imu_wire_format.hpp"
 #include "drivers/modbus_chamber_server.hpp"
 #include "drivers/scpi_server.hpp"
 #include "drivers/sim_world_runner.hpp"
@@ -63,6 +64,27 @@ struct ProtocolSimulator::Impl {
   std::unique_ptr<NoCan> can;
 #endif
   bool started = false;
+
+  /// IMU `i`'s wire format: by its name, else "*", else the calstand frame.
+  std::string imu_format(std::size_t i) const {
+    for (const std::string& key : {sim_config.imus.at(i).name, std::string("*")}) {
+      if (const auto it = options.imu_formats.find(key); it != options.imu_formats.end()) {
+        return it->second;
+      }
+    }
+    return "calstand";
+  }
+  /// Who IMU `i` says it is on its line: its station entry's serial (or one made of its name:
+  /// a device always has one) and the simulator as model and firmware.
+  EmulatedUnit unit(std::size_t i) {
+    const core::ImuConfig& imu = sim_config.imus.at(i);
+    EmulatedUnit u;
+    u.model = imu.model.empty() ? "calstand-sim" : imu.model;
+    u.serial = imu.serial.empty() ? "SIM-" + imu.name : imu.serial;
+    u.firmware = "calstand-sim 1.0";
+    u.native_rate_hz = runner.world().imu(i).truth().sample_rate_hz;
+    return u;
+  }
 };
 
 ProtocolSimulator::ProtocolSimulator(const core::StationConfig& sim_config,
@@ -89,7 +111,8 @@ void ProtocolSimulator::start() {
     m.f4_server->start();
   }
   for (std::size_t i = 0; i < m.runner.world().imu_count(); ++i) {
-    m.imu_lines.push_back(std::make_unique<ImuFrameStreamer>());
+    const ImuWireFormat& format = imu_wire_format(m.imu_format(i), "--imu-format");
+    m.imu_lines.push_back(std::make_unique<ImuFrameStreamer>(format.make_emulator(m.unit(i))));
   }
   // Each supply as a bench supply speaking SCPI on TCP, switching its IMU in the world.
   for (const core::PowerSupplyConfig& supply : m.sim_config.power_supplies) {
@@ -150,7 +173,7 @@ json ProtocolSimulator::endpoints() const {
   for (std::size_t i = 0; i < m.imu_lines.size(); ++i) {
     json entry = {{"name", m.runner.world().imu_name(i)},
                   {"serial", m.imu_lines[i]->path()},
-                  {"format", "calstand"}};
+                  {"format", m.imu_format(i)}};
     if (m.can && i == 0) entry["can"] = m.options.can_interface;
     imus.push_back(std::move(entry));
   }
@@ -209,11 +232,14 @@ core::StationConfig ProtocolSimulator::client_station() const {
     imu.spec_file.clear();
     imu.truth_file.clear();
     imu.truth = nullptr;
+    const std::string format = m.imu_format(i);
     imu.connection = {{"path", m.imu_lines.at(i)->path()},
                       {"baud", 921600},
-                      {"format", "calstand"},
-                      {"sample_rate_hz", truth.sample_rate_hz},
-                      {"sequence_modulus", truth.sequence_modulus}};
+                      {"format", format},
+                      {"sample_rate_hz", truth.sample_rate_hz}};
+    if (format == "calstand") imu.connection["sequence_modulus"] = truth.sequence_modulus;
+    // The unit says who it is over the wire now; the station entry's serial stays what a lab
+    // would write (the unit expected in this slot).
   }
   for (std::size_t i = 0; i < c.power_supplies.size() && i < m.supply_servers.size(); ++i) {
     auto& supply = c.power_supplies[i];

@@ -192,3 +192,83 @@ TEST(SerialImuConnection, EveryMistakeNamesItsField) {
 
 }  // namespace
 }  // namespace calstand::drivers
+
+namespace calstand::drivers {
+namespace {
+
+TEST(SerialImu, ATailCutByTheStartFlushIsNotGarbageButLaterGarbageIs) {
+  // The reader's start flushes the line's input, which may cut a frame in two: its tail is
+  // the first thing the decoder sees. That is no fault of the line (it was the "33 garbage
+  // bytes" event at every start); garbage after the first good frame still is one.
+  PseudoTerminal pty;
+  core::SteadyClock clock;
+  SerialImu imu(serial_config(pty.slave_path()), clock, "imus[0].connection");
+  ASSERT_TRUE(imu.configure());
+  ASSERT_TRUE(imu.activate());
+  const auto cut = encode_imu_frame(make_serial_sample(0));
+  send(pty, std::vector<std::uint8_t>(cut.begin() + 12, cut.end()));
+  for (std::uint32_t i = 1; i <= 5; ++i) send(pty, encode_imu_frame(make_serial_sample(i)));
+  ASSERT_EQ(collect(imu, 5).size(), 5u);
+  send(pty, {0x01, 0x02, 0x03});
+  send(pty, encode_imu_frame(make_serial_sample(6)));
+  ASSERT_EQ(collect(imu, 1).size(), 1u);
+  const auto counters = imu.fault_counters();
+  EXPECT_EQ(counters.at("start_bytes"), cut.size() - 12);
+  EXPECT_EQ(counters.at("garbage_bytes"), 3u);
+  EXPECT_EQ(counters.at("resyncs"), 1u);
+  EXPECT_EQ(counters.at("sequence_gaps"), 0u);
+  ASSERT_TRUE(imu.deactivate());
+}
+
+}  // namespace
+}  // namespace calstand::drivers
+
+namespace calstand::drivers {
+namespace {
+
+/// A device's dialogue as a test scripts it: the identity it reports, or its refusal.
+class ScriptedConfigurator final : public ImuConfigurator {
+ public:
+  explicit ScriptedConfigurator(std::string refusal) : refusal_(std::move(refusal)) {}
+  UnitIdentity configure(ByteTransport& /*link*/) override {
+    ++calls;
+    if (!refusal_.empty()) throw DeviceConfigError(refusal_);
+    return {"MTi-630", "03881234", "1.2.3"};
+  }
+  int calls = 0;
+
+ private:
+  std::string refusal_;
+};
+
+TEST(SerialImu, ConfigureRunsTheDialogueAndKeepsTheIdentityTheDeviceReported) {
+  core::SteadyClock clock;
+  auto pty = std::make_unique<PseudoTerminal>();
+  auto configurator = std::make_unique<ScriptedConfigurator>("");
+  auto* dialogue = configurator.get();
+  SerialImu imu("imu0", std::move(pty), std::make_unique<CalstandFrameDecoder>(), 100.0,
+                std::uint64_t{1} << 32, clock, std::move(configurator));
+  EXPECT_FALSE(imu.identity().has_value());  // nothing said before the dialogue
+  ASSERT_TRUE(imu.configure());
+  EXPECT_EQ(dialogue->calls, 1);
+  ASSERT_TRUE(imu.identity().has_value());
+  EXPECT_EQ(imu.identity()->serial, "03881234");
+  EXPECT_EQ(imu.identity()->model, "MTi-630");
+  EXPECT_EQ(imu.identity()->firmware, "1.2.3");
+}
+
+TEST(SerialImu, ARefusedConfigurationFailsConfigureWithTheDevicesWords) {
+  core::SteadyClock clock;
+  SerialImu imu("imu0", std::make_unique<PseudoTerminal>(),
+                std::make_unique<CalstandFrameDecoder>(), 100.0, std::uint64_t{1} << 32, clock,
+                std::make_unique<ScriptedConfigurator>("SetOutputConfiguration: Error 0x04 "
+                                                       "(invalid period)"));
+  const Result r = imu.configure();
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.message.find("Error 0x04 (invalid period)"), std::string::npos) << r.message;
+  EXPECT_EQ(imu.state(), DeviceState::kError);
+  EXPECT_FALSE(imu.identity().has_value());
+}
+
+}  // namespace
+}  // namespace calstand::drivers

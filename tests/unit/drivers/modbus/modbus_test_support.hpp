@@ -19,10 +19,10 @@
 #include <thread>
 #include <vector>
 
+#include "../child_process.hpp"
 #include "core/clock.hpp"
 #include "core/station_config.hpp"
 #include "sim/sim_world.hpp"
-#include "../child_process.hpp"
 
 extern char** environ;
 
