@@ -4,6 +4,9 @@
 //   bash scripts/run-bench.sh --benchmark_filter=Driver
 //
 // DriverImuFrameDecode: the calstand frame decoder alone on a 1 MiB stream (frames/s).
+// DriverWireFormatDecode/<format>: each wire format's decoder alone (issue 29) on 100 000 of its
+//   device emulator's frames at 2 kHz (800 Hz for VectorNav), configured by its own dialogue,
+//   read 4 KiB at a time (samples/s on one core).
 // DriverSerialImuThroughPty: frames written on a pseudo-terminal by a device thread, read,
 //   decoded and stamped by SerialImu, drained by poll() (sustained frames/s end to end).
 // DriverTableReadState: AcutrolTable::read_state() against the command server on TCP loopback
@@ -22,6 +25,8 @@
 #include "drivers/acutrol_server.hpp"
 #include "drivers/acutrol_table.hpp"
 #include "drivers/chamber_register_map.hpp"
+#include "drivers/emulated_device_link.hpp"
+#include "drivers/imu_wire_format.hpp"
 #include "drivers/imu_frame.hpp"
 #include "drivers/modbus_chamber_options.hpp"
 #include "drivers/modbus_chamber_server.hpp"
@@ -72,6 +77,42 @@ void DriverImuFrameDecode(benchmark::State& state) {
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes.size()));
 }
 BENCHMARK(DriverImuFrameDecode)->Unit(benchmark::kMillisecond);
+
+void DriverWireFormatDecode(benchmark::State& state) {
+  const std::string name = imu_wire_format_names().at(static_cast<std::size_t>(state.range(0)));
+  state.SetLabel(name);
+  const ImuWireFormat& format = imu_wire_format(name, "format");
+  WireFormatSettings settings;
+  settings.sample_rate_hz = name == "vectornav" ? 800.0 : 2000.0;
+  EmulatedDeviceLink link(format.make_emulator({"model", "SN1", "1.0", settings.sample_rate_hz}));
+  if (auto configurator = format.make_configurator(settings)) configurator->configure(link);
+  std::vector<std::uint8_t> drained(link.pending());
+  link.read(drained, std::chrono::milliseconds(0));
+  constexpr std::uint32_t kSamples = 100000;
+  for (std::uint32_t i = 0; i < kSamples; ++i) {
+    core::ImuSample s = sample(i);
+    s.device_time_s = i / settings.sample_rate_hz;
+    link.sample(s);
+  }
+  std::vector<std::uint8_t> bytes(link.pending());
+  link.read(bytes, std::chrono::milliseconds(0));
+  std::vector<core::ImuSample> out;
+  std::size_t samples = 0;
+  for (auto _ : state) {
+    auto decoder = format.make_decoder(settings);
+    out.clear();
+    for (std::size_t at = 0; at < bytes.size(); at += 4096) {
+      decoder->feed(std::span(bytes).subspan(at, std::min<std::size_t>(4096, bytes.size() - at)),
+                    out);
+    }
+    samples += out.size();
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["samples/s"] =
+      benchmark::Counter(static_cast<double>(samples), benchmark::Counter::kIsRate);
+  state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * bytes.size()));
+}
+BENCHMARK(DriverWireFormatDecode)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 
 void DriverSerialImuThroughPty(benchmark::State& state) {
   constexpr std::size_t kFrames = 20000;
