@@ -21,8 +21,8 @@ inline double known_imu_truth(const std::string& name) {
   return nlohmann::json::parse(kKnownImuParameters).value(name, 0.0);
 }
 
-/// The station file text: seeded with `seed`, the IMU at 200 Hz.
-inline std::string known_imu_station(const std::string& name, int seed) {
+/// The station file text: seeded with `seed`, the IMU at `rate_hz`.
+inline std::string known_imu_station(const std::string& name, int seed, int rate_hz = 200) {
   return std::string(R"({"format": "calstand-station/1", "name": ")") + name + R"(", "seed": )" +
          std::to_string(seed) + R"(,
       "site": {"latitude_deg": 30.5, "height_m": 25},
@@ -34,7 +34,8 @@ inline std::string known_imu_station(const std::string& name, int seed) {
         "parameters": )" +
          kKnownImuParameters + R"(,
         "noise": {"gyro": {"arw_deg_per_sqrt_h": 0.1}, "accel": {"vrw_mps_per_sqrt_h": 0.03}},
-        "output": {"sample_rate_hz": 200}}}]})";
+        "output": {"sample_rate_hz": )" +
+         std::to_string(rate_hz) + R"(}}}]})";
 }
 
 }  // namespace calstand::testing

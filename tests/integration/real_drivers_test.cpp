@@ -462,3 +462,62 @@ TEST_F(RealDrivers, PowerCyclesThroughTheScpiSupplyGiveANewTurnOnBiasEachTime) {
 }
 
 }  // namespace
+
+namespace {
+
+/// A real unit's wire format on sim-station's IMU line, and a rate that unit makes.
+struct ImuFormatCase {
+  const char* format;
+  int rate_hz;
+};
+
+class RealImuFormats : public RealDrivers, public ::testing::WithParamInterface<ImuFormatCase> {};
+
+// A whole campaign (the thermal calibration at one plateau, shortened) through each real unit's
+// protocol: sim-station answers the driver's configuration dialogue as the unit does and streams
+// its frames; the fits are as good as the in-process simulator's, the unit's identity as read
+// over the wire is the run's, and the reader's start is no fault.
+TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
+  const ImuFormatCase c = GetParam();
+  const std::string name = std::string("format-") + c.format;
+  const std::string sim = dir_ + name + "-sim.json";
+  write_text(sim, calstand::testing::known_imu_station(name, 7, c.rate_hz));
+  const std::string procedure =
+      "thermal-calibration --set temperatures=[25] --set soak_s=5 --set capture_s=10 "
+      "--set ramp_c_per_min=5 --set outer_angles=[0,90,180,270] --set inner_angles=[0,90] "
+      "--set rates=[30,90] --set revolutions=1";
+  ASSERT_EQ(run_procedure(procedure, sim, dir_ + name + "-inproc.db").exit_code, 0);
+
+  const std::string lab = dir_ + name + "-lab.json";
+  SimStationProcess station({"--station", sim, "--time-scale", kTimeScale, "--station-out", lab,
+                             "--imu-format", c.format});
+  EXPECT_EQ(station.endpoints()["imus"][0]["format"], c.format);
+  const auto info = run("device --station " + lab + " imu info", dir_ + "stderr.txt");
+  ASSERT_EQ(info.exit_code, 0) << read_text(dir_ + "stderr.txt");
+  const json identity = json::parse(info.out);
+  // sim-station's unit without a serial in its station entry: 29000001 (the first IMU).
+  EXPECT_EQ(identity["serial"], "29000001") << info.out;
+
+  const std::string db = dir_ + name + "-real.db";
+  const auto r = run_procedure(procedure, lab, db);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string gyro = "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
+  const std::string accel = "--sensor accel --model accel_bias,accel_scale,accel_misalignment";
+  const json real_gyro = fit_json(db, gyro);
+  expect_same_quality(fit_json(dir_ + name + "-inproc.db", gyro), real_gyro, 4.0);
+  expect_same_quality(fit_json(dir_ + name + "-inproc.db", accel), fit_json(db, accel), 4.0);
+
+  const std::string events = events_text(show_json(db));
+  EXPECT_NE(events.find("unit " + identity["serial"].get<std::string>()), std::string::npos)
+      << events;
+  EXPECT_EQ(events.find("frame errors"), std::string::npos) << events;
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, RealImuFormats,
+                         ::testing::Values(ImuFormatCase{"xsens", 200},
+                                           ImuFormatCase{"vectornav", 200},
+                                           ImuFormatCase{"epson", 200},
+                                           ImuFormatCase{"stim300", 250}),
+                         [](const auto& info) { return std::string(info.param.format); });
+
+}  // namespace

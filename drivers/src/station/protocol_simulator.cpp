@@ -74,13 +74,15 @@ struct ProtocolSimulator::Impl {
     }
     return "calstand";
   }
-  /// Who IMU `i` says it is on its line: its station entry's serial (or one made of its name:
-  /// a device always has one) and the simulator as model and firmware.
+  /// Who IMU `i` says it is on its line: its station entry's serial (or one made of its
+  /// index: a device always has one) and the simulator as model and firmware.
   EmulatedUnit unit(std::size_t i) {
     const core::ImuConfig& imu = sim_config.imus.at(i);
     EmulatedUnit u;
     u.model = imu.model.empty() ? "calstand-sim" : imu.model;
-    u.serial = imu.serial.empty() ? "SIM-" + imu.name : imu.serial;
+    // Digits: several protocols carry the serial as a number (Xsens' device id, VectorNav's
+    // serial register), the others as up to 8 ASCII characters.
+    u.serial = imu.serial.empty() ? std::to_string(29000001 + i) : imu.serial;
     u.firmware = "calstand-sim 1.0";
     u.native_rate_hz = runner.world().imu(i).truth().sample_rate_hz;
     return u;
