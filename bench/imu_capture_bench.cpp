@@ -32,7 +32,7 @@ struct Unit {
 };
 
 // Xsens MTi at 2 kHz, VectorNav at its 800 Hz IMU rate, Epson at 2 kHz, STIM300 at 2 kHz.
-constexpr Unit kUnits[] = {{"xsens", 2000.0},   {"xsens", 2000.0},  {"vectornav", 800.0},
+constexpr Unit kUnits[] = {{"xsens", 2000.0},    {"xsens", 2000.0},  {"vectornav", 800.0},
                            {"vectornav", 800.0}, {"epson", 2000.0},  {"epson", 2000.0},
                            {"stim300", 2000.0},  {"stim300", 2000.0}};
 
@@ -72,8 +72,8 @@ int main(int argc, char** argv) {
   core::SteadyClock clock;
   std::vector<std::unique_ptr<drivers::Imu>> imus;
   for (std::size_t i = 0; i < client.imus.size(); ++i) {
-    imus.push_back(drivers::make_serial_imu(client.imus[i], clock,
-                                            fmt::format("imus[{}].connection", i)));
+    imus.push_back(
+        drivers::make_serial_imu(client.imus[i], clock, fmt::format("imus[{}].connection", i)));
     if (auto r = imus.back()->configure(); !r) {
       fmt::print(stderr, "{}: {}\n", client.imus[i].name, r.message);
       return 2;

@@ -501,7 +501,8 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
   const std::string db = dir_ + name + "-real.db";
   const auto r = run_procedure(procedure, lab, db);
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const std::string gyro = "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
+  const std::string gyro =
+      "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
   const std::string accel = "--sensor accel --model accel_bias,accel_scale,accel_misalignment";
   const json real_gyro = fit_json(db, gyro);
   expect_same_quality(fit_json(dir_ + name + "-inproc.db", gyro), real_gyro, 4.0);

@@ -83,6 +83,7 @@ class SerialImu final : public StreamingImu {
   std::array<std::uint8_t, 4096> chunk_{};
   std::vector<core::ImuSample> decoded_;
   std::map<std::string, std::uint64_t> reported_counters_;
+  std::map<std::string, std::uint64_t> device_reports_;  // since the last summary: text, times
 };
 
 std::unique_ptr<Imu> make_serial_imu(const core::ImuConfig& config, core::Clock& clock,

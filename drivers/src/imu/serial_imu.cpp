@@ -109,9 +109,9 @@ Result SerialImu::read_step() {
   stamp(decoded_, arrival_s);
   deliver(decoded_);
   publish_protocol_counters(decoder_->counters());
-  for (const std::string& report : decoder_->take_device_reports()) {
-    events().push(arrival_s, true, "the device reports: " + report);
-  }
+  // A status word flagging a fault comes with every frame (2000 a second): gathered here and
+  // said once per summary, with how often.
+  for (std::string& report : decoder_->take_device_reports()) ++device_reports_[std::move(report)];
   return Result::success();
 }
 
@@ -132,6 +132,13 @@ void SerialImu::summarise_faults(double now_s, double period_s) {
                               "bytes in {} resyncs",
                               period_s, crc, length, garbage, resyncs));
   }
+  for (const auto& [report, count] : device_reports_) {
+    events().push(now_s, true,
+                  count == 1 ? "the device reports: " + report
+                             : fmt::format("the device reports: {} ({} times in the last {:.1f} s)",
+                                           report, count, period_s));
+  }
+  device_reports_.clear();
   for (const char* key : {"crc_errors", "length_errors", "garbage_bytes", "resyncs"}) {
     const auto it = now.find(key);
     reported_counters_[key] = it == now.end() ? 0 : it->second;

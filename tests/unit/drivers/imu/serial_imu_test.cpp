@@ -272,3 +272,56 @@ TEST(SerialImu, ARefusedConfigurationFailsConfigureWithTheDevicesWords) {
 
 }  // namespace
 }  // namespace calstand::drivers
+
+namespace calstand::drivers {
+namespace {
+
+/// Calstand frames from a unit whose status word flags the same fault in every frame.
+class FaultFlaggingDecoder final : public FrameDecoder {
+ public:
+  std::size_t feed(std::span<const std::uint8_t> bytes,
+                   std::vector<core::ImuSample>& out) override {
+    const std::size_t n = frames_.feed(bytes, out);
+    for (std::size_t i = 0; i < n; ++i) reports_.push_back("gyro x: outside operating conditions");
+    return n;
+  }
+  std::map<std::string, std::uint64_t> counters() const override { return frames_.counters(); }
+  void restart() override { frames_.restart(); }
+  std::vector<std::string> take_device_reports() override { return std::exchange(reports_, {}); }
+
+ private:
+  CalstandFrameDecoder frames_;
+  std::vector<std::string> reports_;
+};
+
+TEST(SerialImu, AFaultTheDeviceFlagsInEveryFrameIsOneEventInItsWordsWithACount) {
+  core::SteadyClock clock;
+  auto pty = std::make_unique<PseudoTerminal>();
+  auto* line = pty.get();
+  SerialImu imu("imu0", std::move(pty), std::make_unique<FaultFlaggingDecoder>(), 100.0,
+                std::uint64_t{1} << 32, clock);
+  ASSERT_TRUE(imu.configure());
+  ASSERT_TRUE(imu.activate());
+  // The device's end of an injected pseudo-terminal is its slave: open it as the unit would.
+  SerialPort unit({line->slave_path(), 115200, Parity::kNone});
+  unit.open();
+  for (std::uint32_t i = 0; i < 40; ++i) {
+    const auto frame = encode_imu_frame(make_serial_sample(i));
+    ASSERT_TRUE(unit.write(frame, 1000ms).ok());
+  }
+  ASSERT_EQ(collect(imu, 40).size(), 40u);
+  ASSERT_TRUE(imu.deactivate());
+  std::vector<std::string> reports;
+  for (const auto& e : imu.take_events()) {
+    if (e.message.find("the device reports") != std::string::npos) {
+      EXPECT_TRUE(e.fault);
+      reports.push_back(e.message);
+    }
+  }
+  ASSERT_FALSE(reports.empty());
+  EXPECT_LE(reports.size(), 3u);  // once per summary, not once per frame
+  EXPECT_NE(reports.front().find("gyro x: outside operating conditions"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace calstand::drivers

@@ -88,7 +88,8 @@ TEST_P(WireFormatRoundTrip, DialogueThenStreamGiveTheUnitAndItsSamples) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, WireFormatRoundTrip,
-                         ::testing::Values(FormatCase{"calstand", 200.0}, FormatCase{"xsens", 200.0},
+                         ::testing::Values(FormatCase{"calstand", 200.0},
+                                           FormatCase{"xsens", 200.0},
                                            FormatCase{"vectornav", 200.0},
                                            FormatCase{"epson", 200.0},
                                            FormatCase{"stim300", 250.0}),
