@@ -86,10 +86,17 @@ json device_json(drivers::Device& d) {
   for (const auto& e : d.take_events()) {
     events.push_back({{"time_s", e.time_s}, {"fault", e.fault}, {"message", e.message}});
   }
-  return {{"name", d.name()},
-          {"state", std::string(drivers::to_string(d.state()))},
-          {"fault_counters", d.fault_counters()},
-          {"events", events}};
+  json out = {{"name", d.name()},
+              {"state", std::string(drivers::to_string(d.state()))},
+              {"fault_counters", d.fault_counters()},
+              {"events", events}};
+  // An IMU whose protocol says who it is: as read over the wire.
+  if (const auto* imu = dynamic_cast<const drivers::Imu*>(&d)) {
+    if (const auto id = imu->identity()) {
+      out["identity"] = {{"model", id->model}, {"serial", id->serial}, {"firmware", id->firmware}};
+    }
+  }
+  return out;
 }
 
 void print(const json& j) { fmt::print("{}\n", j.dump()); }
