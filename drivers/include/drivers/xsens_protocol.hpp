@@ -6,10 +6,11 @@
 // Source: Xsens, "MT Low-Level Communication Protocol Documentation", document MT0101P (the
 // revision we could read is cited in docs/protocols.md), sections "Xbus message structure",
 // "Message identifiers" (the message reference), "MTData2" / "XDI" data identifiers, and
-// "Error codes"; and the MTi family reference manual (MTi 1-series / 600-series) for the output
-// rates and the coordinate-system bits. Fixed-point formats: Xsens knowledge base, "An
-// explanation of the MTi fixed point output formats" (base.xsens.com, article 115003494349).
-// All multi-byte fields on the wire are big-endian (MT0101P, "Xbus message structure").
+// "Error codes"; and the MTi Family Reference Manual (MT1600P, revision 2019.A, 4.3.2 Table 9:
+// Acceleration 0x4020 in m/s^2, RateOfTurn 0x8020 in rad/s, in the sensor-fixed frame). Fixed-point
+// formats: Xsens knowledge base, "An explanation of the MTi fixed point output formats"
+// (base.xsens.com, article 115003494349). All multi-byte fields on the wire are big-endian
+// (MT0101P, "Xbus message structure").
 
 #include <array>
 #include <cstddef>
@@ -79,8 +80,8 @@ enum class Precision : std::uint8_t {
   kFp1632 = 0x2,   ///< signed fixed point 16.32 in 6 bytes (fraction u32, then integer i16)
   kFloat64 = 0x3,  ///< IEEE 754 double
 };
-/// Coordinate system, XDI bits 3..2 (MT0101P; MTi family reference manual, "Coordinate
-/// systems"): East-North-Up (default), North-East-Down, North-West-Up.
+/// Coordinate system, XDI bits 3..2 (MT0101P, XDI format bits): East-North-Up (default),
+/// North-East-Down, North-West-Up.
 enum class Coordinates : std::uint8_t { kEnu = 0x0, kNed = 0x4, kNwu = 0x8 };
 
 /// Bytes of one value in `precision` (4, 4, 6, 8).
@@ -92,9 +93,11 @@ double get_value(const std::uint8_t* p, Precision precision);
 /// What `v` becomes on the wire and back.
 double quantise(double v, Precision precision);
 
-/// Body axes of the unit when it outputs in `coordinates`, from the ENU-default sensor frame:
-/// NED turns the sensor frame 180 deg about x (x, -y, -z); ENU and NWU leave it (MTi family
-/// reference manual, "Coordinate systems"; see docs/protocols.md for the reading chosen).
+/// Body axes of the emulated unit when it outputs in `coordinates`, from the ENU-default sensor
+/// frame: NED turns the sensor frame 180 deg about x (x, -y, -z); ENU and NWU leave it. The MTi
+/// family reference manual (MT1600P 2019.A, 4.3.2) puts calibrated data in the sensor frame and
+/// does not say whether NED turns it: this is our model (docs/protocols.md), used only by the
+/// emulator; the decoder takes the axes as sent.
 std::array<double, 3> to_coordinates(Coordinates coordinates, const std::array<double, 3>& enu);
 
 /// The byte that makes BID + MID + LEN (+ EXT LEN) + DATA + checksum sum to 0 mod 256.
@@ -149,7 +152,8 @@ struct Options {
   Coordinates coordinates = Coordinates::kEnu;  ///< "coordinates"
   std::uint16_t temperature_rate_hz = 0;        ///< "temperature_rate_hz", resolved
 };
-/// The highest temperature output rate calstand asks of a unit [Hz] (docs/protocols.md).
+/// The highest temperature output rate calstand asks of a unit by default [Hz]: our cautious
+/// assumption, no public maximum found (docs/protocols.md, "Xsens MTi", options).
 inline constexpr std::uint16_t kMaxTemperatureRateHz = 400;
 /// Reads settings.options with the defaults; throws core::InputError naming
 /// settings.where + ".key" for what the schema cannot check (a temperature rate above the
