@@ -10,11 +10,11 @@
 namespace calstand::drivers::xsens {
 
 /// The device's half of the MTi protocol, for `calstand sim-station --imu-format xsens` and
-/// tests. At power-on (the first sample) it sends WakeUp and measures with its stored output
-/// configuration (float32, ENU, 100 Hz or the native rate); it answers GoToConfig,
-/// GoToMeasurement, WakeUpAck, ReqDID, ReqProductCode, ReqFWRev and SetOutputConfiguration
-/// (also the request form without data) as MT0101P describes, and Error 0x04 to any other
-/// message. It models a unit whose output rates divide its native rate
+/// tests. At power-on (the first sample, unless the host spoke first) it sends WakeUp and measures
+/// with its stored output configuration (float32, ENU, 100 Hz or the native rate); it answers
+/// GoToConfig, GoToMeasurement, WakeUpAck, ReqDID, ReqProductCode, ReqFWRev and
+/// SetOutputConfiguration (also the request form without data) as MT0101P describes, and Error 0x04
+/// to any other message. It models a unit whose output rates divide its native rate
 /// (EmulatedUnit::native_rate_hz; 2000 Hz for an MTi 600-series unit) with temperature up to
 /// kMaxTemperatureRateHz: SetOutputConfiguration outside that is refused with Error 0x21.
 /// Each item of a packet is encoded in its own XDI's precision and coordinate system.

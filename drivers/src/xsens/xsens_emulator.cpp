@@ -135,6 +135,8 @@ std::vector<std::uint8_t> XsensEmulator::answer(const Message& m) {
 }
 
 std::vector<std::uint8_t> XsensEmulator::on_host_bytes(std::span<const std::uint8_t> bytes) {
+  // A unit the host already talks to has powered up long ago: no WakeUp any more.
+  powered_ = true;
   pending_.insert(pending_.end(), bytes.begin(), bytes.end());
   std::vector<std::uint8_t> out;
   std::size_t at = 0;

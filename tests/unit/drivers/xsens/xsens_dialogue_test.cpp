@@ -147,6 +147,14 @@ TEST(XsensEmulatorTest, SaysWakeUpAtPowerOnAndStopsStreamingInConfig) {
   EXPECT_TRUE(unit.on_sample(xsens_test_sample(1, 100)).empty());
 }
 
+TEST(XsensEmulatorTest, SaysNoWakeUpOnceTheHostHasSpoken) {
+  XsensEmulator unit({"MTi-1", "00000001", "1.0.0", 100.0});
+  unit.on_host_bytes(encode_message(mid::kGoToMeasurement));
+  const auto first = messages_in(unit.on_sample(xsens_test_sample(0, 100)));
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(first[0].mid, mid::kMtData2);
+}
+
 // Configures an emulated unit directly (as the configurator would) and decodes its output.
 std::vector<core::ImuSample> round_trip(const WireFormatSettings& settings, int samples,
                                         XsensDecoder& decoder) {
