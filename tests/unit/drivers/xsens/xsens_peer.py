@@ -99,7 +99,7 @@ class Unit:
             return message(0x31)
         if mid == 0x10:
             self.measuring = True
-            self.started = time.monotonic() + 0.2  # give the host time to start its reader
+            self.started = time.monotonic() + 0.5  # give the host time to start its reader
             return message(0x11)
         if mid == 0x00:
             return message(0x01, struct.pack(">I", 0x037001A5))

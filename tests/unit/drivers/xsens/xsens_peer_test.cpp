@@ -58,7 +58,7 @@ TEST(XsensPeer, ConfiguresTheIndependentPeerAndDecodesItsSignal) {
     got.insert(got.end(), s.begin(), s.end());
     std::this_thread::sleep_for(10ms);
   }
-  ASSERT_GE(got.size(), 40u);
+  ASSERT_GE(got.size(), 20u);
   EXPECT_EQ(got.back().sequence, static_cast<std::uint32_t>(kPeerCount - 1));
 
   std::map<std::uint32_t, int> seen;
