@@ -28,6 +28,9 @@ struct DecoderCounters {
   std::uint64_t start_bytes = 0;         ///< dropped before the first message after restart()
   std::uint64_t device_errors = 0;       ///< Error messages received
   std::uint64_t device_restarts = 0;     ///< WakeUp, or SampleTimeFine going back
+  /// Packets held back at the start of the stream because no temperature had come yet.
+  std::uint64_t awaiting_temperature = 0;
+  std::uint64_t invalid_samples = 0;  ///< packets with a NaN or infinite value, dropped
 };
 
 /// Decoder of an MTi's output: Xbus messages carrying MTData2 packets (MT0101P). Hunts for the
@@ -36,7 +39,8 @@ struct DecoderCounters {
 /// are passed on as the unit outputs them (its configured coordinate system). Rate of turn
 /// comes in rad/s and leaves in deg/s. SampleTimeFine (10 kHz, u32) is unwrapped into
 /// device_time_s; PacketCounter (u16) is the sequence. Packets without a temperature carry the
-/// latest one (NaN until the first). Error and WakeUp messages become device reports.
+/// latest one; those before the first temperature give no sample (awaiting_temperature). Error
+/// and WakeUp messages become device reports.
 class XsensDecoder final : public FrameDecoder {
  public:
   XsensDecoder();

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <numbers>
 
@@ -138,6 +139,18 @@ bool XsensDecoder::on_mtdata2(std::span<const std::uint8_t> data, core::ImuSampl
     ++stats_.incomplete_packets;
     return false;
   }
+  if (!sample.gyro_dps.allFinite() || !sample.accel_mps2.allFinite() ||
+      std::isinf(temperature_c_)) {
+    ++stats_.invalid_samples;  // a float the device should never send: no sample to trust
+    return false;
+  }
+  if (std::isnan(temperature_c_)) {
+    // Temperature comes at a lower rate: the packets before the first one have none to carry.
+    // They are held back (counted) rather than delivered with a NaN that would poison every
+    // mean taken over them; this happens only at the start of a stream.
+    ++stats_.awaiting_temperature;
+    return false;
+  }
   sample.sequence = counter;
   sample.device_time_s = unwrap_time(ticks);
   sample.temperature_c = temperature_c_;
@@ -223,7 +236,9 @@ std::map<std::string, std::uint64_t> XsensDecoder::counters() const {
           {"sequence_gaps", stats_.sequence_gaps},
           {"start_bytes", stats_.start_bytes},
           {"device_errors", stats_.device_errors},
-          {"device_restarts", stats_.device_restarts}};
+          {"device_restarts", stats_.device_restarts},
+          {"awaiting_temperature", stats_.awaiting_temperature},
+          {"invalid_samples", stats_.invalid_samples}};
 }
 
 }  // namespace calstand::drivers::xsens

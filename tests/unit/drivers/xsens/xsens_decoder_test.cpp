@@ -6,6 +6,7 @@
 
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace calstand::drivers::xsens {
@@ -204,7 +205,7 @@ TEST(XsensDecoder, EachSampleCarriesTheLatestTemperature) {
   Bytes bytes;
   Packet p;
   p.temperature.reset();
-  append(bytes, packet(p));  // none yet: NaN
+  append(bytes, packet(p));  // none yet: held back, not delivered with a NaN
   p.counter = 1;
   p.temperature = 30.25;
   append(bytes, packet(p));
@@ -214,9 +215,18 @@ TEST(XsensDecoder, EachSampleCarriesTheLatestTemperature) {
   XsensDecoder d;
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
-  ASSERT_EQ(out.size(), 3u);
-  EXPECT_TRUE(std::isnan(out[0].temperature_c));
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[0].sequence, 1u);
+  EXPECT_DOUBLE_EQ(out[0].temperature_c, 30.25);
+  EXPECT_EQ(out[1].sequence, 2u);
   EXPECT_DOUBLE_EQ(out[1].temperature_c, 30.25);
+  EXPECT_EQ(d.stats().awaiting_temperature, 1u);
+  EXPECT_EQ(d.stats().sequence_gaps, 0u);
+  // A reader restart keeps the temperature: the next packet without one still has a sample.
+  d.restart();
+  p.counter = 9;
+  d.feed(packet(p), out);
+  ASSERT_EQ(out.size(), 3u);
   EXPECT_DOUBLE_EQ(out[2].temperature_c, 30.25);
 }
 
@@ -231,6 +241,18 @@ TEST(XsensDecoder, APacketWithoutItsCounterGivesNoSample) {
   Bytes data{0x10, 0x20, 0x09, 0x00};
   EXPECT_EQ(d.feed(encode_message(mid::kMtData2, data), out), 0u);
   EXPECT_EQ(d.stats().packet_errors, 1u);
+}
+
+TEST(XsensDecoder, APacketWithANonFiniteValueIsDropped) {
+  Packet p;
+  p.gyro_rps[1] = std::numeric_limits<double>::quiet_NaN();
+  Bytes bytes = packet(p);
+  append(bytes, stream_of(1, 1));
+  XsensDecoder d;
+  std::vector<core::ImuSample> out;
+  EXPECT_EQ(d.feed(bytes, out), 1u);
+  EXPECT_EQ(out[0].sequence, 1u);
+  EXPECT_EQ(d.stats().invalid_samples, 1u);
 }
 
 TEST(XsensDecoder, ReadsEachItemInItsOwnPrecision) {
