@@ -13,7 +13,8 @@ namespace {
 using Bytes = std::vector<std::uint8_t>;
 
 TEST(XsensProtocol, EncodesTheManualsPrintedMessages) {
-  // MT0101P prints these complete messages (preamble, BID, MID, LEN, checksum).
+  // GoToConfig is the complete message MT0101P prints as its example; the other two follow
+  // from the checksum rule (every byte after the preamble sums to 0).
   EXPECT_EQ(encode_message(mid::kGoToConfig), (Bytes{0xFA, 0xFF, 0x30, 0x00, 0xD1}));
   EXPECT_EQ(encode_message(mid::kGoToMeasurement), (Bytes{0xFA, 0xFF, 0x10, 0x00, 0xF1}));
   EXPECT_EQ(encode_message(mid::kReqDid), (Bytes{0xFA, 0xFF, 0x00, 0x00, 0x01}));
