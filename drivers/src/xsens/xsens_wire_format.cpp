@@ -1,30 +1,40 @@
-// PLACEHOLDER until the xsens format lands (issue 29): refuses to be used.
-#include <stdexcept>
+// The Xsens MTi format (docs/protocols.md, "Xsens MTi"): Xbus messages with MTData2 packets,
+// the configuration dialogue and an emulated unit.
+#include <memory>
 
 #include "drivers/imu_wire_format.hpp"
+#include "drivers/xsens_configurator.hpp"
+#include "drivers/xsens_decoder.hpp"
+#include "drivers/xsens_emulator.hpp"
 
 namespace calstand::drivers {
 namespace {
 
-class Missing_xsens final : public ImuWireFormat {
+class XsensWireFormat final : public ImuWireFormat {
  public:
   std::string name() const override { return "xsens"; }
-  std::uint64_t sequence_modulus(const WireFormatSettings&) const override { return 0; }
-  std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings&) const override {
-    throw std::logic_error("xsens: not built yet");
+  std::uint64_t sequence_modulus(const WireFormatSettings& /*settings*/) const override {
+    return std::uint64_t{1} << 16;  // PacketCounter is a u16 (MT0101P, XDI 0x1020)
   }
-  std::unique_ptr<ImuConfigurator> make_configurator(const WireFormatSettings&) const override {
-    throw std::logic_error("xsens: not built yet");
+  std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings& settings) const override {
+    // The decoder reads each XDI's own format bits; the options are checked all the same, so a
+    // wrong one fails where the station file is read.
+    xsens::parse_options(settings);
+    return std::make_unique<xsens::XsensDecoder>();
   }
-  std::unique_ptr<ImuDeviceEmulator> make_emulator(const EmulatedUnit&) const override {
-    throw std::logic_error("xsens: not built yet");
+  std::unique_ptr<ImuConfigurator> make_configurator(
+      const WireFormatSettings& settings) const override {
+    return std::make_unique<xsens::XsensConfigurator>(settings);
+  }
+  std::unique_ptr<ImuDeviceEmulator> make_emulator(const EmulatedUnit& unit) const override {
+    return std::make_unique<xsens::XsensEmulator>(unit);
   }
 };
 
 }  // namespace
 
 const ImuWireFormat& xsens_wire_format() {
-  static const Missing_xsens format;
+  static const XsensWireFormat format;
   return format;
 }
 
