@@ -24,7 +24,8 @@ core::ImuSample vn_sim_sample(std::uint64_t n) {
   core::ImuSample s;
   s.sequence = static_cast<std::uint32_t>(n);
   s.device_time_s = 2.0 + static_cast<double>(n) / 800.0;
-  s.gyro_dps = {30.0 * std::sin(static_cast<double>(n) / 50.0), -4.5, 0.001 * static_cast<double>(n)};
+  s.gyro_dps = {30.0 * std::sin(static_cast<double>(n) / 50.0), -4.5,
+                0.001 * static_cast<double>(n)};
   s.accel_mps2 = {0.02, 0.5 * std::cos(static_cast<double>(n) / 80.0), -9.80665};
   s.temperature_c = 24.0 + 0.001 * static_cast<double>(n);
   return s;
