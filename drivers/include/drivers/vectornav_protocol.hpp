@@ -42,14 +42,14 @@ inline constexpr std::uint8_t kGroupAttitude = 0x10;
 inline constexpr std::uint8_t kGroupsKnown = kGroupCommon | kGroupTime | kGroupImu | kGroupAttitude;
 
 /// Fields of the Common group [UM001 §4.2.2 field table, column "Group 1 Common"; sizes from
-/// §4.4 "Binary Output Field Definitions"].
+/// chapter 4 binary output field definitions].
 inline constexpr std::uint16_t kCommonTimeStartup = 1u << 0;  ///< u64 [ns] since start-up
 inline constexpr std::uint16_t kCommonAngularRate = 1u << 5;  ///< 3 x f32 [rad/s], compensated
 inline constexpr std::uint16_t kCommonAccel = 1u << 8;        ///< 3 x f32 [m/s^2], compensated
 inline constexpr std::uint16_t kCommonImu = 1u << 9;          ///< 6 x f32: UncompAccel, UncompGyro
 /// Fields of the Time group [UM001 §4.2.2, column "Group 2 Time"].
 inline constexpr std::uint16_t kTimeTimeStartup = 1u << 0;  ///< u64 [ns] since start-up
-/// Fields of the IMU group [UM001 §4.2.2, column "Group 3 IMU"; the worked example of §4.2.3
+/// Fields of the IMU group [UM001 §4.2.2, column "Group 3 IMU"; the worked example on p. 35
 /// sets 0x000C for "Bit 2 - UncompAccel, Bit 3 - UncompGyro"].
 inline constexpr std::uint16_t kImuUncompAccel = 1u << 2;   ///< 3 x f32 [m/s^2]
 inline constexpr std::uint16_t kImuUncompGyro = 1u << 3;    ///< 3 x f32 [rad/s]
@@ -59,8 +59,8 @@ inline constexpr std::uint16_t kImuAngularRate = 1u << 10;  ///< 3 x f32 [rad/s]
 inline constexpr std::uint16_t kFieldExtension = 0x8000;    ///< another field word follows
 
 /// Bytes of field `bit` of the group at `group_bit` (0 Common, 1 Time, 2 IMU, 4 Attitude) on a
-/// VN-100 [UM001 §4.4]; 0 for a field this decoder does not know (reserved on the VN-100, or
-/// of a later firmware), whose message it cannot measure.
+/// VN-100 [UM001 ch. 4 field definitions]; 0 for a field this decoder does not know (reserved on
+/// the VN-100, or of a later firmware), whose message it cannot measure.
 std::size_t field_size_bytes(int group_bit, int bit);
 
 /// CRC-16 of the binary message [UM001 §3.8.3 "16-bit CRC": CRC16-CCITT]: polynomial 0x1021,
@@ -109,7 +109,7 @@ std::vector<std::uint8_t> encode_binary_message(const core::ImuSample& sample, s
 //   "*XX" asks the device to skip the check [UM001 §3.8.1 "Checksum Bypass"].
 inline constexpr std::size_t kMaxAsciiBytes = 256;  ///< the device's input buffer [UM004 §4.5]
 
-/// Register IDs [UM001 §5.2 system registers; UM004 §5.2-5.7; UM001 §4.2.3 for 75].
+/// Register IDs [UM004 §5.2-5.5 (1-4), §5.7 (6); UM001 p. 35 example (75)].
 inline constexpr int kRegModelNumber = 1;
 inline constexpr int kRegHardwareRevision = 2;
 inline constexpr int kRegSerialNumber = 3;
@@ -134,8 +134,10 @@ struct AsciiMessage {
 /// within kMaxAsciiBytes.
 Scan parse_ascii(std::span<const std::uint8_t> bytes, bool allow_bypass, AsciiMessage& out);
 
-/// The meaning of a `$VNERR` code [UM004 §4.5 table 20 "Error Codes"; UM001 lists the same
-/// codes], e.g. "Invalid Register".
+/// The meaning of a `$VNERR` code [UM004 §4.5 table 20 "Error Codes", codes 1-12; UM001's own
+/// table was not in the public text consulted, so the shared command set is assumed to share
+/// them; 255 "Error Buffer Overflow" is from VectorNav's later manuals], e.g. "Invalid Register".
+/// An unknown code is passed on as "unknown error code" with its number.
 std::string error_name(int code);
 /// "$VNERR,08: Invalid Register" style text for a device report or a DeviceConfigError.
 std::string error_text(const std::string& code_field);
@@ -144,7 +146,7 @@ std::string error_text(const std::string& code_field);
 struct Options {
   bool compensated = false;    ///< "outputs": "compensated" (else the raw "uncompensated")
   int port = 1;                ///< the unit's serial port the station listens on (AsyncMode)
-  double imu_rate_hz = 800.0;  ///< the IMU rate the RateDivisor divides [Hz] [UM001 §4.2.3]
+  double imu_rate_hz = 800.0;  ///< the IMU rate the RateDivisor divides [Hz] [UM001 p. 35]
 };
 
 /// Reads settings.options; throws core::InputError naming settings.where + ".key".
@@ -158,7 +160,7 @@ std::uint16_t imu_fields(const Options& options);
 int rate_divisor(const Options& options, double sample_rate_hz);
 
 /// The body of the Binary Output Register 1 write for `options` at `divisor`:
-/// "VNWRG,75,<AsyncMode>,<RateDivisor>,05,0001,<imu fields>" [UM001 §4.2.3 example
+/// "VNWRG,75,<AsyncMode>,<RateDivisor>,05,0001,<imu fields>" [UM001 p. 35 example
 /// "$VNWRG,75,1,16,15,0001,000C,0014*XX": groups and fields in hexadecimal].
 std::string binary_output_body(const Options& options, int divisor);
 

@@ -118,7 +118,7 @@ std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
     }
     if (rest[0] != kSync) {
       const auto next = std::find_if(rest.begin() + 1, rest.end(),
-                                      [](std::uint8_t b) { return b == kSync || b == '$'; });
+                                     [](std::uint8_t b) { return b == kSync || b == '$'; });
       discard(static_cast<std::size_t>(next - rest.begin()));
       continue;
     }

@@ -14,7 +14,7 @@
 namespace calstand::drivers::vectornav {
 namespace {
 
-// Field sizes by group bit and field bit [UM001 §4.4 binary output field definitions]; 0 for
+// Field sizes by group bit and field bit [UM001 ch. 4, binary output field definitions]; 0 for
 // fields reserved on the VN-100 (GPS time, position, velocity) or unknown to this decoder.
 constexpr std::array<std::array<std::uint8_t, 15>, 8> kVectornavFieldSizes = {{
     // Common: TimeStartup, -, TimeSyncIn, YawPitchRoll, Quaternion, AngularRate, -, -, Accel,
