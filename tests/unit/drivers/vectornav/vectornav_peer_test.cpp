@@ -6,7 +6,9 @@
 #include <thread>
 
 #include "../child_process.hpp"
+#include "../schema_error_field.hpp"
 #include "core/clock.hpp"
+#include "core/error.hpp"
 #include "drivers/serial_imu.hpp"
 
 namespace calstand::drivers {
@@ -91,6 +93,39 @@ TEST(VectornavPeer, ConfiguresIdentifiesAndDecodesAnIndependentDevice) {
   }
   EXPECT_TRUE(reported);
   ASSERT_TRUE(imu.deactivate());
+}
+
+TEST(VectornavPeer, TheStationFileOptionsAreCheckedNamingTheField) {
+  core::SteadyClock clock;
+  for (const auto& [options, field] : std::vector<std::pair<nlohmann::json, std::string>>{
+           {{{"port", 3}}, "imus[0].connection.vectornav.port"},
+           {{{"outputs", "raw"}}, "imus[0].connection.vectornav.outputs"},
+           {{{"imu_rate_hz", 0}}, "imus[0].connection.vectornav.imu_rate_hz"},
+           {{{"model", "VN-100"}}, "imus[0].connection.vectornav.model"}}) {
+    core::ImuConfig config;
+    config.name = "imu0";
+    config.backend = "serial";
+    config.connection = {{"path", "/dev/null"},
+                         {"format", "vectornav"},
+                         {"sample_rate_hz", 100},
+                         {"vectornav", options}};
+    try {
+      SerialImu imu(config, clock, "imus[0].connection");
+      ADD_FAILURE() << field;
+    } catch (const core::InputError& e) {
+      EXPECT_EQ(test::error_field(e), field) << e.what();
+    }
+  }
+  // Every key with its default accepted.
+  core::ImuConfig config;
+  config.name = "imu0";
+  config.backend = "serial";
+  config.connection = {
+      {"path", "/dev/null"},
+      {"format", "vectornav"},
+      {"sample_rate_hz", 100},
+      {"vectornav", {{"outputs", "uncompensated"}, {"port", 1}, {"imu_rate_hz", 800}}}};
+  EXPECT_NO_THROW(SerialImu(config, clock, "imus[0].connection"));
 }
 
 }  // namespace
