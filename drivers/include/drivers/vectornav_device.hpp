@@ -39,8 +39,9 @@ class VectornavConfigurator final : public ImuConfigurator {
 /// configurator uses (1-4, 6, 75) and reports `$VNERR` for others, bad checksums or bad
 /// parameters as the unit does; starts with its binary output off and emits nothing until
 /// Binary Output Register 1 asks for output (whatever AsyncMode's port: it stands for the
-/// port the host is on). The RateDivisor divides the emulator's native rate (800 Hz on the
-/// VN-100). The ASCII async output (register 6) is accepted but never sent.
+/// port the host is on). The output rate is the VN-100's 800 Hz IMU rate over the RateDivisor:
+/// every RateDivisor-th sample at a native rate of 800 Hz, by phase at any other native rate.
+/// The ASCII async output (register 6) is accepted but never sent.
 class VectornavEmulator final : public ImuDeviceEmulator {
  public:
   VectornavEmulator(EmulatedUnit unit, std::string hardware_revision = "1");

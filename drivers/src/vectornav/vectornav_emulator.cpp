@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
+#include <cmath>
 #include <optional>
 
 #include "drivers/vectornav_device.hpp"
@@ -13,6 +14,8 @@ namespace {
 
 // Error codes the emulator answers with [UM004 §4.5 table 20].
 constexpr int kVectornavErrInvalidChecksum = 3;
+/// The VN-100's IMU rate, which the RateDivisor divides [Hz] [UM001 p. 35].
+constexpr double kVectornavEmuImuRateHz = 800.0;
 constexpr int kVectornavErrInvalidCommand = 4;
 constexpr int kVectornavErrNotEnoughParameters = 5;
 constexpr int kVectornavErrTooManyParameters = 6;
@@ -154,7 +157,18 @@ std::vector<std::uint8_t> VectornavEmulator::on_host_bytes(std::span<const std::
 
 std::vector<std::uint8_t> VectornavEmulator::on_sample(const core::ImuSample& sample) {
   if (async_mode_ == 0 || (common_ | imu_) == 0) return {};
-  const bool due = samples_ % static_cast<std::uint64_t>(divisor_) == 0;
+  // The unit divides its 800 Hz IMU rate; a simulator sampling at another native rate gets the
+  // same output rate by phase: a message whenever a whole output period has passed.
+  bool due = false;
+  if (std::abs(unit_.native_rate_hz - kVectornavEmuImuRateHz) < 1e-9 || unit_.native_rate_hz <= 0) {
+    due = samples_ % static_cast<std::uint64_t>(divisor_) == 0;
+  } else {
+    const double outputs_per_sample = kVectornavEmuImuRateHz / divisor_ / unit_.native_rate_hz;
+    const auto phase = [&](std::uint64_t n) {
+      return std::floor(static_cast<double>(n) * outputs_per_sample + 1e-9);
+    };
+    due = samples_ == 0 || phase(samples_) != phase(samples_ - 1);
+  }
   ++samples_;
   if (!due) return {};
   return encode_binary_message(sample, common_, imu_);

@@ -144,6 +144,30 @@ TEST(VectornavDialogue, EmulatorToDecoderReproducesTheSamplesToF32) {
   }
 }
 
+TEST(VectornavDialogue, AnEmulatorSampledAtAnotherNativeRateKeepsTheOutputRate) {
+  EmulatedUnit unit = vn_unit();
+  unit.native_rate_hz = 1000.0;
+  VectornavEmulator device(unit);
+  const std::string start = ascii_message("VNWRG,75,1,5,05,0001,001C");  // 800 / 5 = 160 Hz
+  device.on_host_bytes(
+      std::span(reinterpret_cast<const std::uint8_t*>(start.data()), start.size()));
+  VectornavDecoder decoder(160.0, false);
+  std::vector<core::ImuSample> out;
+  for (std::uint64_t n = 0; n < 1000; ++n) {
+    core::ImuSample s = vn_sim_sample(n);
+    s.device_time_s = static_cast<double>(n) / 1000.0;
+    decoder.feed(device.on_sample(s), out);
+  }
+  ASSERT_EQ(out.size(), 160u);
+  // Each output is the first native sample at or after its 1/160 s slot.
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    EXPECT_GE(out[k].device_time_s + 1e-12, static_cast<double>(k) / 160.0);
+    EXPECT_LT(out[k].device_time_s, static_cast<double>(k) / 160.0 + 1.0 / 1000.0);
+    EXPECT_EQ(out[k].sequence, k);
+  }
+  EXPECT_EQ(decoder.stats().sequence_gaps, 0u);
+}
+
 TEST(VectornavDialogue, ASilentDeviceTimesOutNamingTheRequest) {
   VnDeviceLink link(nullptr);
   VectornavConfigurator configurator(Options{}, 100.0, 30ms);
