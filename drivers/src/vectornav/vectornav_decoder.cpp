@@ -1,0 +1,166 @@
+// Decoder of the VN-100 binary output stream (drivers/include/drivers/vectornav_decoder.hpp).
+#include "drivers/vectornav_decoder.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace calstand::drivers::vectornav {
+namespace {
+
+constexpr double kVectornavDecoderDegPerRad = 180.0 / 3.14159265358979323846;
+
+}  // namespace
+
+VectornavDecoder::VectornavDecoder(double sample_rate_hz, bool prefer_compensated)
+    : sample_rate_hz_(sample_rate_hz > 0.0 ? sample_rate_hz : 800.0),
+      prefer_compensated_(prefer_compensated) {}
+
+void VectornavDecoder::restart() {
+  buffer_.clear();
+  start_ = 0;
+  quiet_ = true;
+  hunting_ = false;
+  have_time_ = false;
+}
+
+std::vector<std::string> VectornavDecoder::take_device_reports() {
+  std::vector<std::string> out;
+  out.swap(reports_);
+  return out;
+}
+
+void VectornavDecoder::discard(std::size_t count) {
+  start_ += count;
+  if (quiet_) {
+    stats_.start_bytes += count;
+    return;
+  }
+  if (!hunting_) ++stats_.resyncs;
+  hunting_ = true;
+  stats_.garbage_bytes += count;
+}
+
+void VectornavDecoder::consume(std::size_t count) {
+  start_ += count;
+  hunting_ = false;
+  quiet_ = false;
+}
+
+void VectornavDecoder::on_ascii(const AsciiMessage& message) {
+  ++stats_.ascii_messages;
+  if (message.fields.empty() || message.fields[0] != "VNERR") return;
+  // An error message, asynchronous or the answer to a command [UM004 §4.5].
+  ++stats_.device_errors;
+  reports_.push_back(error_text(message.fields.size() > 1 ? message.fields[1] : ""));
+}
+
+bool VectornavDecoder::on_binary(const BinaryFields& f, std::vector<core::ImuSample>& out) {
+  const auto& gyro = prefer_compensated_ ? (f.gyro_rps ? f.gyro_rps : f.uncomp_gyro_rps)
+                                         : (f.uncomp_gyro_rps ? f.uncomp_gyro_rps : f.gyro_rps);
+  const auto& accel = prefer_compensated_
+                          ? (f.accel_mps2 ? f.accel_mps2 : f.uncomp_accel_mps2)
+                          : (f.uncomp_accel_mps2 ? f.uncomp_accel_mps2 : f.accel_mps2);
+  if (!f.time_startup_ns || !gyro || !accel) {
+    ++stats_.incomplete_frames;  // a good message of another configuration: no sample in it
+    return false;
+  }
+  const std::uint64_t t_ns = *f.time_startup_ns;
+  core::ImuSample s;
+  s.device_time_s = static_cast<double>(t_ns) * 1e-9;
+  // No counter in these groups: the output period counts the samples since start-up.
+  const double ticks = std::round(static_cast<double>(t_ns) * 1e-9 * sample_rate_hz_);
+  s.sequence = static_cast<std::uint32_t>(std::fmod(ticks, 4294967296.0));
+  if (have_time_ && t_ns < last_time_ns_) {
+    ++stats_.device_restarts;
+    reports_.push_back(
+        fmt::format("device restarted: TimeStartup went back from {:.6f} s to {:.6f} s",
+                    static_cast<double>(last_time_ns_) * 1e-9, s.device_time_s));
+  } else if (have_time_ && s.sequence != static_cast<std::uint32_t>(last_sequence_ + 1u)) {
+    ++stats_.sequence_gaps;
+  }
+  have_time_ = true;
+  last_time_ns_ = t_ns;
+  last_sequence_ = s.sequence;
+  for (std::size_t i = 0; i < 3; ++i) {
+    s.gyro_dps[static_cast<Eigen::Index>(i)] =
+        static_cast<double>((*gyro)[i]) * kVectornavDecoderDegPerRad;
+    s.accel_mps2[static_cast<Eigen::Index>(i)] = static_cast<double>((*accel)[i]);
+  }
+  s.temperature_c = f.temperature_c ? static_cast<double>(*f.temperature_c) : 0.0;
+  out.push_back(s);
+  return true;
+}
+
+std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
+                                   std::vector<core::ImuSample>& out) {
+  stats_.bytes_fed += bytes.size();
+  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
+  start_ = 0;
+  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+
+  std::size_t decoded = 0;
+  while (start_ < buffer_.size()) {
+    const std::span<const std::uint8_t> rest(buffer_.data() + start_, buffer_.size() - start_);
+    if (rest[0] == '$') {
+      AsciiMessage message;
+      const Scan scan = parse_ascii(rest, false, message);
+      if (scan == Scan::kIncomplete) break;
+      if (scan == Scan::kInvalid) {
+        discard(1);
+        continue;
+      }
+      stats_.ascii_bytes += message.size;
+      consume(message.size);
+      on_ascii(message);
+      continue;
+    }
+    if (rest[0] != kSync) {
+      const auto next = std::find_if(rest.begin() + 1, rest.end(),
+                                     [](std::uint8_t b) { return b == kSync || b == '$'; });
+      discard(static_cast<std::size_t>(next - rest.begin()));
+      continue;
+    }
+    BinaryHeader header;
+    const Scan scan = parse_binary_header(rest, header);
+    if (scan == Scan::kIncomplete) break;
+    if (scan == Scan::kInvalid) {
+      // Checked before waiting for the body: an unmeasurable header must not stall the stream.
+      if (!quiet_) ++stats_.length_errors;
+      discard(1);
+      continue;
+    }
+    const std::size_t size = header.message_bytes();
+    if (rest.size() < size) break;
+    // The CRC over everything after the sync, the CRC included, is 0 for a good message.
+    if (crc16(rest.subspan(1, size - 1)) != 0) {
+      if (!quiet_) ++stats_.crc_errors;
+      discard(1);
+      continue;
+    }
+    const BinaryFields fields = parse_binary_payload(rest.first(size), header);
+    ++stats_.frames;
+    stats_.frame_bytes += size;
+    consume(size);
+    if (on_binary(fields, out)) ++decoded;
+  }
+  return decoded;
+}
+
+std::map<std::string, std::uint64_t> VectornavDecoder::counters() const {
+  return {{"bytes_fed", stats_.bytes_fed},
+          {"frames", stats_.frames},
+          {"crc_errors", stats_.crc_errors},
+          {"length_errors", stats_.length_errors},
+          {"garbage_bytes", stats_.garbage_bytes},
+          {"resyncs", stats_.resyncs},
+          {"sequence_gaps", stats_.sequence_gaps},
+          {"start_bytes", stats_.start_bytes},
+          {"ascii_messages", stats_.ascii_messages},
+          {"device_errors", stats_.device_errors},
+          {"device_restarts", stats_.device_restarts},
+          {"incomplete_frames", stats_.incomplete_frames}};
+}
+
+}  // namespace calstand::drivers::vectornav
