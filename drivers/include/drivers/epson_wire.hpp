@@ -38,6 +38,9 @@ class Decoder final : public FrameDecoder {
   std::map<std::string, std::uint64_t> counters() const override;
   void restart() override;
   std::vector<std::string> take_device_reports() override;
+  /// Bytes held back waiting for the rest of a frame [bytes]. Every byte fed is in exactly one
+  /// of a frame, garbage_bytes, start_bytes or buffered().
+  std::size_t buffered() const { return buffer_.size() - start_; }
 
  private:
   const ModelScale* model();
