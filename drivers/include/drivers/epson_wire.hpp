@@ -46,6 +46,8 @@ class Decoder final : public FrameDecoder {
   const ModelScale* model();
   void discard(std::size_t count);
   void decode(const BurstFields& f, std::vector<core::ImuSample>& out);
+  void note_count_step(std::uint64_t delta);
+  static constexpr int kStepsBeforeReport = 16;
 
   Options options_;
   std::shared_ptr<IdentifiedModel> identified_;
@@ -62,6 +64,8 @@ class Decoder final : public FrameDecoder {
   std::uint64_t unwrapped_count_ = 0;
   bool error_flag_ = false;
   bool reported_no_model_ = false;
+  bool reported_count_step_ = false;
+  int steps_like_other_ = 0;
   std::vector<std::string> reports_;
   std::map<std::string, std::uint64_t> stats_;
 };

@@ -58,6 +58,22 @@ void Decoder::discard(std::size_t count) {
   stats_["garbage_bytes"] += count;
 }
 
+void Decoder::note_count_step(std::uint64_t delta) {
+  // The data sheets leave open whether COUNT counts output or base-rate samples (count_step);
+  // a device whose every step is the other reading says so once, in numbers.
+  const std::uint64_t other =
+      options_.count_step == CountStep::kBase
+          ? 1
+          : static_cast<std::uint64_t>(std::llround(kBaseRateHz / (count_rate_hz_)));
+  if (other == count_step_ || reported_count_step_) return;
+  steps_like_other_ = delta == other ? steps_like_other_ + 1 : 0;
+  if (steps_like_other_ >= kStepsBeforeReport) {
+    reports_.push_back(fmt::format(
+        "COUNT steps by {} per frame, not {}: check the count_step option", other, count_step_));
+    reported_count_step_ = true;
+  }
+}
+
 void Decoder::decode(const BurstFields& f, std::vector<core::ImuSample>& out) {
   // EA is the OR of DIAG_STAT's error bits (M-G365PD FLAG / DIAG_STAT): the burst cannot say
   // which, so the report names the flag and where the detail is.
@@ -86,6 +102,7 @@ void Decoder::decode(const BurstFields& f, std::vector<core::ImuSample>& out) {
     } else {
       unwrapped_count_ += delta;
       if (check_gap_ && delta != count_step_) ++stats_["sequence_gaps"];
+      note_count_step(delta);
     }
   }
   last_count_ = f.count;

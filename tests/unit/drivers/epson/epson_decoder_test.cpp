@@ -96,6 +96,18 @@ TEST(EpsonDecoder, OutputCountStepCountsOnePerFrame) {
   EXPECT_EQ(d.counters().at("sequence_gaps"), 0u);
 }
 
+TEST(EpsonDecoder, ACounterSteppingTheOtherWayIsReportedOnce) {
+  Decoder d(decoder_options(100, 32, CountStep::kBase), nullptr);
+  std::vector<core::ImuSample> out;
+  d.feed(stream(0, 40, 0, 1), out);  // one count per frame at 100 Hz: an output-rate counter
+  const auto reports = d.take_device_reports();
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_NE(reports[0].find("COUNT steps by 1 per frame, not 20"), std::string::npos) << reports[0];
+  Decoder right(decoder_options(100, 32, CountStep::kBase), nullptr);
+  right.feed(stream(0, 40, 0, 20), out);
+  EXPECT_TRUE(right.take_device_reports().empty());
+}
+
 TEST(EpsonDecoder, DroppedFramesAreSequenceGaps) {
   Bytes bytes = stream(0, 3, 0);
   const Bytes later = stream(5, 3, 100);  // frames 3 and 4 lost

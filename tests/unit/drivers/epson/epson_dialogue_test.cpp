@@ -6,6 +6,7 @@
 #include <functional>
 #include <thread>
 
+#include "core/error.hpp"
 #include "drivers/epson_wire.hpp"
 
 namespace calstand::drivers::epson {
@@ -231,3 +232,28 @@ TEST(EpsonEmulator, IsSilentInConfigurationModeAndAnswersReads) {
 
 }  // namespace
 }  // namespace calstand::drivers::epson
+
+namespace calstand::drivers {
+namespace {
+
+TEST(EpsonWireFormat, IsTheFormatNamedEpson) {
+  const ImuWireFormat& format = imu_wire_format("epson", "connection.format");
+  EXPECT_EQ(format.name(), "epson");
+  WireFormatSettings s;
+  s.sample_rate_hz = 125;
+  s.where = "imus[1].connection.epson";
+  EXPECT_EQ(format.sequence_modulus(s), std::uint64_t{1} << 32);
+  EXPECT_NE(format.make_decoder(s), nullptr);
+  EXPECT_NE(format.make_configurator(s), nullptr);
+  EXPECT_NE(format.make_emulator({"G330PDG0", "1", "0x0100", 2000.0}), nullptr);
+  s.sample_rate_hz = 300;
+  try {
+    format.make_decoder(s);
+    ADD_FAILURE() << "300 Hz accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_EQ(e.where(), "imus[1].connection.epson.sample_rate_hz");
+  }
+}
+
+}  // namespace
+}  // namespace calstand::drivers
