@@ -10,10 +10,11 @@ deterministic signal below (frame index k of the output rate):
     gyro    = (10 sin(k/10), -2.5, 0.01 k) deg/s
     accel   = (0.5 cos(k/10), 0, 9.80665) m/s^2
     temperature = 30 + 0.01 k degC
-    COUNT   = (65000 + k * 2000/rate) mod 65536   (counts at the 2000 Sps base rate)
+    COUNT   = (64336 + k * 2000/rate) mod 65536   (counts at the 2000 Sps base rate; wraps at
+              k = 60 at 100 Hz)
 
-With --faults it also sends, once, a copy of frame 20 with a wrong checksum before the real
-one, and five bytes of garbage after frame 40.
+With --faults it also sends, once, a copy of frame 50 with a wrong checksum before the real
+one, and five bytes of garbage after frame 70.
 """
 import math
 import os
@@ -92,7 +93,7 @@ def frame(k, rate, wide, bad_checksum=False):
     raw = [round((temp - 25) / TEMP_SF * scale)]
     raw += [round(g / GYRO_SF * scale) for g in gyro]
     raw += [round(a / 9.80665 * 1000 / ACCL_SF * scale) for a in accel]
-    count = (65000 + k * round(2000 / rate)) % 65536
+    count = (64336 + k * round(2000 / rate)) % 65536
     body = struct.pack(">H", 0xFE00)  # ND flags for temperature, gyro, accel; EA clear
     body += b"".join(struct.pack(">i" if wide else ">h", v) for v in raw)
     body += struct.pack(">H", count)
@@ -138,10 +139,10 @@ def main():
             continue
         if streaming and time.monotonic() >= next_time:
             out = b""
-            if faults and k == 20:
+            if faults and k == 50:
                 out += frame(k, dev.rate(), dev.wide(), bad_checksum=True)
             out += frame(k, dev.rate(), dev.wide())
-            if faults and k == 40:
+            if faults and k == 70:
                 out += b"\x11\x22\x33\x44\x55"
             os.write(master, out)
             k += 1
