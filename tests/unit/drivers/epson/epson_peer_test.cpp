@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "../child_process.hpp"
+#include "../schema_error_field.hpp"
 #include "drivers/serial_imu.hpp"
 
 namespace calstand::drivers {
@@ -94,6 +95,35 @@ TEST(EpsonPeer, AModelOtherThanPRODIDIsRefused) {
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.message.find("PROD_ID is G366PDG0, not the model G370PDF1"), std::string::npos)
       << r.message;
+}
+
+}  // namespace
+}  // namespace calstand::drivers
+
+namespace calstand::drivers {
+namespace {
+
+TEST(EpsonOptionsSchema, TheStationSchemaChecksEveryKey) {
+  auto error_of = [](const nlohmann::json& epson) -> std::string {
+    try {
+      SerialImuConnection::from_json(
+          {{"path", "/dev/x"}, {"sample_rate_hz", 100}, {"format", "epson"}, {"epson", epson}},
+          "imus[1].connection");
+    } catch (const core::InputError& e) {
+      return test::error_field(e);
+    }
+    return "accepted";
+  };
+  EXPECT_EQ(error_of({{"width_bits", 24}}), "imus[1].connection.epson.width_bits");
+  EXPECT_EQ(error_of({{"model", "G999PDX0"}}), "imus[1].connection.epson.model");
+  EXPECT_EQ(error_of({{"filter", "moving_average_3"}}), "imus[1].connection.epson.filter");
+  EXPECT_EQ(error_of({{"count_step", "tick"}}), "imus[1].connection.epson.count_step");
+  EXPECT_EQ(error_of({{"baud", 9600}}), "imus[1].connection.epson.baud");
+  EXPECT_EQ(error_of({{"model", "G365PDF1"},
+                      {"width_bits", 16},
+                      {"filter", "kaiser_128_fc50"},
+                      {"count_step", "output"}}),
+            "accepted");
 }
 
 }  // namespace
