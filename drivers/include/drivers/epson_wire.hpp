@@ -21,8 +21,12 @@ struct IdentifiedModel {
   std::atomic<const ModelScale*> model{nullptr};
 };
 
-/// The one IdentifiedModel of the connection at `where` (settings.where) while anything holds it.
-std::shared_ptr<IdentifiedModel> identified_model_for(const std::string& where);
+/// A new IdentifiedModel for the decoder of the connection at `where` (settings.where). It is
+/// also left for the configurator made next on this thread for the same `where`: SerialImu
+/// makes a connection's decoder and then its configurator, one connection at a time.
+std::shared_ptr<IdentifiedModel> model_slot_for_decoder(const std::string& where);
+/// The slot the last decoder made on this thread for `where` (once), or a new one.
+std::shared_ptr<IdentifiedModel> model_slot_for_configurator(const std::string& where);
 
 /// Decodes the burst frames of the configured width. Hunts for 0x80; a candidate whose end byte
 /// is not 0x0D (a frame of another length) is a length error, one whose checksum is wrong a

@@ -114,7 +114,7 @@ TEST(EpsonDialogue, ConfiguresAStreamingDeviceAndReadsItsIdentity) {
   ASSERT_FALSE(emulator.on_sample(EmulatorLink::signal(0)).empty());  // it is streaming
 
   const auto s = settings(200, {{"width_bits", 32}}, "dialogue.streaming");
-  auto identified = identified_model_for(s.where);
+  auto identified = std::make_shared<IdentifiedModel>();
   Configurator c(s, identified);
   const UnitIdentity id = c.configure(link);
   EXPECT_EQ(id.model, "G366PDG0");
@@ -124,7 +124,7 @@ TEST(EpsonDialogue, ConfiguresAStreamingDeviceAndReadsItsIdentity) {
   EXPECT_EQ(identified->model.load(), find_model("G366PDG0"));
 
   // What it streams now decodes, with the model the dialogue read, to the simulated signal.
-  Decoder decoder(Options::from_settings(s), identified_model_for(s.where));
+  Decoder decoder(Options::from_settings(s), identified);
   std::vector<core::ImuSample> got;
   std::array<std::uint8_t, 4096> chunk{};
   for (int i = 0; i < 50; ++i) {
@@ -235,6 +235,35 @@ TEST(EpsonEmulator, IsSilentInConfigurationModeAndAnswersReads) {
 
 namespace calstand::drivers {
 namespace {
+
+TEST(EpsonWireFormat, ADecoderLearnsTheModelFromItsOwnConnectionsDialogueOnly) {
+  const ImuWireFormat& format = epson_wire_format();
+  WireFormatSettings s;
+  s.sample_rate_hz = 2000;
+  s.where = "imus[0].connection.epson";
+  // Two stations of a fleet, each with an imus[0], made one after the other.
+  auto decoder_a = format.make_decoder(s);
+  auto configurator_a = format.make_configurator(s);
+  auto decoder_b = format.make_decoder(s);
+  auto configurator_b = format.make_configurator(s);
+  epson::Emulator device_a({"G370PDS0", "A", "0x0100", 2000.0});
+  epson::Emulator device_b({"G366PDG0", "B", "0x0100", 2000.0});
+  epson::EmulatorLink link_a(device_a);
+  epson::EmulatorLink link_b(device_b);
+  EXPECT_EQ(configurator_a->configure(link_a).model, "G370PDS0");
+  EXPECT_EQ(configurator_b->configure(link_b).model, "G366PDG0");
+  // The same raw gyro (150 x 65536) is 1 deg/s on a G370PDS0 and 150/66 deg/s on a G366PDG0.
+  epson::BurstFields f;
+  f.gyro[0] = 150 * 65536;
+  const auto frame = epson::encode_burst(f, 32);
+  std::vector<core::ImuSample> a, b;
+  decoder_a->feed(frame, a);
+  decoder_b->feed(frame, b);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_NEAR(a[0].gyro_dps.x(), 1.0, 1e-12);
+  EXPECT_NEAR(b[0].gyro_dps.x(), 150.0 / 66, 1e-12);
+}
 
 TEST(EpsonWireFormat, IsTheFormatNamedEpson) {
   const ImuWireFormat& format = imu_wire_format("epson", "connection.format");
