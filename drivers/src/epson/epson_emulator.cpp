@@ -36,8 +36,10 @@ Emulator::Emulator(const EmulatedUnit& unit)
     version = 0;
   }
   registers_[{1, kVersion.address}] = version;
-  // Power-on values (M-G365PD register map): 200 Sps... here 1000 Sps, TAP 16, the factory burst
-  // fields, 16-bit, manual UART mode. Configuration mode at power-on.
+  // Power-on state: configuration mode, DOUT_RATE 0x01 (1000 Sps), a 16-tap moving average,
+  // burst fields 0xF006, 16-bit, UART manual mode. The sheets' power-on values differ between
+  // models; the dialogue writes every register it relies on, so these only need to differ
+  // from what it writes for the tests to see the writes take effect.
   registers_[{1, kSmplCtrl.address}] = 0x0100;
   registers_[{1, kFilterCtrl.address}] = 0x0004;
   registers_[{1, kBurstCtrl1.address}] = 0xF006;
