@@ -4,9 +4,11 @@
 // read and write commands, the burst frame, the models' scale factors and the output rates.
 //
 // Sources (public data sheets of Seiko Epson Corporation):
-//   [G365]  "IMU M-G365PD Data Sheet", Rev.20190905: register map (ch. 8), UART protocol
-//           (6.2: read/write command format), burst output (6.3: data packet format),
-//           scale factors (Table 1.x sensor specification), DOUT_RATE (8.x SMPL_CTRL).
+//   [G365]  "IMU M-G365PD Data Sheet", Rev.20190905: the register map (WIN_CTRL, MODE_CTRL,
+//           DIAG_STAT, FLAG, COUNT, SMPL_CTRL, FILTER_CTRL, UART_CTRL, BURST_CTRL1/2, PROD_ID,
+//           VERSION, SERIAL_NUM), the UART command format, the DOUT_RATE table with its
+//           recommended filter settings, the sensor specification table (scale factors).
+//           Cited by register name: the section numbers were not available to check here.
 //   [G362]  "IMU M-G362PDC1 Data Sheet", Rev.20131217: Table 6.10/6.11 (read command and
 //           response), Table 6.14 (UART data packet format, burst/auto mode), 7.8/7.9 (32-bit
 //           output = 16-bit value * 65536).

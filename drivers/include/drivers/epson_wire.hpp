@@ -98,7 +98,9 @@ class Configurator final : public ImuConfigurator {
 };
 
 /// The device's side: registers in two windows, configuration and sampling modes, UART auto
-/// mode streaming bursts at DOUT_RATE.
+/// mode streaming bursts at DOUT_RATE. PROD_ID is unit.model when the table has it (else
+/// G366PDG0, the first row); SERIAL_NUM holds the first 8 characters of unit.serial; VERSION is
+/// unit.firmware read as hexadecimal ("0x0105"), else 0.
 class Emulator final : public ImuDeviceEmulator {
  public:
   explicit Emulator(const EmulatedUnit& unit);
