@@ -18,6 +18,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -85,7 +86,8 @@ void DriverWireFormatDecode(benchmark::State& state) {
   WireFormatSettings settings;
   settings.sample_rate_hz = name == "vectornav" ? 800.0 : 2000.0;
   EmulatedDeviceLink link(format.make_emulator({"model", "SN1", "1.0", settings.sample_rate_hz}));
-  if (auto configurator = format.make_configurator(settings)) configurator->configure(link);
+  std::optional<UnitIdentity> unit;
+  if (auto configurator = format.make_configurator(settings)) unit = configurator->configure(link);
   std::vector<std::uint8_t> drained(link.pending());
   link.read(drained, std::chrono::milliseconds(0));
   constexpr std::uint32_t kSamples = 100000;
@@ -100,6 +102,7 @@ void DriverWireFormatDecode(benchmark::State& state) {
   std::size_t samples = 0;
   for (auto _ : state) {
     auto decoder = format.make_decoder(settings);
+    if (unit) decoder->identified(*unit);
     out.clear();
     for (std::size_t at = 0; at < bytes.size(); at += 4096) {
       decoder->feed(std::span(bytes).subspan(at, std::min<std::size_t>(4096, bytes.size() - at)),

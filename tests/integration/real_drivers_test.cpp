@@ -487,6 +487,11 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
       "--set ramp_c_per_min=5 --set outer_angles=[0,90,180,270] --set inner_angles=[0,90] "
       "--set rates=[30,90] --set revolutions=1";
   ASSERT_EQ(run_procedure(procedure, sim, dir_ + name + "-inproc.db").exit_code, 0);
+  // The accelerometers from their own procedure: in the campaign's turns about a horizontal
+  // axis the table's telemetry and the IMU's stamps disagree by a few milliseconds at 20x
+  // (both real drivers' latencies, scaled), which moves the gravity a turn's window sees.
+  const std::string six = "six-position --set capture_s=10";
+  ASSERT_EQ(run_procedure(six, sim, dir_ + name + "-six-inproc.db").exit_code, 0);
 
   const std::string lab = dir_ + name + "-lab.json";
   SimStationProcess station({"--station", sim, "--time-scale", kTimeScale, "--station-out", lab,
@@ -504,9 +509,11 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
   const std::string gyro =
       "--sensor gyro --model gyro_bias,gyro_scale,gyro_misalignment,earth_rate";
   const std::string accel = "--sensor accel --model accel_bias,accel_scale,accel_misalignment";
-  const json real_gyro = fit_json(db, gyro);
-  expect_same_quality(fit_json(dir_ + name + "-inproc.db", gyro), real_gyro, 4.0);
-  expect_same_quality(fit_json(dir_ + name + "-inproc.db", accel), fit_json(db, accel), 4.0);
+  expect_same_quality(fit_json(dir_ + name + "-inproc.db", gyro), fit_json(db, gyro), 4.0);
+  const std::string six_db = dir_ + name + "-six-real.db";
+  ASSERT_EQ(run_procedure(six, lab, six_db).exit_code, 0);
+  expect_same_quality(fit_json(dir_ + name + "-six-inproc.db", accel), fit_json(six_db, accel),
+                      4.0);
 
   const std::string events = events_text(show_json(db));
   EXPECT_NE(events.find("unit " + identity["serial"].get<std::string>()), std::string::npos)

@@ -15,18 +15,11 @@
 
 namespace calstand::drivers::epson {
 
-/// The model the configurator read from PROD_ID, shared with the decoder of the same
-/// connection so that a decoder built before configure() scales with the right row.
+/// The model the unit reported (PROD_ID), as the decoder learns it from identified(): the
+/// decoder reads it from the reader thread while the dialogue may set it again (a reopen).
 struct IdentifiedModel {
   std::atomic<const ModelScale*> model{nullptr};
 };
-
-/// A new IdentifiedModel for the decoder of the connection at `where` (settings.where). It is
-/// also left for the configurator made next on this thread for the same `where`: SerialImu
-/// makes a connection's decoder and then its configurator, one connection at a time.
-std::shared_ptr<IdentifiedModel> model_slot_for_decoder(const std::string& where);
-/// The slot the last decoder made on this thread for `where` (once), or a new one.
-std::shared_ptr<IdentifiedModel> model_slot_for_configurator(const std::string& where);
 
 /// Decodes the burst frames of the configured width. Hunts for 0x80; a candidate whose end byte
 /// is not 0x0D (a frame of another length) is a length error, one whose checksum is wrong a
@@ -42,6 +35,8 @@ class Decoder final : public FrameDecoder {
   std::map<std::string, std::uint64_t> counters() const override;
   void restart() override;
   std::vector<std::string> take_device_reports() override;
+  /// Scales with the model the unit reported, unless the station file names one.
+  void identified(const UnitIdentity& unit) override;
   /// Bytes held back waiting for the rest of a frame [bytes]. Every byte fed is in exactly one
   /// of a frame, garbage_bytes, start_bytes or buffered().
   std::size_t buffered() const { return buffer_.size() - start_; }
@@ -79,7 +74,7 @@ class Decoder final : public FrameDecoder {
 /// then sampling.
 class Configurator final : public ImuConfigurator {
  public:
-  Configurator(const WireFormatSettings& settings, std::shared_ptr<IdentifiedModel> identified);
+  explicit Configurator(const WireFormatSettings& settings);
   UnitIdentity configure(ByteTransport& link) override;
 
  private:
@@ -93,7 +88,6 @@ class Configurator final : public ImuConfigurator {
 
   WireFormatSettings settings_;
   Options options_;
-  std::shared_ptr<IdentifiedModel> identified_;
   int window_ = -1;  // unknown until selected
 };
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "drivers/imu.hpp"
 
 namespace calstand::drivers {
 
@@ -64,6 +65,10 @@ class FrameDecoder {
   /// message, a status word flagging a sensor fault ("gyro x out of range"), a restart. Each
   /// becomes a fault event of the IMU.
   virtual std::vector<std::string> take_device_reports() { return {}; }
+  /// The unit said who it is in its configuration dialogue (SerialImu calls this after each
+  /// ImuConfigurator::configure()): a format whose scale factors depend on the model (Epson)
+  /// learns it here.
+  virtual void identified(const UnitIdentity& /*unit*/) {}
 };
 
 /// Counters of a CalstandFrameDecoder. Invariant: every byte fed is in exactly one of a good

@@ -34,11 +34,9 @@ std::string epson_ascii(const std::vector<std::uint16_t>& words) {
 
 }  // namespace
 
-Configurator::Configurator(const WireFormatSettings& settings,
-                           std::shared_ptr<IdentifiedModel> identified)
+Configurator::Configurator(const WireFormatSettings& settings)
     : settings_(settings),
-      options_(Options::from_settings(settings, /*require_rate=*/false)),
-      identified_(std::move(identified)) {}
+      options_(Options::from_settings(settings, /*require_rate=*/false)) {}
 
 void Configurator::write_byte(ByteTransport& link, std::uint8_t address, std::uint8_t value) {
   const auto command = write_command(address, value);
@@ -169,7 +167,6 @@ UnitIdentity Configurator::configure(ByteTransport& link) {
   if (diag != 0) {
     throw DeviceConfigError(fmt::format("DIAG_STAT 0x{:04X}: the device reports an error", diag));
   }
-  if (identified_) identified_->model.store(model);
   select_window(link, kModeCtrl.window);
   write_byte(link, static_cast<std::uint8_t>(kModeCtrl.address + 1), kModeCmdSampling);
   return id;

@@ -40,6 +40,10 @@ void Decoder::restart() {
 
 std::vector<std::string> Decoder::take_device_reports() { return std::exchange(reports_, {}); }
 
+void Decoder::identified(const UnitIdentity& unit) {
+  if (identified_) identified_->model.store(find_model(unit.model));
+}
+
 std::map<std::string, std::uint64_t> Decoder::counters() const { return stats_; }
 
 const ModelScale* Decoder::model() {

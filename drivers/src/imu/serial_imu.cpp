@@ -74,6 +74,7 @@ std::optional<UnitIdentity> SerialImu::identity() const {
 void SerialImu::configure_device() {
   if (!configurator_) return;
   UnitIdentity id = configurator_->configure(*transport_);
+  decoder_->identified(id);
   std::lock_guard lock(identity_mutex_);
   identity_ = std::move(id);
 }

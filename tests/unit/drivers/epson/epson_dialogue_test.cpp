@@ -91,7 +91,7 @@ WireFormatSettings settings(double rate_hz, nlohmann::json options, const std::s
 }
 
 std::string configure_error(ByteTransport& link, const WireFormatSettings& s) {
-  Configurator c(s, nullptr);
+  Configurator c(s);
   try {
     c.configure(link);
   } catch (const DeviceConfigError& e) {
@@ -114,17 +114,16 @@ TEST(EpsonDialogue, ConfiguresAStreamingDeviceAndReadsItsIdentity) {
   ASSERT_FALSE(emulator.on_sample(EmulatorLink::signal(0)).empty());  // it is streaming
 
   const auto s = settings(200, {{"width_bits", 32}}, "dialogue.streaming");
-  auto identified = std::make_shared<IdentifiedModel>();
-  Configurator c(s, identified);
+  Configurator c(s);
   const UnitIdentity id = c.configure(link);
   EXPECT_EQ(id.model, "G366PDG0");
   EXPECT_EQ(id.serial, "E0001234");
   EXPECT_EQ(id.firmware, "VERSION 0x0105");
   EXPECT_TRUE(emulator.sampling());
-  EXPECT_EQ(identified->model.load(), find_model("G366PDG0"));
 
   // What it streams now decodes, with the model the dialogue read, to the simulated signal.
-  Decoder decoder(Options::from_settings(s), identified);
+  Decoder decoder(Options::from_settings(s), std::make_shared<IdentifiedModel>());
+  decoder.identified(id);
   std::vector<core::ImuSample> got;
   std::array<std::uint8_t, 4096> chunk{};
   for (int i = 0; i < 50; ++i) {
@@ -153,7 +152,7 @@ TEST(EpsonDialogue, SixteenBitOutputKeepsTheSixteenBitResolution) {
   Emulator emulator(unit("G370PDF1"));
   EmulatorLink link(emulator);
   const auto s = settings(2000, {{"width_bits", 16}, {"model", "G370PDF1"}}, "dialogue.16");
-  Configurator c(s, nullptr);
+  Configurator c(s);
   EXPECT_EQ(c.configure(link).model, "G370PDF1");
   Decoder decoder(Options::from_settings(s), nullptr);
   std::vector<core::ImuSample> got;
@@ -236,7 +235,7 @@ TEST(EpsonEmulator, IsSilentInConfigurationModeAndAnswersReads) {
 namespace calstand::drivers {
 namespace {
 
-TEST(EpsonWireFormat, ADecoderLearnsTheModelFromItsOwnConnectionsDialogueOnly) {
+TEST(EpsonWireFormat, ADecoderScalesWithTheModelItsOwnUnitReported) {
   const ImuWireFormat& format = epson_wire_format();
   WireFormatSettings s;
   s.sample_rate_hz = 2000;
@@ -250,8 +249,13 @@ TEST(EpsonWireFormat, ADecoderLearnsTheModelFromItsOwnConnectionsDialogueOnly) {
   epson::Emulator device_b({"G366PDG0", "B", "0x0100", 2000.0});
   epson::EmulatorLink link_a(device_a);
   epson::EmulatorLink link_b(device_b);
-  EXPECT_EQ(configurator_a->configure(link_a).model, "G370PDS0");
-  EXPECT_EQ(configurator_b->configure(link_b).model, "G366PDG0");
+  const UnitIdentity id_a = configurator_a->configure(link_a);
+  const UnitIdentity id_b = configurator_b->configure(link_b);
+  EXPECT_EQ(id_a.model, "G370PDS0");
+  EXPECT_EQ(id_b.model, "G366PDG0");
+  // As SerialImu does after each dialogue.
+  decoder_a->identified(id_a);
+  decoder_b->identified(id_b);
   // The same raw gyro (150 x 65536) is 1 deg/s on a G370PDS0 and 150/66 deg/s on a G366PDG0.
   epson::BurstFields f;
   f.gyro[0] = 150 * 65536;

@@ -40,19 +40,21 @@ TEST_P(WireFormatRoundTrip, DialogueThenStreamGiveTheUnitAndItsSamples) {
   WireFormatSettings settings;
   settings.sample_rate_hz = c.rate_hz;
   settings.where = std::string("imus[0].connection.") + c.name;
-  const EmulatedUnit unit{"unit-model", "SN-4711", "fw-2.5", c.rate_hz};
+  // Eight digits: a serial every format carries (a u32 in decimal or hex, 8 ASCII characters).
+  const EmulatedUnit unit{"unit-model", "20004711", "fw-2.5", c.rate_hz};
   EmulatedDeviceLink link(format.make_emulator(unit));
 
   // A unit that was streaming when the host came: the dialogue must find its replies anyway.
   for (std::uint32_t k = 0; k < 3; ++k) link.sample(moving_sample(k, c.rate_hz));
+  auto decoder = format.make_decoder(settings);
   auto configurator = format.make_configurator(settings);
   if (configurator) {
     const UnitIdentity id = configurator->configure(link);
     EXPECT_NE(id.serial.find("4711"), std::string::npos) << id.serial;
     EXPECT_FALSE(id.model.empty());
+    decoder->identified(id);  // as SerialImu does after each dialogue
   }
 
-  auto decoder = format.make_decoder(settings);
   decoder->restart();  // as the reader does after flushing what the dialogue left
   std::vector<std::uint8_t> leftover(link.pending());
   link.read(leftover, std::chrono::milliseconds(0));
