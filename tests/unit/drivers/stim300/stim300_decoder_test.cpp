@@ -16,10 +16,10 @@ Datagram datagram_k(int k, std::uint8_t id = kRateAccInclTemp) {
   d.id = id;
   d.counter = static_cast<std::uint8_t>(k & 0xFF);
   d.latency_us = 250;
-  d.value[0] = {16384 * k, -8192, 1};          // gyro [2^-14 deg/s]
-  d.value[1] = {524288, -262144 * (k % 16), 0};       // acc, 10 g [2^-19 g]
-  d.value[2] = {4194304, 0, -4194304};         // incl [2^-22 g]
-  d.temp[0] = {25 * 256, 26 * 256, 27 * 256};  // [2^-8 degC]
+  d.value[0] = {16384 * k, -8192, 1};            // gyro [2^-14 deg/s]
+  d.value[1] = {524288, -262144 * (k % 16), 0};  // acc, 10 g [2^-19 g]
+  d.value[2] = {4194304, 0, -4194304};           // incl [2^-22 g]
+  d.temp[0] = {25 * 256, 26 * 256, 27 * 256};    // [2^-8 degC]
   return d;
 }
 
