@@ -31,6 +31,8 @@ Stim300Decoder::Stim300Decoder(Stim300Options options, double sample_rate_hz)
       locked_id_(options.datagram) {}
 
 void Stim300Decoder::restart() {
+  // What was held back belongs to the line before the flush: dropped, as start bytes.
+  stats_.start_bytes += buffered();
   buffer_.clear();
   start_ = 0;
   quiet_ = true;
