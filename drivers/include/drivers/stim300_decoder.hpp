@@ -16,17 +16,18 @@ namespace calstand::drivers::stim300 {
 /// Counters of a Stim300Decoder. Every byte fed is in exactly one of a datagram (normal or
 /// start-up, with its CR LF), garbage_bytes, start_bytes or buffered().
 struct Stim300Counters {
-  std::uint64_t bytes_fed = 0;          ///< [bytes]
-  std::uint64_t frames = 0;             ///< valid normal-mode datagrams (one sample each)
-  std::uint64_t frame_bytes = 0;        ///< bytes of valid datagrams incl. start-up ones [bytes]
-  std::uint64_t crc_errors = 0;         ///< identifier matched, CRC-32 did not
-  std::uint64_t length_errors = 0;      ///< CRC matched but the configured CR LF was missing
-  std::uint64_t garbage_bytes = 0;      ///< discarded while hunting [bytes]
-  std::uint64_t resyncs = 0;            ///< runs of discarded bytes
-  std::uint64_t sequence_gaps = 0;      ///< datagrams whose counter was not last + 1 (mod 256)
-  std::uint64_t start_bytes = 0;        ///< dropped before the first datagram after restart()
-  std::uint64_t startup_datagrams = 0;  ///< part/serial/configuration datagrams (unit start)
-  std::uint64_t status_flags = 0;       ///< datagrams with a status bit set
+  std::uint64_t bytes_fed = 0;             ///< [bytes]
+  std::uint64_t frames = 0;                ///< valid normal-mode datagrams (one sample each)
+  std::uint64_t frame_bytes = 0;           ///< bytes of valid datagrams incl. start-up ones [bytes]
+  std::uint64_t crc_errors = 0;            ///< identifier matched, CRC-32 did not
+  std::uint64_t length_errors = 0;         ///< CRC matched but the configured CR LF was missing
+  std::uint64_t garbage_bytes = 0;         ///< discarded while hunting [bytes]
+  std::uint64_t resyncs = 0;               ///< runs of discarded bytes
+  std::uint64_t sequence_gaps = 0;         ///< datagrams whose counter was not last + 1 (mod 256)
+  std::uint64_t start_bytes = 0;           ///< dropped before the first datagram after restart()
+  std::uint64_t startup_datagrams = 0;     ///< part/serial/configuration datagrams (unit start)
+  std::uint64_t status_flags = 0;          ///< datagrams with a status bit set
+  std::uint64_t terminated_datagrams = 0;  ///< datagrams followed by CR LF
 };
 
 /// Hunts for a datagram identifier, checks the CRC-32 (and CR LF when configured); a bad

@@ -21,12 +21,13 @@ struct Stim300EmulatorSettings {
   GyroOutput gyro_output = GyroOutput::kAngularRate;
   AccelOutput accel_output = AccelOutput::kAcceleration;
   std::uint16_t latency_us = 500;  ///< [us] reported in each datagram
-  std::uint8_t firmware_revision = 1;
 };
 
 /// Streams normal-mode datagrams from power-on (after its part number, serial number and
-/// configuration datagrams, as a unit leaving init mode); answers N, I, C, T with their
-/// datagrams and R with a reset (counter from 0, the start-up datagrams again). Values are
+/// configuration datagrams, as a unit leaving init mode); answers N, I, C with their datagrams
+/// and R with a reset (counter from 0, the start-up datagrams again). The part number datagram
+/// carries the hex digits of EmulatedUnit::model, the serial number datagram those of
+/// EmulatedUnit::serial; the configuration bytes are zero (calstand does not read them). Values are
 /// quantised to the datagram's counts; the counter is sample.sequence / decimation mod 256.
 class Stim300Emulator final : public ImuDeviceEmulator {
  public:
@@ -36,7 +37,6 @@ class Stim300Emulator final : public ImuDeviceEmulator {
   std::vector<std::uint8_t> on_sample(const core::ImuSample& sample) override;
 
   double sample_rate_hz() const { return rate_hz_; }
-  Configuration configuration() const;
 
  private:
   std::vector<std::uint8_t> startup_datagrams() const;

@@ -43,13 +43,23 @@ inline constexpr std::uint8_t kRateAccTemp = 0xA5;
 inline constexpr std::uint8_t kRateInclTemp = 0xA6;
 inline constexpr std::uint8_t kRateAccInclTemp = 0xA7;
 
-/// Reply / start-up datagram identifiers (TS1524, "Datagram identifier" table): the unit sends
-/// the part number, serial number and configuration datagrams after power-on or reset (init
-/// mode) and on the normal-mode commands N, I, C; T answers with extended error information.
-inline constexpr std::uint8_t kPartNumber = 0xB1;
-inline constexpr std::uint8_t kSerialNumber = 0xB7;
-inline constexpr std::uint8_t kConfiguration = 0xBD;
-inline constexpr std::uint8_t kExtendedError = 0xB3;  ///< calstand reading (see docs)
+/// Reply / start-up datagrams (TS1524, "Init mode" and "Normal mode commands"): after power-on
+/// or reset the unit sends its part number, serial number and configuration datagrams before
+/// its normal-mode datagrams, and sends them again on the commands N, I, C. Each has one
+/// identifier without and one with CR LF termination (calstand reading, docs/protocols.md "open
+/// details": both are accepted, whichever the unit uses).
+struct ReplyKind {
+  std::uint8_t plain = 0;  ///< identifier without CR LF
+  std::uint8_t crlf = 0;   ///< identifier with CR LF
+  bool matches(std::uint8_t id) const { return id == plain || id == crlf; }
+  std::uint8_t id(bool termination) const { return termination ? crlf : plain; }
+};
+inline constexpr ReplyKind kPartNumber{0xB1, 0xB3};
+inline constexpr ReplyKind kSerialNumber{0xB5, 0xB7};
+inline constexpr ReplyKind kConfiguration{0xBC, 0xBD};
+inline constexpr ReplyKind kExtendedError{0xBE, 0xBF};
+/// Whether `id` starts a part number, serial number or configuration datagram.
+bool is_startup_id(std::uint8_t id);
 
 /// Normal-mode commands (TS1524, "Normal mode commands"): ASCII, ended by CR.
 inline constexpr const char* kCommandPartNumber = "N\r";
@@ -135,10 +145,8 @@ inline constexpr double kStandardGravity = 9.80665;
 /// The sample rates the unit can be set to (TS1524, "Sample rate" in the configuration):
 /// 125, 250, 500, 1000, 2000 Hz (and an external trigger, which calstand does not use).
 std::span<const double> sample_rates_hz();
-/// The code of `rate_hz` in the configuration datagram (0 = 125 .. 4 = 2000); none when the
-/// unit cannot sample at that rate.
-std::optional<std::uint8_t> sample_rate_code(double rate_hz);
-std::optional<double> sample_rate_from_code(std::uint8_t code);
+/// Whether the unit can sample at `rate_hz`.
+bool is_sample_rate(double rate_hz);
 
 /// The status byte's bits in the unit's words, for `group` ("gyro", "accelerometer",
 /// "inclinometer", with "temperature" when `temperature`): bits 0..2 name the channels (x, y,
@@ -149,27 +157,20 @@ std::optional<double> sample_rate_from_code(std::uint8_t code);
 std::vector<std::string> status_text(Group group, bool temperature, std::uint8_t status);
 inline constexpr std::uint8_t kStatusStartup = 0x40;
 
-/// The configuration datagram's fields calstand reads (the reply to C, and the third start-up
-/// datagram). Byte layout: calstand reading (docs/protocols.md, "open details").
-struct Configuration {
-  std::uint8_t firmware_revision = 0;
-  std::uint8_t sample_rate_code = 4;  ///< 0 = 125 Hz .. 4 = 2000 Hz
-  std::uint8_t datagram_id = kRateAccInclTemp;
-  bool termination = true;
-  GyroOutput gyro_output = GyroOutput::kAngularRate;
-  AccelOutput accel_output = AccelOutput::kAcceleration;
-  std::uint8_t accel_range_g = 10;
-};
-inline constexpr std::size_t kConfigurationBodySize = 22;  ///< identifier .. reserved [bytes]
-
-/// A reply datagram (part number, serial number, configuration) on the line.
-std::vector<std::uint8_t> encode_configuration(const Configuration& config);
-/// Part number or serial number datagram: identifier, the ASCII text, CRC-32.
-std::vector<std::uint8_t> encode_text_datagram(std::uint8_t id, const std::string& text,
+/// A part number or serial number datagram: identifier, the digits packed two to a byte (one
+/// 4-bit code each, 0..9 and A..F: TS1524, part number and serial number datagram tables; a
+/// serial number is BCD), CRC-32, CR LF when `termination`. Characters other than hex digits
+/// are left out; an odd count is padded with a 0 code.
+std::vector<std::uint8_t> encode_digits_datagram(ReplyKind kind, const std::string& text,
+                                                 bool termination);
+/// The digits of a part number or serial number datagram (identifier .. CRC), as the sheet's
+/// table turns each 4-bit code into ASCII ("0".."9", "A".."F").
+std::string digits_of(std::span<const std::uint8_t> datagram);
+/// The configuration datagram (the reply to C): identifier, the unit's configuration bytes
+/// (calstand does not interpret them: docs/protocols.md, "open details"), CRC-32, CR LF.
+inline constexpr std::size_t kConfigurationBytes = 16;
+std::vector<std::uint8_t> encode_configuration(std::span<const std::uint8_t> config,
                                                bool termination);
-std::optional<Configuration> parse_configuration(std::span<const std::uint8_t> datagram);
-/// The printable ASCII of a text datagram (identifier and CRC stripped).
-std::string text_of(std::span<const std::uint8_t> datagram);
 
 /// Where a reply datagram `id` begins in `bytes` and how long it is (identifier .. CRC): the
 /// first position holding `id` followed by a body whose CRC matches, trying each length up to
@@ -180,9 +181,10 @@ struct ReplyScan {
   std::size_t offset = 0;
   std::size_t size = 0;
 };
-/// Looks for a reply datagram starting exactly at bytes[0].
-ReplyScan scan_reply_at(std::span<const std::uint8_t> bytes, std::uint8_t id);
-/// Looks for a reply datagram anywhere in `bytes`.
-ReplyScan find_reply(std::span<const std::uint8_t> bytes, std::uint8_t id);
+/// Looks for a reply datagram starting exactly at bytes[0] (whose identifier is the caller's to
+/// check).
+ReplyScan scan_reply_at(std::span<const std::uint8_t> bytes);
+/// Looks for a reply datagram of `kind` anywhere in `bytes`.
+ReplyScan find_reply(std::span<const std::uint8_t> bytes, ReplyKind kind);
 
 }  // namespace calstand::drivers::stim300

@@ -8,10 +8,6 @@
 namespace calstand::drivers::stim300 {
 namespace {
 
-bool stim300_is_startup_id(std::uint8_t byte) {
-  return byte == kPartNumber || byte == kSerialNumber || byte == kConfiguration;
-}
-
 const char* stim300_group_name(Group group) {
   switch (group) {
     case Group::kGyro:
@@ -66,7 +62,7 @@ void Stim300Decoder::consume(std::size_t count) {
 }
 
 bool Stim300Decoder::is_candidate(std::uint8_t byte) const {
-  if (stim300_is_startup_id(byte)) return true;
+  if (is_startup_id(byte)) return true;
   if (locked_id_) return byte == *locked_id_;
   return datagram_layout(byte).has_value();
 }
@@ -76,17 +72,9 @@ void Stim300Decoder::on_startup_datagram(std::span<const std::uint8_t> datagram)
   // The unit sends these after power-on or reset (and on N, I, C): its counter starts again.
   count_afresh_ = true;
   if (quiet_) return;  // a reply of the configuration dialogue left on the line
-  const std::uint8_t id = datagram[0];
-  if (id == kPartNumber) {
+  if (kPartNumber.matches(datagram[0])) {
     reports_.push_back(
-        fmt::format("restart: the unit sent its part number datagram ({})", text_of(datagram)));
-  } else if (id == kConfiguration) {
-    if (const auto c = parse_configuration(datagram)) {
-      const auto rate = sample_rate_from_code(c->sample_rate_code);
-      reports_.push_back(fmt::format(
-          "configuration datagram: datagram {}, sample rate {}", datagram_name(c->datagram_id),
-          rate ? fmt::format("{:g} Hz", *rate) : fmt::format("code {}", c->sample_rate_code)));
-    }
+        fmt::format("restart: the unit sent its part number datagram ({})", digits_of(datagram)));
   }
 }
 
@@ -172,6 +160,7 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
       if (avail < 2) break;
       if (p[1] == kLf) {
         consume(2);
+        ++stats_.terminated_datagrams;
         after_datagram_ = false;
         continue;
       }
@@ -182,8 +171,8 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
       discard(static_cast<std::size_t>(next - p));
       continue;
     }
-    if (stim300_is_startup_id(p[0])) {
-      const auto scan = scan_reply_at(rest, p[0]);
+    if (is_startup_id(p[0])) {
+      const auto scan = scan_reply_at(rest);
       if (scan.result == ScanResult::kNeedMore) break;
       if (scan.result == ScanResult::kNone) {
         discard(1);
@@ -216,6 +205,7 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
         continue;
       }
       total += 2;
+      ++stats_.terminated_datagrams;
     }
     const Datagram d = parse_datagram(rest, *layout);
     locked_id_ = d.id;

@@ -2,6 +2,7 @@
 #include "drivers/stim300_emulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace calstand::drivers::stim300 {
@@ -32,23 +33,12 @@ Stim300Emulator::Stim300Emulator(EmulatedUnit unit, Stim300EmulatorSettings sett
   decimation_ = ratio >= 1.0 ? static_cast<std::uint64_t>(std::llround(ratio)) : 1;
 }
 
-Configuration Stim300Emulator::configuration() const {
-  Configuration c;
-  c.firmware_revision = settings_.firmware_revision;
-  c.sample_rate_code = sample_rate_code(rate_hz_).value_or(0xFF);
-  c.datagram_id = settings_.datagram_id;
-  c.termination = settings_.termination;
-  c.gyro_output = settings_.gyro_output;
-  c.accel_output = settings_.accel_output;
-  c.accel_range_g = static_cast<std::uint8_t>(settings_.accel_range_g);
-  return c;
-}
-
 std::vector<std::uint8_t> Stim300Emulator::startup_datagrams() const {
   std::vector<std::uint8_t> out;
-  stim300_append(out, encode_text_datagram(kPartNumber, unit_.model, settings_.termination));
-  stim300_append(out, encode_text_datagram(kSerialNumber, unit_.serial, settings_.termination));
-  stim300_append(out, encode_configuration(configuration()));
+  const bool t = settings_.termination;
+  stim300_append(out, encode_digits_datagram(kPartNumber, unit_.model, t));
+  stim300_append(out, encode_digits_datagram(kSerialNumber, unit_.serial, t));
+  stim300_append(out, encode_configuration(std::array<std::uint8_t, kConfigurationBytes>{}, t));
   return out;
 }
 
@@ -62,21 +52,20 @@ std::vector<std::uint8_t> Stim300Emulator::on_host_bytes(std::span<const std::ui
     }
     const std::string command = line_;
     line_.clear();
+    const bool t = settings_.termination;
     if (command == "N") {
-      stim300_append(out, encode_text_datagram(kPartNumber, unit_.model, settings_.termination));
+      stim300_append(out, encode_digits_datagram(kPartNumber, unit_.model, t));
     } else if (command == "I") {
-      stim300_append(out, encode_text_datagram(kSerialNumber, unit_.serial, settings_.termination));
+      stim300_append(out, encode_digits_datagram(kSerialNumber, unit_.serial, t));
     } else if (command == "C") {
-      stim300_append(out, encode_configuration(configuration()));
-    } else if (command == "T") {
-      stim300_append(out, encode_text_datagram(kExtendedError, "NO ERRORS", settings_.termination));
+      stim300_append(out, encode_configuration(std::array<std::uint8_t, kConfigurationBytes>{}, t));
     } else if (command == "R") {
       samples_ = 0;
       reset_pending_ = true;
       powered_ = true;
       stim300_append(out, startup_datagrams());
     }
-    // Anything else (SERVICEMODE included, which calstand does not use) is not answered.
+    // Anything else (T, SERVICEMODE: calstand sends neither) is not answered.
   }
   return out;
 }

@@ -201,16 +201,13 @@ double incl_counts_per_unit(AccelOutput output) {
 
 std::span<const double> sample_rates_hz() { return kStim300Rates; }
 
-std::optional<std::uint8_t> sample_rate_code(double rate_hz) {
-  for (std::size_t i = 0; i < kStim300Rates.size(); ++i) {
-    if (std::abs(kStim300Rates[i] - rate_hz) < 1e-9) return static_cast<std::uint8_t>(i);
-  }
-  return std::nullopt;
+bool is_sample_rate(double rate_hz) {
+  return std::any_of(kStim300Rates.begin(), kStim300Rates.end(),
+                     [rate_hz](double r) { return std::abs(r - rate_hz) < 1e-9; });
 }
 
-std::optional<double> sample_rate_from_code(std::uint8_t code) {
-  if (code >= kStim300Rates.size()) return std::nullopt;
-  return kStim300Rates[code];
+bool is_startup_id(std::uint8_t id) {
+  return kPartNumber.matches(id) || kSerialNumber.matches(id) || kConfiguration.matches(id);
 }
 
 std::vector<std::string> status_text(Group group, bool temperature, std::uint8_t status) {
@@ -238,33 +235,11 @@ std::vector<std::string> status_text(Group group, bool temperature, std::uint8_t
   return lines;
 }
 
-std::vector<std::uint8_t> encode_configuration(const Configuration& c) {
-  std::vector<std::uint8_t> out;
-  out.reserve(kConfigurationBodySize + kCrcSize + 2);
-  out.push_back(kConfiguration);
-  out.push_back(c.firmware_revision);
-  out.push_back(c.sample_rate_code);
-  out.push_back(c.datagram_id);
-  out.push_back(c.termination ? 1 : 0);
-  out.push_back(c.gyro_output == GyroOutput::kAngularRate ? 0 : 2);
-  out.push_back(c.accel_output == AccelOutput::kAcceleration ? 0 : 2);
-  out.push_back(c.accel_output == AccelOutput::kAcceleration ? 0 : 2);  // inclinometer
-  out.push_back(c.accel_range_g);
-  out.resize(kConfigurationBodySize, 0x00);  // filters, bit rate: not read by calstand
-  stim300_put_be(out, datagram_crc(out), 4);
-  if (c.termination) {
-    out.push_back(kCr);
-    out.push_back(kLf);
-  }
-  return out;
-}
-
-std::vector<std::uint8_t> encode_text_datagram(std::uint8_t id, const std::string& text,
+std::vector<std::uint8_t> encode_configuration(std::span<const std::uint8_t> config,
                                                bool termination) {
-  std::vector<std::uint8_t> out(1, id);
-  out.reserve(1 + text.size() + 1 + kCrcSize + 2);
-  out.insert(out.end(), text.begin(), text.end());
-  if (text.empty()) out.push_back(' ');
+  std::vector<std::uint8_t> out(1, kConfiguration.id(termination));
+  out.reserve(1 + config.size() + kCrcSize + 2);
+  out.insert(out.end(), config.begin(), config.end());
   stim300_put_be(out, datagram_crc(out), 4);
   if (termination) {
     out.push_back(kCr);
@@ -273,36 +248,41 @@ std::vector<std::uint8_t> encode_text_datagram(std::uint8_t id, const std::strin
   return out;
 }
 
-std::optional<Configuration> parse_configuration(std::span<const std::uint8_t> datagram) {
-  if (datagram.size() < kConfigurationBodySize + kCrcSize || datagram[0] != kConfiguration) {
-    return std::nullopt;
+std::vector<std::uint8_t> encode_digits_datagram(ReplyKind kind, const std::string& text,
+                                                 bool termination) {
+  std::vector<std::uint8_t> codes;
+  for (char ch : text) {
+    if (ch >= '0' && ch <= '9') codes.push_back(static_cast<std::uint8_t>(ch - '0'));
+    if (ch >= 'A' && ch <= 'F') codes.push_back(static_cast<std::uint8_t>(ch - 'A' + 10));
+    if (ch >= 'a' && ch <= 'f') codes.push_back(static_cast<std::uint8_t>(ch - 'a' + 10));
   }
-  Configuration c;
-  c.firmware_revision = datagram[1];
-  c.sample_rate_code = datagram[2];
-  c.datagram_id = datagram[3];
-  c.termination = datagram[4] != 0;
-  // Output unit codes: 0 = rate/acceleration, 1 = average, 2 = incremental, 3 = integrated
-  // (calstand reads 0 and 2; the averages scale as the plain outputs, integrals as increments).
-  c.gyro_output = datagram[5] >= 2 ? GyroOutput::kIncrement : GyroOutput::kAngularRate;
-  c.accel_output = datagram[6] >= 2 ? AccelOutput::kIncrement : AccelOutput::kAcceleration;
-  c.accel_range_g = datagram[8];
-  return c;
+  if (codes.empty() || codes.size() % 2 != 0) codes.push_back(0);
+  std::vector<std::uint8_t> out(1, kind.id(termination));
+  out.reserve(1 + codes.size() / 2 + kCrcSize + 2);
+  for (std::size_t i = 0; i < codes.size(); i += 2) {
+    out.push_back(static_cast<std::uint8_t>((codes[i] << 4) | codes[i + 1]));
+  }
+  stim300_put_be(out, datagram_crc(out), 4);
+  if (termination) {
+    out.push_back(kCr);
+    out.push_back(kLf);
+  }
+  return out;
 }
 
-std::string text_of(std::span<const std::uint8_t> datagram) {
+std::string digits_of(std::span<const std::uint8_t> datagram) {
+  static constexpr const char* kHex = "0123456789ABCDEF";
   std::string text;
   if (datagram.size() <= 1 + kCrcSize) return text;
   for (std::uint8_t b : datagram.subspan(1, datagram.size() - 1 - kCrcSize)) {
-    if (b >= 0x20 && b < 0x7F) text.push_back(static_cast<char>(b));
+    text.push_back(kHex[b >> 4]);
+    text.push_back(kHex[b & 0x0F]);
   }
-  while (!text.empty() && text.back() == ' ') text.pop_back();
-  while (!text.empty() && text.front() == ' ') text.erase(text.begin());
   return text;
 }
 
-ReplyScan scan_reply_at(std::span<const std::uint8_t> bytes, std::uint8_t id) {
-  if (bytes.empty() || bytes[0] != id) return {};
+ReplyScan scan_reply_at(std::span<const std::uint8_t> bytes) {
+  if (bytes.empty()) return {};
   for (std::size_t size = kStim300MinReply; size <= kMaxReplySize; ++size) {
     if (size > bytes.size()) return {ScanResult::kNeedMore, 0, 0};
     if (crc_matches(bytes, size)) return {ScanResult::kFound, 0, size};
@@ -310,11 +290,11 @@ ReplyScan scan_reply_at(std::span<const std::uint8_t> bytes, std::uint8_t id) {
   return {};
 }
 
-ReplyScan find_reply(std::span<const std::uint8_t> bytes, std::uint8_t id) {
+ReplyScan find_reply(std::span<const std::uint8_t> bytes, ReplyKind kind) {
   ReplyScan pending;
   for (std::size_t at = 0; at < bytes.size(); ++at) {
-    if (bytes[at] != id) continue;
-    auto scan = scan_reply_at(bytes.subspan(at), id);
+    if (!kind.matches(bytes[at])) continue;
+    auto scan = scan_reply_at(bytes.subspan(at));
     if (scan.result == ScanResult::kFound) return {ScanResult::kFound, at, scan.size};
     if (scan.result == ScanResult::kNeedMore && pending.result == ScanResult::kNone) {
       pending = {ScanResult::kNeedMore, at, 0};

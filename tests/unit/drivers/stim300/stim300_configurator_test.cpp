@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <deque>
+#include <thread>
 
 #include "drivers/stim300_decoder.hpp"
 #include "drivers/stim300_emulator.hpp"
@@ -11,7 +12,7 @@
 namespace calstand::drivers::stim300 {
 namespace {
 
-const EmulatedUnit kUnit{"84167-2500-301 REV C", "N25581234", "1", 2000.0};
+const EmulatedUnit kUnit{"84167-2500-301", "N25581234", "", 2000.0};
 
 core::ImuSample sample_k(std::uint32_t k) {
   core::ImuSample s;
@@ -23,19 +24,26 @@ core::ImuSample sample_k(std::uint32_t k) {
   return s;
 }
 
-/// The emulated unit on an in-memory line: it streams two native samples before every read
-/// (the unit does not stop streaming for the dialogue) and answers what the host writes.
+/// The emulated unit on an in-memory line, sampling at its native rate in real time (the unit
+/// does not stop streaming for the dialogue) and answering what the host writes.
 class EmulatorLink final : public ByteTransport {
  public:
   explicit EmulatorLink(Stim300Emulator& unit, bool answers = true)
-      : unit_(unit), answers_(answers) {}
-  IoResult read(std::span<std::uint8_t> buffer, std::chrono::milliseconds) override {
-    for (int i = 0; i < 2; ++i) {
+      : unit_(unit), answers_(answers), start_(std::chrono::steady_clock::now()) {}
+  IoResult read(std::span<std::uint8_t> buffer, std::chrono::milliseconds timeout) override {
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    for (const auto due = static_cast<std::uint32_t>(elapsed_s * kUnit.native_rate_hz);
+         next_ < due;) {
       const auto b = unit_.on_sample(sample_k(next_++));
       pending_.insert(pending_.end(), b.begin(), b.end());
     }
+    if (pending_.empty()) {
+      std::this_thread::sleep_for(std::min(timeout, std::chrono::milliseconds(2)));
+      return {};
+    }
     std::size_t n = 0;
-    while (n < buffer.size() && n < 50 && !pending_.empty()) {
+    while (n < buffer.size() && !pending_.empty()) {
       buffer[n++] = pending_.front();
       pending_.pop_front();
     }
@@ -54,6 +62,7 @@ class EmulatorLink final : public ByteTransport {
  private:
   Stim300Emulator& unit_;
   bool answers_;
+  std::chrono::steady_clock::time_point start_;
   std::deque<std::uint8_t> pending_;
   std::uint32_t next_ = 0;
 };
@@ -79,41 +88,40 @@ std::string configure_error(Stim300Emulator& unit, const WireFormatSettings& s,
   return "(accepted)";
 }
 
-TEST(Stim300Configurator, ReadsTheIdentityWhileTheUnitStreams) {
+TEST(Stim300Configurator, ReadsTheIdentityAndChecksWhatTheUnitStreams) {
   Stim300Emulator unit(kUnit, Stim300EmulatorSettings{});
   EmulatorLink link(unit);
   const auto s = settings(2000.0, {{"datagram", "0xA7"}, {"termination", true}});
   Stim300Configurator configurator(s, parse_stim300_options(s));
   const auto id = configurator.configure(link);
-  EXPECT_EQ(id.model, "84167-2500-301 REV C");
-  EXPECT_EQ(id.serial, "N25581234");
-  EXPECT_EQ(id.firmware, "firmware revision 1");
+  EXPECT_EQ(id.model, "STIM300 841672500301");
+  EXPECT_EQ(id.serial, "25581234");
+  EXPECT_EQ(id.firmware, "");
   EXPECT_EQ(link.writes, 3);  // N, I, C: one each
 }
 
-TEST(Stim300Configurator, ARateTheUnitDoesNotStreamIsRefusedInItsWords) {
+TEST(Stim300Configurator, ARateTheUnitDoesNotStreamIsRefusedWithWhatItStreams) {
   Stim300Emulator unit(kUnit, Stim300EmulatorSettings{});
   const auto what = configure_error(unit, settings(500.0));
-  EXPECT_NE(what.find("the unit's configuration datagram says: sample rate 2000 Hz, datagram "
-                      "0xA7 (rate_acc_incl_temp)"),
+  EXPECT_NE(what.find("STIM300 841672500301 (serial 25581234) streams datagram 0xA7 "
+                      "(rate_acc_incl_temp) with CR LF at about "),
             std::string::npos)
       << what;
-  EXPECT_NE(what.find("asks sample_rate_hz 500"), std::string::npos) << what;
-  EXPECT_NE(what.find("N25581234"), std::string::npos) << what;
+  EXPECT_NE(what.find("asks sample_rate_hz 500 "), std::string::npos) << what;
 }
 
-TEST(Stim300Configurator, OptionsTheUnitIsNotSetToAreRefused) {
+TEST(Stim300Configurator, ADatagramOrTerminationTheUnitDoesNotStreamIsRefused) {
   Stim300EmulatorSettings es;
   es.datagram_id = kRateAccIncl;
   es.sample_rate_hz = 500.0;
   es.termination = false;
   Stim300Emulator unit(kUnit, es);
-  const auto what = configure_error(
-      unit,
-      settings(500.0, {{"datagram", "rate_acc"}, {"accel_range_g", 30}, {"termination", true}}));
-  EXPECT_NE(what.find("datagram 0x93 (rate_acc_incl)"), std::string::npos) << what;
-  EXPECT_NE(what.find("asks datagram 0x91 (rate_acc), accel_range_g 30, termination true"),
+  const auto what =
+      configure_error(unit, settings(500.0, {{"datagram", "rate_acc"}, {"termination", true}}));
+  EXPECT_NE(what.find("streams datagram 0x93 (rate_acc_incl) without CR LF at about 500 Hz"),
             std::string::npos)
+      << what;
+  EXPECT_NE(what.find("asks datagram 0x91 (rate_acc), termination true"), std::string::npos)
       << what;
   Stim300Emulator same(kUnit, es);
   EXPECT_EQ(configure_error(same, settings(500.0, {{"datagram", "0x93"}})), "(accepted)");
@@ -184,7 +192,7 @@ TEST(Stim300Emulator, ResetStartsTheCounterAgainAfterTheStartUpDatagrams) {
   EXPECT_LT(out[50].device_time_s, out[49].device_time_s);
   const auto reports = decoder.take_device_reports();
   ASSERT_FALSE(reports.empty());
-  EXPECT_EQ(reports[0], "restart: the unit sent its part number datagram (84167-2500-301 REV C)");
+  EXPECT_EQ(reports[0], "restart: the unit sent its part number datagram (841672500301)");
 }
 
 TEST(Stim300WireFormat, MakesItsPartsFromTheOptions) {

@@ -174,10 +174,9 @@ TEST(Stim300Decoder, TheStartUpDatagramsAreARestartAndDeviceTimeGoesBack) {
   Stim300Decoder decoder(terminated(), 2000.0);
   std::vector<core::ImuSample> out;
   auto bytes = stream(100, 110);
-  const auto part = encode_text_datagram(kPartNumber, "84167-2500-301 REV C", true);
-  const auto serial = encode_text_datagram(kSerialNumber, "N25581234", true);
-  Configuration c;
-  const auto config = encode_configuration(c);
+  const auto part = encode_digits_datagram(kPartNumber, "84167-2500-301", true);
+  const auto serial = encode_digits_datagram(kSerialNumber, "N25581234", true);
+  const auto config = encode_configuration(std::array<std::uint8_t, kConfigurationBytes>{}, true);
   for (const auto* b : {&part, &serial, &config}) bytes.insert(bytes.end(), b->begin(), b->end());
   const auto after = stream(0, 3);
   bytes.insert(bytes.end(), after.begin(), after.end());
@@ -190,7 +189,7 @@ TEST(Stim300Decoder, TheStartUpDatagramsAreARestartAndDeviceTimeGoesBack) {
   EXPECT_EQ(decoder.stats().garbage_bytes, 0u);
   const auto reports = decoder.take_device_reports();
   ASSERT_GE(reports.size(), 1u);
-  EXPECT_EQ(reports[0], "restart: the unit sent its part number datagram (84167-2500-301 REV C)");
+  EXPECT_EQ(reports[0], "restart: the unit sent its part number datagram (841672500301)");
   EXPECT_TRUE(decoder.take_device_reports().empty());
 }
 

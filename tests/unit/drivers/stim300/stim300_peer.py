@@ -4,8 +4,8 @@ TS1524) as docs/protocols.md ("Sensonor STIM300") reads it, not from the C++ dri
 
 Prints the slave path as its first line, then behaves as a unit in normal mode: streams
 datagram 0xA7 (rate, acceleration, inclination, temperatures) with CR LF at the given rate,
-and answers the normal-mode commands N, I and C (ended by CR) with the part number, serial
-number and configuration datagrams. The signal is a function of the 8-bit counter c:
+and answers the normal-mode commands N, I and C (ended by CR) with the part number (0xB3),
+serial number (0xB7) and configuration (0xBD) datagrams, the identifiers with CR LF. The signal is a function of the 8-bit counter c:
   gyro  [deg/s] = (sin(2 pi 3 c / 256), cos(2 pi 3 c / 256), 0.5)
   acc   [g]     = (0.1 sin(2 pi c / 256), -0.2, 1.0)       (10 g unit: 2^19 counts per g)
   incl  [g]     = (0, 0, 1)
@@ -22,9 +22,8 @@ import time
 import tty
 
 RATE_HZ = float(sys.argv[1]) if len(sys.argv) > 1 else 500.0
-RATE_CODES = {125.0: 0, 250.0: 1, 500.0: 2, 1000.0: 3, 2000.0: 4}
-PART = b"84167-2500-301 REV C"
-SERIAL = b"N25581234"
+PART_DIGITS = "841672500301"  # part number 84167-2500-301, one 4-bit code per digit
+SERIAL_DIGITS = "25581234"  # serial number, BCD
 CRLF = b"\r\n"
 
 
@@ -71,10 +70,14 @@ def datagram(c, gyro_status=0):
     return with_crc(body)
 
 
+def digits_datagram(identifier, digits):
+    """Two 4-bit codes a byte, first digit in the high nibble."""
+    return with_crc(bytes([identifier]) + bytes.fromhex(digits))
+
+
 def configuration():
-    body = bytes([0xBD, 3, RATE_CODES[RATE_HZ], 0xA7, 1, 0, 0, 0, 10])
-    body += bytes(22 - len(body))
-    return with_crc(body)
+    # 16 configuration bytes; calstand does not interpret them, so they stay zero here.
+    return with_crc(bytes([0xBD]) + bytes(16))
 
 
 def main():
@@ -98,10 +101,10 @@ def main():
                 data = b""
             for b in data:
                 if b == 0x0D:
-                    if line == b"N":
-                        out += with_crc(bytes([0xB1]) + PART)
-                    elif line == b"I":
-                        out += with_crc(bytes([0xB7]) + SERIAL)
+                    if line == b"N":  # part number datagram, with CR LF: 0xB3
+                        out += digits_datagram(0xB3, PART_DIGITS)
+                    elif line == b"I":  # serial number datagram, with CR LF: 0xB7
+                        out += digits_datagram(0xB7, SERIAL_DIGITS)
                     elif line == b"C":
                         out += configuration()
                         if faults_at is None:

@@ -46,9 +46,8 @@ TEST(Stim300Peer, ConfiguresAndDecodesAnIndependentUnitOnAPty) {
   ASSERT_TRUE(imu.activate());
   const auto id = imu.identity();
   ASSERT_TRUE(id);
-  EXPECT_EQ(id->model, "84167-2500-301 REV C");
-  EXPECT_EQ(id->serial, "N25581234");
-  EXPECT_EQ(id->firmware, "firmware revision 3");
+  EXPECT_EQ(id->model, "STIM300 841672500301");
+  EXPECT_EQ(id->serial, "25581234");
   EXPECT_EQ(imu.sequence_modulus(), std::uint64_t{1} << 32);
 
   // Two seconds: the peer's faults come one second after the configuration reply.
@@ -101,7 +100,10 @@ TEST(Stim300Peer, ARateTheUnitIsNotSetToFailsConfigureInTheUnitsWords) {
   SerialImu imu(stim300_config(*path, 1000.0), clock, "imus[0].connection");
   const auto configured = imu.configure();
   EXPECT_FALSE(configured);
-  EXPECT_NE(configured.message.find("sample rate 500 Hz"), std::string::npos) << configured.message;
+  EXPECT_NE(configured.message.find("STIM300 841672500301 (serial 25581234) streams datagram 0xA7 "
+                                    "(rate_acc_incl_temp) with CR LF at about "),
+            std::string::npos)
+      << configured.message;
   EXPECT_NE(configured.message.find("asks sample_rate_hz 1000"), std::string::npos)
       << configured.message;
 }

@@ -114,12 +114,9 @@ TEST(Stim300Scale, CountsPerUnitOfEachOutputAndRange) {
   EXPECT_EQ(incl_counts_per_unit(AccelOutput::kAcceleration), 4194304.0);
 }
 
-TEST(Stim300Rates, OnlyTheUnitsRatesHaveCodes) {
-  EXPECT_EQ(sample_rate_code(125.0), 0);
-  EXPECT_EQ(sample_rate_code(2000.0), 4);
-  EXPECT_FALSE(sample_rate_code(400.0));
-  EXPECT_EQ(sample_rate_from_code(3), 1000.0);
-  EXPECT_FALSE(sample_rate_from_code(5));
+TEST(Stim300Rates, OnlyTheUnitsRatesAreRates) {
+  for (double r : {125.0, 250.0, 500.0, 1000.0, 2000.0}) EXPECT_TRUE(is_sample_rate(r)) << r;
+  for (double r : {0.0, 100.0, 400.0, 2500.0}) EXPECT_FALSE(is_sample_rate(r)) << r;
 }
 
 TEST(Stim300Status, BitsReadAsTheUnitsConditionsPerChannel) {
@@ -145,43 +142,43 @@ TEST(Stim300Names, IdentifiersAndNamesBothSelectADatagram) {
   EXPECT_EQ(datagram_name(0x93), "0x93 (rate_acc_incl)");
 }
 
-TEST(Stim300Replies, ALengthIsFoundByItsCrcAmongStreamedBytes) {
-  const auto part = encode_text_datagram(kPartNumber, "84167-2500-301 REV C", true);
+TEST(Stim300Replies, DigitsArePackedTwoToAByteAndALengthIsFoundByItsCrc) {
+  const auto part = encode_digits_datagram(kPartNumber, "84167-2500-301", true);
+  // Identifier with CR LF, 12 digit codes in 6 bytes, CRC, CR LF.
+  ASSERT_EQ(part.size(), 1u + 6u + 4u + 2u);
+  EXPECT_EQ(part[0], 0xB3);
+  EXPECT_EQ(part[1], 0x84);
+  EXPECT_EQ(part[6], 0x01);
+  EXPECT_EQ(encode_digits_datagram(kSerialNumber, "N2558123", false)[0], 0xB5);
   Datagram d;
   d.id = kRateAccIncl;
   std::vector<std::uint8_t> line = encode_datagram(d, true);
-  line.push_back(kPartNumber);  // a lone identifier byte: not a datagram
+  line.push_back(0xB1);  // a lone identifier byte: not a datagram
   line.insert(line.end(), part.begin(), part.end());
   const auto scan = find_reply(line, kPartNumber);
   ASSERT_EQ(scan.result, ScanResult::kFound);
   EXPECT_EQ(scan.offset, 41u);
   EXPECT_EQ(scan.size, part.size() - 2);
-  EXPECT_EQ(text_of(std::span(line).subspan(scan.offset, scan.size)), "84167-2500-301 REV C");
+  EXPECT_EQ(digits_of(std::span(line).subspan(scan.offset, scan.size)), "841672500301");
+  EXPECT_EQ(find_reply(line, kSerialNumber).result, ScanResult::kNone);
   // Cut short: the candidate may still complete.
-  EXPECT_EQ(find_reply(std::span(part).first(10), kPartNumber).result, ScanResult::kNeedMore);
+  EXPECT_EQ(find_reply(std::span(part).first(8), kPartNumber).result, ScanResult::kNeedMore);
+  // An odd count is padded with a 0 code; letters A..F are codes 10..15.
+  EXPECT_EQ(digits_of(encode_digits_datagram(kPartNumber, "1A3", false)), "1A30");
 }
 
-TEST(Stim300Replies, TheConfigurationDatagramReadsBack) {
-  Configuration c;
-  c.firmware_revision = 7;
-  c.sample_rate_code = 2;
-  c.datagram_id = kRateAcc;
-  c.termination = false;
-  c.gyro_output = GyroOutput::kIncrement;
-  c.accel_output = AccelOutput::kIncrement;
-  c.accel_range_g = 30;
-  const auto bytes = encode_configuration(c);
-  ASSERT_EQ(bytes.size(), kConfigurationBodySize + kCrcSize);
-  EXPECT_TRUE(crc_matches(bytes, bytes.size()));
-  const auto back = parse_configuration(bytes);
-  ASSERT_TRUE(back);
-  EXPECT_EQ(back->firmware_revision, 7);
-  EXPECT_EQ(back->sample_rate_code, 2);
-  EXPECT_EQ(back->datagram_id, kRateAcc);
-  EXPECT_FALSE(back->termination);
-  EXPECT_EQ(back->gyro_output, GyroOutput::kIncrement);
-  EXPECT_EQ(back->accel_output, AccelOutput::kIncrement);
-  EXPECT_EQ(back->accel_range_g, 30);
+TEST(Stim300Replies, TheConfigurationDatagramCarriesItsBytesUnderItsCrc) {
+  const std::array<std::uint8_t, kConfigurationBytes> config{1, 2, 3};
+  const auto plain = encode_configuration(config, false);
+  ASSERT_EQ(plain.size(), 1 + kConfigurationBytes + kCrcSize);
+  EXPECT_EQ(plain[0], 0xBC);
+  EXPECT_TRUE(crc_matches(plain, plain.size()));
+  const auto terminated = encode_configuration(config, true);
+  EXPECT_EQ(terminated[0], 0xBD);
+  EXPECT_EQ(terminated.back(), kLf);
+  EXPECT_TRUE(is_startup_id(0xBD));
+  EXPECT_TRUE(is_startup_id(0xB5));
+  EXPECT_FALSE(is_startup_id(0xBE));
 }
 
 TEST(Stim300Options, DefaultsAndEveryMistakeNamesItsKey) {
