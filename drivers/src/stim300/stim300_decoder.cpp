@@ -69,9 +69,11 @@ bool Stim300Decoder::is_candidate(std::uint8_t byte) const {
 
 void Stim300Decoder::on_startup_datagram(std::span<const std::uint8_t> datagram) {
   ++stats_.startup_datagrams;
-  // The unit sends these after power-on or reset (and on N, I, C): its counter starts again.
+  // Before the first datagram after restart(): a reply of the configuration dialogue (N, I, C)
+  // left on the line, not a restart of the unit.
+  if (quiet_) return;
+  // The unit sends these after power-on or reset: its counter starts again.
   count_afresh_ = true;
-  if (quiet_) return;  // a reply of the configuration dialogue left on the line
   if (kPartNumber.matches(datagram[0])) {
     reports_.push_back(
         fmt::format("restart: the unit sent its part number datagram ({})", digits_of(datagram)));
