@@ -19,6 +19,9 @@ struct Stim300Options {
   AccelOutput accel_output = AccelOutput::kAcceleration;
   /// CR LF after each datagram: required (true), absent (false), or either (none).
   std::optional<bool> termination;
+  /// Whether configure() measures the streamed rate against the host clock (off for a link that
+  /// does not run in real time: a replayed capture, an accelerated simulation).
+  bool rate_check = true;
 };
 
 /// The options of `settings` (already checked by the schema). Throws core::InputError naming

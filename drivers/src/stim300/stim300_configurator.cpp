@@ -124,8 +124,9 @@ UnitIdentity Stim300Configurator::configure(ByteTransport& link) {
       terminated ? "with" : "without",
       seen.rate_hz ? fmt::format("about {:.0f} Hz", *seen.rate_hz) : "an unmeasured rate");
   std::vector<std::string> differ;
-  if (!seen.rate_hz || std::abs(*seen.rate_hz - settings_.sample_rate_hz) >
-                           kStim300RateTolerance * settings_.sample_rate_hz) {
+  const bool rate_differs = !seen.rate_hz || std::abs(*seen.rate_hz - settings_.sample_rate_hz) >
+                                                 kStim300RateTolerance * settings_.sample_rate_hz;
+  if (options_.rate_check && rate_differs) {
     differ.push_back(fmt::format("sample_rate_hz {:g}", settings_.sample_rate_hz));
   }
   if (options_.datagram && *options_.datagram != *seen.datagram) {

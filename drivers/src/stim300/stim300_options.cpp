@@ -45,6 +45,9 @@ Stim300Options parse_stim300_options(const WireFormatSettings& settings) {
       if (!value.is_boolean())
         throw core::InputError(field("termination"), "must be true or false");
       o.termination = value.get<bool>();
+    } else if (key == "rate_check") {
+      if (!value.is_boolean()) throw core::InputError(field("rate_check"), "must be true or false");
+      o.rate_check = value.get<bool>();
     } else {
       throw core::InputError(field(key.c_str()), "unknown option of format stim300");
     }

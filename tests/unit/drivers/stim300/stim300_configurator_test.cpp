@@ -128,6 +128,15 @@ TEST(Stim300Configurator, ADatagramOrTerminationTheUnitDoesNotStreamIsRefused) {
   EXPECT_EQ(configure_error(same, settings(500.0, {{"datagram", "0x93"}})), "(accepted)");
 }
 
+TEST(Stim300Configurator, WithoutTheRateCheckOnlyTheDatagramIsChecked) {
+  Stim300Emulator unit(kUnit, Stim300EmulatorSettings{});  // 2000 Hz
+  EXPECT_EQ(configure_error(unit, settings(500.0, {{"rate_check", false}})), "(accepted)");
+  Stim300Emulator again(kUnit, Stim300EmulatorSettings{});
+  const auto what =
+      configure_error(again, settings(500.0, {{"rate_check", false}, {"datagram", "0x93"}}));
+  EXPECT_NE(what.find("asks datagram 0x93 (rate_acc_incl) (the unit"), std::string::npos) << what;
+}
+
 TEST(Stim300Configurator, ARateNoStim300MakesIsRefusedBeforeAsking) {
   Stim300Emulator unit(kUnit, Stim300EmulatorSettings{});
   int writes = -1;

@@ -189,6 +189,7 @@ TEST(Stim300Options, DefaultsAndEveryMistakeNamesItsKey) {
   EXPECT_EQ(d.accel_range_g, 10);
   EXPECT_EQ(d.gyro_output, GyroOutput::kAngularRate);
   EXPECT_FALSE(d.termination);
+  EXPECT_TRUE(d.rate_check);
   s.options = {{"datagram", "rate_acc"},
                {"accel_range_g", 80},
                {"gyro_output", "increment"},
@@ -203,7 +204,9 @@ TEST(Stim300Options, DefaultsAndEveryMistakeNamesItsKey) {
                                                            {"accel_range_g", 2},
                                                            {"gyro_output", "angle"},
                                                            {"termination", "yes"},
-                                                           {"accel_output", "g"}}) {
+                                                           {"accel_output", "g"},
+                                                           {"rate_check", 1},
+                                                           {"baud", 9600}}) {
     s.options = {{key, value}};
     try {
       parse_stim300_options(s);
