@@ -2,8 +2,8 @@
 
 // The Sensonor STIM300 wire format: datagram layouts, CRC-32, scale factors, status bits and
 // the normal-mode commands. Source: Sensonor "ButterflyGyro STIM300 Inertia Measurement Unit"
-// datasheet, TS1524 (cited per constant as "TS1524 <section>"); where the public sheet was not
-// at hand to check a detail, the constant says "calstand reading" and docs/protocols.md lists
+// datasheet, TS1524 (rev. 27; cited per constant as "TS1524 <section>"); where the public sheet was
+// not at hand to check a detail, the constant says "calstand reading" and docs/protocols.md lists
 // it under "open details".
 
 #include <array>
