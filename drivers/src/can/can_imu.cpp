@@ -105,6 +105,8 @@ Result CanImu::read_step() {
   assembler_.feed(r.frame.frame, decoded_);
   stamp(decoded_, arrival_s);
   deliver(decoded_);
+  for (const std::string& fault : assembler_.take_device_faults())
+    events().push(clock().now_s(), true, "device fault: " + fault);
   publish_protocol_counters(assembler_.counters());
   return Result::success();
 }
