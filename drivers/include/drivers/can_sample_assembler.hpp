@@ -98,8 +98,8 @@ class CanSampleAssembler {
   std::uint64_t last_time_raw_ = 0;
   std::uint64_t time_wraps_ = 0;
   CanAssemblyCounters stats_;
-  std::uint32_t opened_ = 0;                   // kOpeningFrame without a counter: samples opened
-  std::vector<std::int64_t> status_last_;      // per status signal: last raw value
+  std::uint32_t opened_ = 0;               // kOpeningFrame without a counter: samples opened
+  std::vector<std::int64_t> status_last_;  // per status signal: last raw value
   std::vector<std::string> device_faults_;
 };
 

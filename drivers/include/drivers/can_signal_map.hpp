@@ -92,7 +92,8 @@ struct CanSignalMap {
   /// or nullopt when the map does not use it.
   std::optional<std::size_t> frame_index(canid_t id) const;
   /// As above, for a multiplexed id the layout whose switch value the payload carries.
-  std::optional<std::size_t> frame_index(canid_t id, std::span<const std::uint8_t, 8> payload) const;
+  std::optional<std::size_t> frame_index(canid_t id,
+                                         std::span<const std::uint8_t, 8> payload) const;
   /// Every id, with CAN_EFF_FLAG for extended ids (for receive filters).
   std::vector<canid_t> ids() const;
   /// The sequence counter's natural wrap: 2^sequence.length_bits.

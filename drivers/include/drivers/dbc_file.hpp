@@ -16,7 +16,7 @@ namespace calstand::drivers {
 /// One SG_ line of a DBC file (Vector CANdb++ format), with what CM_, VAL_ and SIG_VALTYPE_
 /// said about it.
 struct DbcSignal {
-  enum class Mux { kPlain, kSwitch, kMultiplexed };  ///< none, `M`, `mN`
+  enum class Mux { kPlain, kSwitch, kMultiplexed };       ///< none, `M`, `mN`
   enum class ValueType { kInteger, kFloat32, kFloat64 };  ///< SIG_VALTYPE_ 0 / 1 / 2
 
   std::string name;

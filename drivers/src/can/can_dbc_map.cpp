@@ -28,8 +28,8 @@ struct DbcUnit {
 };
 
 std::optional<DbcUnit> dbc_unit(ImuSignal which, const std::string& unit) {
-  const std::string deg = "\xC2\xB0";   // UTF-8 degree sign
-  const std::string deg1 = "\xB0";      // Latin-1 degree sign
+  const std::string deg = "\xC2\xB0";    // UTF-8 degree sign
+  const std::string deg1 = "\xB0";       // Latin-1 degree sign
   const std::string micro = "\xC2\xB5";  // UTF-8 micro sign
   auto is = [&](std::initializer_list<std::string> names) {
     return std::find(names.begin(), names.end(), unit) != names.end();
@@ -169,8 +169,8 @@ CanSignalMap CanSignalMap::from_dbc(const std::string& dbc_path, const json& con
 
   auto place = [&](std::size_t layout, const CanField& field, const std::string& here) {
     const std::uint64_t mask = field.occupied_mask();
-    std::uint64_t taken = map.frames[layout].multiplexed ? map.frames[layout].mux.occupied_mask()
-                                                         : 0;
+    std::uint64_t taken =
+        map.frames[layout].multiplexed ? map.frames[layout].mux.occupied_mask() : 0;
     for (const auto& [l, m] : used)
       if (l == layout) taken |= m;
     if (mask & taken) {
@@ -219,9 +219,9 @@ CanSignalMap CanSignalMap::from_dbc(const std::string& dbc_path, const json& con
     const auto unit = dbc_unit(which, n.signal->unit);
     if (!unit) {
       throw core::InputError(
-          here, fmt::format("unit \"{}\" of {}.{} is not a unit of {} known here ({})",
-                            n.signal->unit, n.message->name, n.signal->name, name,
-                            dbc_unit_examples(which)));
+          here,
+          fmt::format("unit \"{}\" of {}.{} is not a unit of {} known here ({})", n.signal->unit,
+                      n.message->name, n.signal->name, name, dbc_unit_examples(which)));
     }
     CanField f = n.signal->field();
     f.scale *= unit->scale;

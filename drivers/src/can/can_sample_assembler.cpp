@@ -1,11 +1,11 @@
 #include "drivers/can_sample_assembler.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
-
-#include <fmt/format.h>
 
 namespace calstand::drivers {
 
@@ -67,8 +67,8 @@ std::size_t CanSampleAssembler::feed_opening(std::size_t index,
   p.payloads[index] = payload;
   if (p.received != complete_mask_) return 0;
   if (map_.has_sequence) {
-    const std::uint64_t raw =
-        map_.sequence.extract_raw(std::span<const std::uint8_t, 8>(p.payloads[map_.sequence_frame]));
+    const std::uint64_t raw = map_.sequence.extract_raw(
+        std::span<const std::uint8_t, 8>(p.payloads[map_.sequence_frame]));
     if (raw >= modulus_) {
       ++stats_.invalid_samples;  // the device says its counter never gets here
       stats_.frames_discarded += map_.frames.size();

@@ -58,8 +58,8 @@ class DbcLexer {
       const auto uc = static_cast<unsigned char>(c);
       if (std::isalpha(uc) || c == '_') {
         t.kind = DbcToken::Kind::kIdent;
-        while (at_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[at_])) ||
-                                      text_[at_] == '_'))
+        while (at_ < text_.size() &&
+               (std::isalnum(static_cast<unsigned char>(text_[at_])) || text_[at_] == '_'))
           t.text += text_[at_++];
       } else if (std::isdigit(uc) || ((c == '-' || c == '+' || c == '.') && number_follows())) {
         t.kind = DbcToken::Kind::kNumber;
@@ -116,11 +116,11 @@ class DbcLexer {
 
 /// The sections a DBC may hold that carry nothing the station needs: skipped up to their `;`.
 const std::set<std::string, std::less<>> kDbcSkipped = {
-    "BA_DEF_DEF_",     "BA_DEF_DEF_REL_", "BA_DEF_REL_", "BA_REL_",        "BA_DEF_SGTYPE_",
-    "BA_SGTYPE_",      "VAL_TABLE_",      "EV_",         "ENVVAR_DATA_",   "SGTYPE_",
-    "SGTYPE_VAL_",     "SIG_GROUP_",      "CAT_DEF_",    "CAT_",           "FILTER",
-    "BU_SG_REL_",      "BU_EV_REL_",      "BU_BO_REL_",  "SIG_TYPE_REF_",  "SIGTYPE_VALTYPE_",
-    "BO_TX_BU_",       "NS_DESC_",        "EV_DATA_",    "SIG_TYPE_REF_"};
+    "BA_DEF_DEF_", "BA_DEF_DEF_REL_", "BA_DEF_REL_", "BA_REL_",       "BA_DEF_SGTYPE_",
+    "BA_SGTYPE_",  "VAL_TABLE_",      "EV_",         "ENVVAR_DATA_",  "SGTYPE_",
+    "SGTYPE_VAL_", "SIG_GROUP_",      "CAT_DEF_",    "CAT_",          "FILTER",
+    "BU_SG_REL_",  "BU_EV_REL_",      "BU_BO_REL_",  "SIG_TYPE_REF_", "SIGTYPE_VALTYPE_",
+    "BO_TX_BU_",   "NS_DESC_",        "EV_DATA_",    "SIG_TYPE_REF_"};
 
 class DbcParser {
  public:
@@ -163,8 +163,9 @@ class DbcParser {
       } else if (key == "SIG_VALTYPE_") {
         parse_value_type(out);
       } else if (key == "SG_MUL_VAL_") {
-        fail(k, "extended multiplexing (SG_MUL_VAL_) is not supported: only one `M` switch per "
-                "message with `mN` signals");
+        fail(k,
+             "extended multiplexing (SG_MUL_VAL_) is not supported: only one `M` switch per "
+             "message with `mN` signals");
       } else if (kDbcSkipped.count(key)) {
         skip_statement();
       } else {
@@ -235,8 +236,7 @@ class DbcParser {
     if (t.kind == DbcToken::Kind::kNumber && !text.empty() && text[0] == '+') text.erase(0, 1);
     std::int64_t v = 0;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (t.kind != DbcToken::Kind::kNumber || ec != std::errc() ||
-        end != text.data() + text.size())
+    if (t.kind != DbcToken::Kind::kNumber || ec != std::errc() || end != text.data() + text.size())
       fail(t, fmt::format("expected {} (an integer), found '{}'", what, describe(t)));
     next();
     return v;
@@ -258,9 +258,9 @@ class DbcParser {
     next();
     expect_punct(':');
     while (peek().kind == DbcToken::Kind::kIdent) {
-      const bool followed_by_colon =
-          at_ + 1 < t_.size() && t_[at_ + 1].kind == DbcToken::Kind::kPunct &&
-          t_[at_ + 1].text == ":";
+      const bool followed_by_colon = at_ + 1 < t_.size() &&
+                                     t_[at_ + 1].kind == DbcToken::Kind::kPunct &&
+                                     t_[at_ + 1].text == ":";
       if (followed_by_colon || peek().text == "BO_") break;
       next();
     }
@@ -272,7 +272,8 @@ class DbcParser {
     m.line = bo.line;
     const DbcToken& id_token = peek();
     const std::uint64_t raw_id = expect_unsigned("the message id");
-    if (raw_id > 0xFFFFFFFFu) fail(id_token, fmt::format("message id {} is beyond 32 bits", raw_id));
+    if (raw_id > 0xFFFFFFFFu)
+      fail(id_token, fmt::format("message id {} is beyond 32 bits", raw_id));
     const bool extended = (raw_id & 0x80000000u) != 0;
     const std::uint64_t id = raw_id & 0x7FFFFFFFu;
     if (extended ? id > CAN_EFF_MASK : id > CAN_SFF_MASK) {
@@ -309,9 +310,9 @@ class DbcParser {
       const std::string& x = mux.text;
       if (x == "M") {
         s.mux = DbcSignal::Mux::kSwitch;
-      } else if (x.size() >= 2 && x[0] == 'm' &&
-                 std::all_of(x.begin() + 1, x.end(),
-                             [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
+      } else if (x.size() >= 2 && x[0] == 'm' && std::all_of(x.begin() + 1, x.end(), [](char c) {
+                   return std::isdigit(static_cast<unsigned char>(c));
+                 })) {
         s.mux = DbcSignal::Mux::kMultiplexed;
         std::uint64_t v = 0;
         const auto [end, ec] = std::from_chars(x.data() + 1, x.data() + x.size(), v);
@@ -322,8 +323,8 @@ class DbcParser {
                               "is not supported",
                               s.name, x));
       } else {
-        fail(mux, fmt::format("signal {}: \"{}\" is not a multiplexer indicator (M or mN)",
-                              s.name, x));
+        fail(mux,
+             fmt::format("signal {}: \"{}\" is not a multiplexer indicator (M or mN)", s.name, x));
       }
     }
     expect_punct(':');
@@ -390,8 +391,8 @@ class DbcParser {
 
   DbcMessage* find_message(DbcFile& f, std::uint64_t raw_id, const DbcToken& at) {
     for (auto& m : f.messages) {
-      const std::uint64_t mid = (m.id & CAN_EFF_FLAG) ? ((m.id & CAN_EFF_MASK) | 0x80000000u)
-                                                      : m.id;
+      const std::uint64_t mid =
+          (m.id & CAN_EFF_FLAG) ? ((m.id & CAN_EFF_MASK) | 0x80000000u) : m.id;
       if (mid == raw_id) return &m;
     }
     fail(at, fmt::format("no message with id {}", raw_id));
@@ -611,8 +612,8 @@ DbcFile DbcFile::parse(std::string_view text, const std::string& file) {
 DbcFile DbcFile::load(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw core::InputError(path, std::string("cannot read the DBC file (") +
-                                     std::strerror(errno) + ")");
+    throw core::InputError(path,
+                           std::string("cannot read the DBC file (") + std::strerror(errno) + ")");
   }
   std::stringstream text;
   text << in.rdbuf();
