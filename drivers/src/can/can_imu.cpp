@@ -72,7 +72,19 @@ Result CanImu::activate() {
     // The reader may still be retrying a lost link: only configure() starts afresh.
     return Result::failure("in error: configure it again first");
   }
-  return StreamingImu::activate();
+  Result r = StreamingImu::activate();
+  std::string absent;
+  for (std::size_t i = 0; i < kImuSignalCount; ++i) {
+    if (connection_.map.absent[i])
+      absent +=
+          fmt::format("{}{}", absent.empty() ? "" : ", ", signal_name(static_cast<ImuSignal>(i)));
+  }
+  // A fit over all six axes cannot use a NaN axis: say so where the operator looks.
+  if (r.ok && !absent.empty()) {
+    events().push(clock().now_s(), false,
+                  "not measured by this device, delivered as NaN: " + absent);
+  }
+  return r;
 }
 
 double CanImu::arrival_time_s(const ReceivedCanFrame& frame) const {

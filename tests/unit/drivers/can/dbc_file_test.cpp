@@ -11,6 +11,7 @@
 #include <fstream>
 #include <numbers>
 #include <string>
+#include <thread>
 
 #include "../child_process.hpp"
 #include "core/error.hpp"
@@ -18,6 +19,7 @@
 #include "drivers/can_imu.hpp"
 #include "drivers/can_sample_assembler.hpp"
 #include "drivers/can_signal_map.hpp"
+#include "drivers/socketpair_can.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -446,6 +448,51 @@ TEST(DbcEndToEndTest, SimpleMultiplexingSplitsOneIdIntoFrames) {
   EXPECT_EQ(dbc_test_error([&] { CanImuConnection::from_json(c, kDbcWhere); }),
             "imus[0].connection.signals.counter: IMU_DATA.Page is the multiplexer switch itself, "
             "not a value");
+}
+
+// The driver over a socket pair: the MM5.10's absent channels are announced, its samples
+// arrive, and the ABS's yaw rate sensor bit becomes an event in the DBC's words.
+TEST(DbcEndToEndTest, CanImuAnnouncesAbsentChannelsAndReportsDeviceFaults) {
+  using namespace std::chrono_literals;
+  auto [device_end, driver_end] = SocketPairCan::make_pair();
+  core::SteadyClock clock;
+  const CanImuConnection c = CanImuConnection::from_json(dbc_test_mm5_connection(), kDbcWhere);
+  CanImu imu("mm5.10", c, std::move(driver_end), clock);
+  ASSERT_TRUE(imu.configure());
+  ASSERT_TRUE(imu.activate());
+  for (std::uint32_t k = 0; k < 20; ++k)
+    for (const auto& f : encode_sample(c.map, dbc_test_sample(k)))
+      ASSERT_EQ(device_end->write(f, 1000ms), "");
+  can_frame diag{};
+  diag.can_id = 0x5C0;
+  diag.len = 8;
+  diag.data[5] = 0x20;
+  ASSERT_EQ(device_end->write(diag, 1000ms), "");
+  std::vector<core::ImuSample> got;
+  std::vector<DeviceEvent> events;
+  const auto deadline = std::chrono::steady_clock::now() + 5s;
+  while ((got.size() < 20 || events.size() < 2) && std::chrono::steady_clock::now() < deadline) {
+    auto more = imu.poll();
+    got.insert(got.end(), more.begin(), more.end());
+    for (auto& e : imu.take_events()) events.push_back(e);
+    std::this_thread::sleep_for(2ms);
+  }
+  imu.deactivate();
+  ASSERT_EQ(got.size(), 20u);
+  EXPECT_TRUE(std::isnan(got[19].gyro_dps.y()));
+  EXPECT_NEAR(got[19].gyro_dps.x(), 1.5 + 0.1 * 19, 0.005);
+  bool absent = false, fault = false;
+  for (const auto& e : events) {
+    absent = absent || e.message ==
+                           "not measured by this device, delivered as NaN: gyro_y, "
+                           "temperature";
+    fault = fault || (e.fault && e.message ==
+                                     "device fault: ABS_M5_Status.Diag_YRS = 1: yaw "
+                                     "rate sensor error present");
+  }
+  EXPECT_TRUE(absent);
+  EXPECT_TRUE(fault);
+  EXPECT_EQ(imu.fault_counters().at("device_faults"), 1u);
 }
 
 // --- the independent peer ----------------------------------------------------------------
