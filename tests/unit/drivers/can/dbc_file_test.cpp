@@ -293,6 +293,32 @@ TEST(DbcSignalMapTest, ErrorsNameTheField) {
                 file);
 }
 
+TEST(DbcSignalMapTest, TheSchemaNamesTheField) {
+  auto err = [](json c) {
+    return dbc_test_error([&] { CanImuConnection::from_json(c, kDbcWhere); });
+  };
+  json c = dbc_test_xsens_connection();
+  c["signals"]["gyro_x"] = "gyrX";
+  EXPECT_EQ(err(c).rfind("imus[0].connection.signals.gyro_x", 0), 0u) << err(c);
+  c = dbc_test_xsens_connection();
+  c["signals"]["counter"] = nullptr;
+  EXPECT_EQ(err(c).rfind("imus[0].connection.signals.counter", 0), 0u) << err(c);
+  c = dbc_test_xsens_connection();
+  c["signals"]["gyro"] = "A.B";
+  EXPECT_EQ(err(c).rfind("imus[0].connection.signals", 0), 0u) << err(c);
+  c = dbc_test_xsens_connection();
+  c.erase("signals");
+  EXPECT_EQ(err(c),
+            "imus[0].connection.signals: is required with dbc: the DBC message and "
+            "signal of each value");
+  c = dbc_test_xsens_connection();
+  c["signals"]["gyro_x"] = "XCID_RateOfTurn.gyrX";
+  c["signals"]["gyro_y"] = "XCID_RateOfTurn.gyrX";
+  EXPECT_EQ(err(c),
+            "imus[0].connection.signals.gyro_y: uses payload bits another named signal "
+            "of its frame uses");
+}
+
 TEST(DbcSignalMapTest, StationLoaderResolvesTheDbcNextToTheStationFile) {
   const core::StationConfig config =
       core::StationConfig::load(dbc_test_source("sim/can/xsens-mti-600-station.json"));
