@@ -35,6 +35,10 @@ CanImuConnection CanImuConnection::from_json(const json& c, const std::string& w
                            dbc ? "is required with dbc: the DBC message and signal of each value"
                                : "is required with signals: the DBC file they name");
   }
+  for (const char* key : {"sample_start", "status"}) {
+    if (!dbc && c.contains(key))
+      throw core::InputError(where + "." + key, "is only for a dbc layout");
+  }
   auto resolved = [&](const std::string& key) {
     std::filesystem::path path = c.at(key).get<std::string>();
     if (path.is_relative() && !base_dir.empty()) path = std::filesystem::path(base_dir) / path;

@@ -306,6 +306,11 @@ TEST(DbcSignalMapTest, TheSchemaNamesTheField) {
   c = dbc_test_xsens_connection();
   c["signals"]["gyro"] = "A.B";
   EXPECT_EQ(err(c).rfind("imus[0].connection.signals", 0), 0u) << err(c);
+  c = {{"interface", "can0"},
+       {"map_file", dbc_test_source("sim/can/calstand-imu-can.json")},
+       {"sample_rate_hz", 200},
+       {"sample_start", "X"}};
+  EXPECT_EQ(err(c), "imus[0].connection.sample_start: is only for a dbc layout");
   c = dbc_test_xsens_connection();
   c.erase("signals");
   EXPECT_EQ(err(c),
