@@ -63,9 +63,10 @@ struct DbcMessage {
 /// A parsed DBC file: messages and their signals, with comments, value descriptions and float
 /// value types attached; nodes and the version kept; attribute definitions and values, value
 /// tables, environment variables, signal groups and the other sections skipped by rule (each
-/// statement up to its `;`). Refused by name with FILE:LINE: extended multiplexing
-/// (SG_MUL_VAL_, `mNM` signals), CAN FD (DLC > 8, VFrameFormat *_FD), signals beyond the
-/// message's bytes, and anything that is not DBC syntax. Errors are core::InputError
+/// statement up to its `;`); CANdb++'s VECTOR__INDEPENDENT_SIG_MSG (BO_ 3221225472) is parsed
+/// but is no message; a UTF-8 byte order mark is skipped. Refused by name with FILE:LINE: extended
+/// multiplexing (SG_MUL_VAL_, `mNM` signals), CAN FD (DLC > 8, VFrameFormat *_FD), signals beyond
+/// the message's bytes, and anything that is not DBC syntax. Errors are core::InputError
 /// "FILE:LINE: why".
 struct DbcFile {
   std::string file;  ///< as given, for messages

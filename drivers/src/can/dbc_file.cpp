@@ -35,6 +35,7 @@ class DbcLexer {
   std::vector<DbcToken> run() {
     std::vector<DbcToken> out;
     bool line_start = true;
+    if (text_.starts_with("\xEF\xBB\xBF")) at_ = 3;  // a UTF-8 byte order mark
     while (at_ < text_.size()) {
       const char c = text_[at_];
       if (c == '\n') {
@@ -114,6 +115,11 @@ class DbcLexer {
   std::size_t line_ = 1;
 };
 
+/// BO_ 3221225472 VECTOR__INDEPENDENT_SIG_MSG: CANdb++'s holder of signals that belong to no
+/// message (id 0xC0000000: not a CAN id). Parsed, kept out of the messages.
+constexpr std::uint64_t kDbcIndependentRawId = 0xC0000000u;
+constexpr canid_t kDbcIndependentId = 0xFFFFFFFFu;  // no can_id has every bit set
+
 /// The sections a DBC may hold that carry nothing the station needs: skipped up to their `;`.
 const std::set<std::string, std::less<>> kDbcSkipped = {
     "BA_DEF_DEF_", "BA_DEF_DEF_REL_", "BA_DEF_REL_", "BA_REL_",       "BA_DEF_SGTYPE_",
@@ -149,7 +155,12 @@ class DbcParser {
         while (peek().kind == DbcToken::Kind::kIdent && peek().line == line)
           out.nodes.push_back(next().text);
       } else if (key == "BO_") {
-        out.messages.push_back(parse_message());
+        DbcMessage m = parse_message();
+        if (m.id == kDbcIndependentId) {
+          independent_ = std::move(m);  // a signal store, not a frame: kept for CM_ and VAL_
+        } else {
+          out.messages.push_back(std::move(m));
+        }
       } else if (key == "SG_") {
         fail(k, "SG_ outside a message (no BO_ before it)");
       } else if (key == "CM_") {
@@ -276,13 +287,15 @@ class DbcParser {
       fail(id_token, fmt::format("message id {} is beyond 32 bits", raw_id));
     const bool extended = (raw_id & 0x80000000u) != 0;
     const std::uint64_t id = raw_id & 0x7FFFFFFFu;
-    if (extended ? id > CAN_EFF_MASK : id > CAN_SFF_MASK) {
+    const bool independent = raw_id == kDbcIndependentRawId;
+    if (!independent && (extended ? id > CAN_EFF_MASK : id > CAN_SFF_MASK)) {
       fail(id_token,
            fmt::format("message id {} is beyond the {} ids{}", raw_id,
                        extended ? "29-bit extended" : "11-bit standard",
                        extended ? "" : " (an extended id has bit 31 set: id + 2147483648)"));
     }
-    m.id = static_cast<canid_t>(id) | (extended ? CAN_EFF_FLAG : 0u);
+    m.id =
+        independent ? kDbcIndependentId : static_cast<canid_t>(id) | (extended ? CAN_EFF_FLAG : 0u);
     m.name = expect_ident("the message name");
     expect_punct(':');
     const DbcToken& dlc_token = peek();
@@ -371,6 +384,7 @@ class DbcParser {
     }
     s.start_bit = static_cast<std::uint32_t>(start);
     s.length_bits = static_cast<std::uint32_t>(length);
+    if (m.id == kDbcIndependentId) return s;  // not placed in any frame
     if (s.factor == 0.0) fail(start_token, fmt::format("signal {}: factor 0", s.name));
     // Within the 64 bits and the message's length.
     const std::uint32_t last_stream =
@@ -390,6 +404,8 @@ class DbcParser {
   }
 
   DbcMessage* find_message(DbcFile& f, std::uint64_t raw_id, const DbcToken& at) {
+    if (raw_id == kDbcIndependentRawId && independent_.id == kDbcIndependentId)
+      return &independent_;
     for (auto& m : f.messages) {
       const std::uint64_t mid =
           (m.id & CAN_EFF_FLAG) ? ((m.id & CAN_EFF_MASK) | 0x80000000u) : m.id;
@@ -557,6 +573,7 @@ class DbcParser {
   const std::string& file_;
   std::size_t at_ = 0;
   std::map<std::string, std::vector<std::string>> enums_;
+  DbcMessage independent_;
 };
 
 }  // namespace

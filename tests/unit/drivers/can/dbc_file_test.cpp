@@ -138,6 +138,22 @@ TEST(DbcFileTest, ParsesEveryConstruct) {
   EXPECT_EQ(f.message("NONE"), nullptr);
 }
 
+TEST(DbcFileTest, IndependentSignalsAndByteOrderMarksAreTolerated) {
+  const DbcFile f = DbcFile::parse(
+      "\xEF\xBB\xBF"
+      R"(BU_: A
+BO_ 1 M: 8 A
+ SG_ S : 0|8@1+ (1,0) [0|0] "" A
+BO_ 3221225472 VECTOR__INDEPENDENT_SIG_MSG: 0 Vector__XXX
+ SG_ Loose : 40|16@1+ (1,0) [0|0] "" Vector__XXX
+CM_ SG_ 3221225472 Loose "belongs to no message";
+VAL_ 3221225472 Loose 0 "zero" ;
+)",
+      "i.dbc");
+  ASSERT_EQ(f.messages.size(), 1u);
+  EXPECT_EQ(f.messages[0].name, "M");
+}
+
 // The DBC's Motorola convention: the start bit is the most significant bit, numbered
 // sawtooth (bit k of byte b is 8b + k). "7|16@0+" is bytes 0..1 big-endian; "3|12@0+" is the
 // low nibble of byte 0 (most significant) followed by all of byte 1.
