@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,9 @@ struct CanAssemblyCounters {
   std::uint64_t incomplete_samples = 0;  ///< partial samples dropped (a newer sequence came first)
   std::uint64_t invalid_samples = 0;     ///< complete but a value was NaN or infinite (dropped)
   std::uint64_t sequence_gaps = 0;       ///< delivered samples whose sequence was not last + 1
-  std::uint64_t status_frames = 0;  ///< frames of status-only ids (DBC layouts' status signals)
-  std::uint64_t device_faults = 0;  ///< status signals that turned non-zero
+  std::uint64_t status_frames = 0;       ///< frames of ids used only for status or counter checks
+  std::uint64_t counter_errors = 0;      ///< per-message counters that did not step by +1
+  std::uint64_t device_faults = 0;       ///< status signals that turned non-zero
 };
 
 /// Turns CAN frames into IMU samples by the signal map. Frames of one sample are matched by
@@ -81,6 +83,7 @@ class CanSampleAssembler {
   std::size_t feed_opening(std::size_t index, const std::array<std::uint8_t, 8>& payload,
                            std::vector<core::ImuSample>& out);
   void check_status(canid_t id, const std::array<std::uint8_t, 8>& payload);
+  void check_counters(canid_t id, const std::array<std::uint8_t, 8>& payload);
   void drop_partial(std::size_t index);
   void deliver(std::size_t index, std::vector<core::ImuSample>& out);
 
@@ -101,6 +104,7 @@ class CanSampleAssembler {
   std::uint32_t opened_ = 0;               // kOpeningFrame without a counter: samples opened
   std::vector<std::int64_t> status_last_;  // per status signal: last raw value
   std::vector<std::string> device_faults_;
+  std::vector<std::optional<std::uint64_t>> counter_last_;  // per message counter
 };
 
 }  // namespace calstand::drivers

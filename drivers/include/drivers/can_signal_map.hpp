@@ -48,6 +48,15 @@ struct CanFrameLayout {
   std::uint64_t mux_value = 0;
 };
 
+/// A per-message counter of a DBC layout (an "alive counter"): each frame of `id` must carry
+/// the previous frame's value + 1 modulo 2^field.length_bits, else CanAssemblyCounters::
+/// counter_errors counts it (the frame is still used).
+struct CanMessageCounter {
+  canid_t id = 0;
+  std::string name;  ///< "MESSAGE.SIGNAL"
+  CanField field;
+};
+
 /// A status signal of a DBC layout (docs/protocols.md, "Signals from a DBC file"): a frame of
 /// `id` whose `field` reads a value other than 0 is a device fault, reported as an event with
 /// the DBC's VAL_ text for that value (the device's own words).
@@ -87,6 +96,8 @@ struct CanSignalMap {
   std::array<bool, kImuSignalCount> absent{};
   /// Status signals checked in every frame of their id (not part of a sample).
   std::vector<CanStatusSignal> status;
+  /// Per-message counters checked in every frame of their id.
+  std::vector<CanMessageCounter> message_counters;
 
   /// Index into `frames` of the frame with `id` (can_id with CAN_EFF_FLAG, no RTR/ERR flags),
   /// or nullopt when the map does not use it.

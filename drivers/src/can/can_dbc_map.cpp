@@ -267,6 +267,24 @@ CanSignalMap CanSignalMap::from_dbc(const std::string& dbc_path, const json& con
     throw core::InputError(sigs_where, "more than 31 frames per sample");
   }
 
+  // Per-message counters: +1 from frame to frame of their message.
+  if (connection.contains("message_counters")) {
+    const json& list = connection.at("message_counters");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string here = fmt::format("{}.message_counters[{}]", where, i);
+      const std::string text = list.at(i).get<std::string>();
+      const DbcNamed n = dbc_lookup(dbc, text, here);
+      const CanField f = n.signal->field();
+      if (n.signal->mux != DbcSignal::Mux::kPlain || f.type != FieldType::kUnsigned ||
+          n.signal->factor != 1.0 || n.signal->offset != 0.0 || f.length_bits > 32) {
+        throw core::InputError(here, fmt::format("{} is not a counter: a plain unsigned integer "
+                                                 "of at most 32 bits with factor 1 and offset 0",
+                                                 text));
+      }
+      map.message_counters.push_back({n.message->id, text, f});
+    }
+  }
+
   // Status signals: any value but 0 is an event in the device's words.
   if (connection.contains("status")) {
     const json& list = connection.at("status");

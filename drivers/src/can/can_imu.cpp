@@ -15,10 +15,10 @@ namespace {
 constexpr double kMaxKernelAgeS = 1.0;
 
 // The counters worth an event when they grow (the others count good traffic).
-constexpr std::array kReportedFaults = {"unknown_ids",      "bad_frames",    "bad_dlc",
-                                        "duplicate_frames", "late_frames",   "incomplete_samples",
-                                        "invalid_samples",  "sequence_gaps", "malformed_messages",
-                                        "buffer_overflows"};
+constexpr std::array kReportedFaults = {"unknown_ids",      "bad_frames",      "bad_dlc",
+                                        "duplicate_frames", "late_frames",     "incomplete_samples",
+                                        "invalid_samples",  "sequence_gaps",   "malformed_messages",
+                                        "counter_errors",   "buffer_overflows"};
 
 double realtime_now_s() {
   const auto t = std::chrono::system_clock::now().time_since_epoch();

@@ -35,7 +35,7 @@ CanImuConnection CanImuConnection::from_json(const json& c, const std::string& w
                            dbc ? "is required with dbc: the DBC message and signal of each value"
                                : "is required with signals: the DBC file they name");
   }
-  for (const char* key : {"sample_start", "status"}) {
+  for (const char* key : {"sample_start", "status", "message_counters"}) {
     if (!dbc && c.contains(key))
       throw core::InputError(where + "." + key, "is only for a dbc layout");
   }

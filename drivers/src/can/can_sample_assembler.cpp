@@ -15,7 +15,19 @@ CanSampleAssembler::CanSampleAssembler(CanSignalMap map, std::uint64_t sequence_
       modulus_(std::clamp<std::uint64_t>(sequence_modulus, 2, map_.sequence_wrap())),
       sample_rate_hz_(sample_rate_hz > 0.0 ? sample_rate_hz : 1.0),
       complete_mask_(static_cast<std::uint32_t>((std::uint64_t{1} << map_.frames.size()) - 1)),
-      status_last_(map_.status.size(), 0) {}
+      status_last_(map_.status.size(), 0),
+      counter_last_(map_.message_counters.size()) {}
+
+void CanSampleAssembler::check_counters(canid_t id, const std::array<std::uint8_t, 8>& payload) {
+  for (std::size_t i = 0; i < map_.message_counters.size(); ++i) {
+    const CanMessageCounter& c = map_.message_counters[i];
+    if (c.id != id) continue;
+    const std::uint64_t raw = c.field.extract_raw(std::span<const std::uint8_t, 8>(payload));
+    const std::uint64_t wrap = std::uint64_t{1} << c.field.length_bits;
+    if (counter_last_[i] && raw != (*counter_last_[i] + 1) % wrap) ++stats_.counter_errors;
+    counter_last_[i] = raw;
+  }
+}
 
 std::vector<std::string> CanSampleAssembler::take_device_faults() {
   std::vector<std::string> out;
@@ -108,6 +120,7 @@ void CanSampleAssembler::reset() {
   have_time_raw_ = false;
   time_wraps_ = 0;
   opened_ = 0;
+  for (auto& c : counter_last_) c.reset();
 }
 
 void CanSampleAssembler::deliver(std::size_t index, std::vector<core::ImuSample>& out) {
@@ -212,10 +225,13 @@ std::size_t CanSampleAssembler::feed(const can_frame& frame, std::vector<core::I
   std::array<std::uint8_t, 8> payload{};  // bytes beyond len read as 0
   std::copy_n(frame.data, frame.len, payload.begin());
   if (!map_.status.empty()) check_status(id, payload);
+  if (!map_.message_counters.empty()) check_counters(id, payload);
   const auto index = map_.frame_index(id, std::span<const std::uint8_t, 8>(payload));
   if (!index) {
     const bool status_only = std::any_of(map_.status.begin(), map_.status.end(),
-                                         [&](const CanStatusSignal& s) { return s.id == id; });
+                                         [&](const CanStatusSignal& s) { return s.id == id; }) ||
+                             std::any_of(map_.message_counters.begin(), map_.message_counters.end(),
+                                         [&](const CanMessageCounter& c) { return c.id == id; });
     ++(status_only ? stats_.status_frames : stats_.unknown_ids);
     return 0;
   }
@@ -282,7 +298,8 @@ std::map<std::string, std::uint64_t> CanSampleAssembler::counters() const {
           {"invalid_samples", stats_.invalid_samples},
           {"sequence_gaps", stats_.sequence_gaps},
           {"status_frames", stats_.status_frames},
-          {"device_faults", stats_.device_faults}};
+          {"device_faults", stats_.device_faults},
+          {"counter_errors", stats_.counter_errors}};
 }
 
 }  // namespace calstand::drivers

@@ -192,6 +192,7 @@ std::vector<canid_t> CanSignalMap::ids() const {
   std::vector<canid_t> out;
   for (const auto& f : frames) out.push_back(f.id);
   for (const auto& s : status) out.push_back(s.id);
+  for (const auto& c : message_counters) out.push_back(c.id);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
@@ -247,6 +248,10 @@ std::vector<can_frame> encode_sample(const CanSignalMap& map, const core::ImuSam
         map.delimiting == CanSignalMap::Delimiting::kSequenceInEveryFrame ||
         (map.has_sequence && &layout == &map.frames[map.sequence_frame]);
     if (carries_sequence) map.sequence.insert_raw(payload, sample.sequence % map.sequence_wrap());
+    for (const auto& counter : map.message_counters) {
+      // One frame of each message per sample: its counter steps with the sample's sequence.
+      if (counter.id == layout.id) counter.field.insert_raw(payload, sample.sequence);
+    }
     for (const auto& [which, field] : layout.signals) {
       double value = 0.0;
       switch (which) {

@@ -542,6 +542,53 @@ TEST(DbcEndToEndTest, CanImuAnnouncesAbsentChannelsAndReportsDeviceFaults) {
   EXPECT_EQ(imu.fault_counters().at("device_faults"), 1u);
 }
 
+// An automotive-style layout: an alive counter in each message, no sample counter.
+TEST(DbcEndToEndTest, PerMessageCountersAreChecked) {
+  DbcTestFile file("calstand-dbc-alive-test.dbc", R"(BU_: S
+BO_ 256 RATE: 8 S
+ SG_ Wx : 0|16@1- (0.01,0) [0|0] "deg/s" A
+ SG_ Wy : 16|16@1- (0.01,0) [0|0] "deg/s" A
+ SG_ Wz : 32|16@1- (0.01,0) [0|0] "deg/s" A
+ SG_ Alive : 48|4@1+ (1,0) [0|15] "" A
+BO_ 257 ACC: 8 S
+ SG_ Ax : 0|16@1- (0.001,0) [0|0] "m/s^2" A
+ SG_ Ay : 16|16@1- (0.001,0) [0|0] "m/s^2" A
+ SG_ Az : 32|16@1- (0.001,0) [0|0] "m/s^2" A
+ SG_ T : 48|8@1- (1,0) [0|0] "degC" A
+ SG_ Alive : 60|4@1+ (1,0) [0|15] "" A
+)");
+  const json c = {{"interface", "vcan0"},
+                  {"dbc", file.path},
+                  {"sample_rate_hz", 100},
+                  {"sample_start", "RATE"},
+                  {"message_counters", {"RATE.Alive", "ACC.Alive"}},
+                  {"signals",
+                   {{"gyro_x", "RATE.Wx"},
+                    {"gyro_y", "RATE.Wy"},
+                    {"gyro_z", "RATE.Wz"},
+                    {"accel_x", "ACC.Ax"},
+                    {"accel_y", "ACC.Ay"},
+                    {"accel_z", "ACC.Az"},
+                    {"temperature", "ACC.T"}}}};
+  const CanImuConnection conn = CanImuConnection::from_json(c, kDbcWhere);
+  ASSERT_EQ(conn.map.message_counters.size(), 2u);
+  CanSampleAssembler a(conn.map, conn.sequence_modulus, conn.sample_rate_hz);
+  std::vector<core::ImuSample> out;
+  for (std::uint32_t k = 14; k < 20; ++k)  // the 4-bit counters wrap at 16
+    for (const auto& f : encode_sample(conn.map, dbc_test_sample(k))) a.feed(f, out);
+  EXPECT_EQ(out.size(), 6u);
+  EXPECT_EQ(a.stats().counter_errors, 0u);
+  // A repeated ACC frame (stale counter) and a lost RATE frame: one error each.
+  auto frames = encode_sample(conn.map, dbc_test_sample(20));
+  a.feed(frames[1], out);  // ACC of a sample with no opening frame: discarded, counter 20 % 16
+  a.feed(frames[1], out);  // the same again: counter did not step
+  EXPECT_EQ(a.stats().counter_errors, 1u);
+  for (const auto& f : encode_sample(conn.map, dbc_test_sample(21))) a.feed(f, out);
+  EXPECT_EQ(a.stats().counter_errors, 2u);  // RATE: 19 -> 21
+  EXPECT_EQ(out.size(), 7u);
+  EXPECT_EQ(a.counters().at("counter_errors"), 2u);
+}
+
 // --- the independent peer ----------------------------------------------------------------
 
 /// Runs dbc_peer.py on `request` and returns its frames (candump lines parsed).
