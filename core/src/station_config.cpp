@@ -50,11 +50,12 @@ std::string resolve(const std::string& base_dir, const std::string& path) {
 }
 
 /// A device's connection with every string field named "*_file" (e.g. a CAN signal map's
-/// "map_file") resolved against the station file's folder, as spec and truth files are.
+/// "map_file") or "dbc" resolved against the station file's folder, as spec and truth files are.
 json resolve_connection_files(json connection, const std::string& base_dir) {
   if (!connection.is_object()) return connection;
   for (auto& [key, value] : connection.items()) {
-    if (value.is_string() && key.size() > 5 && key.ends_with("_file")) {
+    // "dbc": a CAN IMU's DBC file (docs/protocols.md, "Signals from a DBC file").
+    if (value.is_string() && ((key.size() > 5 && key.ends_with("_file")) || key == "dbc")) {
       value = resolve(base_dir, value.get<std::string>());
     }
   }

@@ -1,6 +1,7 @@
 // libFuzzer target: arbitrary CAN frames (ids, length, payload chosen by the fuzzer) into the
 // CanSampleAssembler with the example signal map sim/can/calstand-imu-can.json and variants of
-// it (reassembly depth 2 and 3, no device_time, big-endian with a float32 gyro, an extended id).
+// it (reassembly depth 2 and 3, no device_time, big-endian with a float32 gyro, an extended id),
+// and the Xsens MTi-600 DBC layout (sim/can/xsens-mti-600.dbc: samples opened by a frame).
 // After every frame each frame fed must be counted exactly once (CanAssemblyCounters), feed()
 // must return what it appended, and no delivered sample may hold a NaN or an infinity.
 //
@@ -66,6 +67,13 @@ std::vector<CanSignalMap> make_maps() {
   json extended = doc;
   extended["signals"]["temperature"]["extended"] = true;
   maps.push_back(CanSignalMap::from_json(extended, "extended"));
+  // A DBC layout: samples opened by a frame, the counter in its own message, status signals.
+  std::ifstream station(CALSTAND_SOURCE_DIR "/sim/can/xsens-mti-600-station.json");
+  std::stringstream station_text;
+  station_text << station.rdbuf();
+  const json connection = json::parse(station_text.str())["imus"][0]["connection"];
+  maps.push_back(CanSignalMap::from_dbc(CALSTAND_SOURCE_DIR "/sim/can/xsens-mti-600.dbc",
+                                        connection, "xsens"));
   return maps;
 }
 
@@ -90,7 +98,7 @@ bool finite(const calstand::core::ImuSample& s) {
 void check_counts(const CanSampleAssembler& a) {
   const auto& s = a.stats();
   check(s.frames == s.unknown_ids + s.bad_frames + s.bad_dlc + s.duplicate_frames + s.late_frames +
-                        s.frames_used + s.frames_discarded + a.pending_frames());
+                        s.frames_used + s.frames_discarded + s.status_frames + a.pending_frames());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,7 +18,7 @@ namespace calstand::drivers {
 /// Counters of a CanSampleAssembler since construction. Every frame fed ends up in exactly one
 /// of the frame counters or is still pending:
 ///   frames == unknown_ids + bad_frames + bad_dlc + duplicate_frames + late_frames
-///             + frames_used + frames_discarded + pending_frames()
+///             + frames_used + frames_discarded + status_frames + pending_frames()
 struct CanAssemblyCounters {
   std::uint64_t frames = 0;       ///< frames fed
   std::uint64_t unknown_ids = 0;  ///< ids the map does not use (ignored)
@@ -31,6 +32,9 @@ struct CanAssemblyCounters {
   std::uint64_t incomplete_samples = 0;  ///< partial samples dropped (a newer sequence came first)
   std::uint64_t invalid_samples = 0;     ///< complete but a value was NaN or infinite (dropped)
   std::uint64_t sequence_gaps = 0;       ///< delivered samples whose sequence was not last + 1
+  std::uint64_t status_frames = 0;       ///< frames of ids used only for status or counter checks
+  std::uint64_t counter_errors = 0;      ///< per-message counters that did not step by +1
+  std::uint64_t device_faults = 0;       ///< status signals that turned non-zero
 };
 
 /// Turns CAN frames into IMU samples by the signal map. Frames of one sample are matched by
@@ -61,6 +65,9 @@ class CanSampleAssembler {
   std::map<std::string, std::uint64_t> counters() const;
   /// Frames held in partial samples.
   std::size_t pending_frames() const;
+  /// Device faults reported by status signals since the last call, in the device's words
+  /// ("XCID_Error.ErrorCode = 1: The output buffer is full, ..."); cleared by the call.
+  std::vector<std::string> take_device_faults();
   /// Drops partial samples (counted incomplete) and forgets sequence and device-time history,
   /// as after a reconnect. Counters are kept.
   void reset();
@@ -69,10 +76,14 @@ class CanSampleAssembler {
   struct Partial {
     std::uint32_t sequence = 0;
     std::uint32_t received = 0;  // bit i: frame i of the map has arrived
-    std::array<std::array<std::uint8_t, 8>, kImuSignalCount> payloads{};
+    std::array<std::array<std::uint8_t, 8>, 31> payloads{};  // up to 31 frames per sample
   };
 
   std::uint64_t ahead(std::uint32_t from, std::uint32_t to) const;  // (to - from) mod modulus
+  std::size_t feed_opening(std::size_t index, const std::array<std::uint8_t, 8>& payload,
+                           std::vector<core::ImuSample>& out);
+  void check_status(canid_t id, const std::array<std::uint8_t, 8>& payload);
+  void check_counters(canid_t id, const std::array<std::uint8_t, 8>& payload);
   void drop_partial(std::size_t index);
   void deliver(std::size_t index, std::vector<core::ImuSample>& out);
 
@@ -90,6 +101,10 @@ class CanSampleAssembler {
   std::uint64_t last_time_raw_ = 0;
   std::uint64_t time_wraps_ = 0;
   CanAssemblyCounters stats_;
+  std::uint32_t opened_ = 0;               // kOpeningFrame without a counter: samples opened
+  std::vector<std::int64_t> status_last_;  // per status signal: last raw value
+  std::vector<std::string> device_faults_;
+  std::vector<std::optional<std::uint64_t>> counter_last_;  // per message counter
 };
 
 }  // namespace calstand::drivers

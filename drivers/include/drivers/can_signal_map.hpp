@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
@@ -40,6 +41,30 @@ struct CanFrameLayout {
   canid_t id = 0;               ///< 11-bit id, or 29-bit id with CAN_EFF_FLAG set (as in can_frame)
   std::uint8_t min_length = 0;  ///< payload bytes the fields need; shorter frames are refused
   std::vector<std::pair<ImuSignal, CanField>> signals;
+  /// Simple multiplexing (DBC `M` / `mN`): this layout is the frames of `id` whose switch
+  /// field `mux` reads `mux_value`; several layouts may share an id.
+  bool multiplexed = false;
+  CanField mux;
+  std::uint64_t mux_value = 0;
+};
+
+/// A per-message counter of a DBC layout (an "alive counter"): each frame of `id` must carry
+/// the previous frame's value + 1 modulo 2^field.length_bits, else CanAssemblyCounters::
+/// counter_errors counts it (the frame is still used).
+struct CanMessageCounter {
+  canid_t id = 0;
+  std::string name;  ///< "MESSAGE.SIGNAL"
+  CanField field;
+};
+
+/// A status signal of a DBC layout (docs/protocols.md, "Signals from a DBC file"): a frame of
+/// `id` whose `field` reads a value other than 0 is a device fault, reported as an event with
+/// the DBC's VAL_ text for that value (the device's own words).
+struct CanStatusSignal {
+  canid_t id = 0;
+  std::string name;  ///< "MESSAGE.SIGNAL"
+  CanField field;
+  std::map<std::int64_t, std::string> values;
 };
 
 /// Which CAN id carries which value of an IMU sample: configuration, not code, so that a new
@@ -55,9 +80,31 @@ struct CanSignalMap {
   /// current sample's last, as mailbox priority can do).
   std::size_t reassembly_depth = 1;
 
+  /// How frames of one sample are found (docs/protocols.md):
+  ///   kSequenceInEveryFrame  every frame carries `sequence` at the same place (JSON maps);
+  ///   kOpeningFrame          frames[opening_frame] opens a sample, which is complete when
+  ///                          every other frame of the map has arrived after it (DBC layouts
+  ///                          whose counter sits in one message, or that have none).
+  enum class Delimiting { kSequenceInEveryFrame, kOpeningFrame };
+  Delimiting delimiting = Delimiting::kSequenceInEveryFrame;
+  std::size_t opening_frame = 0;
+  /// kOpeningFrame: the opening frame carries `sequence`. false: the layout has no counter and
+  /// the sequence counts opened samples (32 bits): a whole lost sample is then invisible.
+  bool has_sequence = true;
+  std::size_t sequence_frame = 0;  ///< kOpeningFrame with has_sequence: the frame carrying it
+  /// Channels the device does not measure (station file `null`): delivered as NaN.
+  std::array<bool, kImuSignalCount> absent{};
+  /// Status signals checked in every frame of their id (not part of a sample).
+  std::vector<CanStatusSignal> status;
+  /// Per-message counters checked in every frame of their id.
+  std::vector<CanMessageCounter> message_counters;
+
   /// Index into `frames` of the frame with `id` (can_id with CAN_EFF_FLAG, no RTR/ERR flags),
   /// or nullopt when the map does not use it.
   std::optional<std::size_t> frame_index(canid_t id) const;
+  /// As above, for a multiplexed id the layout whose switch value the payload carries.
+  std::optional<std::size_t> frame_index(canid_t id,
+                                         std::span<const std::uint8_t, 8> payload) const;
   /// Every id, with CAN_EFF_FLAG for extended ids (for receive filters).
   std::vector<canid_t> ids() const;
   /// The sequence counter's natural wrap: 2^sequence.length_bits.
@@ -69,6 +116,12 @@ struct CanSignalMap {
   /// Reads a map file (`path` used as given: callers resolve relative paths). Errors name
   /// `where` and the file.
   static CanSignalMap load(const std::string& path, const std::string& where);
+  /// The map from a DBC file and the station file's names (docs/protocols.md, "Signals from a
+  /// DBC file"): `signals` is the connection's "signals" object, `options` the connection
+  /// (sample_start, status, reassembly_depth). Errors name `where` (the connection) and the
+  /// field, e.g. "imus[0].connection.signals.gyro_x: no signal \"X\" in message \"Y\" of F".
+  static CanSignalMap from_dbc(const std::string& dbc_path, const nlohmann::json& connection,
+                               const std::string& where);
 };
 
 /// The frames that carry `sample` (one per id of the map, in map order), for simulators and

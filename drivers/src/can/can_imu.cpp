@@ -15,10 +15,10 @@ namespace {
 constexpr double kMaxKernelAgeS = 1.0;
 
 // The counters worth an event when they grow (the others count good traffic).
-constexpr std::array kReportedFaults = {"unknown_ids",      "bad_frames",    "bad_dlc",
-                                        "duplicate_frames", "late_frames",   "incomplete_samples",
-                                        "invalid_samples",  "sequence_gaps", "malformed_messages",
-                                        "buffer_overflows"};
+constexpr std::array kReportedFaults = {"unknown_ids",      "bad_frames",      "bad_dlc",
+                                        "duplicate_frames", "late_frames",     "incomplete_samples",
+                                        "invalid_samples",  "sequence_gaps",   "malformed_messages",
+                                        "counter_errors",   "buffer_overflows"};
 
 double realtime_now_s() {
   const auto t = std::chrono::system_clock::now().time_since_epoch();
@@ -72,7 +72,19 @@ Result CanImu::activate() {
     // The reader may still be retrying a lost link: only configure() starts afresh.
     return Result::failure("in error: configure it again first");
   }
-  return StreamingImu::activate();
+  Result r = StreamingImu::activate();
+  std::string absent;
+  for (std::size_t i = 0; i < kImuSignalCount; ++i) {
+    if (connection_.map.absent[i])
+      absent +=
+          fmt::format("{}{}", absent.empty() ? "" : ", ", signal_name(static_cast<ImuSignal>(i)));
+  }
+  // A fit over all six axes cannot use a NaN axis: say so where the operator looks.
+  if (r.ok && !absent.empty()) {
+    events().push(clock().now_s(), false,
+                  "not measured by this device, delivered as NaN: " + absent);
+  }
+  return r;
 }
 
 double CanImu::arrival_time_s(const ReceivedCanFrame& frame) const {
@@ -105,6 +117,8 @@ Result CanImu::read_step() {
   assembler_.feed(r.frame.frame, decoded_);
   stamp(decoded_, arrival_s);
   deliver(decoded_);
+  for (const std::string& fault : assembler_.take_device_faults())
+    events().push(clock().now_s(), true, "device fault: " + fault);
   publish_protocol_counters(assembler_.counters());
   return Result::success();
 }

@@ -20,19 +20,36 @@ CanImuConnection CanImuConnection::from_json(const json& c, const std::string& w
 
   const bool inline_map = c.contains("map");
   const bool file_map = c.contains("map_file");
-  // A schema can require exactly one of two keys only as "matches none of the forms"; this
+  const bool dbc = c.contains("dbc");
+  // A schema can require exactly one of the keys only as "matches none of the forms"; this
   // names them.
-  if (inline_map == file_map) {
-    throw core::InputError(where + ".map", inline_map ? "give map or map_file, not both"
-                                                      : "is required (or map_file): which CAN id "
-                                                        "carries which signal");
+  if (int{inline_map} + int{file_map} + int{dbc} != 1) {
+    throw core::InputError(where + ".map",
+                           inline_map || file_map || dbc
+                               ? "give one of map, map_file and dbc, not several"
+                               : "is required (or map_file, or dbc with signals): which CAN id "
+                                 "carries which signal");
   }
+  if (dbc != c.contains("signals")) {
+    throw core::InputError(where + (dbc ? ".signals" : ".dbc"),
+                           dbc ? "is required with dbc: the DBC message and signal of each value"
+                               : "is required with signals: the DBC file they name");
+  }
+  for (const char* key : {"sample_start", "status", "message_counters"}) {
+    if (!dbc && c.contains(key))
+      throw core::InputError(where + "." + key, "is only for a dbc layout");
+  }
+  auto resolved = [&](const std::string& key) {
+    std::filesystem::path path = c.at(key).get<std::string>();
+    if (path.is_relative() && !base_dir.empty()) path = std::filesystem::path(base_dir) / path;
+    return path.string();
+  };
   if (inline_map) {
     out.map = CanSignalMap::from_json(c.at("map"), where + ".map");
+  } else if (file_map) {
+    out.map = CanSignalMap::load(resolved("map_file"), where + ".map_file");
   } else {
-    std::filesystem::path path = c.at("map_file").get<std::string>();
-    if (path.is_relative() && !base_dir.empty()) path = std::filesystem::path(base_dir) / path;
-    out.map = CanSignalMap::load(path.string(), where + ".map_file");
+    out.map = CanSignalMap::from_dbc(resolved("dbc"), c, where);
   }
   out.sample_rate_hz = c.at("sample_rate_hz").get<double>();
 

@@ -149,7 +149,10 @@ CanSignalMap map_from_json(const json& doc, const std::string& where) {
     auto it = std::find_if(map.frames.begin(), map.frames.end(),
                            [&](const CanFrameLayout& f) { return f.id == id; });
     if (it == map.frames.end()) {
-      map.frames.push_back({id, static_cast<std::uint8_t>(map.sequence.bytes_needed()), {}});
+      CanFrameLayout layout;
+      layout.id = id;
+      layout.min_length = static_cast<std::uint8_t>(map.sequence.bytes_needed());
+      map.frames.push_back(layout);
       it = map.frames.end() - 1;
     }
     it->min_length =
@@ -175,9 +178,23 @@ std::optional<std::size_t> CanSignalMap::frame_index(canid_t id) const {
   return std::nullopt;
 }
 
+std::optional<std::size_t> CanSignalMap::frame_index(
+    canid_t id, std::span<const std::uint8_t, 8> payload) const {
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if (frames[i].id != id) continue;
+    if (!frames[i].multiplexed || frames[i].mux.extract_raw(payload) == frames[i].mux_value)
+      return i;
+  }
+  return std::nullopt;
+}
+
 std::vector<canid_t> CanSignalMap::ids() const {
   std::vector<canid_t> out;
   for (const auto& f : frames) out.push_back(f.id);
+  for (const auto& s : status) out.push_back(s.id);
+  for (const auto& c : message_counters) out.push_back(c.id);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 
@@ -214,12 +231,27 @@ CanSignalMap CanSignalMap::load(const std::string& path, const std::string& wher
 std::vector<can_frame> encode_sample(const CanSignalMap& map, const core::ImuSample& sample) {
   std::vector<can_frame> out;
   out.reserve(map.frames.size());
-  for (const auto& layout : map.frames) {
+  // A layout that delimits samples by an opening frame sends that frame first.
+  std::vector<const CanFrameLayout*> order;
+  if (map.delimiting == CanSignalMap::Delimiting::kOpeningFrame)
+    order.push_back(&map.frames[map.opening_frame]);
+  for (const auto& layout : map.frames)
+    if (order.empty() || &layout != order.front()) order.push_back(&layout);
+  for (const CanFrameLayout* layout_ptr : order) {
+    const CanFrameLayout& layout = *layout_ptr;
     can_frame frame{};
     frame.can_id = layout.id;
     frame.len = 8;  // always the full classic payload: simpler receivers, same bus time order
     std::span<std::uint8_t, 8> payload(frame.data);
-    map.sequence.insert_raw(payload, sample.sequence % map.sequence_wrap());
+    if (layout.multiplexed) layout.mux.insert_raw(payload, layout.mux_value);
+    const bool carries_sequence =
+        map.delimiting == CanSignalMap::Delimiting::kSequenceInEveryFrame ||
+        (map.has_sequence && &layout == &map.frames[map.sequence_frame]);
+    if (carries_sequence) map.sequence.insert_raw(payload, sample.sequence % map.sequence_wrap());
+    for (const auto& counter : map.message_counters) {
+      // One frame of each message per sample: its counter steps with the sample's sequence.
+      if (counter.id == layout.id) counter.field.insert_raw(payload, sample.sequence);
+    }
     for (const auto& [which, field] : layout.signals) {
       double value = 0.0;
       switch (which) {
