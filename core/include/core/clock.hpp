@@ -27,6 +27,8 @@ class SteadyClock final : public Clock {
  public:
   explicit SteadyClock(double time_scale = 1.0, double start_s = 0.0);
   double now_s() const override;
+  /// Station seconds per wall second.
+  double time_scale() const { return time_scale_; }
   void sleep_until(double t_s) override;
   bool is_virtual() const override { return false; }
 

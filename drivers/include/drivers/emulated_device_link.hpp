@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -28,8 +29,13 @@ class EmulatedDeviceLink final : public ByteTransport {
   }
   /// Bytes waiting on the line [bytes].
   std::size_t pending() const { return line_.size(); }
+  /// The unit samples on its own whenever the host reads an empty line (one sample of `next`
+  /// per read), as a unit streaming in real time does during a dialogue that watches the
+  /// stream (STIM300); an empty function stops it.
+  void free_run(std::function<core::ImuSample()> next) { free_run_ = std::move(next); }
 
   IoResult read(std::span<std::uint8_t> buffer, std::chrono::milliseconds /*timeout*/) override {
+    if (line_.empty() && free_run_) sample(free_run_());
     // Nothing waits in memory: a timeout is immediate (the dialogue's retries stay fast).
     const std::size_t n = std::min(buffer.size(), line_.size());
     std::copy_n(line_.begin(), n, buffer.begin());
@@ -46,6 +52,7 @@ class EmulatedDeviceLink final : public ByteTransport {
  private:
   std::unique_ptr<ImuDeviceEmulator> device_;
   std::deque<std::uint8_t> line_;
+  std::function<core::ImuSample()> free_run_;
 };
 
 }  // namespace calstand::drivers

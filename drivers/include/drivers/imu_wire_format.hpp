@@ -23,6 +23,9 @@ struct WireFormatSettings {
   nlohmann::json options = nlohmann::json::object();
   /// Where the options sit in the station file ("imus[0].connection.xsens"), for errors.
   std::string where;
+  /// Station seconds per wall second (`calstand sim-station --time-scale K` runs the units K
+  /// times faster): a dialogue that times the unit's stream on the wall clock divides by it.
+  double time_scale = 1.0;
 };
 
 /// A device that refused its configuration or did not answer it. what() says which request

@@ -35,8 +35,7 @@ std::string epson_ascii(const std::vector<std::uint16_t>& words) {
 }  // namespace
 
 Configurator::Configurator(const WireFormatSettings& settings)
-    : settings_(settings),
-      options_(Options::from_settings(settings, /*require_rate=*/false)) {}
+    : settings_(settings), options_(Options::from_settings(settings, /*require_rate=*/false)) {}
 
 void Configurator::write_byte(ByteTransport& link, std::uint8_t address, std::uint8_t value) {
   const auto command = write_command(address, value);

@@ -37,7 +37,11 @@ SerialImuConnection SerialImuConnection::from_json(const json& c, const std::str
 
 SerialImu::SerialImu(const core::ImuConfig& config, core::Clock& clock, const std::string& where)
     : StreamingImu(config.name, clock) {
-  const auto c = SerialImuConnection::from_json(config.connection, where);
+  auto c = SerialImuConnection::from_json(config.connection, where);
+  // A station rehearsed K times faster than the wall (sim-station) has units that are too.
+  if (const auto* steady = dynamic_cast<const core::SteadyClock*>(&clock)) {
+    c.settings.time_scale = steady->time_scale();
+  }
   const ImuWireFormat& format = imu_wire_format(c.format, where + ".format");
   auto port = std::make_unique<SerialPort>(c.serial);
   port_ = port.get();

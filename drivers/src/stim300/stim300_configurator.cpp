@@ -54,7 +54,10 @@ struct Stim300Observed {
   std::optional<double> rate_hz;  // counter steps over host time, after the backlog
 };
 
-Stim300Observed stim300_observe(ByteTransport& link, std::chrono::milliseconds observe) {
+/// What the unit streams over `observe` of wall time; its rate in station time, the wall's
+/// `time_scale` times slower (a unit rehearsed by sim-station at K times the wall).
+Stim300Observed stim300_observe(ByteTransport& link, std::chrono::milliseconds observe,
+                                double time_scale) {
   using Clock = std::chrono::steady_clock;
   Stim300Decoder decoder(Stim300Options{}, 2000.0);  // any identifier, either termination
   std::array<std::uint8_t, 4096> chunk{};
@@ -84,7 +87,7 @@ Stim300Observed stim300_observe(ByteTransport& link, std::chrono::milliseconds o
   o.terminated = decoder.stats().terminated_datagrams;
   if (first && last && last->second - first->second >= kStim300MinObserved) {
     const double seconds = std::chrono::duration<double>(last->first - first->first).count();
-    if (seconds > 0.0) o.rate_hz = (last->second - first->second) / seconds;
+    if (seconds > 0.0) o.rate_hz = (last->second - first->second) / (seconds * time_scale);
   }
   return o;
 }
@@ -110,7 +113,7 @@ UnitIdentity Stim300Configurator::configure(ByteTransport& link) {
   // interpreted (docs/protocols.md, "open details"): what the unit streams is checked instead.
   stim300_ask(link, kCommandConfiguration, kConfiguration, "C (configuration)");
 
-  const auto seen = stim300_observe(link, observe_);
+  const auto seen = stim300_observe(link, observe_, settings_.time_scale);
   const std::string unit = fmt::format("STIM300 {} (serial {})", part, identity.serial);
   if (!seen.datagram) {
     throw DeviceConfigError(fmt::format(
