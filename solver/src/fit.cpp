@@ -24,6 +24,13 @@ bool uses_channel(SensorRows rows, int channel) {
   return true;
 }
 
+/// A channel the unit does not measure (a 5-DoF sensor's missing axis, delivered as NaN):
+/// no step has a mean for it. Its rows are left out, so its terms are not determined.
+bool unmeasured(const std::vector<StepSummary>& steps, int channel) {
+  return std::all_of(steps.begin(), steps.end(),
+                     [&](const StepSummary& s) { return std::isnan(s.measured[channel]); });
+}
+
 /// Parameters the rules of the physics exclude before any numerics: a temperature polynomial of
 /// order k needs k + 1 distinct temperatures, a temperature scale two.
 void temperature_rules(const Model& model, std::size_t temperatures, std::vector<bool>& excluded,
@@ -152,7 +159,7 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   const std::size_t P = model.size();
   std::vector<int> channels;
   for (int c = 0; c < kChannels; ++c) {
-    if (uses_channel(options.rows, c)) channels.push_back(c);
+    if (uses_channel(options.rows, c) && !unmeasured(steps, c)) channels.push_back(c);
   }
   const auto S = static_cast<Eigen::Index>(steps.size());
   const auto rows = static_cast<Eigen::Index>(steps.size() * channels.size());

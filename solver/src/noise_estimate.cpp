@@ -119,6 +119,11 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       ch.note = "its sensor's rows are not part of this fit";
       continue;
     }
+    if (std::all_of(steps.begin(), steps.end(),
+                    [&](const StepSummary& s) { return std::isnan(s.measured[c]); })) {
+      ch.note = "the unit does not measure it (no step has a mean): its terms are not determined";
+      continue;
+    }
     if (!fitted) {
       ch.note =
           "the run has fewer step means than the catalogue has parameters: the wander "

@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "core/error.hpp"
 #include "sim/noise.hpp"
 #include "sim_run.hpp"
+#include "solver/noise_estimate.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -234,6 +236,39 @@ TEST(Fit, JsonStepsCarryTheirSignals) {
     if (!summaries[i].is_static && rate > 10.0) saw_a_rate_step = true;
   }
   EXPECT_TRUE(saw_a_rate_step);
+}
+
+}  // namespace
+}  // namespace calstand::solver
+
+namespace calstand::solver {
+namespace {
+
+// A unit that does not measure one channel (a 5-DoF automotive sensor without pitch rate, read
+// through a DBC file, delivers it as NaN): the fit uses the channels it has, and the terms of
+// the missing one are not determined, said so; nothing becomes NaN.
+TEST(Fit, AChannelTheUnitDoesNotMeasureIsLeftOutNotNaN) {
+  const sim::ImuTruth truth = random_unit(1);
+  const Model model = Model::parse(kBaseModel);
+  RunData data = simulate_run(truth, base_campaign(), 1);
+  for (auto& step : data.steps) {
+    for (auto& s : step.samples) s.gyro_dps[1] = std::numeric_limits<double>::quiet_NaN();
+  }
+  for (const FitResult& fit : {fit_at_noise_floor(data, model), fit_run(data, model)}) {
+    EXPECT_TRUE(std::isfinite(fit.chi2_dof));
+    bool gyro_y_undetermined = false;
+    for (const auto& u : fit.unidentifiable) {
+      if (u.name == "gyro_bias.y") gyro_y_undetermined = true;
+    }
+    EXPECT_TRUE(gyro_y_undetermined);
+    for (const auto& p : fit.parameters) {
+      EXPECT_TRUE(std::isfinite(p.value)) << p.name;
+      EXPECT_TRUE(std::isfinite(p.sigma)) << p.name;
+      if (p.name.rfind("accel", 0) == 0 || p.name == "gyro_bias.x") {
+        EXPECT_NEAR(p.value, truth.parameter(p.name), 4.0 * p.sigma) << p.name;
+      }
+    }
+  }
 }
 
 }  // namespace
