@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu.hpp"
 
 namespace calstand::drivers {
@@ -100,17 +101,13 @@ class CalstandFrameDecoder final : public FrameDecoder {
 
   const ImuFrameCounters& stats() const { return stats_; }
   /// Bytes held back waiting for the rest of a frame [bytes].
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
 
  private:
-  void discard(std::size_t count);
   void check_sequence(std::uint32_t sequence);
 
   std::uint64_t sequence_modulus_;
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;  // first unconsumed byte in buffer_ (compacted lazily)
-  bool hunting_ = false;   // discarding bytes since the last good frame
-  bool quiet_ = false;     // after restart(): bytes before the first good frame are uncounted
+  FrameHunt hunt_;
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
   ImuFrameCounters stats_;
