@@ -28,10 +28,8 @@ std::uint64_t xsens_read_be(const std::uint8_t* p, std::size_t size_bytes) {
 XsensDecoder::XsensDecoder() : temperature_c_(std::numeric_limits<double>::quiet_NaN()) {}
 
 void XsensDecoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   have_sequence_ = false;
   // Device time and the latest temperature survive: a flush of the line does not restart the
   // device, and its clock goes on.
@@ -41,17 +39,6 @@ std::vector<std::string> XsensDecoder::take_device_reports() {
   std::vector<std::string> out;
   out.swap(reports_);
   return out;
-}
-
-void XsensDecoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    stats_.start_bytes += count;
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
 }
 
 void XsensDecoder::device_restarted(const std::string& why) {
@@ -189,37 +176,33 @@ void XsensDecoder::on_message(const Message& message, std::vector<core::ImuSampl
 
 std::size_t XsensDecoder::feed(std::span<const std::uint8_t> bytes,
                                std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   const std::size_t before = out.size();
-  while (start_ < buffer_.size()) {
-    const std::uint8_t* p = buffer_.data() + start_;
-    const std::size_t avail = buffer_.size() - start_;
+  while (hunt_.buffered() > 0) {
+    const std::uint8_t* p = hunt_.bytes().data();
+    const std::size_t avail = hunt_.buffered();
     if (p[0] != kPreamble) {
       const auto* next = std::find(p + 1, p + avail, kPreamble);
-      discard(static_cast<std::size_t>(next - p));
+      hunt_.discard(static_cast<std::size_t>(next - p));
       continue;
     }
     Scan scan = scan_message({p, avail});
     if (scan.status == ScanStatus::kIncomplete) break;
     if (scan.status != ScanStatus::kMessage) {
       // Drop only the preamble: a real message may begin inside this bad candidate.
-      if (!quiet_) {
+      if (!hunt_.quiet()) {
         if (scan.status == ScanStatus::kBadChecksum) ++stats_.crc_errors;
         if (scan.status == ScanStatus::kBadLength) ++stats_.length_errors;
       }
-      discard(1);
+      hunt_.discard(1);
       continue;
     }
-    start_ += scan.size;
+    hunt_.consume(scan.size);
     stats_.message_bytes += scan.size;
-    hunting_ = false;
-    quiet_ = false;
     on_message(scan.message, out);
   }
+  copy_hunt_counters(hunt_, stats_);
   return out.size() - before;
 }
 
