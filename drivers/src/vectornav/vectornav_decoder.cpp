@@ -18,10 +18,8 @@ VectornavDecoder::VectornavDecoder(double sample_rate_hz, bool prefer_compensate
       prefer_compensated_(prefer_compensated) {}
 
 void VectornavDecoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   have_time_ = false;
 }
 
@@ -29,23 +27,6 @@ std::vector<std::string> VectornavDecoder::take_device_reports() {
   std::vector<std::string> out;
   out.swap(reports_);
   return out;
-}
-
-void VectornavDecoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    stats_.start_bytes += count;
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
-}
-
-void VectornavDecoder::consume(std::size_t count) {
-  start_ += count;
-  hunting_ = false;
-  quiet_ = false;
 }
 
 void VectornavDecoder::on_ascii(const AsciiMessage& message) {
@@ -95,31 +76,28 @@ bool VectornavDecoder::on_binary(const BinaryFields& f, std::vector<core::ImuSam
 
 std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
                                    std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   std::size_t decoded = 0;
-  while (start_ < buffer_.size()) {
-    const std::span<const std::uint8_t> rest(buffer_.data() + start_, buffer_.size() - start_);
+  while (hunt_.buffered() > 0) {
+    const std::span<const std::uint8_t> rest = hunt_.bytes();
     if (rest[0] == '$') {
       AsciiMessage message;
       const Scan scan = parse_ascii(rest, false, message);
       if (scan == Scan::kIncomplete) break;
       if (scan == Scan::kInvalid) {
-        discard(1);
+        hunt_.discard(1);
         continue;
       }
       stats_.ascii_bytes += message.size;
-      consume(message.size);
+      hunt_.consume(message.size);
       on_ascii(message);
       continue;
     }
     if (rest[0] != kSync) {
       const auto next = std::find_if(rest.begin() + 1, rest.end(),
                                      [](std::uint8_t b) { return b == kSync || b == '$'; });
-      discard(static_cast<std::size_t>(next - rest.begin()));
+      hunt_.discard(static_cast<std::size_t>(next - rest.begin()));
       continue;
     }
     BinaryHeader header;
@@ -127,24 +105,25 @@ std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
     if (scan == Scan::kIncomplete) break;
     if (scan == Scan::kInvalid) {
       // Checked before waiting for the body: an unmeasurable header must not stall the stream.
-      if (!quiet_) ++stats_.length_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.length_errors;
+      hunt_.discard(1);
       continue;
     }
     const std::size_t size = header.message_bytes();
     if (rest.size() < size) break;
     // The CRC over everything after the sync, the CRC included, is 0 for a good message.
     if (crc16(rest.subspan(1, size - 1)) != 0) {
-      if (!quiet_) ++stats_.crc_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.crc_errors;
+      hunt_.discard(1);
       continue;
     }
     const BinaryFields fields = parse_binary_payload(rest.first(size), header);
     ++stats_.frames;
     stats_.frame_bytes += size;
-    consume(size);
+    hunt_.consume(size);
     if (on_binary(fields, out)) ++decoded;
   }
+  copy_hunt_counters(hunt_, stats_);
   return decoded;
 }
 
