@@ -2,7 +2,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace calstand::drivers {
@@ -77,5 +79,12 @@ void copy_hunt_counters(const FrameHunt& hunt, Stats& stats) {
   stats.resyncs = c.resyncs;
   stats.start_bytes = c.start_bytes;
 }
+
+}  // namespace calstand::drivers
+
+namespace calstand::drivers {
+
+/// The same for a decoder that keeps its counters by name (those of FrameHunt::Counters).
+void copy_hunt_counters(const FrameHunt& hunt, std::map<std::string, std::uint64_t>& stats);
 
 }  // namespace calstand::drivers

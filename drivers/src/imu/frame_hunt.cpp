@@ -41,4 +41,12 @@ void FrameHunt::restart(Dropped dropped) {
   hunting_ = false;
 }
 
+void copy_hunt_counters(const FrameHunt& hunt, std::map<std::string, std::uint64_t>& stats) {
+  const FrameHunt::Counters& c = hunt.counters();
+  stats["bytes_fed"] = c.bytes_fed;
+  stats["garbage_bytes"] = c.garbage_bytes;
+  stats["resyncs"] = c.resyncs;
+  stats["start_bytes"] = c.start_bytes;
+}
+
 }  // namespace calstand::drivers
