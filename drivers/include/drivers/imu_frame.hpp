@@ -38,9 +38,15 @@ inline constexpr std::size_t kCrcSize = 2;       ///< [bytes]
 inline constexpr std::size_t kFrameSize = kHeaderSize + kPayloadSize + kCrcSize;  ///< 45 bytes
 }  // namespace imu_frame
 
+/// CRC-16 with polynomial 0x1021, no input or output reflection and no final XOR, starting
+/// from `initial`: the family the calstand frame (0xFFFF) and VectorNav (0) both use.
+std::uint16_t crc16_ccitt(std::span<const std::uint8_t> bytes, std::uint16_t initial);
+
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no input or output
 /// reflection, no final XOR. Check value over ASCII "123456789" is 0x29B1.
-std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes);
+inline std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes) {
+  return crc16_ccitt(bytes, 0xFFFF);
+}
 
 /// One calstand frame for `sample` (kFrameSize bytes). Gyro, accel and temperature are narrowed
 /// to f32, as the device sends them; receive_time_s is not sent (the receiver stamps it).

@@ -38,9 +38,10 @@ double get_f32(const std::uint8_t* p) {
 
 }  // namespace
 
-std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes) {
-  // Bitwise rather than table-driven: 45-byte frames at a few kHz do not need the speed.
-  std::uint16_t crc = 0xFFFF;
+std::uint16_t crc16_ccitt(std::span<const std::uint8_t> bytes, std::uint16_t initial) {
+  // Bitwise rather than table-driven: frames of tens of bytes at a few kHz do not need the
+  // speed.
+  std::uint16_t crc = initial;
   for (std::uint8_t byte : bytes) {
     crc = static_cast<std::uint16_t>(crc ^ (byte << 8));
     for (int bit = 0; bit < 8; ++bit) {
