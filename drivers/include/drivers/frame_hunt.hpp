@@ -80,9 +80,16 @@ void copy_hunt_counters(const FrameHunt& hunt, Stats& stats) {
   stats.start_bytes = c.start_bytes;
 }
 
-}  // namespace calstand::drivers
-
-namespace calstand::drivers {
+/// The counters every frame decoder publishes under these names (FrameDecoder::counters()),
+/// read from its counters struct: FrameHunt's four and frames, crc_errors, length_errors and
+/// sequence_gaps. A decoder adds its own to the map.
+template <class Stats>
+std::map<std::string, std::uint64_t> frame_decoder_counters(const Stats& stats) {
+  return {{"bytes_fed", stats.bytes_fed},         {"frames", stats.frames},
+          {"crc_errors", stats.crc_errors},       {"length_errors", stats.length_errors},
+          {"garbage_bytes", stats.garbage_bytes}, {"resyncs", stats.resyncs},
+          {"sequence_gaps", stats.sequence_gaps}, {"start_bytes", stats.start_bytes}};
+}
 
 /// The same for a decoder that keeps its counters by name (those of FrameHunt::Counters).
 void copy_hunt_counters(const FrameHunt& hunt, std::map<std::string, std::uint64_t>& stats);

@@ -141,10 +141,7 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
 }
 
 std::map<std::string, std::uint64_t> CalstandFrameDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},         {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},       {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes}, {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps}, {"start_bytes", stats_.start_bytes}};
+  return frame_decoder_counters(stats_);
 }
 
 }  // namespace calstand::drivers

@@ -212,16 +212,10 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
 }
 
 std::map<std::string, std::uint64_t> Stim300Decoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"startup_datagrams", stats_.startup_datagrams},
-          {"status_flags", stats_.status_flags}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert(
+      {{"startup_datagrams", stats_.startup_datagrams}, {"status_flags", stats_.status_flags}});
+  return out;
 }
 
 }  // namespace calstand::drivers::stim300

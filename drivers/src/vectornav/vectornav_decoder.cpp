@@ -128,18 +128,12 @@ std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
 }
 
 std::map<std::string, std::uint64_t> VectornavDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"ascii_messages", stats_.ascii_messages},
-          {"device_errors", stats_.device_errors},
-          {"device_restarts", stats_.device_restarts},
-          {"incomplete_frames", stats_.incomplete_frames}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert({{"ascii_messages", stats_.ascii_messages},
+              {"device_errors", stats_.device_errors},
+              {"device_restarts", stats_.device_restarts},
+              {"incomplete_frames", stats_.incomplete_frames}});
+  return out;
 }
 
 }  // namespace calstand::drivers::vectornav

@@ -207,21 +207,15 @@ std::size_t XsensDecoder::feed(std::span<const std::uint8_t> bytes,
 }
 
 std::map<std::string, std::uint64_t> XsensDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"messages", stats_.messages},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"packet_errors", stats_.packet_errors},
-          {"incomplete_packets", stats_.incomplete_packets},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"device_errors", stats_.device_errors},
-          {"device_restarts", stats_.device_restarts},
-          {"awaiting_temperature", stats_.awaiting_temperature},
-          {"invalid_samples", stats_.invalid_samples}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert({{"messages", stats_.messages},
+              {"packet_errors", stats_.packet_errors},
+              {"incomplete_packets", stats_.incomplete_packets},
+              {"device_errors", stats_.device_errors},
+              {"device_restarts", stats_.device_restarts},
+              {"awaiting_temperature", stats_.awaiting_temperature},
+              {"invalid_samples", stats_.invalid_samples}});
+  return out;
 }
 
 }  // namespace calstand::drivers::xsens
