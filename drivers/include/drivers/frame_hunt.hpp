@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -43,6 +44,18 @@ class FrameHunt {
   /// Drops the first `count` bytes (count <= buffered()) as not a frame: garbage while the
   /// stream is locked or hunting (a new run counts one resync), start bytes while quiet().
   void discard(std::size_t count);
+  /// Hunts: discards the bytes before the first one `starts_frame` accepts (all of them when
+  /// none does; the first byte is not tried). Returns whether it discarded, i.e. whether the
+  /// first byte could not start a frame. One call discards a whole run of garbage, so a decoder
+  /// calls it before looking at a candidate.
+  template <class StartsFrame>
+  bool discard_until(StartsFrame starts_frame) {
+    const std::span<const std::uint8_t> rest = bytes();
+    if (rest.empty() || starts_frame(rest[0])) return false;
+    const auto next = std::find_if(rest.begin() + 1, rest.end(), starts_frame);
+    discard(static_cast<std::size_t>(next - rest.begin()));
+    return true;
+  }
   /// Takes the first `count` bytes (count <= buffered()) as a good frame: the hunt is over and
   /// the quiet state after restart() ends.
   void consume(std::size_t count);

@@ -128,11 +128,7 @@ std::size_t Decoder::feed(std::span<const std::uint8_t> bytes, std::vector<core:
   while (hunt_.buffered() > 0) {
     const std::uint8_t* p = hunt_.bytes().data();
     const std::size_t avail = hunt_.buffered();
-    if (p[0] != kBurstHeader) {
-      const auto* next = std::find(p + 1, p + avail, kBurstHeader);
-      hunt_.discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kBurstHeader; })) continue;
     if (avail < frame_size_) break;
     if (p[frame_size_ - 1] != kDelimiter) {
       // No end byte where this width puts it: not a frame of the configured length.

@@ -96,11 +96,7 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     const std::size_t avail = hunt_.buffered();
 
     // Hunt: skip to the next 0xA5 (a lone trailing 0xA5 may be the start of a frame).
-    if (p[0] != kSync0) {
-      const auto* next = std::find(p + 1, p + avail, kSync0);
-      hunt_.discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kSync0; })) continue;
     if (avail < 2) break;
     if (p[1] != kSync1) {
       hunt_.discard(1);

@@ -155,10 +155,8 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
         continue;
       }
     }
-    if (!is_candidate(p[0])) {
-      const auto* next =
-          std::find_if(p + 1, p + avail, [this](std::uint8_t b) { return is_candidate(b); });
-      discard(static_cast<std::size_t>(next - p));
+    if (hunt_.discard_until([this](std::uint8_t b) { return is_candidate(b); })) {
+      after_datagram_ = false;  // as discard() does: a CR LF after garbage ends no datagram
       continue;
     }
     if (is_startup_id(p[0])) {

@@ -94,12 +94,8 @@ std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
       on_ascii(message);
       continue;
     }
-    if (rest[0] != kSync) {
-      const auto next = std::find_if(rest.begin() + 1, rest.end(),
-                                     [](std::uint8_t b) { return b == kSync || b == '$'; });
-      hunt_.discard(static_cast<std::size_t>(next - rest.begin()));
-      continue;
-    }
+    // Not '$' here: hunt for the next binary sync byte or ASCII message.
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kSync || b == '$'; })) continue;
     BinaryHeader header;
     const Scan scan = parse_binary_header(rest, header);
     if (scan == Scan::kIncomplete) break;

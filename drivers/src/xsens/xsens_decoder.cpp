@@ -182,11 +182,7 @@ std::size_t XsensDecoder::feed(std::span<const std::uint8_t> bytes,
   while (hunt_.buffered() > 0) {
     const std::uint8_t* p = hunt_.bytes().data();
     const std::size_t avail = hunt_.buffered();
-    if (p[0] != kPreamble) {
-      const auto* next = std::find(p + 1, p + avail, kPreamble);
-      hunt_.discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kPreamble; })) continue;
     Scan scan = scan_message({p, avail});
     if (scan.status == ScanStatus::kIncomplete) break;
     if (scan.status != ScanStatus::kMessage) {
