@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <utility>
 
 namespace calstand::drivers::stim300 {
 namespace {
@@ -35,9 +36,7 @@ void Stim300Decoder::restart() {
 }
 
 std::vector<std::string> Stim300Decoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
+  return std::exchange(reports_, {});
 }
 
 void Stim300Decoder::discard(std::size_t count) {

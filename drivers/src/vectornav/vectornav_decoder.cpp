@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace calstand::drivers::vectornav {
 namespace {
@@ -24,9 +25,7 @@ void VectornavDecoder::restart() {
 }
 
 std::vector<std::string> VectornavDecoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
+  return std::exchange(reports_, {});
 }
 
 void VectornavDecoder::on_ascii(const AsciiMessage& message) {

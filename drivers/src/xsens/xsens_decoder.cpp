@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 namespace calstand::drivers::xsens {
 namespace {
@@ -35,11 +36,7 @@ void XsensDecoder::restart() {
   // device, and its clock goes on.
 }
 
-std::vector<std::string> XsensDecoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
-}
+std::vector<std::string> XsensDecoder::take_device_reports() { return std::exchange(reports_, {}); }
 
 void XsensDecoder::device_restarted(const std::string& why) {
   ++stats_.device_restarts;
