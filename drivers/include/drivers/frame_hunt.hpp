@@ -44,10 +44,10 @@ class FrameHunt {
   /// Drops the first `count` bytes (count <= buffered()) as not a frame: garbage while the
   /// stream is locked or hunting (a new run counts one resync), start bytes while quiet().
   void discard(std::size_t count);
-  /// Hunts: discards the bytes before the first one `starts_frame` accepts (all of them when
-  /// none does; the first byte is not tried). Returns whether it discarded, i.e. whether the
-  /// first byte could not start a frame. One call discards a whole run of garbage, so a decoder
-  /// calls it before looking at a candidate.
+  /// Hunts: when the first byte cannot start a frame (`starts_frame` rejects it), discards it
+  /// and every byte up to the next one `starts_frame` accepts (all of them when none does) and
+  /// returns true; otherwise discards nothing and returns false. One call discards a whole run
+  /// of garbage (one resync), so a decoder calls it before looking at a candidate.
   template <class StartsFrame>
   bool discard_until(StartsFrame starts_frame) {
     const std::span<const std::uint8_t> rest = bytes();
@@ -72,6 +72,7 @@ class FrameHunt {
   /// then, since a candidate cut by the flush is not a fault of the line.
   bool quiet() const { return quiet_; }
 
+  /// Since construction; restart() does not reset them.
   const Counters& counters() const { return counters_; }
 
  private:
