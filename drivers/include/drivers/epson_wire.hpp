@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "drivers/epson_protocol.hpp"
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu_wire_format.hpp"
 
 namespace calstand::drivers::epson {
@@ -39,11 +40,10 @@ class Decoder final : public FrameDecoder {
   void identified(const UnitIdentity& unit) override;
   /// Bytes held back waiting for the rest of a frame [bytes]. Every byte fed is in exactly one
   /// of a frame, garbage_bytes, start_bytes or buffered().
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
 
  private:
   const ModelScale* model();
-  void discard(std::size_t count);
   void decode(const BurstFields& f, std::vector<core::ImuSample>& out);
   void note_count_step(std::uint64_t delta);
   static constexpr int kStepsBeforeReport = 16;
@@ -53,10 +53,7 @@ class Decoder final : public FrameDecoder {
   std::size_t frame_size_;
   std::uint64_t count_step_;  // COUNT ticks per output sample
   double count_rate_hz_;      // COUNT ticks per second
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;
-  bool hunting_ = false;
-  bool quiet_ = false;
+  FrameHunt hunt_;
   bool have_count_ = false;
   bool check_gap_ = false;
   std::uint16_t last_count_ = 0;

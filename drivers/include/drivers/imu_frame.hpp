@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu.hpp"
 
 namespace calstand::drivers {
@@ -37,9 +38,15 @@ inline constexpr std::size_t kCrcSize = 2;       ///< [bytes]
 inline constexpr std::size_t kFrameSize = kHeaderSize + kPayloadSize + kCrcSize;  ///< 45 bytes
 }  // namespace imu_frame
 
+/// CRC-16 with polynomial 0x1021, no input or output reflection and no final XOR, starting
+/// from `initial`: the family the calstand frame (0xFFFF) and VectorNav (0) both use.
+std::uint16_t crc16_ccitt(std::span<const std::uint8_t> bytes, std::uint16_t initial);
+
 /// CRC-16/CCITT-FALSE: polynomial 0x1021, initial value 0xFFFF, no input or output
 /// reflection, no final XOR. Check value over ASCII "123456789" is 0x29B1.
-std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes);
+inline std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes) {
+  return crc16_ccitt(bytes, 0xFFFF);
+}
 
 /// One calstand frame for `sample` (kFrameSize bytes). Gyro, accel and temperature are narrowed
 /// to f32, as the device sends them; receive_time_s is not sent (the receiver stamps it).
@@ -100,17 +107,13 @@ class CalstandFrameDecoder final : public FrameDecoder {
 
   const ImuFrameCounters& stats() const { return stats_; }
   /// Bytes held back waiting for the rest of a frame [bytes].
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
 
  private:
-  void discard(std::size_t count);
   void check_sequence(std::uint32_t sequence);
 
   std::uint64_t sequence_modulus_;
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;  // first unconsumed byte in buffer_ (compacted lazily)
-  bool hunting_ = false;   // discarding bytes since the last good frame
-  bool quiet_ = false;     // after restart(): bytes before the first good frame are uncounted
+  FrameHunt hunt_;
   bool have_sequence_ = false;
   std::uint32_t last_sequence_ = 0;
   ImuFrameCounters stats_;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu_frame.hpp"
 #include "drivers/stim300_options.hpp"
 
@@ -47,7 +48,7 @@ class Stim300Decoder final : public FrameDecoder {
   std::vector<std::string> take_device_reports() override;
 
   const Stim300Counters& stats() const { return stats_; }
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
   /// The identifier the decoder reads (the configured one, or the first that arrived).
   std::optional<std::uint8_t> datagram_id() const { return locked_id_; }
 
@@ -62,10 +63,7 @@ class Stim300Decoder final : public FrameDecoder {
   Stim300Options options_;
   double sample_rate_hz_;
   std::optional<std::uint8_t> locked_id_;
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;
-  bool hunting_ = false;
-  bool quiet_ = false;
+  FrameHunt hunt_;
   bool after_datagram_ = false;  // a CR LF here ends the previous datagram (termination unset)
   bool have_counter_ = false;
   bool count_afresh_ = false;  // the unit restarted: the next counter starts the count

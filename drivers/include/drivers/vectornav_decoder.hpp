@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu_frame.hpp"
 #include "drivers/vectornav_protocol.hpp"
 
@@ -49,20 +50,15 @@ class VectornavDecoder final : public FrameDecoder {
   std::vector<std::string> take_device_reports() override;
 
   const DecoderCounters& stats() const { return stats_; }
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
 
  private:
-  void discard(std::size_t count);
-  void consume(std::size_t count);
   void on_ascii(const AsciiMessage& message);
   bool on_binary(const BinaryFields& fields, std::vector<core::ImuSample>& out);
 
   double sample_rate_hz_;
   bool prefer_compensated_;
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;
-  bool hunting_ = false;
-  bool quiet_ = false;
+  FrameHunt hunt_;
   bool have_time_ = false;
   std::uint64_t last_time_ns_ = 0;
   std::uint32_t last_sequence_ = 0;

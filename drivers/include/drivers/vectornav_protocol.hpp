@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "core/imu_sample.hpp"
+#include "drivers/imu_frame.hpp"
 #include "drivers/imu_wire_format.hpp"
 
 namespace calstand::drivers::vectornav {
@@ -66,7 +67,7 @@ std::size_t field_size_bytes(int group_bit, int bit);
 /// CRC-16 of the binary message [UM001 §3.8.3 "16-bit CRC": CRC16-CCITT]: polynomial 0x1021,
 /// initial value 0, no reflection, no final XOR (the XMODEM form). Check value over ASCII
 /// "123456789" is 0x31C3.
-std::uint16_t crc16(std::span<const std::uint8_t> bytes);
+inline std::uint16_t crc16(std::span<const std::uint8_t> bytes) { return crc16_ccitt(bytes, 0); }
 
 /// The groups and field masks of a binary message's header.
 struct BinaryHeader {

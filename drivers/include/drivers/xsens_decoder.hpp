@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/frame_hunt.hpp"
 #include "drivers/imu_frame.hpp"
 #include "drivers/xsens_protocol.hpp"
 
@@ -50,19 +51,15 @@ class XsensDecoder final : public FrameDecoder {
   std::vector<std::string> take_device_reports() override;
 
   const DecoderCounters& stats() const { return stats_; }
-  std::size_t buffered() const { return buffer_.size() - start_; }
+  std::size_t buffered() const { return hunt_.buffered(); }
 
  private:
-  void discard(std::size_t count);
   void on_message(const Message& message, std::vector<core::ImuSample>& out);
   bool on_mtdata2(std::span<const std::uint8_t> data, core::ImuSample& sample);
   double unwrap_time(std::uint32_t ticks);
   void device_restarted(const std::string& why);
 
-  std::vector<std::uint8_t> buffer_;
-  std::size_t start_ = 0;
-  bool hunting_ = false;
-  bool quiet_ = false;
+  FrameHunt hunt_;
   bool have_sequence_ = false;
   std::uint16_t last_sequence_ = 0;
   bool have_time_ = false;

@@ -29,10 +29,8 @@ Decoder::Decoder(Options options, std::shared_ptr<IdentifiedModel> identified)
 }
 
 void Decoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   // The counter keeps its epoch (device time stays continuous over a reconnect); only the
   // gap check skips the first frame.
   check_gap_ = false;
@@ -49,17 +47,6 @@ std::map<std::string, std::uint64_t> Decoder::counters() const { return stats_; 
 const ModelScale* Decoder::model() {
   if (!options_.model.empty()) return find_model(options_.model);
   return identified_ ? identified_->model.load() : nullptr;
-}
-
-void Decoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    stats_["start_bytes"] += count;
-    return;
-  }
-  if (!hunting_) ++stats_["resyncs"];
-  hunting_ = true;
-  stats_["garbage_bytes"] += count;
 }
 
 void Decoder::note_count_step(std::uint64_t delta) {
@@ -135,40 +122,32 @@ void Decoder::decode(const BurstFields& f, std::vector<core::ImuSample>& out) {
 }
 
 std::size_t Decoder::feed(std::span<const std::uint8_t> bytes, std::vector<core::ImuSample>& out) {
-  stats_["bytes_fed"] += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   const std::size_t before = out.size();
-  while (buffer_.size() > start_) {
-    const std::uint8_t* p = buffer_.data() + start_;
-    const std::size_t avail = buffer_.size() - start_;
-    if (p[0] != kBurstHeader) {
-      const auto* next = std::find(p + 1, p + avail, kBurstHeader);
-      discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+  while (hunt_.buffered() > 0) {
+    const std::uint8_t* p = hunt_.bytes().data();
+    const std::size_t avail = hunt_.buffered();
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kBurstHeader; })) continue;
     if (avail < frame_size_) break;
     if (p[frame_size_ - 1] != kDelimiter) {
       // No end byte where this width puts it: not a frame of the configured length.
-      if (!quiet_) ++stats_["length_errors"];
-      discard(1);
+      if (!hunt_.quiet()) ++stats_["length_errors"];
+      hunt_.discard(1);
       continue;
     }
     const auto fields = parse_burst({p, frame_size_}, options_.width_bits);
     if (!fields) {
       // A real frame may start inside this bad candidate: drop only its header byte.
-      if (!quiet_) ++stats_["crc_errors"];
-      discard(1);
+      if (!hunt_.quiet()) ++stats_["crc_errors"];
+      hunt_.discard(1);
       continue;
     }
     ++stats_["frames"];
-    hunting_ = false;
-    quiet_ = false;
-    start_ += frame_size_;
+    hunt_.consume(frame_size_);
     decode(*fields, out);
   }
+  copy_hunt_counters(hunt_, stats_);
   return out.size() - before;
 }
 

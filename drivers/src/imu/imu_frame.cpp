@@ -38,9 +38,10 @@ double get_f32(const std::uint8_t* p) {
 
 }  // namespace
 
-std::uint16_t crc16_ccitt_false(std::span<const std::uint8_t> bytes) {
-  // Bitwise rather than table-driven: 45-byte frames at a few kHz do not need the speed.
-  std::uint16_t crc = 0xFFFF;
+std::uint16_t crc16_ccitt(std::span<const std::uint8_t> bytes, std::uint16_t initial) {
+  // Bitwise rather than table-driven: frames of tens of bytes at a few kHz do not need the
+  // speed.
+  std::uint16_t crc = initial;
   for (std::uint8_t byte : bytes) {
     crc = static_cast<std::uint16_t>(crc ^ (byte << 8));
     for (int bit = 0; bit < 8; ++bit) {
@@ -70,23 +71,9 @@ CalstandFrameDecoder::CalstandFrameDecoder(std::uint64_t sequence_modulus)
     : sequence_modulus_(sequence_modulus == 0 ? std::uint64_t{1} << 32 : sequence_modulus) {}
 
 void CalstandFrameDecoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   have_sequence_ = false;
-}
-
-void CalstandFrameDecoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    // Still the tail of a frame cut by the input flush: not a fault of the line.
-    stats_.start_bytes += count;
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
 }
 
 void CalstandFrameDecoder::check_sequence(std::uint32_t sequence) {
@@ -101,34 +88,25 @@ void CalstandFrameDecoder::check_sequence(std::uint32_t sequence) {
 
 std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
                                        std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  // Compact before appending so the buffer never holds more than one partial frame plus the
-  // new bytes, however long the stream runs.
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   std::size_t decoded = 0;
-  while (buffer_.size() - start_ >= 1) {
-    const std::uint8_t* p = buffer_.data() + start_;
-    const std::size_t avail = buffer_.size() - start_;
+  while (hunt_.buffered() >= 1) {
+    const std::uint8_t* p = hunt_.bytes().data();
+    const std::size_t avail = hunt_.buffered();
 
     // Hunt: skip to the next 0xA5 (a lone trailing 0xA5 may be the start of a frame).
-    if (p[0] != kSync0) {
-      const auto* next = std::find(p + 1, p + avail, kSync0);
-      discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kSync0; })) continue;
     if (avail < 2) break;
     if (p[1] != kSync1) {
-      discard(1);
+      hunt_.discard(1);
       continue;
     }
     if (avail < kHeaderSize) break;
     if (p[2] != kPayloadSize) {
       // Checked before waiting for the body: an impossible length must not stall the stream.
-      if (!quiet_) ++stats_.length_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.length_errors;
+      hunt_.discard(1);
       continue;
     }
     if (avail < kFrameSize) break;
@@ -136,8 +114,8 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     const auto sent_crc = static_cast<std::uint16_t>(get_le(p + kHeaderSize + kPayloadSize, 2));
     if (crc16_ccitt_false({p + 2, 1 + kPayloadSize}) != sent_crc) {
       // Drop only the first sync byte: a real frame may begin inside this bad candidate.
-      if (!quiet_) ++stats_.crc_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.crc_errors;
+      hunt_.discard(1);
       continue;
     }
 
@@ -152,18 +130,14 @@ std::size_t CalstandFrameDecoder::feed(std::span<const std::uint8_t> bytes,
     out.push_back(s);
     ++decoded;
     ++stats_.frames;
-    hunting_ = false;
-    quiet_ = false;
-    start_ += kFrameSize;
+    hunt_.consume(kFrameSize);
   }
+  copy_hunt_counters(hunt_, stats_);
   return decoded;
 }
 
 std::map<std::string, std::uint64_t> CalstandFrameDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},         {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},       {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes}, {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps}, {"start_bytes", stats_.start_bytes}};
+  return frame_decoder_counters(stats_);
 }
 
 }  // namespace calstand::drivers

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <utility>
 
 namespace calstand::drivers::stim300 {
 namespace {
@@ -28,37 +29,26 @@ Stim300Decoder::Stim300Decoder(Stim300Options options, double sample_rate_hz)
 
 void Stim300Decoder::restart() {
   // What was held back belongs to the line before the flush: dropped, as start bytes.
-  stats_.start_bytes += buffered();
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart(FrameHunt::Dropped::kAsStartBytes);
+  copy_hunt_counters(hunt_, stats_);
   after_datagram_ = false;
   gap_free_ = true;
 }
 
 std::vector<std::string> Stim300Decoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
+  return std::exchange(reports_, {});
 }
 
 void Stim300Decoder::discard(std::size_t count) {
-  start_ += count;
-  after_datagram_ = false;
-  if (quiet_) {
-    stats_.start_bytes += count;  // the tail of a datagram cut by the input flush
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
+  hunt_.discard(count);
+  after_datagram_ = false;  // a CR LF after garbage ends no datagram
 }
 
 void Stim300Decoder::consume(std::size_t count) {
-  start_ += count;
+  // A terminator or start-up datagram does not end the quiet state after restart(): only a
+  // normal datagram (feed() calls hunt_.consume() for those) proves the stream is in step.
+  hunt_.pass(count);
   stats_.frame_bytes += count;
-  hunting_ = false;
 }
 
 bool Stim300Decoder::is_candidate(std::uint8_t byte) const {
@@ -71,7 +61,7 @@ void Stim300Decoder::on_startup_datagram(std::span<const std::uint8_t> datagram)
   ++stats_.startup_datagrams;
   // Before the first datagram after restart(): a reply of the configuration dialogue (N, I, C)
   // left on the line, not a restart of the unit.
-  if (quiet_) return;
+  if (hunt_.quiet()) return;
   // The unit sends these after power-on or reset: its counter starts again.
   count_afresh_ = true;
   if (kPartNumber.matches(datagram[0])) {
@@ -147,16 +137,13 @@ core::ImuSample Stim300Decoder::to_sample(const Datagram& d, const DatagramLayou
 
 std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
                                  std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
   std::size_t decoded = 0;
   const bool require_crlf = options_.termination.value_or(false);
-  while (buffer_.size() > start_) {
-    const std::uint8_t* p = buffer_.data() + start_;
-    const std::size_t avail = buffer_.size() - start_;
-    const std::span<const std::uint8_t> rest(p, avail);
+  while (hunt_.buffered() > 0) {
+    const std::span<const std::uint8_t> rest = hunt_.bytes();
+    const std::uint8_t* p = rest.data();
+    const std::size_t avail = rest.size();
     // CR LF after a datagram when the termination is left open (either way is accepted).
     if (after_datagram_ && !options_.termination.has_value() && p[0] == kCr) {
       if (avail < 2) break;
@@ -167,10 +154,8 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
         continue;
       }
     }
-    if (!is_candidate(p[0])) {
-      const auto* next =
-          std::find_if(p + 1, p + avail, [this](std::uint8_t b) { return is_candidate(b); });
-      discard(static_cast<std::size_t>(next - p));
+    if (hunt_.discard_until([this](std::uint8_t b) { return is_candidate(b); })) {
+      after_datagram_ = false;  // as discard() does: a CR LF after garbage ends no datagram
       continue;
     }
     if (is_startup_id(p[0])) {
@@ -194,7 +179,7 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
     const std::size_t size = layout->size();
     if (avail < size) break;
     if (!crc_matches(rest, size)) {
-      if (!quiet_) ++stats_.crc_errors;
+      if (!hunt_.quiet()) ++stats_.crc_errors;
       discard(1);  // a real datagram may begin inside this bad candidate
       continue;
     }
@@ -202,7 +187,7 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
     if (require_crlf) {
       if (avail < size + 2) break;
       if (p[size] != kCr || p[size + 1] != kLf) {
-        if (!quiet_) ++stats_.length_errors;
+        if (!hunt_.quiet()) ++stats_.length_errors;
         discard(1);
         continue;
       }
@@ -215,24 +200,19 @@ std::size_t Stim300Decoder::feed(std::span<const std::uint8_t> bytes,
     out.push_back(to_sample(d, *layout));
     ++decoded;
     ++stats_.frames;
-    quiet_ = false;
-    consume(total);
+    hunt_.consume(total);
+    stats_.frame_bytes += total;
     after_datagram_ = !require_crlf;
   }
+  copy_hunt_counters(hunt_, stats_);
   return decoded;
 }
 
 std::map<std::string, std::uint64_t> Stim300Decoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"startup_datagrams", stats_.startup_datagrams},
-          {"status_flags", stats_.status_flags}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert(
+      {{"startup_datagrams", stats_.startup_datagrams}, {"status_flags", stats_.status_flags}});
+  return out;
 }
 
 }  // namespace calstand::drivers::stim300

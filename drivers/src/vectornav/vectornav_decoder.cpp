@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace calstand::drivers::vectornav {
 namespace {
@@ -18,34 +19,13 @@ VectornavDecoder::VectornavDecoder(double sample_rate_hz, bool prefer_compensate
       prefer_compensated_(prefer_compensated) {}
 
 void VectornavDecoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   have_time_ = false;
 }
 
 std::vector<std::string> VectornavDecoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
-}
-
-void VectornavDecoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    stats_.start_bytes += count;
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
-}
-
-void VectornavDecoder::consume(std::size_t count) {
-  start_ += count;
-  hunting_ = false;
-  quiet_ = false;
+  return std::exchange(reports_, {});
 }
 
 void VectornavDecoder::on_ascii(const AsciiMessage& message) {
@@ -95,72 +75,60 @@ bool VectornavDecoder::on_binary(const BinaryFields& f, std::vector<core::ImuSam
 
 std::size_t VectornavDecoder::feed(std::span<const std::uint8_t> bytes,
                                    std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   std::size_t decoded = 0;
-  while (start_ < buffer_.size()) {
-    const std::span<const std::uint8_t> rest(buffer_.data() + start_, buffer_.size() - start_);
+  while (hunt_.buffered() > 0) {
+    const std::span<const std::uint8_t> rest = hunt_.bytes();
     if (rest[0] == '$') {
       AsciiMessage message;
       const Scan scan = parse_ascii(rest, false, message);
       if (scan == Scan::kIncomplete) break;
       if (scan == Scan::kInvalid) {
-        discard(1);
+        hunt_.discard(1);
         continue;
       }
       stats_.ascii_bytes += message.size;
-      consume(message.size);
+      hunt_.consume(message.size);
       on_ascii(message);
       continue;
     }
-    if (rest[0] != kSync) {
-      const auto next = std::find_if(rest.begin() + 1, rest.end(),
-                                     [](std::uint8_t b) { return b == kSync || b == '$'; });
-      discard(static_cast<std::size_t>(next - rest.begin()));
-      continue;
-    }
+    // Not '$' here: hunt for the next binary sync byte or ASCII message.
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kSync || b == '$'; })) continue;
     BinaryHeader header;
     const Scan scan = parse_binary_header(rest, header);
     if (scan == Scan::kIncomplete) break;
     if (scan == Scan::kInvalid) {
       // Checked before waiting for the body: an unmeasurable header must not stall the stream.
-      if (!quiet_) ++stats_.length_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.length_errors;
+      hunt_.discard(1);
       continue;
     }
     const std::size_t size = header.message_bytes();
     if (rest.size() < size) break;
     // The CRC over everything after the sync, the CRC included, is 0 for a good message.
     if (crc16(rest.subspan(1, size - 1)) != 0) {
-      if (!quiet_) ++stats_.crc_errors;
-      discard(1);
+      if (!hunt_.quiet()) ++stats_.crc_errors;
+      hunt_.discard(1);
       continue;
     }
     const BinaryFields fields = parse_binary_payload(rest.first(size), header);
     ++stats_.frames;
     stats_.frame_bytes += size;
-    consume(size);
+    hunt_.consume(size);
     if (on_binary(fields, out)) ++decoded;
   }
+  copy_hunt_counters(hunt_, stats_);
   return decoded;
 }
 
 std::map<std::string, std::uint64_t> VectornavDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"ascii_messages", stats_.ascii_messages},
-          {"device_errors", stats_.device_errors},
-          {"device_restarts", stats_.device_restarts},
-          {"incomplete_frames", stats_.incomplete_frames}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert({{"ascii_messages", stats_.ascii_messages},
+              {"device_errors", stats_.device_errors},
+              {"device_restarts", stats_.device_restarts},
+              {"incomplete_frames", stats_.incomplete_frames}});
+  return out;
 }
 
 }  // namespace calstand::drivers::vectornav

@@ -77,18 +77,6 @@ std::size_t field_size_bytes(int group_bit, int bit) {
   return kVectornavFieldSizes[static_cast<std::size_t>(group_bit)][static_cast<std::size_t>(bit)];
 }
 
-std::uint16_t crc16(std::span<const std::uint8_t> bytes) {
-  std::uint16_t crc = 0;
-  for (std::uint8_t byte : bytes) {
-    crc = static_cast<std::uint16_t>(crc ^ (byte << 8));
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u)
-                            : static_cast<std::uint16_t>(crc << 1);
-    }
-  }
-  return crc;
-}
-
 Scan parse_binary_header(std::span<const std::uint8_t> bytes, BinaryHeader& out) {
   if (bytes.size() < 2) return Scan::kIncomplete;
   out = BinaryHeader{};

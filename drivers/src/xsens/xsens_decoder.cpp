@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 namespace calstand::drivers::xsens {
 namespace {
@@ -28,31 +29,14 @@ std::uint64_t xsens_read_be(const std::uint8_t* p, std::size_t size_bytes) {
 XsensDecoder::XsensDecoder() : temperature_c_(std::numeric_limits<double>::quiet_NaN()) {}
 
 void XsensDecoder::restart() {
-  buffer_.clear();
-  start_ = 0;
-  quiet_ = true;
-  hunting_ = false;
+  hunt_.restart();
+  copy_hunt_counters(hunt_, stats_);
   have_sequence_ = false;
   // Device time and the latest temperature survive: a flush of the line does not restart the
   // device, and its clock goes on.
 }
 
-std::vector<std::string> XsensDecoder::take_device_reports() {
-  std::vector<std::string> out;
-  out.swap(reports_);
-  return out;
-}
-
-void XsensDecoder::discard(std::size_t count) {
-  start_ += count;
-  if (quiet_) {
-    stats_.start_bytes += count;
-    return;
-  }
-  if (!hunting_) ++stats_.resyncs;
-  hunting_ = true;
-  stats_.garbage_bytes += count;
-}
+std::vector<std::string> XsensDecoder::take_device_reports() { return std::exchange(reports_, {}); }
 
 void XsensDecoder::device_restarted(const std::string& why) {
   ++stats_.device_restarts;
@@ -189,56 +173,42 @@ void XsensDecoder::on_message(const Message& message, std::vector<core::ImuSampl
 
 std::size_t XsensDecoder::feed(std::span<const std::uint8_t> bytes,
                                std::vector<core::ImuSample>& out) {
-  stats_.bytes_fed += bytes.size();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(start_));
-  start_ = 0;
-  buffer_.insert(buffer_.end(), bytes.begin(), bytes.end());
+  hunt_.append(bytes);
 
   const std::size_t before = out.size();
-  while (start_ < buffer_.size()) {
-    const std::uint8_t* p = buffer_.data() + start_;
-    const std::size_t avail = buffer_.size() - start_;
-    if (p[0] != kPreamble) {
-      const auto* next = std::find(p + 1, p + avail, kPreamble);
-      discard(static_cast<std::size_t>(next - p));
-      continue;
-    }
+  while (hunt_.buffered() > 0) {
+    const std::uint8_t* p = hunt_.bytes().data();
+    const std::size_t avail = hunt_.buffered();
+    if (hunt_.discard_until([](std::uint8_t b) { return b == kPreamble; })) continue;
     Scan scan = scan_message({p, avail});
     if (scan.status == ScanStatus::kIncomplete) break;
     if (scan.status != ScanStatus::kMessage) {
       // Drop only the preamble: a real message may begin inside this bad candidate.
-      if (!quiet_) {
+      if (!hunt_.quiet()) {
         if (scan.status == ScanStatus::kBadChecksum) ++stats_.crc_errors;
         if (scan.status == ScanStatus::kBadLength) ++stats_.length_errors;
       }
-      discard(1);
+      hunt_.discard(1);
       continue;
     }
-    start_ += scan.size;
+    hunt_.consume(scan.size);
     stats_.message_bytes += scan.size;
-    hunting_ = false;
-    quiet_ = false;
     on_message(scan.message, out);
   }
+  copy_hunt_counters(hunt_, stats_);
   return out.size() - before;
 }
 
 std::map<std::string, std::uint64_t> XsensDecoder::counters() const {
-  return {{"bytes_fed", stats_.bytes_fed},
-          {"frames", stats_.frames},
-          {"messages", stats_.messages},
-          {"crc_errors", stats_.crc_errors},
-          {"length_errors", stats_.length_errors},
-          {"packet_errors", stats_.packet_errors},
-          {"incomplete_packets", stats_.incomplete_packets},
-          {"garbage_bytes", stats_.garbage_bytes},
-          {"resyncs", stats_.resyncs},
-          {"sequence_gaps", stats_.sequence_gaps},
-          {"start_bytes", stats_.start_bytes},
-          {"device_errors", stats_.device_errors},
-          {"device_restarts", stats_.device_restarts},
-          {"awaiting_temperature", stats_.awaiting_temperature},
-          {"invalid_samples", stats_.invalid_samples}};
+  auto out = frame_decoder_counters(stats_);
+  out.insert({{"messages", stats_.messages},
+              {"packet_errors", stats_.packet_errors},
+              {"incomplete_packets", stats_.incomplete_packets},
+              {"device_errors", stats_.device_errors},
+              {"device_restarts", stats_.device_restarts},
+              {"awaiting_temperature", stats_.awaiting_temperature},
+              {"invalid_samples", stats_.invalid_samples}});
+  return out;
 }
 
 }  // namespace calstand::drivers::xsens
