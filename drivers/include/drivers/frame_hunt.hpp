@@ -26,11 +26,6 @@ class FrameHunt {
   };
 
   /// What restart() does with the bytes still buffered.
-  enum class Dropped {
-    kUncounted,     ///< dropped and not counted anywhere
-    kAsStartBytes,  ///< counted as start_bytes, like the bytes discarded while quiet
-  };
-
   /// Adds `bytes` after the unconsumed ones and counts them in bytes_fed.
   void append(std::span<const std::uint8_t> bytes);
 
@@ -63,10 +58,10 @@ class FrameHunt {
   /// (a terminator, a start-up message): the hunt is over, the quiet state stays.
   void pass(std::size_t count);
 
-  /// The reader (re)starts after the line's input flush: the buffer is dropped (`dropped`
-  /// says whether it counts as start bytes) and the bytes before the next consume() are the
-  /// tail of a frame cut by the flush: start bytes, not garbage.
-  void restart(Dropped dropped = Dropped::kUncounted);
+  /// The reader (re)starts after the line's input flush: what the buffer holds and the bytes
+  /// before the next consume() are the tail of a frame cut by the flush (or a frame the
+  /// restart abandons): start bytes, not garbage, so that every byte fed stays counted.
+  void restart();
 
   /// True from restart() to the next consume(): a decoder counts no checksum or length errors
   /// then, since a candidate cut by the flush is not a fault of the line.

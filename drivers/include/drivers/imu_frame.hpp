@@ -65,8 +65,9 @@ class FrameDecoder {
   /// Named counters since construction (e.g. "frames", "crc_errors", "sequence_gaps").
   virtual std::map<std::string, std::uint64_t> counters() const = 0;
   /// The reader (re)starts after the line's input was flushed: the bytes before the next good
-  /// frame are the tail of a frame cut by the flush, not garbage. They are dropped uncounted,
-  /// and the sequence starts afresh (no gap against the last run's last frame).
+  /// frame are the tail of a frame cut by the flush, not garbage. They are counted as
+  /// start_bytes (not a fault), and the sequence starts afresh (no gap against the last run's
+  /// last frame).
   virtual void restart() = 0;
   /// What the device said about itself since the last call, in its own words: an error
   /// message, a status word flagging a sensor fault ("gyro x out of range"), a restart. Each

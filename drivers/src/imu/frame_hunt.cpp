@@ -33,8 +33,8 @@ void FrameHunt::pass(std::size_t count) {
   hunting_ = false;
 }
 
-void FrameHunt::restart(Dropped dropped) {
-  if (dropped == Dropped::kAsStartBytes) counters_.start_bytes += buffered();
+void FrameHunt::restart() {
+  counters_.start_bytes += buffered();
   buffer_.clear();
   start_ = 0;
   quiet_ = true;

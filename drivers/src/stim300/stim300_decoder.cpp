@@ -29,7 +29,7 @@ Stim300Decoder::Stim300Decoder(Stim300Options options, double sample_rate_hz)
 
 void Stim300Decoder::restart() {
   // What was held back belongs to the line before the flush: dropped, as start bytes.
-  hunt_.restart(FrameHunt::Dropped::kAsStartBytes);
+  hunt_.restart();
   copy_hunt_counters(hunt_, stats_);
   after_datagram_ = false;
   gap_free_ = true;

@@ -101,7 +101,7 @@ INSTANTIATE_TEST_SUITE_P(Formats, WireFormatRoundTrip,
                                            FormatCase{"vectornav", 200.0},
                                            FormatCase{"epson", 200.0},
                                            FormatCase{"stim300", 250.0}),
-                         [](const auto& info) { return std::string(info.param.name); });
+                         [](const auto& test_info) { return std::string(test_info.param.name); });
 
 }  // namespace
 }  // namespace calstand::drivers
