@@ -471,7 +471,61 @@ struct ImuFormatCase {
   int rate_hz;
 };
 
-class RealImuFormats : public RealDrivers, public ::testing::WithParamInterface<ImuFormatCase> {};
+class RealImuFormats : public RealDrivers, public ::testing::WithParamInterface<ImuFormatCase> {
+ protected:
+  static std::vector<json> stream(const std::string& lab, int count) {
+    const auto r = run("device --station " + lab + " imu stream --count " + std::to_string(count));
+    EXPECT_EQ(r.exit_code, 0) << r.out;
+    std::vector<json> out;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+      auto j = json::parse(line, nullptr, false);
+      if (j.is_object()) out.push_back(std::move(j));
+    }
+    return out;
+  }
+
+  /// `device imu stream` through the unit's protocol gives the simulator's samples: two
+  /// sim-stations of the same station file (the same world, sample for sample) serve it, one
+  /// in calstand frames (f32, the simulator's values) and one as the unit; the unit's stream is
+  /// found in the calstand stream by its values and must equal it sample after sample, to the
+  /// format's resolution. Real time (x1), so that both streams overlap.
+  static void expect_stream_equals_calstand_frames(const std::string& sim, const char* format) {
+    const std::string frames_lab = dir_ + format + "-frames-x1.json";
+    const std::string unit_lab = dir_ + format + "-unit-x1.json";
+    SimStationProcess frames({"--station", sim, "--station-out", frames_lab});
+    SimStationProcess unit({"--station", sim, "--station-out", unit_lab, "--imu-format", format});
+    auto reference = std::async(std::launch::async, [&] { return stream(frames_lab, 600); });
+    const std::vector<json> got = stream(unit_lab, 600);
+    const std::vector<json> want = reference.get();
+    ASSERT_EQ(got.size(), 600u);
+    ASSERT_EQ(want.size(), 600u);
+    auto same = [](const json& a, const json& b) {
+      for (int i = 0; i < 3; ++i) {
+        if (std::abs(a["gyro_dps"][i].get<double>() - b["gyro_dps"][i].get<double>()) > 1e-3 ||
+            std::abs(a["accel_mps2"][i].get<double>() - b["accel_mps2"][i].get<double>()) > 1e-4) {
+          return false;
+        }
+      }
+      return std::abs(a["temperature_c"].get<double>() - b["temperature_c"].get<double>()) < 0.02;
+    };
+    // Whichever stream started later begins inside the other.
+    std::size_t in_want = 0, in_got = 0;
+    while (in_want < want.size() && !same(want[in_want], got[0])) ++in_want;
+    if (in_want == want.size()) {
+      in_want = 0;
+      while (in_got < got.size() && !same(want[0], got[in_got])) ++in_got;
+    }
+    const std::size_t overlap = std::min(want.size() - in_want, got.size() - in_got);
+    ASSERT_GE(overlap, 100u) << "the two streams of the same world do not overlap: the unit's "
+                                "samples are not the simulator's";
+    for (std::size_t k = 0; k < overlap; ++k) {
+      EXPECT_TRUE(same(want[in_want + k], got[in_got + k]))
+          << format << " sample " << k << ": " << got[in_got + k].dump() << " vs "
+          << want[in_want + k].dump();
+    }
+  }
+};
 
 // A whole campaign (the thermal calibration at one plateau, shortened) through each real unit's
 // protocol: sim-station answers the driver's configuration dialogue as the unit does and streams
@@ -502,6 +556,8 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
   const json identity = json::parse(info.out);
   // sim-station's unit without a serial in its station entry: 29000001 (the first IMU).
   EXPECT_EQ(identity["serial"], "29000001") << info.out;
+
+  expect_stream_equals_calstand_frames(sim, c.format);
 
   const std::string db = dir_ + name + "-real.db";
   const auto r = run_procedure(procedure, lab, db);
