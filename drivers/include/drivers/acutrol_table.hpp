@@ -103,7 +103,9 @@ class AcutrolTable final : public Turntable {
   /// A reply that is not what the command expects (counted; one event until a good reading).
   void note_bad_reply(const std::string& why);
   Result open_link();
-  bool read_axis(int wire_axis, core::AxisState& axis, std::string& why);
+  /// `angle_time_s`: when the controller read the angle, as well as the station can tell (the
+  /// middle of the position query's round trip) [s].
+  bool read_axis(int wire_axis, core::AxisState& axis, double& angle_time_s, std::string& why);
   void note_axis_faults(const core::TableState& state);
 
   std::string name_ = "table";

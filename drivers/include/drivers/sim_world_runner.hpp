@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -31,6 +32,11 @@ class SimWorldRunner {
   /// How far the world lags behind where the wall clock says it should be [s of world time]:
   /// near 0 while the CPU keeps up with the time scale.
   double lag_s() const { return lag_s_.load(); }
+  /// The world time the wall clock stands at now [s]: where the world is heading. The world
+  /// itself advances in slices (a millisecond of wall time, 20 ms of world time at 20x); a
+  /// protocol reply that reads a moving axis extrapolates to this, as a controller reading its
+  /// encoder now would. The world's own time before start().
+  double clock_s() const;
 
  private:
   void loop();
@@ -41,6 +47,10 @@ class SimWorldRunner {
   std::thread thread_;
   std::atomic<bool> running_{false};
   std::atomic<double> lag_s_{0.0};
+  // Set by start() before the thread runs; read by clock_s() from any thread.
+  std::atomic<bool> started_{false};
+  std::chrono::steady_clock::time_point wall0_;
+  double world0_s_ = 0.0;
 };
 
 }  // namespace calstand::drivers

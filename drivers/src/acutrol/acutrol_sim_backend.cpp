@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -57,6 +58,12 @@ TableServerBackend::AxisReport SimTableBackend::report(int axis) {
   const auto& c = control(axis);
   AxisReport r;
   r.angle_deg = s.angle_deg;
+  if (now_s_) {
+    // The world stands at the end of its last slice; the query is now. At most one slice's
+    // worth (a world that fell behind is not extrapolated across the gap).
+    const double ahead_s = std::clamp(now_s_() - world_.now_s(), 0.0, 0.1);
+    r.angle_deg = std::remainder(s.angle_deg + s.rate_dps * ahead_s, 360.0);
+  }
   r.rate_dps = s.rate_dps;
   r.status.mode = to_wire_mode(s.mode);
   r.status.settled = s.in_position;

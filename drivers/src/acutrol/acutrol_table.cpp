@@ -412,8 +412,11 @@ Result AcutrolTable::stop() {
 
 // ---- state -----------------------------------------------------------------------------------
 
-bool AcutrolTable::read_axis(int axis, core::AxisState& out, std::string& why) {
+bool AcutrolTable::read_axis(int axis, core::AxisState& out, double& angle_time_s,
+                             std::string& why) {
+  const double asked_s = clock_.now_s();
   const Exchange pos = exchange(axis_command(CommandKind::kReadPosition, axis));
+  angle_time_s = 0.5 * (asked_s + clock_.now_s());
   const Exchange rate = pos.ok() ? exchange(axis_command(CommandKind::kReadRate, axis)) : pos;
   const Exchange status = rate.ok() ? exchange(axis_command(CommandKind::kReadStatus, axis)) : rate;
   if (!status.ok()) {
@@ -475,8 +478,16 @@ core::TableState AcutrolTable::read_state() {
   std::string why = "not configured (no link opened yet)";
   // Before configure() there is no link to read: say so rather than open one behind its back.
   // Stops at the first failure, so a dead controller costs one response timeout, not six.
-  if (life_.state() != DeviceState::kUnconfigured && read_axis(acutrol::kOuterAxis, s.outer, why) &&
-      read_axis(acutrol::kInnerAxis, s.inner, why)) {
+  double outer_at_s = s.time_s, inner_at_s = s.time_s;
+  if (life_.state() != DeviceState::kUnconfigured &&
+      read_axis(acutrol::kOuterAxis, s.outer, outer_at_s, why) &&
+      read_axis(acutrol::kInnerAxis, s.inner, inner_at_s, why)) {
+    // One time for both angles: the outer's reading, the inner's moved back to it at its rate.
+    // Stamping the state before its six queries made a turning axis's angle late by up to
+    // three round trips, which a rehearsal at 20x turns into degrees (gravity's mean over a
+    // turn's window then moved by up to 0.05 m/s^2).
+    s.time_s = outer_at_s;
+    s.inner.angle_deg = wrap_180(s.inner.angle_deg - s.inner.rate_dps * (inner_at_s - outer_at_s));
     last_ = s;
     bad_reply_reported_ = false;
     note_axis_faults(s);

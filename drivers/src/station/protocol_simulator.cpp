@@ -103,6 +103,7 @@ void ProtocolSimulator::start() {
   AcutrolServerOptions table_options;
   table_options.bind_host = m.options.host;
   table_options.port = static_cast<std::uint16_t>(m.options.table_port);
+  m.table_backend.set_clock([&runner = m.runner] { return runner.clock_s(); });
   m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
   m.table_server->start();
   m.f4t_server = ModbusChamberServer::tcp(watlow_f4t_map(), m.chamber_backend,

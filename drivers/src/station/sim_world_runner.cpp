@@ -20,7 +20,20 @@ SimWorldRunner::~SimWorldRunner() { stop(); }
 
 void SimWorldRunner::start() {
   if (running_.exchange(true)) return;
+  {
+    std::lock_guard lock(mutex_);
+    world0_s_ = world_.now_s();
+  }
+  wall0_ = std::chrono::steady_clock::now();
+  started_ = true;
   thread_ = std::thread([this] { loop(); });
+}
+
+double SimWorldRunner::clock_s() const {
+  if (!started_) return world0_s_;
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
+  return world0_s_ + time_scale_ * wall_s;
 }
 
 void SimWorldRunner::stop() {
@@ -29,16 +42,8 @@ void SimWorldRunner::stop() {
 }
 
 void SimWorldRunner::loop() {
-  const auto wall0 = std::chrono::steady_clock::now();
-  double world0;
-  {
-    std::lock_guard lock(mutex_);
-    world0 = world_.now_s();
-  }
   while (running_) {
-    const double wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    const double target = world0 + time_scale_ * wall_s;
+    const double target = clock_s();
     {
       std::lock_guard lock(mutex_);
       world_.advance_to(std::min(target, world_.now_s() + kMaxAdvanceWallS * time_scale_));
