@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   settings.options = {{"model", "G366PDG0"},
                       {"width_bits", (data[0] & 0x40) != 0 ? 16 : 32},
                       {"count_step", (data[0] & 0x80) != 0 ? "output" : "base"}};
-  epson::Decoder decoder(epson::Options::from_settings(settings), nullptr);
+  epson::Decoder decoder(epson::Options::from_settings(settings));
   std::vector<calstand::core::ImuSample> out;
   for (std::size_t at = 1; at < size; at += chunk) {
     const std::size_t n = std::min(chunk, size - at);

@@ -16,12 +16,6 @@
 
 namespace calstand::drivers::epson {
 
-/// The model the unit reported (PROD_ID), as the decoder learns it from identified(): the
-/// decoder reads it from the reader thread while the dialogue may set it again (a reopen).
-struct IdentifiedModel {
-  std::atomic<const ModelScale*> model{nullptr};
-};
-
 /// Decodes the burst frames of the configured width. Hunts for 0x80; a candidate whose end byte
 /// is not 0x0D (a frame of another length) is a length error, one whose checksum is wrong a
 /// checksum error ("crc_errors"); either costs one byte. COUNT is unwrapped (mod 65536) into
@@ -30,7 +24,7 @@ struct IdentifiedModel {
 /// such frames.
 class Decoder final : public FrameDecoder {
  public:
-  Decoder(Options options, std::shared_ptr<IdentifiedModel> identified);
+  explicit Decoder(Options options);
 
   std::size_t feed(std::span<const std::uint8_t> bytes, std::vector<core::ImuSample>& out) override;
   std::map<std::string, std::uint64_t> counters() const override;
@@ -49,7 +43,9 @@ class Decoder final : public FrameDecoder {
   static constexpr int kStepsBeforeReport = 16;
 
   Options options_;
-  std::shared_ptr<IdentifiedModel> identified_;
+  // The model the unit reported (identified()); the reader thread reads it while a reopen's
+  // dialogue may set it again.
+  std::atomic<const ModelScale*> identified_model_{nullptr};
   std::size_t frame_size_;
   std::uint64_t count_step_;  // COUNT ticks per output sample
   double count_rate_hz_;      // COUNT ticks per second

@@ -9,10 +9,8 @@
 
 namespace calstand::drivers::epson {
 
-Decoder::Decoder(Options options, std::shared_ptr<IdentifiedModel> identified)
-    : options_(std::move(options)),
-      identified_(std::move(identified)),
-      frame_size_(burst_size(options_.width_bits)) {
+Decoder::Decoder(Options options)
+    : options_(std::move(options)), frame_size_(burst_size(options_.width_bits)) {
   const double rate_hz = options_.rate != nullptr ? options_.rate->rate_hz : kBaseRateHz;
   if (options_.count_step == CountStep::kBase) {
     count_rate_hz_ = kBaseRateHz;
@@ -39,14 +37,14 @@ void Decoder::restart() {
 std::vector<std::string> Decoder::take_device_reports() { return std::exchange(reports_, {}); }
 
 void Decoder::identified(const UnitIdentity& unit) {
-  if (identified_) identified_->model.store(find_model(unit.model));
+  identified_model_.store(find_model(unit.model));
 }
 
 std::map<std::string, std::uint64_t> Decoder::counters() const { return stats_; }
 
 const ModelScale* Decoder::model() {
   if (!options_.model.empty()) return find_model(options_.model);
-  return identified_ ? identified_->model.load() : nullptr;
+  return identified_model_.load();
 }
 
 void Decoder::note_count_step(std::uint64_t delta) {

@@ -16,8 +16,7 @@ class EpsonWireFormat final : public ImuWireFormat {
     return std::uint64_t{1} << 32;  // COUNT is unwrapped
   }
   std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings& settings) const override {
-    return std::make_unique<Decoder>(Options::from_settings(settings),
-                                     std::make_shared<IdentifiedModel>());
+    return std::make_unique<Decoder>(Options::from_settings(settings));
   }
   std::unique_ptr<ImuConfigurator> make_configurator(
       const WireFormatSettings& settings) const override {

@@ -20,12 +20,12 @@ class CalstandEmulator final : public ImuDeviceEmulator {
 class CalstandWireFormat final : public ImuWireFormat {
  public:
   std::string name() const override { return "calstand"; }
-  std::uint64_t sequence_modulus(const WireFormatSettings& /*settings*/) const override {
-    return std::uint64_t{1} << 32;
+  /// `sequence_modulus` in the options (the connection's, checked by the schema), else 2^32.
+  std::uint64_t sequence_modulus(const WireFormatSettings& settings) const override {
+    return settings.options.value("sequence_modulus", std::uint64_t{1} << 32);
   }
-  std::unique_ptr<FrameDecoder> make_decoder(
-      const WireFormatSettings& /*settings*/) const override {
-    return std::make_unique<CalstandFrameDecoder>();
+  std::unique_ptr<FrameDecoder> make_decoder(const WireFormatSettings& settings) const override {
+    return std::make_unique<CalstandFrameDecoder>(sequence_modulus(settings));
   }
   std::unique_ptr<ImuConfigurator> make_configurator(
       const WireFormatSettings& /*settings*/) const override {

@@ -26,6 +26,9 @@ SerialImuConnection SerialImuConnection::from_json(const json& c, const std::str
   out.settings.options = c.value(out.format, json::object());
   out.settings.where = where + "." + out.format;
   out.sequence_modulus = c.value("sequence_modulus", out.sequence_modulus);
+  // The calstand frame's one option sits at the connection's top level (station files before
+  // the wire formats); the format reads it from its options like any other.
+  if (out.format == "calstand") out.settings.options = {{"sequence_modulus", out.sequence_modulus}};
   if (out.format != "calstand" && c.contains("sequence_modulus")) {
     throw core::InputError(where + ".sequence_modulus",
                            fmt::format("only for format calstand: a {} device's counter is the "
@@ -47,13 +50,8 @@ SerialImu::SerialImu(const core::ImuConfig& config, core::Clock& clock, const st
   port_ = port.get();
   transport_ = std::move(port);
   sample_rate_hz_ = c.settings.sample_rate_hz;
-  if (c.format == "calstand") {
-    decoder_ = std::make_unique<CalstandFrameDecoder>(c.sequence_modulus);
-    sequence_modulus_ = c.sequence_modulus;
-  } else {
-    decoder_ = format.make_decoder(c.settings);
-    sequence_modulus_ = format.sequence_modulus(c.settings);
-  }
+  decoder_ = format.make_decoder(c.settings);
+  sequence_modulus_ = format.sequence_modulus(c.settings);
   configurator_ = format.make_configurator(c.settings);
 }
 

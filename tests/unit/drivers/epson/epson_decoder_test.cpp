@@ -55,7 +55,7 @@ std::vector<core::ImuSample> feed_split(Decoder& d, const Bytes& bytes, std::siz
 TEST(EpsonDecoder, AnySplitGivesTheSameScaledSamples) {
   const Bytes bytes = stream(0, 30, 100);
   for (std::size_t chunk : {1u, 2u, 7u, 35u, 36u, 37u, 1000u}) {
-    Decoder d(decoder_options(100, 32), nullptr);
+    Decoder d(decoder_options(100, 32));
     const auto got = feed_split(d, bytes, chunk);
     ASSERT_EQ(got.size(), 30u) << chunk;
     for (int k = 0; k < 30; ++k) {
@@ -75,7 +75,7 @@ TEST(EpsonDecoder, AnySplitGivesTheSameScaledSamples) {
 }
 
 TEST(EpsonDecoder, CountWrapsIntoMonotonicDeviceTime) {
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(stream(0, 10, 65500), out);  // wraps between frames 1 and 2
   ASSERT_EQ(out.size(), 10u);
@@ -88,7 +88,7 @@ TEST(EpsonDecoder, CountWrapsIntoMonotonicDeviceTime) {
 }
 
 TEST(EpsonDecoder, OutputCountStepCountsOnePerFrame) {
-  Decoder d(decoder_options(100, 32, CountStep::kOutput), nullptr);
+  Decoder d(decoder_options(100, 32, CountStep::kOutput));
   std::vector<core::ImuSample> out;
   d.feed(stream(0, 5, 7, 1), out);
   ASSERT_EQ(out.size(), 5u);
@@ -97,13 +97,13 @@ TEST(EpsonDecoder, OutputCountStepCountsOnePerFrame) {
 }
 
 TEST(EpsonDecoder, ACounterSteppingTheOtherWayIsReportedOnce) {
-  Decoder d(decoder_options(100, 32, CountStep::kBase), nullptr);
+  Decoder d(decoder_options(100, 32, CountStep::kBase));
   std::vector<core::ImuSample> out;
   d.feed(stream(0, 40, 0, 1), out);  // one count per frame at 100 Hz: an output-rate counter
   const auto reports = d.take_device_reports();
   ASSERT_EQ(reports.size(), 1u);
   EXPECT_NE(reports[0].find("COUNT steps by 1 per frame, not 20"), std::string::npos) << reports[0];
-  Decoder right(decoder_options(100, 32, CountStep::kBase), nullptr);
+  Decoder right(decoder_options(100, 32, CountStep::kBase));
   right.feed(stream(0, 40, 0, 20), out);
   EXPECT_TRUE(right.take_device_reports().empty());
 }
@@ -112,7 +112,7 @@ TEST(EpsonDecoder, DroppedFramesAreSequenceGaps) {
   Bytes bytes = stream(0, 3, 0);
   const Bytes later = stream(5, 3, 100);  // frames 3 and 4 lost
   bytes.insert(bytes.end(), later.begin(), later.end());
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
   ASSERT_EQ(out.size(), 6u);
@@ -124,7 +124,7 @@ TEST(EpsonDecoder, DroppedFramesAreSequenceGaps) {
 TEST(EpsonDecoder, BadChecksumCostsOneByteAndTheNextFrameSurvives) {
   Bytes bytes = stream(0, 3, 0);
   bytes[36 + 9] ^= 0x40;  // corrupt frame 1's gyro
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
   ASSERT_EQ(out.size(), 2u);
@@ -138,7 +138,7 @@ TEST(EpsonDecoder, GarbageAndAWrongLengthAreCountedNotDecoded) {
   Bytes bytes{0x00, 0x0D, 0x80, 0x01, 0x02};  // a header with no frame behind it
   const Bytes good = stream(0, 2, 0);
   bytes.insert(bytes.end(), good.begin(), good.end());
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
   EXPECT_EQ(out.size(), 2u);
@@ -146,7 +146,7 @@ TEST(EpsonDecoder, GarbageAndAWrongLengthAreCountedNotDecoded) {
   EXPECT_GE(d.counters().at("length_errors"), 1u);
 
   // A 16-bit stream fed to a 32-bit decoder is all length errors, never a sample.
-  Decoder wrong(decoder_options(100, 32), nullptr);
+  Decoder wrong(decoder_options(100, 32));
   Bytes sixteen;
   for (int k = 0; k < 20; ++k) {
     const auto b = encode_burst(frame_fields(k, static_cast<std::uint16_t>(k * 20)), 16);
@@ -162,7 +162,7 @@ TEST(EpsonDecoder, CounterBackToZeroIsADeviceRestart) {
   Bytes bytes = stream(0, 5, 30000);
   const Bytes after = stream(0, 3, 0);
   bytes.insert(bytes.end(), after.begin(), after.end());
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
   ASSERT_EQ(out.size(), 8u);
@@ -175,7 +175,7 @@ TEST(EpsonDecoder, CounterBackToZeroIsADeviceRestart) {
 }
 
 TEST(EpsonDecoder, AfterRestartTheCutFrameIsStartBytesAndNoGap) {
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(stream(0, 2, 0), out);
   d.restart();
@@ -197,7 +197,7 @@ TEST(EpsonDecoder, ErrorFlagIsReportedOncePerRun) {
     const auto b = encode_burst(f, 32);
     bytes.insert(bytes.end(), b.begin(), b.end());
   }
-  Decoder d(decoder_options(100, 32), nullptr);
+  Decoder d(decoder_options(100, 32));
   std::vector<core::ImuSample> out;
   d.feed(bytes, out);
   EXPECT_EQ(out.size(), 6u);
@@ -212,21 +212,20 @@ TEST(EpsonDecoder, WithoutAModelFramesAreCountedButNotScaled) {
   WireFormatSettings s;
   s.sample_rate_hz = 100;
   s.where = "x";
-  auto identified = std::make_shared<IdentifiedModel>();
-  Decoder d(Options::from_settings(s), identified);
+  Decoder d(Options::from_settings(s));
   std::vector<core::ImuSample> out;
   d.feed(stream(0, 2, 0), out);
   EXPECT_TRUE(out.empty());
   EXPECT_EQ(d.counters().at("frames_without_model"), 2u);
   EXPECT_EQ(d.take_device_reports().size(), 1u);
-  identified->model.store(find_model("G366PDG0"));
+  d.identified({"G366PDG0", "E0001234", "VERSION 0x0105"});
   d.feed(stream(2, 2, 40), out);
   EXPECT_EQ(out.size(), 2u);
 }
 
 TEST(EpsonDecoder, RandomBytesNeverMakeASampleAndEveryByteIsAccounted) {
   std::mt19937 rng(29);
-  Decoder d(decoder_options(100, 16), nullptr);
+  Decoder d(decoder_options(100, 16));
   Bytes noise(20000);
   for (auto& b : noise) b = static_cast<std::uint8_t>(rng());
   std::vector<core::ImuSample> out;

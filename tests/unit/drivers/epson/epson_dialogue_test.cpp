@@ -122,7 +122,7 @@ TEST(EpsonDialogue, ConfiguresAStreamingDeviceAndReadsItsIdentity) {
   EXPECT_TRUE(emulator.sampling());
 
   // What it streams now decodes, with the model the dialogue read, to the simulated signal.
-  Decoder decoder(Options::from_settings(s), std::make_shared<IdentifiedModel>());
+  Decoder decoder(Options::from_settings(s));
   decoder.identified(id);
   std::vector<core::ImuSample> got;
   std::array<std::uint8_t, 4096> chunk{};
@@ -154,7 +154,7 @@ TEST(EpsonDialogue, SixteenBitOutputKeepsTheSixteenBitResolution) {
   const auto s = settings(2000, {{"width_bits", 16}, {"model", "G370PDF1"}}, "dialogue.16");
   Configurator c(s);
   EXPECT_EQ(c.configure(link).model, "G370PDF1");
-  Decoder decoder(Options::from_settings(s), nullptr);
+  Decoder decoder(Options::from_settings(s));
   std::vector<core::ImuSample> got;
   std::array<std::uint8_t, 4096> chunk{};
   for (int i = 0; i < 5; ++i) {
