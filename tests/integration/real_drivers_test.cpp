@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -88,7 +89,10 @@ class RealDrivers : public ::testing::Test {
     };
     const double in_process_rms = rms_z(in_process, "in process");
     const double real_rms = rms_z(real, "real drivers");
-    EXPECT_LT(real["chi2_dof"].get<double>(), 2.0 * in_process["chi2_dof"].get<double>() + 0.5)
+    // A floor of 2: with some 24 degrees of freedom chi2/dof passes 2 by chance at p ~ 0.002,
+    // and an in-process run that came out low by chance (0.35) must not make the bar 1.2.
+    EXPECT_LT(real["chi2_dof"].get<double>(),
+              std::max(2.0 * in_process["chi2_dof"].get<double>() + 0.5, 2.0))
         << "in process " << in_process["chi2_dof"] << ", real drivers " << real["chi2_dof"];
     EXPECT_LT(real_rms, std::max(2.0 * in_process_rms, 2.0))
         << "in process " << in_process_rms << ", real drivers " << real_rms;
@@ -583,6 +587,6 @@ INSTANTIATE_TEST_SUITE_P(Formats, RealImuFormats,
                                            ImuFormatCase{"vectornav", 200},
                                            ImuFormatCase{"epson", 200},
                                            ImuFormatCase{"stim300", 250}),
-                         [](const auto& info) { return std::string(info.param.format); });
+                         [](const auto& test_info) { return std::string(test_info.param.format); });
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "drivers/dbc_file.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -42,9 +43,12 @@ std::string dbc_test_error(F&& f) {
 }
 
 /// A file in the test's temporary folder, removed at the end.
+/// A file in the temporary folder, named per process: ctest runs each test as a process of its
+/// own, two at a time, and two tests writing one path would read each other's files.
 struct DbcTestFile {
   explicit DbcTestFile(const std::string& name, const std::string& text)
-      : path((std::filesystem::temp_directory_path() / name).string()) {
+      : path((std::filesystem::temp_directory_path() / (std::to_string(::getpid()) + "-" + name))
+                 .string()) {
     std::ofstream(path) << text;
   }
   ~DbcTestFile() { std::remove(path.c_str()); }
