@@ -20,9 +20,9 @@ namespace calstand::drivers {
 /// frame unless another format is given) on a pseudo-terminal whose slave path a SerialImu
 /// opens. The host's bytes (configuration, identity requests) are answered by the emulator;
 /// push() is called by the world as samples are produced and never blocks; a writer thread
-/// sends what the emulator makes of them. As on a real line, what nobody reads is lost: beyond
-/// `max_queued_frames` the oldest frames are dropped (counted), and the receiver sees a
-/// sequence gap.
+/// sends what the emulator makes of them. As on a real line, what nobody reads is lost: a write
+/// nobody takes within a second drops every frame queued, beyond `max_queued_frames` (a held
+/// burst) the oldest frames are dropped (counted), and the receiver sees a sequence gap.
 class ImuFrameStreamer {
  public:
   explicit ImuFrameStreamer(std::unique_ptr<ImuDeviceEmulator> emulator,
@@ -54,6 +54,8 @@ class ImuFrameStreamer {
   void loop();
   void host_loop();
   void queue(std::vector<std::uint8_t> bytes, bool is_frame);
+  /// Drops the frames queued (not the replies): the line was not read.
+  void drop_queued_frames();
 
   PseudoTerminal pty_;
   std::mutex emulator_mutex_;  // the world's thread (push) and the host thread share it

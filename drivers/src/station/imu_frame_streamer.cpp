@@ -48,6 +48,12 @@ void ImuFrameStreamer::queue(std::vector<std::uint8_t> bytes, bool is_frame) {
   wake_.notify_one();
 }
 
+void ImuFrameStreamer::drop_queued_frames() {
+  std::lock_guard lock(mutex_);
+  const auto stale = std::erase_if(queue_, [](const Queued& q) { return q.is_frame; });
+  dropped_ += stale;
+}
+
 void ImuFrameStreamer::host_loop() {
   using namespace std::chrono_literals;
   std::array<std::uint8_t, 1024> chunk{};
@@ -87,13 +93,16 @@ void ImuFrameStreamer::loop() {
     }
     if (batch.empty()) continue;
     // A reader that keeps up takes this at once. One that stalls briefly (scheduling) is waited
-    // for, as a UART's buffers would; one that stops reading makes the write time out and the
-    // frames that did not fit are lost, as on a real line (the receiver resynchronises).
+    // for, as a UART's buffers would; one that stops reading (or a line nobody has open) makes
+    // the write time out, and what did not fit is lost with everything queued behind it, as on
+    // a real line (the receiver resynchronises). Kept, the queue would hand the next client
+    // seconds of stale frames ahead of the reply to its first request.
     const auto r = pty_.write(batch, 1000ms);
     if (r.ok()) {
       sent_ += frames;
     } else {
       dropped_ += frames;
+      drop_queued_frames();
     }
   }
 }
