@@ -6,7 +6,8 @@
 //
 // While it runs, lines on stdin rehearse faults (one JSON line answers each):
 //   interlock open outer|inner [WHY...]   interlock clear outer|inner
-//   modbus stop | modbus start            imu silent NAME | imu talk NAME
+//   modbus stop | modbus start            table drop | table restore (its TCP link)
+//   imu silent NAME | imu talk NAME
 //   imu garbage NAME N                    imu hold NAME | imu release NAME (a burst)
 //   imu clock-jump NAME SECONDS           status | quit
 #include <fmt/format.h>
@@ -82,6 +83,10 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
     sim.set_modbus_running(what == "start");
     return {{"ok", true}};
   }
+  if (verb == "table" && (what == "drop" || what == "restore")) {
+    sim.set_table_link(what == "restore");
+    return {{"ok", true}};
+  }
   if (verb == "imu" && (what == "silent" || what == "talk")) {
     sim.set_imu_silent(sim.imu_index(arg), what == "silent");
     return {{"ok", true}};
@@ -111,7 +116,8 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
     return {{"ok", true}};
   }
   throw core::InputError("command", fmt::format("\"{}\" is not understood (interlock open|clear "
-                                                "AXIS, modbus stop|start, imu silent|talk|garbage|"
+                                                "AXIS, modbus stop|start, table drop|restore, "
+                                                "imu silent|talk|garbage|"
                                                 "hold|release|clock-jump NAME, status, quit)",
                                                 line));
 }

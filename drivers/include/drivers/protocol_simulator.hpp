@@ -57,6 +57,10 @@ class ProtocolSimulator {
   void clear_interlock_cause(TableAxis axis);
   /// The Modbus servers stop answering (controller unplugged) or come back.
   void set_modbus_running(bool running);
+  /// false: the table's link drops (every client connection closed, new ones closed at once)
+  /// while the simulated table keeps doing what it was told, as a real controller does; true:
+  /// connections are accepted again.
+  void set_table_link(bool up);
   /// IMU `index` stops talking (frames are lost) or resumes.
   void set_imu_silent(std::size_t index, bool silent);
   /// Writes raw bytes on IMU `index`'s line (garbage, corrupted frames).

@@ -276,6 +276,13 @@ void ProtocolSimulator::set_modbus_running(bool running) {
   }
 }
 
+void ProtocolSimulator::set_table_link(bool up) {
+  auto& server = *impl_->table_server;
+  // Refuse first, so that a client reconnecting between the two calls is refused too.
+  server.set_refusing(!up);
+  if (!up) server.drop_clients();
+}
+
 void ProtocolSimulator::set_imu_silent(std::size_t index, bool silent) {
   impl_->imu_lines.at(index)->set_silent(silent);
   if (impl_->can && index == 0) impl_->can->set_silent(silent);
