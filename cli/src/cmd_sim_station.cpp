@@ -1,8 +1,8 @@
 // `calstand sim-station`: one simulated world behind the real protocols (table command server,
-// chamber over Modbus TCP and RTU, IMUs on pseudo-terminals in their wire format), so that the real
-// drivers and the engine can be rehearsed end to end on this machine. Prints the endpoints as one
-// line of JSON on start; `--station-out` writes the station file that points the real drivers at
-// them.
+// chamber over Modbus TCP in the map --chamber-protocol names and as an F4 over RTU, IMUs on
+// pseudo-terminals in their wire format), so that the real drivers and the engine can be
+// rehearsed end to end on this machine. Prints the endpoints as one line of JSON on start;
+// `--station-out` writes the station file that points the real drivers at them.
 //
 // While it runs, lines on stdin rehearse faults (one JSON line answers each):
 //   interlock open outer|inner [WHY...]   interlock clear outer|inner
@@ -225,6 +225,12 @@ void register_sim_station(CLI::App& app) {
   cmd->add_option("--table-port", opt->serve.table_port, "table command port (0: any free)")
       ->capture_default_str();
   cmd->add_option("--modbus-port", opt->serve.modbus_port, "Modbus TCP port (0: any free)")
+      ->capture_default_str();
+  cmd->add_option("--chamber-protocol", opt->serve.chamber_protocol,
+                  "the chamber's protocol on TCP: " + drivers::chamber_protocol_names())
+      ->capture_default_str();
+  cmd->add_option("--table-protocol", opt->serve.table_protocol,
+                  "the table's command set on TCP: " + drivers::table_protocol_names())
       ->capture_default_str();
   cmd->add_flag("--no-rtu", opt->no_rtu, "do not serve the chamber as an F4 over RTU");
   cmd->add_option("--can", opt->serve.can_interface,

@@ -524,6 +524,39 @@ TEST_F(RealDrivers, DeviceCommandsRideOutADroppedLink) {
   ASSERT_TRUE(station->command("table restore").value("ok", false));
 }
 
+// sim-station serves the chamber in the map --chamber-protocol names (CSZ EZT-570 here): the
+// endpoints and the station file follow it, and the real Modbus driver sets, reads and stands
+// the chamber by through it. An unknown name is refused with the names it knows.
+TEST_F(RealDrivers, SimStationServesTheChamberInTheChosenMap) {
+  const std::string lab = dir_ + "csz-lab.json";
+  SimStationProcess station({"--station", sim_station_, "--time-scale", kTimeScale, "--station-out",
+                             lab, "--chamber-protocol", "csz-ezt570"});
+  EXPECT_EQ(station.endpoints()["chamber"]["map"], "csz-ezt570") << station.endpoints().dump();
+  EXPECT_EQ(station.endpoints()["table"]["protocol"], "acutrol");
+  EXPECT_EQ(json::parse(read_text(lab))["chamber"]["connection"]["map"], "csz-ezt570");
+  const std::string device = "device --station " + lab + " ";
+  auto json_of = [&](const std::string& args) {
+    const auto r = run(device + args, dir_ + "stderr.txt");
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << read_text(dir_ + "stderr.txt");
+    return json::parse(r.out, nullptr, false);
+  };
+  const auto set = json_of("chamber set 30 --ramp 5");
+  EXPECT_NEAR(set["setpoint_c"].get<double>(), 30.0, 0.05) << set.dump();
+  EXPECT_EQ(set["mode"], "active") << set.dump();
+  EXPECT_EQ(json_of("chamber standby")["mode"], "standby");
+
+  const auto refused =
+      run("sim-station --chamber-protocol espec --duration 1", dir_ + "stderr.txt");
+  EXPECT_NE(refused.exit_code, 0);
+  const std::string why = refused.out + read_text(dir_ + "stderr.txt");
+  EXPECT_NE(why.find("--chamber-protocol"), std::string::npos) << why;
+  EXPECT_NE(why.find("csz-ezt570"), std::string::npos) << why;
+  const auto no_table =
+      run("sim-station --table-protocol aerotech --duration 1", dir_ + "stderr.txt");
+  EXPECT_NE(no_table.exit_code, 0);
+  EXPECT_NE(read_text(dir_ + "stderr.txt").find("acutrol"), std::string::npos);
+}
+
 }  // namespace
 
 namespace {

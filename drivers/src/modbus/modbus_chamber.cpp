@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <vector>
 
 namespace calstand::drivers {
 namespace {
@@ -22,7 +23,8 @@ struct ModbusChamber::Reading {
   double pv_c = 0.0;
   RegisterWords pv_raw;
   double sp_c = 0.0;
-  std::optional<std::uint16_t> mode_raw;  // set when the map has a mode register
+  std::optional<std::uint16_t> mode_raw;   // set when the map has a mode register
+  std::vector<std::uint16_t> alarm_words;  // one per map.alarms, in its order
 };
 
 ModbusChamber::ModbusChamber(ModbusChamberOptions options, core::Clock& clock, std::string name)
@@ -69,6 +71,11 @@ LinkStatus ModbusChamber::read_all(Reading& r) {
     s = link_.read_registers(RegisterKind::kHolding, map.mode->address, {&mode, 1});
     if (!s.ok()) return s;
     r.mode_raw = mode;
+  }
+  r.alarm_words.assign(map.alarms.size(), 0);
+  for (std::size_t i = 0; i < map.alarms.size(); ++i) {
+    s = link_.read_registers(RegisterKind::kHolding, map.alarms[i].address, {&r.alarm_words[i], 1});
+    if (!s.ok()) return s;
   }
   return s;
 }
@@ -396,6 +403,15 @@ void ModbusChamber::apply_reading(const Reading& r) {
     // Without a mode register the controller always controls; standby is our ambient setpoint.
     cache_.mode =
         command_ == Command::kStandby ? core::ChamberMode::kStandby : core::ChamberMode::kActive;
+  }
+  // The controller's own alarms: a fault with its words (which bit is which alarm is in its
+  // manual), recorded as an event when it appears like any implausible reading.
+  for (std::size_t i = 0; i < r.alarm_words.size() && i < options_.map.alarms.size(); ++i) {
+    if (r.alarm_words[i] == 0) continue;
+    const auto& alarm = options_.map.alarms[i];
+    reading_fault_ += fmt::format("{}controller alarm: {} (register {}) reads {:#06x}",
+                                  reading_fault_.empty() ? "" : "; ", alarm.name, alarm.address,
+                                  r.alarm_words[i]);
   }
 }
 
