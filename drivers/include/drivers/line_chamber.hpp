@@ -115,7 +115,7 @@ class LineChamber final : public Chamber {
   core::ChamberState last_;  ///< last values read (kept while the link is down)
   std::optional<double> read_setpoint_c_;
   std::optional<std::string> mode_text_;  ///< read_mode's value, when the set has it
-  std::atomic<bool> link_lost_{false};  ///< also read by state() without the lock
+  std::atomic<bool> link_lost_{false};    ///< also read by state() without the lock
   std::string link_error_;
   std::string read_fault_;  ///< a read the controller refused, in its words
   bool alarm_ = false;

@@ -33,8 +33,8 @@ LineChamber::LineChamber(const core::ChamberConfig& config, core::Clock& clock, 
                          std::chrono::milliseconds min_poll_interval)
     : config_(config), clock_(clock), min_poll_interval_(min_poll_interval) {
   const auto connection = LineConnection::from_json(config.connection, set, "chamber.connection");
-  session_ = std::make_unique<LineSession>(std::move(set), connection, kWho, clock_, counters_,
-                                           events_);
+  session_ =
+      std::make_unique<LineSession>(std::move(set), connection, kWho, clock_, counters_, events_);
 }
 
 LineChamber::LineChamber(const core::ChamberConfig& config, core::Clock& clock, CommandSet set,
@@ -42,9 +42,9 @@ LineChamber::LineChamber(const core::ChamberConfig& config, core::Clock& clock, 
                          std::chrono::milliseconds timeout,
                          std::chrono::milliseconds min_poll_interval)
     : config_(config), clock_(clock), min_poll_interval_(min_poll_interval) {
-  session_ = std::make_unique<LineSession>(std::move(set), std::move(transport),
-                                           std::move(link_name), timeout, kWho, clock_, counters_,
-                                           events_);
+  session_ =
+      std::make_unique<LineSession>(std::move(set), std::move(transport), std::move(link_name),
+                                    timeout, kWho, clock_, counters_, events_);
 }
 
 LineChamber::~LineChamber() = default;
@@ -154,8 +154,8 @@ bool LineChamber::poll() {
   if (!air_c || !std::isfinite(*air_c)) {
     Outcome bad;
     bad.kind = Outcome::Kind::kBadReply;
-    bad.message = fmt::format("the {} command set's read_air gave no air_c",
-                              session_->command_set().name);
+    bad.message =
+        fmt::format("the {} command set's read_air gave no air_c", session_->command_set().name);
     note_read_failure(bad);
     return false;
   }
@@ -266,8 +266,8 @@ Result LineChamber::set_temperature(double target_c, std::optional<double> ramp_
     written_setpoint_c_ = target_c;
   } else {
     if (!have_reading_ && !poll()) {
-      return Result::failure(fmt::format("{}: no air temperature to start the ramp from: {}",
-                                         name_, link_lost_ ? link_error_ : read_fault_));
+      return Result::failure(fmt::format("{}: no air temperature to start the ramp from: {}", name_,
+                                         link_lost_ ? link_error_ : read_fault_));
     }
     // A ramp continues from the last step written while controlling; otherwise it starts where
     // the air is, as a controller's own ramp would.

@@ -2,6 +2,8 @@
 // independent Python peer written from the same public material (peers/*_peer.py): identify,
 // set, read, standby, a refused command in the controller's words, a dropped connection that
 // is ridden out, an alarm; and the driver's own ramp on a virtual clock.
+#include "drivers/line_chamber.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,7 +19,6 @@
 #include "../child_process.hpp"
 #include "core/clock.hpp"
 #include "drivers/command_set.hpp"
-#include "drivers/line_chamber.hpp"
 #include "drivers/tcp_client.hpp"
 
 namespace calstand::drivers::line {
@@ -34,6 +35,8 @@ struct Device {
   const char* alarm_argument;  ///< the peer's "alarm" instruction's argument
   const char* alarm_words;     ///< what the chamber's fault must then say
 };
+
+void PrintTo(const Device& d, std::ostream* os) { *os << d.set; }
 
 const Device kDevices[] = {
     {"espec", "espec_peer.py", "PROTECT ON", "12", "controller alarm: 1 active, 12"},
@@ -254,7 +257,7 @@ TEST_P(LineChamberPeer, RefusesTargetsAndRampsBeyondTheStationWithoutSendingAnyt
 }
 
 INSTANTIATE_TEST_SUITE_P(BuiltInSets, LineChamberPeer, ::testing::ValuesIn(kDevices),
-                         [](const auto& info) { return std::string(info.param.set); });
+                         [](const auto& p) { return std::string(p.param.set); });
 
 /// The sets without set_ramp: the driver steps the setpoint itself.
 class LineChamberDriverRamp : public ::testing::TestWithParam<Device> {};
@@ -282,12 +285,19 @@ void check_ramp(const Device& device, std::optional<double> ramp, double expecte
   ASSERT_GE(sets.size(), 3u);
   EXPECT_DOUBLE_EQ(sets.front(), 23.0) << "the ramp starts at the air";
   EXPECT_DOUBLE_EQ(sets.back(), 33.0);
-  const double bound = expected_rate * kPoll / 60.0;
+  // Each poll is due a step of at least the resolution, so the i-th step is the i-th poll's, at
+  // station time i x kPoll after the start: never further from the start than the ramp allows
+  // by then, never more than one resolution behind it, and each step at most the ramp over one
+  // poll plus one resolution (the steps are whole resolutions rounded toward the start).
+  const double resolution = 0.1;
   for (std::size_t i = 1; i < sets.size(); ++i) {
+    const double allowed = std::min(10.0, expected_rate * kPoll * static_cast<double>(i) / 60.0);
+    EXPECT_LE(sets[i] - 23.0, allowed + 1e-9) << "step " << i << " of " << device.set;
+    EXPECT_GE(sets[i] - 23.0, allowed - resolution - 1e-9) << "step " << i << " of " << device.set;
     EXPECT_GT(sets[i], sets[i - 1]) << i;
-    EXPECT_LE(sets[i] - sets[i - 1], bound + 1e-9) << "step " << i << " of " << device.set;
+    EXPECT_LE(sets[i] - sets[i - 1], expected_rate * kPoll / 60.0 + resolution + 1e-9) << i;
   }
-  // Whole poll periods: the ramp cannot finish sooner than the rate allows.
+  // The ramp cannot finish sooner than the rate allows.
   const double minutes = (33.0 - 23.0) / expected_rate;
   EXPECT_GE(static_cast<double>(sets.size() - 1), minutes * 60.0 / kPoll - 1e-9);
 }
@@ -302,7 +312,7 @@ TEST_P(LineChamberDriverRamp, StepsAtTheStationsMaximumByDefault) {
 
 INSTANTIATE_TEST_SUITE_P(SetsWithoutRamp, LineChamberDriverRamp,
                          ::testing::Values(kDevices[0], kDevices[2]),
-                         [](const auto& info) { return std::string(info.param.set); });
+                         [](const auto& p) { return std::string(p.param.set); });
 
 TEST(LineChamberSimServ, TheControllerRampsWithTheGradientsBeforeTheSetpoint) {
   Peer peer("simserv_peer.py");
