@@ -342,6 +342,109 @@ TEST(LineChamberSimServ, TheControllerRampsWithTheGradientsBeforeTheSetpoint) {
   EXPECT_EQ(s.mode, core::ChamberMode::kActive);
 }
 
+/// A lab's own set for the ESPEC peer: MON? alone gives air, mode and the alarm count, and a
+/// setpoint query the controller does not know.
+CommandSet lab_set(bool with_unknown_query) {
+  json doc = {{"format", "calstand-command-set/1"},
+              {"name", "lab-espec"},
+              {"device", "chamber"},
+              {"source", "a lab's own file (tests)"},
+              {"line", {{"terminator", "\r\n"}, {"timeout_ms", 1000}}},
+              {"errors", {{{"pattern", "^NA:(.*)$"}, {"text_group", 1}}}},
+              {"operations",
+               {{"read_air",
+                 {{"command", "MON?"},
+                  {"reply", "^([-0-9.]+),([-0-9.]*),([A-Z ]+),(\\d+)$"},
+                  {"fields",
+                   {{"air_c", 1},
+                    {"mode",
+                     {{"group", 3},
+                      {"kind", "map"},
+                      {"map", {{"CONSTANT", "active"}, {"STANDBY", "standby"}}},
+                      {"otherwise", "fault"}}},
+                    {"alarm_count", 4}}}}},
+                {"set_setpoint", {{"command", "TEMP,S{setpoint_c:.1f}"}, {"reply", "^OK:.*$"}}},
+                {"start", {{"command", "MODE,CONSTANT"}, {"reply", "^OK:.*$"}}},
+                {"standby", {{"command", "MODE,STANDBY"}, {"reply", "^OK:.*$"}}}}}};
+  if (with_unknown_query) {
+    doc["operations"]["read_setpoint"] = {
+        {"command", "SETPOINT?"}, {"reply", "^([-0-9.]+)$"}, {"fields", {{"setpoint_c", 1}}}};
+  }
+  return parse_command_set(doc, "lab-espec.json");
+}
+
+std::unique_ptr<LineChamber> lab_chamber(const CommandSet& set, int port, core::Clock& clock) {
+  TcpOptions tcp;
+  tcp.host = "127.0.0.1";
+  tcp.port = static_cast<std::uint16_t>(port);
+  return std::make_unique<LineChamber>(station_chamber(), clock, set,
+                                       std::make_unique<TcpClient>(tcp), "tcp", 1000ms);
+}
+
+TEST(LineChamberOwnSet, ReadsAirModeAndAlarmsFromOneReply) {
+  Peer peer("espec_peer.py");
+  ASSERT_GT(peer.port(), 0);
+  core::VirtualClock clock;
+  auto chamber = lab_chamber(lab_set(false), peer.port(), clock);
+  ASSERT_TRUE(chamber->configure());
+  ASSERT_TRUE(chamber->activate());
+  ASSERT_TRUE(chamber->set_temperature(23.0, std::nullopt));
+  auto s = chamber->read_state();
+  EXPECT_FALSE(s.fault) << s.fault_text;
+  EXPECT_EQ(s.mode, core::ChamberMode::kActive) << "the controller's mode, from MON?";
+  peer.tell("alarm 7");
+  s = chamber->read_state();
+  EXPECT_TRUE(s.fault);
+  EXPECT_NE(s.fault_text.find("controller alarm: 1 active"), std::string::npos) << s.fault_text;
+  for (const auto& c : peer.values("cmd")) {
+    EXPECT_NE(c.get<std::string>(), "TEMP?") << "the set has no TEMP?";
+  }
+}
+
+TEST(LineChamberOwnSet, AReadTheControllerRefusesIsAFaultInItsWordsNotALostLink) {
+  Peer peer("espec_peer.py");
+  ASSERT_GT(peer.port(), 0);
+  core::VirtualClock clock;
+  auto chamber = lab_chamber(lab_set(true), peer.port(), clock);
+  const auto r = chamber->configure();
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.message.find("CMD ERR"), std::string::npos) << r.message;
+  EXPECT_EQ(chamber->state(), DeviceState::kError);
+}
+
+TEST(LineChamberRamp, ANewTargetContinuesFromTheLastStepAndARefusedStepIsAFault) {
+  Peer peer("espec_peer.py");
+  ASSERT_GT(peer.port(), 0);
+  core::VirtualClock clock;
+  auto chamber = chamber_on("espec", peer.port(), clock);
+  ASSERT_TRUE(chamber->configure());
+  ASSERT_TRUE(chamber->activate());
+  ASSERT_TRUE(chamber->set_temperature(40.0, 1.0));
+  clock.advance(120.0);  // 2 degC of ramp
+  ASSERT_FALSE(chamber->read_state().fault);
+  ASSERT_DOUBLE_EQ(peer.values("set").back().get<double>(), 25.0);
+  // Back down: from the step written (25.0), not from the air (23.0).
+  ASSERT_TRUE(chamber->set_temperature(20.0, 1.0));
+  EXPECT_DOUBLE_EQ(peer.values("set").back().get<double>(), 25.0);
+  clock.advance(60.0);
+  ASSERT_FALSE(chamber->read_state().fault);
+  EXPECT_DOUBLE_EQ(peer.values("set").back().get<double>(), 24.0);
+
+  chamber->take_events();
+  peer.tell("refuse");
+  clock.advance(60.0);
+  auto s = chamber->read_state();
+  EXPECT_TRUE(s.fault);
+  EXPECT_FALSE(s.link_lost);
+  EXPECT_NE(s.fault_text.find("ramp step refused"), std::string::npos) << s.fault_text;
+  EXPECT_NE(s.fault_text.find("PROTECT ON"), std::string::npos) << s.fault_text;
+  EXPECT_TRUE(has_event(chamber->take_events(), true, "PROTECT ON"));
+  peer.tell("accept");
+  s = chamber->read_state();
+  EXPECT_FALSE(s.fault) << s.fault_text;
+  EXPECT_DOUBLE_EQ(peer.values("set").back().get<double>(), 23.0) << "the step refused, now";
+}
+
 TEST(LineChamber, IsFaultedUntilConfiguredAndNeverThrows) {
   core::VirtualClock clock(7.0);
   auto chamber = chamber_on("espec", 1, clock);  // nothing listens on port 1
