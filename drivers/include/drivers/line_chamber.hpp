@@ -43,7 +43,7 @@ namespace calstand::drivers::line {
 ///   mode is a fault in the controller's words and an event. Never throws.
 ///
 /// Thread safety: every public call holds one mutex for all its exchanges (commands and polls
-/// never cross); fault_counters() and take_events() do not wait for it.
+/// never cross); state(), fault_counters() and take_events() do not wait for it.
 class LineChamber final : public Chamber {
  public:
   /// Reads config.connection against the set (throws core::InputError naming
