@@ -30,7 +30,8 @@ namespace calstand::drivers::line {
 ///   the air's temperature (or the last step written while controlling) toward the target,
 ///   never further from the start than ramp x elapsed station time, on every poll. Then `start`.
 ///   A refusal returns the controller's words.
-/// - standby(): `standby` (the safe state); allowed in every configured state.
+/// - standby(): `standby` (the safe state); allowed in every configured state. When the
+///   controller cannot be reached it fails, and the first poll that reaches it sends standby.
 /// - read_state(): polls at most every `min_poll_interval` (wall time; between polls the last
 ///   poll's state is returned): read_air (+ read_setpoint, read_mode when the set has them, and
 ///   read_alarms on every poll: an alarm is what stops a run safely, and one more short
@@ -128,6 +129,7 @@ class LineChamber final : public Chamber {
   double ramp_start_c_ = 0.0;
   double ramp_start_s_ = 0.0;
   std::optional<double> written_setpoint_c_;
+  bool standby_pending_ = false;  ///< standby not reached the controller: the next poll sends it
 };
 
 /// The chamber of a station file whose backend speaks a command set ("espec", "simserv",

@@ -72,6 +72,7 @@ Result LineChamber::configure() {
   ramp_fault_.clear();
   command_ = Command::kNone;
   written_setpoint_c_.reset();
+  standby_pending_ = false;
   const auto& set = session_->command_set();
   auto fail = [&](const std::string& why) {
     life_.set(DeviceState::kError);
@@ -196,6 +197,20 @@ bool LineChamber::poll() {
   if (setpoint) read_setpoint_c_ = setpoint;
   if (mode) mode_text_ = mode;
   note_alarm(alarm, alarm_words);
+  if (standby_pending_) {
+    // The safe state asked for while the controller could not be reached: now.
+    const auto o = run("standby");
+    if (o.ok()) {
+      standby_pending_ = false;
+      events_.push(clock_.now_s(), false, "standby written now that the link is back");
+    } else if (o.kind == Outcome::Kind::kRefused) {
+      standby_pending_ = false;
+      read_fault_ = "standby refused: " + o.message;
+    } else {
+      note_read_failure(o);
+      return false;
+    }
+  }
   if (command_ == Command::kControl && driver_ramps()) step_ramp();
   return true;
 }
@@ -288,6 +303,7 @@ Result LineChamber::set_temperature(double target_c, std::optional<double> ramp_
     if (const auto o = run("start"); !o.ok()) return command_failure("start", o);
   }
   command_ = Command::kControl;
+  standby_pending_ = false;
   target_c_ = target_c;
   ramp_c_per_min_ = ramp;
   ramp_fault_.clear();
@@ -300,7 +316,13 @@ Result LineChamber::standby() {
   command_ = Command::kStandby;
   written_setpoint_c_.reset();
   ramp_fault_.clear();
-  if (const auto o = run("standby"); !o.ok()) return command_failure("standby", o);
+  standby_pending_ = false;
+  if (const auto o = run("standby"); !o.ok()) {
+    // Not reached: the next poll that reaches the controller writes it (the safe state must not
+    // depend on the link being up at the moment it is asked for).
+    standby_pending_ = o.link_lost() || o.kind == Outcome::Kind::kBadReply;
+    return command_failure("standby", o);
+  }
   return Result::success();
 }
 

@@ -226,6 +226,20 @@ TEST_P(LineChamberPeer, RidesOutADroppedConnection) {
   EXPECT_EQ(chamber_->read_state().mode, core::ChamberMode::kActive);
 }
 
+TEST_P(LineChamberPeer, AStandbyTheLinkMissedIsSentWhenTheLinkIsBack) {
+  ASSERT_TRUE(chamber_->set_temperature(24.0, std::nullopt));
+  ASSERT_TRUE(peer_->values("running").back().get<bool>());
+  peer_->tell("drop");
+  const auto r = chamber_->standby();
+  ASSERT_FALSE(r) << "the controller could not be reached";
+  EXPECT_NE(r.message.find("link down"), std::string::npos) << r.message;
+  for (int i = 0; i < 100 && chamber_->read_state().fault; ++i) std::this_thread::sleep_for(20ms);
+  EXPECT_FALSE(chamber_->read_state().fault);
+  EXPECT_FALSE(peer_->values("running").back().get<bool>()) << "standby reached the controller";
+  EXPECT_EQ(chamber_->read_state().mode, core::ChamberMode::kStandby);
+  EXPECT_TRUE(has_event(chamber_->take_events(), false, "standby written"));
+}
+
 TEST_P(LineChamberPeer, AnAlarmIsAFaultInTheControllersWordsAndAnEvent) {
   ASSERT_TRUE(chamber_->set_temperature(24.0, std::nullopt));
   chamber_->take_events();
