@@ -7,7 +7,8 @@ separated by the byte 0xB6, ended by CR; the reply starts with the return code (
 -5 unknown command, -6 too few or wrong parameters, -8 data could not be read), then the data,
 separated by 0xB6, ended by CR LF. 99997 chamber information, 11001/11002 set/get the nominal
 value, 11004 the actual value, 11068/11072 gradients up/down, 10012 status (1 not running,
-3 running, +4 warnings, +8 alarms), 14001 manual mode on/off.
+3 running, +4 warnings, +8 alarms), 14001 manual mode on/off, 14003 digital output value
+(output 1: the manual mode, "get running" in the users' code).
 
 "alarm" sets the status' alarm bit; "refuse [CODE]" answers settings with CODE (default -6).
 """
@@ -36,6 +37,8 @@ class SimServ(Device):
             return self.ok(f"{self.air:.1f}")
         if number == "11002":
             return self.ok(f"{self.setpoint:.1f}")
+        if number == "14003":  # digital output value; output 1 is the manual mode's on/off
+            return self.ok(1 if self.running else 0)
         if number == "10012":
             return self.ok((3 if self.running else 1) + (8 if self.alarm else 0))
         if number in ("11001", "11068", "11072", "14001"):
