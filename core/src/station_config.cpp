@@ -51,6 +51,14 @@ std::string resolve(const std::string& base_dir, const std::string& path) {
 
 /// A device's connection with every string field named "*_file" (e.g. a CAN signal map's
 /// "map_file") or "dbc" resolved against the station file's folder, as spec and truth files are.
+/// A `command_set`: a built-in name as it is, a file path (one with a '/' or ending in .json)
+/// resolved against the station file's folder.
+std::string resolve_command_set(const std::string& name_or_path, const std::string& base_dir) {
+  const bool is_path =
+      name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".json");
+  return is_path ? resolve(base_dir, name_or_path) : name_or_path;
+}
+
 json resolve_connection_files(json connection, const std::string& base_dir) {
   if (!connection.is_object()) return connection;
   for (auto& [key, value] : connection.items()) {
@@ -172,6 +180,9 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
   c.table.inner = axis_from_json(table.at("inner"));
   c.table.connection =
       resolve_connection_files(table.value("connection", json::object()), base_dir);
+  if (table.contains("command_set")) {
+    c.table.command_set = resolve_command_set(table.at("command_set").get<std::string>(), base_dir);
+  }
   if (table.contains("tilt_rad")) {
     c.table.tilt_rad = {table.at("tilt_rad").value("east", 0.0),
                         table.at("tilt_rad").value("north", 0.0)};
@@ -192,6 +203,9 @@ StationConfig StationConfig::from_json(const json& doc, const std::string& file_
     c.chamber.imu_self_heating_c = s.value("imu_self_heating_c", c.chamber.imu_self_heating_c);
   }
   c.chamber.connection = resolve_connection_files(ch.value("connection", json::object()), base_dir);
+  if (ch.contains("command_set")) {
+    c.chamber.command_set = resolve_command_set(ch.at("command_set").get<std::string>(), base_dir);
+  }
 
   for (const json& j : doc.at("imus")) {
     ImuConfig imu;
@@ -285,6 +299,7 @@ json StationConfig::to_json() const {
                   {"inner", axis_to_json(table.inner)},
                   {"tilt_rad", {{"east", table.tilt_rad.x()}, {"north", table.tilt_rad.y()}}}};
   if (!table.connection.empty()) table_j["connection"] = table.connection;
+  if (!table.command_set.empty()) table_j["command_set"] = table.command_set;
   json chamber_j = {{"backend", chamber.backend},
                     {"min_c", chamber.min_c},
                     {"max_c", chamber.max_c},
@@ -297,6 +312,7 @@ json StationConfig::to_json() const {
                       {"imu_time_constant_s", chamber.imu_time_constant_s},
                       {"imu_self_heating_c", chamber.imu_self_heating_c}}}};
   if (!chamber.connection.empty()) chamber_j["connection"] = chamber.connection;
+  if (!chamber.command_set.empty()) chamber_j["command_set"] = chamber.command_set;
   json doc = {{"format", "calstand-station/1"},
               {"name", name},
               {"seed", seed},

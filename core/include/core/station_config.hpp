@@ -32,6 +32,9 @@ struct TableConfig {
   AxisConfig outer;
   AxisConfig inner;
   nlohmann::json connection = nlohmann::json::object();
+  /// A built-in command set's name or a command-set file's absolute path; empty: the backend's
+  /// own (docs/protocols.md, Command sets).
+  std::string command_set;
 };
 
 struct ChamberConfig {
@@ -47,6 +50,9 @@ struct ChamberConfig {
   double imu_time_constant_s = 600.0;
   double imu_self_heating_c = 3.0;
   nlohmann::json connection = nlohmann::json::object();
+  /// A built-in command set's name or a command-set file's absolute path; empty: the backend's
+  /// own (docs/protocols.md, Command sets).
+  std::string command_set;
 };
 
 /// One IMU of the station. Exactly one truth source is set for a simulated IMU.

@@ -32,11 +32,11 @@ struct FieldSpec {
     kMatch,   ///< true when the group matched at all (an optional group)
   };
   Kind kind = Kind::kNumber;
-  int group = 1;              ///< capture group of the step's reply pattern (1 = first)
-  double scale = 1.0;         ///< kNumber: value = number * scale (e.g. 0.001 for millidegrees)
-  int bit = 0;                ///< kBit: bit number, 0 = least significant
-  int base = 10;              ///< kBit: 10 or 16
-  bool invert = false;        ///< kBit, kMatch: the opposite truth
+  int group = 1;        ///< capture group of the step's reply pattern (1 = first)
+  double scale = 1.0;   ///< kNumber: value = number * scale (e.g. 0.001 for millidegrees)
+  int bit = 0;          ///< kBit: bit number, 0 = least significant
+  int base = 10;        ///< kBit: 10 or 16
+  bool invert = false;  ///< kBit, kMatch: the opposite truth
   std::map<std::string, std::string> map;  ///< kMap: device text -> value
   std::optional<std::string> otherwise;    ///< kMap: value of an unlisted text (none: bad reply)
 };
@@ -82,11 +82,11 @@ struct LineFormat {
   /// Put before every command line: a template with {address} (RS-485 multi-drop), e.g.
   /// "{address},"; empty: none.
   std::string prefix;
-  std::string address;         ///< the station file's connection.address overrides it
-  int timeout_ms = 1000;       ///< per reply
-  int delay_ms = 0;            ///< wait after each command without a reply (slow controllers)
-  int default_tcp_port = 0;    ///< used when the connection gives none (0: must be given)
-  int default_baud = 9600;     ///< used when the connection gives none
+  std::string address;       ///< the station file's connection.address overrides it
+  int timeout_ms = 1000;     ///< per reply
+  int delay_ms = 0;          ///< wait after each command without a reply (slow controllers)
+  int default_tcp_port = 0;  ///< used when the connection gives none (0: must be given)
+  int default_baud = 9600;   ///< used when the connection gives none
 };
 
 /// A command set, parsed and checked.
@@ -96,6 +96,8 @@ struct CommandSet {
   std::string source;  ///< the public document it was written from (docs)
   LineFormat line;
   std::vector<ErrorPattern> errors;
+  /// For simulators only: the refusal reply, a template with {text}; empty: none served.
+  std::string error_format;
   /// Operation name -> steps. Chamber operations: identify, read_air, read_setpoint, read_mode,
   /// set_setpoint, set_ramp, start, standby, read_alarms. Table operations: identify,
   /// set_limits, position, rate, sine, stop, read_position, read_rate, read_status,

@@ -61,8 +61,8 @@ struct Outcome {
 class LineSession {
  public:
   /// The link from the station file's connection (no I/O until the first operation).
-  LineSession(CommandSet set, const LineConnection& connection, std::string who,
-              core::Clock& clock, FaultCounters& counters, EventQueue& events);
+  LineSession(CommandSet set, const LineConnection& connection, std::string who, core::Clock& clock,
+              FaultCounters& counters, EventQueue& events);
   /// Over a given transport (tests); `timeout` per reply.
   LineSession(CommandSet set, std::unique_ptr<ByteTransport> transport, std::string link_name,
               std::chrono::milliseconds timeout, std::string who, core::Clock& clock,
