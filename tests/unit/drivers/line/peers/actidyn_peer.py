@@ -17,6 +17,7 @@ a refused command is answered by one line 'ERROR <the controller's words>'.
 import os
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import table_peer  # noqa: E402
 

@@ -25,6 +25,7 @@ PARAMETER OUT OF RANGE bit'. This peer answers a refused message with one line
 import os
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import table_peer  # noqa: E402
 

@@ -15,6 +15,7 @@ controller's own text before the prompt ('AXIS 2 FAULT: ...'); commands end with
 import os
 import sys
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import table_peer  # noqa: E402
 
