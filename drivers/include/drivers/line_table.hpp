@@ -97,7 +97,9 @@ class LineTable final : public Turntable {
   /// Runs a motion operation; `expect` is the mode the axis must report when the reply says.
   Result run_motion(const char* operation, std::size_t axis, const line::Arguments& args,
                     const char* expect);
-  std::optional<Interlock> read_interlock(std::size_t axis, std::string& why);
+  /// The axis's interlock, or nullopt with why (`link_lost`: the controller was not reached).
+  std::optional<Interlock> read_interlock(std::size_t axis, std::string& why,
+                                          bool* link_lost = nullptr);
   bool read_axis(std::size_t axis, core::AxisState& out, double& angle_time_s, std::string& why,
                  bool& link_lost);
   void note_axis_faults(const core::TableState& state);

@@ -98,10 +98,12 @@ Result LineTable::run_motion(const char* operation, std::size_t axis, const Argu
   return Result::success();
 }
 
-std::optional<LineTable::Interlock> LineTable::read_interlock(std::size_t axis, std::string& why) {
+std::optional<LineTable::Interlock> LineTable::read_interlock(std::size_t axis, std::string& why,
+                                                              bool* link_lost) {
   const Outcome o = run("read_interlock", axis_args(axis));
   if (!o.ok()) {
     why = o.message;
+    if (link_lost != nullptr) *link_lost = o.link_lost();
     return std::nullopt;
   }
   const auto open = o.truth("open");
@@ -437,11 +439,8 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
   }
   std::optional<Interlock> il;
   if (session_->has("read_interlock")) {
-    il = read_interlock(axis, why);
-    if (!il) {
-      link_lost = false;
-      return false;
-    }
+    il = read_interlock(axis, why, &link_lost);
+    if (!il) return false;
   }
 
   out.angle_deg = angle_deg;

@@ -111,6 +111,11 @@ TEST_P(LineTablePeer, MovesTurnsAndStops) {
 
   ASSERT_TRUE(table_->move_to(30.0, -45.0).ok);
   EXPECT_TRUE(eventually([&] { return settled_at(30.0, -45.0); }));
+  // The state's time is when the outer angle was read: within the call.
+  const double before_s = clock_.now_s();
+  const auto at = table_->read_state();
+  EXPECT_GE(at.time_s, before_s);
+  EXPECT_LE(at.time_s, clock_.now_s());
 
   ASSERT_TRUE(table_->set_rate(TableAxis::kOuter, 20.0).ok);
   EXPECT_TRUE(eventually([&] {
@@ -194,6 +199,25 @@ TEST_P(LineTablePeer, ADroppedConnectionIsRiddenOut) {
 
   ASSERT_TRUE(table_->move_to(0.0, 0.0).ok);
   EXPECT_TRUE(eventually([&] { return settled_at(0.0, 0.0); }));
+}
+
+TEST_P(LineTablePeer, ALostControllerIsLinkLostAndStopStillTriesBothAxes) {
+  configure_and_activate();
+  ASSERT_TRUE(table_->move_to(12.0, -12.0).ok);
+  ASSERT_TRUE(eventually([&] { return settled_at(12.0, -12.0); }));
+  tell("quit");  // the controller is gone for good
+
+  EXPECT_TRUE(eventually([&] { return table_->read_state().link_lost; }));
+  const auto s = table_->read_state();
+  EXPECT_TRUE(s.link_lost);
+  EXPECT_TRUE(s.outer.fault);
+  EXPECT_EQ(s.outer.fault_text.rfind("table state unreadable: ", 0), 0u) << s.outer.fault_text;
+  EXPECT_NEAR(s.outer.angle_deg, 12.0, 0.01) << "the last known angle is kept";
+  const Result stopped = table_->stop();
+  EXPECT_FALSE(stopped.ok);
+  EXPECT_NE(stopped.message.find("outer axis"), std::string::npos) << stopped.message;
+  EXPECT_NE(stopped.message.find("inner axis"), std::string::npos) << stopped.message;
+  EXPECT_FALSE(table_->move_to(0.0, 0.0).ok);
 }
 
 TEST_P(LineTablePeer, AnOpenInterlockIsClosedOnlyByAnOperator) {

@@ -212,6 +212,9 @@ def run(table, handler, ending=b"\n", split=b"\r\n"):
                 axis.fault = rest or "fault"
                 axis.halt()
             elif cmd == "quit":
-                break
+                server.drop()
+                server.listener.close()
+                print("ok " + raw.strip(), flush=True)
+                return
         print("ok " + raw.strip(), flush=True)
     server.drop()
