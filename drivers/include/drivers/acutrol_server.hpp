@@ -123,6 +123,10 @@ struct AcutrolServerOptions {
   std::string bind_host = "127.0.0.1";  ///< IPv4 address to listen on
   std::uint16_t port = 0;               ///< 0: an ephemeral port (see AcutrolServer::port())
   std::size_t max_clients = 8;          ///< further connections are accepted and closed at once
+  /// A CR alone ends a line too (controllers whose command sets end lines with CR); the LF of a
+  /// CR LF then gives an empty line, which the handler ignores.
+  bool cr_ends_line = false;
+  std::string reply_terminator = "\n";  ///< appended to every reply
 };
 
 /// The protocol simulator: serves the command language over TCP (and, if asked, a

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <stdexcept>
@@ -180,13 +181,15 @@ void AcutrolServer::serve(ByteTransport& link, const std::atomic<bool>& dropped)
   while (!stopping_ && !dropped) {
     const IoResult r = link.read(buffer, kPollSlice);
     if (!r.ok()) return;  // the client hung up or the link failed: end of session
+    if (options_.cr_ends_line)
+      std::replace(buffer, buffer + r.bytes, std::uint8_t{'\r'}, std::uint8_t{'\n'});
     lines.push(std::span<const std::uint8_t>(buffer, r.bytes));
     while (auto line = lines.next()) {
       std::optional<std::string> answer = handler_(line->text, line->overlong);
       ++commands_;
       if (!answering_ || !answer) continue;
       std::string reply = std::move(*answer);
-      reply.push_back(acutrol::kTerminator);
+      reply += options_.reply_terminator;
       const auto* bytes = reinterpret_cast<const std::uint8_t*>(reply.data());
       if (!link.write(std::span<const std::uint8_t>(bytes, reply.size()), kReplyTimeout).ok()) {
         return;

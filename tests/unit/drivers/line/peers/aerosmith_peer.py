@@ -8,7 +8,9 @@ What it speaks, from that code:
 - every command is answered by the response terminator CR LF '>' CR LF, a query by its value
   then that terminator; any other answer means the command failed.
 Left open by the material, and read here as the aerosmith set reads it: the axis is the first
-argument ('JOG 2,10.0', 'POS? 1'); POS moves to an angle; a refused command is answered by the
+argument ('JOG 2,10.0', 'POS? 1'); POS moves to an angle; 'SRV? N' answers 1 (motor on) or 0
+(off: an interlock or a fault switched it off; 'SRV N,1' switches it on again unless the cause
+is present); a refused command is answered by the
 controller's own text before the prompt ('AXIS 2 FAULT: ...'); commands end with CR or LF.
 """
 
@@ -67,6 +69,8 @@ def handle(line):
                 return ["%.4f" % a.demand_rate + PROMPT]
             if head == "ACL":
                 return ["%.4f" % a.max_accel + PROMPT]
+            if head == "SRV":
+                return [("1" if a.usable() else "0") + PROMPT]
             raise Refused("INVALID COMMAND %s?" % head)
         if head == "STO":
             if a.mode != "off":
@@ -84,8 +88,10 @@ def handle(line):
             if on:
                 if a.fault:
                     raise Refused("AXIS %s FAULT: %s" % (name, a.fault))
-                if a.interlock_open:
+                if a.interlock_open and a.cause_present:
                     raise Refused("AXIS %s INTERLOCK OPEN: %s" % (name, a.interlock_why))
+                a.interlock_open = False
+                a.interlock_why = ""
                 a.servo = True
                 if a.mode == "off":
                     a.mode = "rest"
