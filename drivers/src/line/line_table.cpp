@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <numbers>
+#include <string_view>
 
 namespace calstand::drivers {
 
@@ -88,9 +89,11 @@ Result LineTable::run_motion(const char* operation, std::size_t axis, const Argu
   if (!o.ok()) {
     return Result::failure(fmt::format("{} axis: {}", line_table_axis_name(axis), o.message));
   }
-  // Sets whose operation ends by asking the axis's mode (ACUTROL3000, Actidyn): a controller
-  // that silently kept another mode (an axis off, an interlock) must not look like success.
-  if (const auto mode = o.text("mode"); mode && *mode != expect) {
+  // Sets whose operation ends by asking the axis's mode (ACUTROL3000): a controller that
+  // silently kept another mode (an axis off, an interlock) must not look like success. An axis
+  // a fault has stopped is at rest as far as stop() is concerned.
+  const auto mode = o.text("mode");
+  if (mode && *mode != expect && !(*mode == "fault" && std::string_view(expect) == "rest")) {
     return Result::failure(
         fmt::format("{} axis: the controller did not take {} mode: it reports {}",
                     line_table_axis_name(axis), expect, *mode));

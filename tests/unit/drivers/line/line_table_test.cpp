@@ -39,6 +39,7 @@ struct SetCase {
 
 std::string case_name(const ::testing::TestParamInfo<SetCase>& info) { return info.param.set; }
 void PrintTo(const SetCase& c, std::ostream* os) { *os << c.set; }
+std::string served_case_name(const ::testing::TestParamInfo<const char*>& p) { return p.param; }
 
 bool eventually(const std::function<bool()>& done, std::chrono::milliseconds limit = 10s) {
   const auto deadline = std::chrono::steady_clock::now() + limit;
@@ -311,7 +312,7 @@ TEST_P(LineTableServed, TheSimulatedTableMovesTurnsAndStops) {
 
 INSTANTIATE_TEST_SUITE_P(BuiltInSets, LineTableServed,
                          ::testing::Values("acutrol3000", "aerosmith", "actidyn", "aerotech"),
-                         [](const auto& info) { return std::string(info.param); });
+                         served_case_name);
 
 TEST(LineTable, BeforeConfigureItReadsNothingAndSaysSo) {
   core::TableConfig config;
