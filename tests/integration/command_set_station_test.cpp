@@ -26,7 +26,7 @@ using calstand::testing::write_text;
 using nlohmann::json;
 
 // As the other sim-station tests: fast enough for the suite, slow enough for a busy machine.
-constexpr const char* kTimeScale = "20";
+constexpr const char* kSetsTimeScale = "20";
 
 /// One table set and one chamber set served together, and how the station file names them.
 struct SetPair {
@@ -82,7 +82,7 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
   }
 
   const std::string lab = dir_ + name + "-lab.json";
-  SimStationProcess station({"--station", sim, "--time-scale", kTimeScale, "--station-out", lab,
+  SimStationProcess station({"--station", sim, "--time-scale", kSetsTimeScale, "--station-out", lab,
                              "--table-protocol", p.table, "--chamber-protocol", p.chamber});
   const json lab_file = json::parse(read_text(lab));
   EXPECT_EQ(lab_file["table"]["backend"], p.table_backend);
