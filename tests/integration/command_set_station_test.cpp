@@ -76,8 +76,8 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
       "--set rates=[30,90] --set revolutions=1";
   const std::string six = "six-position --set capture_s=10";
   const std::string ladder = "rate-ladder --set rates=[30,90] --set revolutions=1";
-  for (const auto& [procedure, db] : {std::pair{thermal, "thermal"}, std::pair{six, "six"},
-                                      std::pair{ladder, "ladder"}}) {
+  for (const auto& [procedure, db] :
+       {std::pair{thermal, "thermal"}, std::pair{six, "six"}, std::pair{ladder, "ladder"}}) {
     ASSERT_EQ(run_procedure(procedure, sim, dir_ + name + "-" + db + "-inproc.db").exit_code, 0);
   }
 
@@ -105,21 +105,21 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
     const std::string real_db = dir_ + name + "-" + db + "-real.db";
     const auto r = run_procedure(procedure, lab, real_db);
     ASSERT_EQ(r.exit_code, 0) << procedure << "\n" << r.out;
-    calstand::testing::expect_same_quality(
-        fit_json(dir_ + name + "-" + db + "-inproc.db", model), fit_json(real_db, model), 4.0);
+    calstand::testing::expect_same_quality(fit_json(dir_ + name + "-" + db + "-inproc.db", model),
+                                           fit_json(real_db, model), 4.0);
     const std::string events = events_text(real_db);
     EXPECT_EQ(events.find("link lost"), std::string::npos) << events;
     EXPECT_EQ(events.find("bad reply"), std::string::npos) << events;
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Sets, CommandSetStations,
-    ::testing::Values(SetPair{"acutrol-style", "watlow-f4t", "acutrol", "modbus"}),
-    [](const auto& info) {
-      std::string n = std::string(info.param.table) + "_" + info.param.chamber;
-      std::replace(n.begin(), n.end(), '-', '_');
-      return n;
-    });
+INSTANTIATE_TEST_SUITE_P(Sets, CommandSetStations,
+                         ::testing::Values(SetPair{"acutrol-style", "watlow-f4t", "acutrol",
+                                                   "modbus"}),
+                         [](const auto& info) {
+                           std::string n = std::string(info.param.table) + "_" + info.param.chamber;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
 
 }  // namespace

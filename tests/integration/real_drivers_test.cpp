@@ -36,7 +36,6 @@ using nlohmann::json;
 // enough that the engine's 0.1 s ticks (5 ms of wall time) keep up on a busy 2-core machine.
 constexpr const char* kTimeScale = "20";
 
-
 class RealDrivers : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

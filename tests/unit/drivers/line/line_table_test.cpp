@@ -314,6 +314,40 @@ INSTANTIATE_TEST_SUITE_P(BuiltInSets, LineTableServed,
                          ::testing::Values("acutrol3000", "aerosmith", "actidyn", "aerotech"),
                          served_case_name);
 
+TEST(LineTable, WithoutAStatusInPositionIsTheAngleHeldWithinToleranceForTheSettleTime) {
+  // Aerosmith's set reads no status: in-position is derived, on the station clock.
+  test::ChildProcess peer({test::kPython, std::string(CALSTAND_SOURCE_DIR) +
+                                              "/tests/unit/drivers/line/peers/aerosmith_peer.py"});
+  const auto first = peer.read_line();
+  ASSERT_TRUE(first.has_value() && first->rfind("port ", 0) == 0);
+  core::TableConfig config;
+  config.outer.settle_time_s = config.inner.settle_time_s = 0.5;
+  config.outer.position_tolerance_deg = config.inner.position_tolerance_deg = 1e-3;
+  config.connection = {
+      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", std::stoi(first->substr(5))}};
+  core::VirtualClock clock(100.0);
+  LineTable table(config, clock, *line::builtin_command_set("aerosmith"));
+  ASSERT_TRUE(table.configure().ok);
+  ASSERT_TRUE(table.activate().ok);
+  ASSERT_TRUE(table.move_to(20.0, -20.0).ok);
+  // The peer gets there in real time; the station clock stands still meanwhile.
+  ASSERT_TRUE(eventually([&] {
+    const auto s = table.read_state();
+    return std::abs(s.outer.angle_deg - 20.0) < 1e-4 && std::abs(s.inner.angle_deg + 20.0) < 1e-4;
+  }));
+  EXPECT_FALSE(table.read_state().outer.in_position) << "settled before the settle time";
+  clock.advance(0.3);
+  EXPECT_FALSE(table.read_state().outer.in_position);
+  clock.advance(0.3);
+  const auto settled = table.read_state();
+  EXPECT_TRUE(settled.outer.in_position);
+  EXPECT_TRUE(settled.inner.in_position);
+  EXPECT_EQ(settled.outer.mode, core::AxisMode::kPosition);
+  // A new demand starts the settle time again.
+  ASSERT_TRUE(table.move_to(20.0, -20.0).ok);
+  EXPECT_FALSE(table.read_state().outer.in_position);
+}
+
 TEST(LineTable, BeforeConfigureItReadsNothingAndSaysSo) {
   core::TableConfig config;
   config.connection = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", 9}};
