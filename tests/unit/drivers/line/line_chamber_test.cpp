@@ -244,6 +244,20 @@ TEST_P(LineChamberPeer, AStandbyTheLinkMissedIsSentWhenTheLinkIsBack) {
   EXPECT_TRUE(has_event(chamber_->take_events(), false, "standby written"));
 }
 
+TEST_P(LineChamberPeer, AReplyOutOfStepIsALostReadingNotAFaultOfTheChamber) {
+  peer_->tell("garble");
+  auto s = chamber_->read_state();
+  EXPECT_TRUE(s.fault);
+  EXPECT_TRUE(s.link_lost) << "the engine rides it out like a timeout";
+  EXPECT_EQ(s.fault_text.rfind("link down: ", 0), 0u) << s.fault_text;
+  EXPECT_NE(s.fault_text.find("#~%&"), std::string::npos) << "the reply, as it came";
+  EXPECT_NEAR(s.air_temperature_c, 23.0, 1e-9);
+  EXPECT_GE(chamber_->fault_counters().at("bad_replies"), 1u);
+  s = chamber_->read_state();
+  EXPECT_FALSE(s.fault) << s.fault_text;
+  EXPECT_FALSE(s.link_lost);
+}
+
 TEST_P(LineChamberPeer, AnAlarmIsAFaultInTheControllersWordsAndAnEvent) {
   ASSERT_TRUE(chamber_->set_temperature(24.0, std::nullopt));
   chamber_->take_events();
