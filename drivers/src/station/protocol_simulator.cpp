@@ -31,7 +31,65 @@ namespace {
 std::string connect_host(const std::string& listen_host) {
   return listen_host == "0.0.0.0" ? "127.0.0.1" : listen_host;
 }
+
+/// How the simulated chamber is served in one protocol. Today every chamber protocol is a
+/// register map over Modbus TCP; a protocol served otherwise (a line command set) gets its own
+/// entry kind here and its own server in start().
+struct ChamberProtocol {
+  const char* name;
+  ChamberRegisterMap (*modbus_map)();
+};
+
+ChamberRegisterMap f4t_map() { return watlow_f4t_map(); }
+
+constexpr ChamberProtocol kChamberProtocols[] = {
+    {"watlow-f4t", &f4t_map},
+    {"watlow-f4", &watlow_f4_map},
+    {"csz-ezt570", &csz_ezt570_map},
+};
+
+/// The table's command sets; the ACUTROL-style language is the only one served yet.
+constexpr const char* kTableProtocols[] = {"acutrol"};
+
+const ChamberProtocol* find_chamber_protocol(const std::string& name) {
+  for (const auto& p : kChamberProtocols) {
+    if (name == p.name) return &p;
+  }
+  return nullptr;
+}
+
+ProtocolSimOptions validated(ProtocolSimOptions options) {
+  options.validate();
+  return options;
+}
+
 }  // namespace
+
+std::string chamber_protocol_names() {
+  std::string out;
+  for (const auto& p : kChamberProtocols) out += (out.empty() ? "" : ", ") + std::string(p.name);
+  return out;
+}
+
+std::string table_protocol_names() {
+  std::string out;
+  for (const char* p : kTableProtocols) out += (out.empty() ? "" : ", ") + std::string(p);
+  return out;
+}
+
+void ProtocolSimOptions::validate() const {
+  if (find_chamber_protocol(chamber_protocol) == nullptr) {
+    throw core::InputError("--chamber-protocol",
+                           fmt::format("\"{}\" is not a chamber protocol sim-station serves ({})",
+                                       chamber_protocol, chamber_protocol_names()));
+  }
+  if (std::find(std::begin(kTableProtocols), std::end(kTableProtocols), table_protocol) ==
+      std::end(kTableProtocols)) {
+    throw core::InputError("--table-protocol",
+                           fmt::format("\"{}\" is not a table protocol sim-station serves ({})",
+                                       table_protocol, table_protocol_names()));
+  }
+}
 
 struct ProtocolSimulator::Impl {
   Impl(const core::StationConfig& config, ProtocolSimOptions o)
@@ -47,7 +105,7 @@ struct ProtocolSimulator::Impl {
   SimTableBackend table_backend;
   SimChamberBackend chamber_backend;
   std::unique_ptr<AcutrolServer> table_server;
-  std::unique_ptr<ModbusChamberServer> f4t_server;
+  std::unique_ptr<ModbusChamberServer> chamber_tcp_server;
   std::unique_ptr<ModbusChamberServer> f4_server;
   std::vector<std::unique_ptr<ImuFrameStreamer>> imu_lines;
   /// One SCPI server per simulated supply, in the station file's order.
@@ -91,7 +149,7 @@ struct ProtocolSimulator::Impl {
 
 ProtocolSimulator::ProtocolSimulator(const core::StationConfig& sim_config,
                                      ProtocolSimOptions options)
-    : impl_(std::make_unique<Impl>(sim_config, std::move(options))) {}
+    : impl_(std::make_unique<Impl>(sim_config, validated(std::move(options)))) {}
 
 ProtocolSimulator::~ProtocolSimulator() { stop(); }
 
@@ -106,9 +164,10 @@ void ProtocolSimulator::start() {
   m.table_backend.set_clock([&runner = m.runner] { return runner.clock_s(); });
   m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
   m.table_server->start();
-  m.f4t_server = ModbusChamberServer::tcp(watlow_f4t_map(), m.chamber_backend,
-                                          m.options.modbus_port, 1, m.options.host);
-  m.f4t_server->start();
+  const ChamberProtocol& chamber = *find_chamber_protocol(m.options.chamber_protocol);
+  m.chamber_tcp_server = ModbusChamberServer::tcp(chamber.modbus_map(), m.chamber_backend,
+                                                  m.options.modbus_port, 1, m.options.host);
+  m.chamber_tcp_server->start();
   if (m.options.f4_rtu) {
     m.f4_server = ModbusChamberServer::rtu(watlow_f4_map(), m.chamber_backend);
     m.f4_server->start();
@@ -161,7 +220,7 @@ void ProtocolSimulator::stop() {
   if (!m.started) return;
   m.runner.stop();
   if (m.table_server) m.table_server->stop();
-  if (m.f4t_server) m.f4t_server->stop();
+  if (m.chamber_tcp_server) m.chamber_tcp_server->stop();
   if (m.f4_server) m.f4_server->stop();
   for (auto& server : m.supply_servers) server->stop();
   m.supply_servers.clear();
@@ -180,9 +239,9 @@ json ProtocolSimulator::endpoints() const {
     if (m.can && i == 0) entry["can"] = m.options.can_interface;
     imus.push_back(std::move(entry));
   }
-  json chamber = {
-      {"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host), m.f4t_server->port())},
-      {"map", "watlow-f4t"}};
+  json chamber = {{"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host),
+                                             m.chamber_tcp_server->port())},
+                  {"map", m.options.chamber_protocol}};
   if (m.f4_server)
     chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
   json supplies = json::array();
@@ -198,7 +257,7 @@ json ProtocolSimulator::endpoints() const {
           {"power_supplies", supplies},
           {"table",
            {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
-            {"protocol", "acutrol"}}},
+            {"protocol", m.options.table_protocol}}},
           {"chamber", chamber},
           {"imus", imus}};
 }
@@ -220,9 +279,9 @@ core::StationConfig ProtocolSimulator::client_station() const {
   c.chamber.connection = {
       {"transport", "tcp"},
       {"host", connect_host(m.options.host)},
-      {"port", m.f4t_server->port()},
+      {"port", m.chamber_tcp_server->port()},
       {"unit_id", 1},
-      {"map", "watlow-f4t"},
+      {"map", m.options.chamber_protocol},
       // Poll as often in world time as a lab station does (4 Hz); the
       // staleness rule (5 s in a lab) scaled as the policy above.
       {"poll_period_ms", std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
@@ -266,7 +325,7 @@ void ProtocolSimulator::clear_interlock_cause(TableAxis axis) {
 }
 
 void ProtocolSimulator::set_modbus_running(bool running) {
-  for (auto* server : {impl_->f4t_server.get(), impl_->f4_server.get()}) {
+  for (auto* server : {impl_->chamber_tcp_server.get(), impl_->f4_server.get()}) {
     if (!server) continue;
     if (running) {
       server->start();
@@ -274,6 +333,13 @@ void ProtocolSimulator::set_modbus_running(bool running) {
       server->stop();
     }
   }
+}
+
+void ProtocolSimulator::set_table_link(bool up) {
+  auto& server = *impl_->table_server;
+  // Refuse first, so that a client reconnecting between the two calls is refused too.
+  server.set_refusing(!up);
+  if (!up) server.drop_clients();
 }
 
 void ProtocolSimulator::set_imu_silent(std::size_t index, bool silent) {
@@ -311,7 +377,7 @@ json ProtocolSimulator::statistics() const {
   }
   return {{"world_lag_s", m.runner.lag_s()},
           {"table_commands", m.table_server ? m.table_server->commands_served() : 0},
-          {"modbus_requests", m.f4t_server ? m.f4t_server->requests() : 0},
+          {"modbus_requests", m.chamber_tcp_server ? m.chamber_tcp_server->requests() : 0},
           {"can_frames_sent", m.can ? m.can->frames_sent() : 0},
           {"can_frames_dropped", m.can ? m.can->frames_dropped() : 0},
           {"imus", imus}};
