@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -18,6 +19,7 @@
 
 #include "../child_process.hpp"
 #include "core/clock.hpp"
+#include "core/error.hpp"
 #include "drivers/command_set.hpp"
 #include "drivers/command_set_server.hpp"
 #include "drivers/modbus_chamber_server.hpp"
@@ -240,6 +242,20 @@ TEST_P(LineChamberPeer, AStandbyTheLinkMissedIsSentWhenTheLinkIsBack) {
   EXPECT_FALSE(peer_->values("running").back().get<bool>()) << "standby reached the controller";
   EXPECT_EQ(chamber_->read_state().mode, core::ChamberMode::kStandby);
   EXPECT_TRUE(has_event(chamber_->take_events(), false, "standby written"));
+}
+
+TEST_P(LineChamberPeer, AReplyOutOfStepIsALostReadingNotAFaultOfTheChamber) {
+  peer_->tell("garble");
+  auto s = chamber_->read_state();
+  EXPECT_TRUE(s.fault);
+  EXPECT_TRUE(s.link_lost) << "the engine rides it out like a timeout";
+  EXPECT_EQ(s.fault_text.rfind("link down: ", 0), 0u) << s.fault_text;
+  EXPECT_NE(s.fault_text.find("#~%&"), std::string::npos) << "the reply, as it came";
+  EXPECT_NEAR(s.air_temperature_c, 23.0, 1e-9);
+  EXPECT_GE(chamber_->fault_counters().at("bad_replies"), 1u);
+  s = chamber_->read_state();
+  EXPECT_FALSE(s.fault) << s.fault_text;
+  EXPECT_FALSE(s.link_lost);
 }
 
 TEST_P(LineChamberPeer, AnAlarmIsAFaultInTheControllersWordsAndAnEvent) {
@@ -562,6 +578,61 @@ TEST_P(LineChamberSimulator, TheSetsRepliesFormatsReadBackThroughTheDriver) {
 
 INSTANTIATE_TEST_SUITE_P(BuiltInSets, LineChamberSimulator, ::testing::ValuesIn(kDevices),
                          [](const auto& p) { return std::string(p.param.set); });
+
+TEST(LineChamberFactory, ReadsTheStationsConnectionAgainstTheSet) {
+  Peer peer("thermotron_peer.py");
+  ASSERT_GT(peer.port(), 0);
+  core::VirtualClock clock;
+  auto config = station_chamber();
+  config.backend = "thermotron";
+  config.connection = {
+      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", peer.port()}, {"timeout_ms", 500}};
+  auto chamber = make_line_chamber(config, clock, *builtin_command_set("thermotron"));
+  const auto r = chamber->configure();
+  ASSERT_TRUE(r) << r.message;
+  ASSERT_TRUE(chamber->activate());
+  EXPECT_TRUE(chamber->set_temperature(23.0, std::nullopt));
+  EXPECT_FALSE(chamber->read_state().fault);
+
+  // No port: the set's own (57732 for espec), named when nothing answers there.
+  config.connection = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"timeout_ms", 200}};
+  auto espec = make_line_chamber(config, clock, *builtin_command_set("espec"));
+  const auto refused = espec->configure();
+  EXPECT_FALSE(refused);
+  EXPECT_NE(refused.message.find("57732"), std::string::npos) << refused.message;
+
+  config.connection = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", "x"}};
+  EXPECT_THROW(make_line_chamber(config, clock, *builtin_command_set("espec")), core::InputError);
+}
+
+TEST(LineChamberThreads, StatusReadsFromAnotherThreadNeverCrossTheEnginesCommands) {
+  Peer peer("espec_peer.py");
+  ASSERT_GT(peer.port(), 0);
+  core::VirtualClock clock;
+  auto chamber = chamber_on("espec", peer.port(), clock);
+  ASSERT_TRUE(chamber->configure());
+  ASSERT_TRUE(chamber->activate());
+  std::atomic<bool> stop{false};
+  std::atomic<int> bad{0};
+  std::thread reader([&] {
+    while (!stop) {
+      const auto s = chamber->read_state();
+      if (s.fault) ++bad;
+      (void)chamber->state();
+      (void)chamber->fault_counters();
+    }
+  });
+  for (int i = 0; i < 40; ++i) {
+    EXPECT_TRUE(chamber->set_temperature(i % 2 == 0 ? 24.0 : 23.0, std::nullopt));
+    clock.advance(30.0);
+    EXPECT_TRUE(chamber->standby());
+  }
+  stop = true;
+  reader.join();
+  EXPECT_EQ(bad.load(), 0) << "a reply taken for another command's would be a fault";
+  EXPECT_EQ(chamber->fault_counters().at("bad_replies"), 0u);
+  EXPECT_EQ(chamber->fault_counters().at("stray_bytes"), 0u);
+}
 
 TEST(LineChamber, IsFaultedUntilConfiguredAndNeverThrows) {
   core::VirtualClock clock(7.0);

@@ -13,6 +13,7 @@ stdin (from the test), one instruction per line:
   refuse [WORDS]  refuse setting commands from now on
   accept          accept them again
   air V           the air temperature is V degC
+  garble          answer the next command with line noise
   quit            end
 """
 import json
@@ -34,6 +35,7 @@ class Device:
         self.running = False
         self.alarm = None  # None or the device-specific argument of "alarm"
         self.refusal = None  # None or the words of "refuse"
+        self.garble = False  # the next reply is line noise
 
     def handle(self, command):
         """Returns the reply line (without terminator), or None for no reply."""
@@ -55,6 +57,8 @@ class Device:
             self.refusal = None
         elif what == "air":
             self.air = float(arg)
+        elif what == "garble":
+            self.garble = True
 
     def default_refusal(self):
         return "refused"
@@ -117,5 +121,8 @@ def serve(device, reply_terminator=b"\r\n", separators=b"\r\n"):
                     command = raw.decode("latin-1")
                     report(cmd=command)
                     reply = device.handle(command)
+                    if reply is not None and device.garble:
+                        device.garble = False
+                        reply = "#~%&"
                     if reply is not None:
                         client.sendall(reply.encode("latin-1") + reply_terminator)
