@@ -75,11 +75,9 @@ void check(const drivers::Result& r, const std::string& what) {
   throw std::runtime_error(named ? r.message : what + ": " + r.message);
 }
 
-/// Rides out `device`'s dropped link for the station's policy.link_outage_s.
+/// Rides out a dropped link for the station's policy.link_outage_s.
 drivers::RideOutPolicy ride_out_policy(drivers::Station& station) {
-  drivers::RideOutPolicy policy;
-  policy.limit_s = station.config().policy.link_outage_s;
-  return policy;
+  return drivers::RideOutPolicy::from_policy(station.config().policy);
 }
 
 /// `command` on `device`, repeated while its link is down (harmless commands only).

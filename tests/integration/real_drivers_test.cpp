@@ -521,6 +521,19 @@ TEST_F(RealDrivers, SimStationServesTheChamberInTheChosenMap) {
   EXPECT_NEAR(set["setpoint_c"].get<double>(), 30.0, 0.05) << set.dump();
   EXPECT_EQ(set["mode"], "active") << set.dump();
   EXPECT_EQ(json_of("chamber standby")["mode"], "standby");
+  // A run through the map: a setpoint, a soak, a capture, the chamber to standby at its end.
+  const std::string procedure = dir_ + "csz-plateau.json";
+  write_text(procedure, R"({"format": "calstand-procedure/1", "name": "csz-plateau",
+    "description": "one plateau near the lab's air, through the chamber's register map",
+    "steps": [
+      {"kind": "set_temperature", "target_c": 26, "ramp_c_per_min": 5, "label": "to 26 degC",
+       "soak": {"tolerance_c": 3, "stable_s": 1, "timeout_s": 600}},
+      {"kind": "capture", "duration_s": 2, "label": "at 26 degC"}]})");
+  const std::string db = dir_ + "csz.db";
+  const auto r = run_procedure(procedure, lab, db);
+  EXPECT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "stderr.txt");
+  EXPECT_EQ(show_json(db).value("status", ""), "completed");
+  EXPECT_EQ(json_of("chamber get")["mode"], "standby");
 
   const auto refused =
       run("sim-station --chamber-protocol espec --duration 1", dir_ + "stderr.txt");

@@ -8,6 +8,7 @@
 
 #include "core/chamber_state.hpp"
 #include "core/clock.hpp"
+#include "core/station_config.hpp"
 #include "core/table_state.hpp"
 #include "drivers/device.hpp"
 
@@ -26,6 +27,8 @@ struct RideOutPolicy {
   double first_pause_s = 0.2;
   double max_pause_s = 2.0;
 
+  /// The station's rule: limit_s is its policy.link_outage_s, as a run's engine has it.
+  static RideOutPolicy from_policy(const core::FaultPolicy& policy);
   /// Throws core::InputError naming `where`.<field> for a negative or non-finite limit or a
   /// pause that is not positive.
   void validate(const std::string& where) const;

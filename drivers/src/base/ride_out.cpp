@@ -11,6 +11,12 @@
 
 namespace calstand::drivers {
 
+RideOutPolicy RideOutPolicy::from_policy(const core::FaultPolicy& policy) {
+  RideOutPolicy out;
+  out.limit_s = policy.link_outage_s;
+  return out;
+}
+
 void RideOutPolicy::validate(const std::string& where) const {
   if (!std::isfinite(limit_s) || limit_s < 0.0) {
     throw core::InputError(where + ".limit_s", fmt::format("{} s is not >= 0", limit_s));

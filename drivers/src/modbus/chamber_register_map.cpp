@@ -207,18 +207,29 @@ ChamberRegisterMap watlow_f4t_map(WordOrder order) {
   return m;
 }
 
+// CSZ EZT-570i/S: the User Communication Reference Manual, section 2.4 "Control Registers"
+// (docs/protocols.md, "CSZ EZT-570", cites it). Where the public material leaves a detail open
+// the map takes the cautious reading; a station file's generic map can change each one:
+//   - scale: the decimal point is the loop's configuration; one place (tenths) assumed;
+//   - on/off: which bit of the chamber manual event word runs the chamber is not spelt out;
+//     bit 0, as on CSZ's EZT-550, and the whole word compared (see below);
+//   - sensor fault: reported in alarm word 55, not as a process-value sentinel; the int16 full
+//     scale is treated as one too, as for the F4;
+//   - alarms: which bit is which alarm is not decoded; any bit set is a fault.
 ChamberRegisterMap csz_ezt570_map() {
   ChamberRegisterMap m;
   m.name = "csz-ezt570";
   // Control registers 60..119 are the loops, 12 registers each; loop 1 is the air temperature.
   m.process_value = {61, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
   m.setpoint = {60, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
-  // The chamber's manual on/off is event bit 0 of the chamber manual event word. The whole word
-  // is written and compared: another event on (humidity, purge) reads as neither control nor
-  // standby, which the driver reports as a fault rather than guess what the chamber does.
+  // The whole event word is written and compared: another event on (humidity, purge) reads as
+  // neither control nor standby, which the driver reports as a fault rather than guess what
+  // the chamber does.
   m.mode = ModeField{22, 1, 0};
-  // No ramp register for constant mode: the driver steps the setpoint at the requested ramp.
+  // No ramp register for constant mode (the controller ramps in its own programs only): the
+  // driver steps the setpoint at the requested ramp.
   m.sensor_fault_raw = {0x7FFF, 0x8000};
+  // EZT-570 alarm status (input sensor breaks), input, chamber and refrigeration alarm words.
   m.alarms = {{55, "controller alarms"},
               {56, "input alarms"},
               {57, "chamber alarms"},

@@ -109,6 +109,12 @@ TEST(RideOut, APolicyThatCannotWorkIsRefusedNamingTheField) {
   EXPECT_THROW(p.validate("ride_out"), core::InputError);
 }
 
+TEST(RideOut, TheStationsPolicyGivesTheLimit) {
+  core::FaultPolicy station;
+  station.link_outage_s = 42.0;
+  EXPECT_EQ(RideOutPolicy::from_policy(station).limit_s, 42.0);
+}
+
 TEST(RideOut, AFailureInContextKeepsItsLinkFlag) {
   const auto r = Result::link_failure("no reply").in("outer axis");
   EXPECT_EQ(r.message, "outer axis: no reply");
