@@ -102,6 +102,7 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
   for (const auto& [procedure, db, model] :
        {std::tuple{thermal, "thermal", gyro}, std::tuple{six, "six", accel},
         std::tuple{ladder, "ladder", gyro}}) {
+    SCOPED_TRACE(procedure);
     const std::string real_db = dir_ + name + "-" + db + "-real.db";
     const auto r = run_procedure(procedure, lab, real_db);
     ASSERT_EQ(r.exit_code, 0) << procedure << "\n" << r.out;
@@ -114,8 +115,10 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
 }
 
 INSTANTIATE_TEST_SUITE_P(Sets, CommandSetStations,
-                         ::testing::Values(SetPair{"acutrol-style", "watlow-f4t", "acutrol",
-                                                   "modbus"}),
+                         ::testing::Values(SetPair{"acutrol3000", "espec", "acutrol", "espec"},
+                                           SetPair{"aerosmith", "simserv", "aerosmith", "simserv"},
+                                           SetPair{"actidyn", "thermotron", "actidyn", "thermotron"},
+                                           SetPair{"aerotech", "csz-ezt570", "aerotech", "modbus"}),
                          [](const auto& info) {
                            std::string n = std::string(info.param.table) + "_" + info.param.chamber;
                            std::replace(n.begin(), n.end(), '-', '_');

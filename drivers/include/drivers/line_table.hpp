@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <deque>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -84,6 +85,9 @@ class LineTable final : public Turntable {
     std::optional<double> settled_since_s;  ///< in tolerance since [s]
     std::optional<double> last_angle_deg;   ///< previous reading, for the rate by difference
     double last_angle_time_s = 0.0;
+    double unwrapped_deg = 0.0;  ///< the angle without its wraps [deg]
+    /// (station time [s], unwrapped angle [deg]) over the last kDerivedRateWindowS
+    std::deque<std::pair<double, double>> history;
   };
   /// An axis interlock as read.
   struct Interlock {

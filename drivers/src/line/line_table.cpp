@@ -15,6 +15,12 @@ using line::Outcome;
 namespace {
 
 constexpr std::array<std::size_t, 2> kLineTableAxes{0, 1};  // outer, inner
+// A rate the controller does not report is the angle's slope over this much station time [s]:
+// long enough that the readings' time-stamp jitter (a round trip's) is a small part of it.
+constexpr double kDerivedRateWindowS = 2.0;
+// A derived rate is at its demand within this fraction of it (a measured one, within the
+// axis's rate_tolerance_dps): the window's jitter, not the table, limits it.
+constexpr double kDerivedRateTolerance = 0.01;
 
 std::string_view line_table_axis_name(std::size_t axis) { return axis == 1 ? "inner" : "outer"; }
 
@@ -407,14 +413,30 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
       return false;
     }
   }
-  if (!rate) {
-    const double dt = angle_time_s - t.last_angle_time_s;
-    rate = t.last_angle_deg && dt > 0.0
-               ? line_table_wrap_180(angle_deg - *t.last_angle_deg) / dt
-               : (t.commanded == core::AxisMode::kRate ? out.rate_dps : 0.0);
+  // The angle unwrapped, kept over a window for a rate the controller does not give.
+  if (t.last_angle_deg) {
+    t.unwrapped_deg += line_table_wrap_180(angle_deg - *t.last_angle_deg);
+  } else {
+    t.unwrapped_deg = angle_deg;
   }
   t.last_angle_deg = angle_deg;
   t.last_angle_time_s = angle_time_s;
+  t.history.emplace_back(angle_time_s, t.unwrapped_deg);
+  // The slope is of the motion since the last command only, over at most the window.
+  while (t.history.size() > 1 && (t.history.front().first < t.commanded_at_s ||
+                                  (t.history.size() > 2 &&
+                                   angle_time_s - t.history[1].first >= kDerivedRateWindowS))) {
+    t.history.pop_front();
+  }
+  const bool rate_derived = !rate.has_value();
+  if (rate_derived) {
+    // Over a window, not between two readings: each reading's time stamp carries the link's
+    // round-trip jitter, which between readings 0.1 s apart is tens of percent of the rate.
+    const auto& [t0, a0] = t.history.front();
+    const double dt = angle_time_s - t0;
+    rate = dt > 0.0 ? (t.unwrapped_deg - a0) / dt
+                    : (t.commanded == core::AxisMode::kRate ? out.rate_dps : 0.0);
+  }
 
   std::optional<core::AxisMode> mode;
   std::optional<bool> in_position;
@@ -461,7 +483,13 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
           std::abs(line_table_wrap_180(angle_deg - t.demand_deg)) <= limits.position_tolerance_deg;
       break;
     case core::AxisMode::kRate:
-      within = std::abs(*rate - t.demand_rate_dps) <= limits.rate_tolerance_dps;
+      // A rate derived from angles is judged to kDerivedRateTolerance of the demand, once the
+      // window holds angles from after the command only.
+      within = rate_derived ? t.history.front().first >= t.commanded_at_s &&
+                                  std::abs(*rate - t.demand_rate_dps) <=
+                                      std::max(limits.rate_tolerance_dps,
+                                               kDerivedRateTolerance * std::abs(t.demand_rate_dps))
+                            : std::abs(*rate - t.demand_rate_dps) <= limits.rate_tolerance_dps;
       break;
     case core::AxisMode::kSine:
       within = now_s - t.commanded_at_s >= limits.settle_time_s;
@@ -475,6 +503,16 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
     if (!t.settled_since_s) t.settled_since_s = now_s;
   } else {
     t.settled_since_s.reset();
+  }
+  // A controller holds its rate to its own specification (ppm), far better than the slope of
+  // angles polled over a link: once that slope agrees with the demand, the rate is the demand.
+  // Likewise an axis holding its angle (settled in position, or at rest) is not turning.
+  if (rate_derived && within) {
+    if (out.mode == core::AxisMode::kRate) out.rate_dps = t.demand_rate_dps;
+    const bool holding = out.mode == core::AxisMode::kRest ||
+                         (out.mode == core::AxisMode::kPosition && t.settled_since_s &&
+                          now_s - *t.settled_since_s >= limits.settle_time_s);
+    if (holding) out.rate_dps = 0.0;
   }
   const bool derived =
       out.mode == core::AxisMode::kSine

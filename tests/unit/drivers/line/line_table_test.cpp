@@ -302,7 +302,10 @@ TEST_P(LineTableServed, TheSimulatedTableMovesTurnsAndStops) {
   })) << table.read_state().outer.fault_text;
   const Result turned = table.set_rate(TableAxis::kOuter, 10.0);
   ASSERT_TRUE(turned.ok) << turned.message;
-  EXPECT_TRUE(eventually([&] { return std::abs(table.read_state().outer.rate_dps - 10.0) < 0.1; }));
+  // Within 5 %: a set without a rate query (Aerosmith) gives the angles' slope over the
+  // station clock, and this test's world advances behind the wall in slices of its own (it
+  // lags the clock by a few percent at 20x; sim-station aligns the two, this fixture does not).
+  EXPECT_TRUE(eventually([&] { return std::abs(table.read_state().outer.rate_dps - 10.0) < 0.5; }));
   const Result stopped = table.stop();
   ASSERT_TRUE(stopped.ok) << stopped.message;
   EXPECT_TRUE(eventually([&] { return std::abs(table.read_state().outer.rate_dps) < 0.05; }));
