@@ -1,8 +1,8 @@
 #pragma once
 
 #include <array>
-#include <deque>
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>

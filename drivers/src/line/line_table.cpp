@@ -423,9 +423,9 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
   t.last_angle_time_s = angle_time_s;
   t.history.emplace_back(angle_time_s, t.unwrapped_deg);
   // The slope is of the motion since the last command only, over at most the window.
-  while (t.history.size() > 1 && (t.history.front().first < t.commanded_at_s ||
-                                  (t.history.size() > 2 &&
-                                   angle_time_s - t.history[1].first >= kDerivedRateWindowS))) {
+  while (t.history.size() > 1 &&
+         (t.history.front().first < t.commanded_at_s ||
+          (t.history.size() > 2 && angle_time_s - t.history[1].first >= kDerivedRateWindowS))) {
     t.history.pop_front();
   }
   const bool rate_derived = !rate.has_value();

@@ -91,8 +91,8 @@ std::optional<line::CommandSet> command_set_protocol(const std::string& protocol
                                                      const std::string& known) {
   const bool is_file = protocol.find('/') != std::string::npos || protocol.ends_with(".json");
   if (!is_file && !line::builtin_command_set(protocol)) {
-    throw core::InputError(option, fmt::format("\"{}\" is not a protocol sim-station serves ({})",
-                                               protocol, known));
+    throw core::InputError(
+        option, fmt::format("\"{}\" is not a protocol sim-station serves ({})", protocol, known));
   }
   return line::load_command_set(protocol, "", device, option);
 }
@@ -286,12 +286,12 @@ json ProtocolSimulator::endpoints() const {
   }
   json chamber;
   if (m.chamber_line_server) {
-    chamber = {{"tcp", fmt::format("{}:{}", connect_host(m.options.host),
-                                   m.chamber_line_server->port())},
-               {"protocol", m.options.chamber_protocol}};
+    chamber = {
+        {"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.chamber_line_server->port())},
+        {"protocol", m.options.chamber_protocol}};
   } else {
-    chamber = {{"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host),
-                                          m.chamber_tcp_server->port())},
+    chamber = {{"modbus_tcp",
+                fmt::format("{}:{}", connect_host(m.options.host), m.chamber_tcp_server->port())},
                {"map", m.options.chamber_protocol}};
   }
   if (m.f4_server)
@@ -343,15 +343,16 @@ core::StationConfig ProtocolSimulator::client_station() const {
   } else {
     c.chamber.backend = "modbus";
     c.chamber.connection = {
-      {"transport", "tcp"},
-      {"host", connect_host(m.options.host)},
-      {"port", m.chamber_tcp_server->port()},
-      {"unit_id", 1},
-      {"map", m.options.chamber_protocol},
-      // Poll as often in world time as a lab station does (4 Hz); the
-      // staleness rule (5 s in a lab) scaled as the policy above.
-      {"poll_period_ms", std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
-      {"stale_after_s", 5.0 * m.options.time_scale}};
+        {"transport", "tcp"},
+        {"host", connect_host(m.options.host)},
+        {"port", m.chamber_tcp_server->port()},
+        {"unit_id", 1},
+        {"map", m.options.chamber_protocol},
+        // Poll as often in world time as a lab station does (4 Hz); the
+        // staleness rule (5 s in a lab) scaled as the policy above.
+        {"poll_period_ms",
+         std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
+        {"stale_after_s", 5.0 * m.options.time_scale}};
   }
   for (std::size_t i = 0; i < c.imus.size(); ++i) {
     auto& imu = c.imus[i];
