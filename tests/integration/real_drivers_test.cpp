@@ -536,15 +536,17 @@ TEST_F(RealDrivers, SimStationServesTheChamberInTheChosenMap) {
   EXPECT_EQ(json_of("chamber get")["mode"], "standby");
 
   const auto refused =
-      run("sim-station --chamber-protocol espec --duration 1", dir_ + "stderr.txt");
+      run("sim-station --chamber-protocol nosuch --duration 1", dir_ + "stderr.txt");
   EXPECT_NE(refused.exit_code, 0);
   const std::string why = refused.out + read_text(dir_ + "stderr.txt");
   EXPECT_NE(why.find("--chamber-protocol"), std::string::npos) << why;
   EXPECT_NE(why.find("csz-ezt570"), std::string::npos) << why;
   const auto no_table =
-      run("sim-station --table-protocol aerotech --duration 1", dir_ + "stderr.txt");
+      run("sim-station --table-protocol nosuch --duration 1", dir_ + "stderr.txt");
   EXPECT_NE(no_table.exit_code, 0);
-  EXPECT_NE(read_text(dir_ + "stderr.txt").find("acutrol"), std::string::npos);
+  // The refusal lists what is served: the ACUTROL-style server and the table command sets.
+  EXPECT_NE(read_text(dir_ + "stderr.txt").find("acutrol, "), std::string::npos);
+  EXPECT_NE(read_text(dir_ + "stderr.txt").find("aerotech"), std::string::npos);
 }
 
 }  // namespace
