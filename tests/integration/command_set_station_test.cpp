@@ -36,6 +36,9 @@ struct SetPair {
   const char* chamber_backend;
 };
 
+/// The pair by its sets in ctest's test names (not the struct's bytes).
+void PrintTo(const SetPair& p, std::ostream* os) { *os << p.table << " and " << p.chamber; }
+
 class CommandSetStations : public ::testing::TestWithParam<SetPair> {
  protected:
   static void SetUpTestSuite() {
@@ -74,7 +77,8 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
   // plateau is most of a thermal run's time), the table's turns and positions for the gyro
   // fit; the accelerometers from their own six positions.
   const std::string thermal =
-      "thermal-calibration --set temperatures=[23,24] --set final_c=24 --set soak_s=5 "
+      "thermal-calibration --set temperatures=[23,24] --set final_c=24 --set final_soak_s=5 --set "
+      "soak_s=5 "
       "--set capture_s=5 --set ramp_c_per_min=5 --set outer_angles=[0,180] "
       "--set inner_angles=[0,90] --set rates=[60] --set revolutions=1";
   const std::string six = "six-position --set capture_s=5";

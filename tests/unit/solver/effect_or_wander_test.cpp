@@ -39,6 +39,10 @@ std::string case_name(const WarmUpCase& c) {
                      c.seed, c.tau_s, c.times_noise, c.static_capture_s);
 }
 
+// The parameter as ctest's name shows it (else gtest prints the struct's bytes: a name that
+// changes with every build).
+void PrintTo(const WarmUpCase& c, std::ostream* os) { *os << case_name(c); }
+
 double time_constant_of(const std::string& custom) {
   const auto slash = custom.find("elapsed/");
   return slash == std::string::npos ? 0.0 : std::stod(custom.substr(slash + 8));

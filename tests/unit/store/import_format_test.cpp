@@ -167,6 +167,9 @@ struct UnitCase {
   const char* accel;
 };
 
+/// The case by its units in ctest's test names (not the struct's bytes).
+void PrintTo(const UnitCase& u, std::ostream* os) { *os << u.gyro << " and " << u.accel; }
+
 class Import2Units : public ::testing::TestWithParam<UnitCase> {};
 
 TEST_P(Import2Units, SamplesAreStoredInDegPerSecondAndMetresPerSecondSquared) {

@@ -103,6 +103,9 @@ struct BadConnection {
   const char* where;
 };
 
+/// The case by its name in ctest's test names (not the struct's bytes).
+void PrintTo(const BadConnection& c, std::ostream* os) { *os << c.name; }
+
 class CanImuConnectionErrorTest : public ::testing::TestWithParam<BadConnection> {};
 
 TEST_P(CanImuConnectionErrorTest, NamesTheField) {

@@ -49,6 +49,9 @@ struct BadMap {
   const char* why;
 };
 
+/// The case by its name in ctest's test names (not the struct's bytes).
+void PrintTo(const BadMap& c, std::ostream* os) { *os << c.name; }
+
 class CanSignalMapErrorTest : public ::testing::TestWithParam<BadMap> {};
 
 TEST_P(CanSignalMapErrorTest, NamesTheFieldAndWhy) {
