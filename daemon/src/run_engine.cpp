@@ -152,7 +152,7 @@ void RunEngine::skip_step(std::size_t index) {
     // The next step expects the table at rest, as after a completed rate step.
     const auto axis =
         step.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
-    station_.table().set_rate(axis, 0.0);
+    bring_to_rest(axis, index);
   }
   journal_.step_skipped(index, station_.clock().now_s(), why);
 }
@@ -420,7 +420,26 @@ void RunEngine::rate(const Step& step, std::size_t index) {
   wait_for(step.settle_s, "settling");
   attempt_ = capture(index, step.duration_s, attempt_);
   // The table comes to rest after a rate step unless the next step turns the same axis on.
-  if (step.rest_after) station_.table().set_rate(axis, 0.0);
+  if (step.rest_after) bring_to_rest(axis, index);
+}
+
+void RunEngine::bring_to_rest(drivers::TableAxis axis, std::size_t index) {
+  for (;;) {
+    const drivers::Result r = station_.table().set_rate(axis, 0.0);
+    if (r) return;
+    const Step& step = plan_.steps[index];
+    if (!r.link_lost) {
+      throw StepFailed{fmt::format("step {} ({}): table refused to bring the axis to rest: {}",
+                                   index, step.label, r.message)};
+    }
+    // The controller keeps the axis turning until the command reaches it: the next step must
+    // not start on a turning table, so wait the outage out (or abort past the policy's limit,
+    // which brings the table to its safe state once the link allows).
+    ride_out_link_outage("table", true, r.message, table_link_down_since_s_);
+    station_.wait_until(station_.clock().now_s() + options_.tick_s);
+    poll_imus();
+    record_device_events();
+  }
 }
 
 void RunEngine::oscillate(const Step& step, std::size_t index) {

@@ -163,6 +163,10 @@ class RunEngine {
   /// Records step `index` as skipped (the operator's request) and leaves the station as the
   /// next step expects it (a skipped rate step's axis at rest).
   void skip_step(std::size_t index);
+  /// Brings `axis` to rest after rate step `index`: a command lost to a link outage is sent
+  /// again until it reaches the controller (the outage ridden out by the policy, so the run
+  /// aborts to the safe state past its limit); a refusal fails the step.
+  void bring_to_rest(drivers::TableAxis axis, std::size_t index);
   /// True when a skip request applies to the current step now (false while re-establishing
   /// the station after a crash; a request meant for a step that has ended is dropped).
   bool skip_wanted();

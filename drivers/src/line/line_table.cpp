@@ -93,7 +93,10 @@ Result LineTable::run_motion(const char* operation, std::size_t axis, const Argu
                              const char* expect) {
   const Outcome o = run(operation, args);
   if (!o.ok()) {
-    return Result::failure(fmt::format("{} axis: {}", line_table_axis_name(axis), o.message));
+    // A command lost to the link may be sent again once it is back (the engine does so to
+    // bring an axis to rest); a refusal is the controller's answer.
+    const std::string why = fmt::format("{} axis: {}", line_table_axis_name(axis), o.message);
+    return o.link_lost() ? Result::link_failure(why) : Result::failure(why);
   }
   // Sets whose operation ends by asking the axis's mode (ACUTROL3000): a controller that
   // silently kept another mode (an axis off, an interlock) must not look like success. An axis

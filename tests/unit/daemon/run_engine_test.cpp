@@ -394,6 +394,111 @@ TEST(RunEngine, OnlyAFlaggedLinkLossOfAControllerNotInFaultIsRiddenOut) {
   }
 }
 
+/// The simulated table behind a link that goes down at the first command to bring an axis to
+/// rest and stays down for `outage_s` of station time: the command is lost (link_failure) and
+/// the state is the last known with link_lost, as the ACUTROL and command-set drivers give.
+class TableBehindALink final : public drivers::Turntable {
+ public:
+  TableBehindALink(drivers::Turntable& inner, core::Clock& clock) : inner_(inner), clock_(clock) {}
+  double outage_s = 0.0;
+  int rest_commands_lost = 0;
+
+  const std::string& name() const override { return inner_.name(); }
+  drivers::Result configure() override { return inner_.configure(); }
+  drivers::Result activate() override { return inner_.activate(); }
+  drivers::Result deactivate() override { return inner_.deactivate(); }
+  drivers::DeviceState state() const override { return inner_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override { return {}; }
+  drivers::Result move_to(double outer, double inner) override {
+    if (down()) return drivers::Result::link_failure("no reply: scripted outage");
+    return inner_.move_to(outer, inner);
+  }
+  drivers::Result set_rate(drivers::TableAxis axis, double rate_dps) override {
+    if (rate_dps == 0.0 && !lost_at_s_) lost_at_s_ = clock_.now_s();
+    if (down()) {
+      ++rest_commands_lost;
+      return drivers::Result::link_failure("no reply: scripted outage");
+    }
+    return inner_.set_rate(axis, rate_dps);
+  }
+  drivers::Result start_sine(drivers::TableAxis axis, double amplitude, double f) override {
+    return inner_.start_sine(axis, amplitude, f);
+  }
+  drivers::Result stop() override { return down() ? drivers::Result::success() : inner_.stop(); }
+  core::TableState read_state() override {
+    if (!down()) return last_ = inner_.read_state();
+    core::TableState s = last_;
+    s.outer.fault = true;
+    s.outer.fault_text = "link down: scripted outage";
+    s.link_lost = true;
+    return s;
+  }
+
+ private:
+  bool down() const {
+    return lost_at_s_ && clock_.now_s() >= *lost_at_s_ && clock_.now_s() < *lost_at_s_ + outage_s;
+  }
+  drivers::Turntable& inner_;
+  core::Clock& clock_;
+  std::optional<double> lost_at_s_;
+  core::TableState last_;
+};
+
+/// The simulated station with its table behind TableBehindALink.
+class StationWithATableLink final : public drivers::Station {
+ public:
+  StationWithATableLink() : table_(sim_.table(), sim_.clock()) {}
+  TableBehindALink& link() { return table_; }
+  drivers::SimStation& sim() { return sim_; }
+  const core::StationConfig& config() const override { return sim_.config(); }
+  core::Clock& clock() override { return sim_.clock(); }
+  drivers::Turntable& table() override { return table_; }
+  drivers::Chamber& chamber() override { return sim_.chamber(); }
+  std::size_t imu_count() const override { return sim_.imu_count(); }
+  drivers::Imu& imu(std::size_t i) override { return sim_.imu(i); }
+  void wait_until(double t_s) override { sim_.wait_until(t_s); }
+
+ private:
+  drivers::SimStation sim_{sim::default_station()};
+  TableBehindALink table_;
+};
+
+// A link outage that swallows the command bringing a rate step's axis to rest: the engine sends
+// it again once the link is back, so the next step's capture is on a table at rest (it used to
+// start on a table still turning at the step's rate).
+TEST(RunEngine, ARestCommandLostToALinkOutageIsSentAgainBeforeTheNextStep) {
+  StationWithATableLink station;
+  station.link().outage_s = 2.0;
+  MemoryJournal journal;
+  EngineOptions opt;
+  opt.link_outage_s = 5.0;
+  // The inner axis's rate at the end of the next step's capture (braking takes 0.1 s).
+  std::optional<double> inner_rate_in_next_capture;
+  opt.on_progress = [&](const Progress& p) {
+    if (p.step == 1 && p.phase == "capturing") {
+      inner_rate_in_next_capture = station.sim().table().read_state().inner.rate_dps;
+    }
+  };
+  RunEngine engine(station, journal, plan_of({rate("inner", 50.0, 3.0), capture(2.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kCompleted) << engine.exit_reason();
+  EXPECT_GE(station.link().rest_commands_lost, 1);
+  ASSERT_TRUE(inner_rate_in_next_capture.has_value());
+  EXPECT_NEAR(*inner_rate_in_next_capture, 0.0, 1e-6);
+  EXPECT_TRUE(journal.has_event(EventKind::kFault, "link lost (no reply: scripted outage)"));
+}
+
+TEST(RunEngine, ARestCommandLostForLongerThanThePolicyAbortsNamingTheTableLink) {
+  StationWithATableLink station;
+  station.link().outage_s = 60.0;
+  MemoryJournal journal;
+  EngineOptions opt;
+  opt.link_outage_s = 3.0;
+  RunEngine engine(station, journal, plan_of({rate("inner", 50.0, 3.0), capture(2.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  EXPECT_NE(engine.exit_reason().find("table link down for "), std::string::npos)
+      << engine.exit_reason();
+}
+
 TEST(RunEngine, SequenceGapIsRecordedOrRepeatsTheCaptureByPolicy) {
   for (GapPolicy policy : {GapPolicy::kRecord, GapPolicy::kRepeatCapture}) {
     Fixture f;
