@@ -1,8 +1,9 @@
 // How often diagnose finds a gyro warm-up (issue 28), by noise class, amplitude (times a static
 // step mean's noise, white and wander), time constant and whether the run starts with a 30 min
 // static capture; and how often it suggests anything on the same runs without a warm-up (false
-// alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] [CLASS] (CLASS: white,
-// ln200, adis16488 or mems; all by default) prints one line per cell and a JSON line per cell. A
+// alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] [CLASS] [clean] (CLASS:
+// white, ln200, adis16488, mems or all; all by default) prints one line per cell and a JSON line
+// per cell; with `clean`, only runs without a warm-up, SEEDS per class and capture. A
 // run "finds" the warm-up when diagnose says NOT explained and its first suggestion is
 // exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
 #include <fmt/format.h>
@@ -28,9 +29,38 @@ bool found(const solver::Diagnosis& d, double tau_s) {
 
 }  // namespace
 
+/// The false-alarm rate alone: `seeds` clean runs (no warm-up) per class and capture, seeds
+/// distinct from the sweep's, and what was suggested on each that got a suggestion.
+int false_alarms(int seeds, const std::string& only) {
+  for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
+    if (!only.empty() && only != noise) continue;
+    for (double capture_s : {0.0, 1800.0}) {
+      int alarms = 0;
+      for (int k = 0; k < seeds; ++k) {
+        const auto seed = static_cast<std::uint64_t>(90000 + 131 * k);
+        const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
+        const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+        const solver::RunData clean =
+            solver::testing::warm_up_run(truth, capture_s, 900.0, 0.0, seed + 2);
+        const solver::Diagnosis d = solver::diagnose(clean, model);
+        if (d.suggestions.empty()) continue;
+        ++alarms;
+        fmt::print("  false alarm: {} seed {} capture {:.0f} s: {} (delta BIC {:.1f})\n", noise,
+                   seed, capture_s, d.suggestions.front().custom, d.suggestions.front().delta_bic);
+      }
+      fmt::print("{:10} capture {:5.0f} s: false alarms {}/{}\n", noise, capture_s, alarms, seeds);
+      fmt::print("{{\"noise\": \"{}\", \"capture_s\": {}, \"false_alarms\": {}, \"runs\": {}}}\n",
+                 noise, capture_s, alarms, seeds);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
-  const std::string only = argc > 2 ? argv[2] : "";
+  const std::string only = argc > 2 && std::string(argv[2]) != "all" ? argv[2] : "";
+  if (argc > 3 && std::string(argv[3]) == "clean") return false_alarms(seeds, only);
   for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
     if (!only.empty() && only != noise) continue;
     for (double capture_s : {0.0, 1800.0}) {
