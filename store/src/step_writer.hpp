@@ -7,10 +7,13 @@
 #include <SQLiteCpp/Statement.h>
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 
 #include "core/imu_sample.hpp"
+#include "step_stats.hpp"
+#include "store/sample_codec.hpp"
 #include "store/step_data.hpp"
 
 namespace calstand::store::detail {
@@ -40,6 +43,33 @@ class StepWriter {
   SQLite::Statement chunk_;
   SQLite::Statement table_;
   SQLite::Statement means_;
+};
+
+/// One step written as its samples arrive (a streamed import): the step row first, the samples
+/// in exact chunks as they come, then the step's time span and means. No table rows (the
+/// orientation is not known). The caller owns the transaction.
+class StepStreamWriter {
+ public:
+  StepStreamWriter(SQLite::Database& db, std::int64_t run, const StepRow& step,
+                   std::string device);
+  /// Appends samples in order; full chunks are written at once.
+  void append(std::span<const core::ImuSample> samples);
+  /// Writes the last chunk, the step's first and last sample time and its means; returns the
+  /// step id.
+  std::int64_t finish();
+
+ private:
+  void insert_chunk();
+
+  SQLite::Database& db_;
+  std::int64_t run_;
+  std::int64_t step_id_ = 0;
+  std::string device_;
+  SQLite::Statement chunk_;
+  ChunkEncoder enc_;
+  StepStats stats_;
+  double min_s_ = std::numeric_limits<double>::infinity();
+  double max_s_ = -std::numeric_limits<double>::infinity();
 };
 
 }  // namespace calstand::store::detail
