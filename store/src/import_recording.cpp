@@ -31,7 +31,9 @@ constexpr std::size_t kPeriodIntervals = 1000;
 constexpr double kGapPeriods = 1.5;
 
 /// Gaps, out-of-order and repeated stamps of a stream of stamps, in constant memory: the
-/// period is the median of the first kPeriodIntervals intervals.
+/// period is the median of the first kPeriodIntervals intervals. Intervals are taken from the
+/// latest stamp so far, so that a stamp out of order counts once (and the interval over it as
+/// a gap).
 class StampCheck {
  public:
   explicit StampCheck(RecordingImportResult& r) : r_(r) {}
@@ -43,7 +45,7 @@ class StampCheck {
       return;
     }
     const double dt = t - last_;
-    last_ = t;
+    last_ = std::max(last_, t);
     if (period_ > 0.0) {
       judge(dt, t);
     } else {
@@ -75,7 +77,7 @@ class StampCheck {
 
   void judge(double dt, double t) {
     if (dt < 0.0) {
-      ++r_.out_of_order;
+      ++r_.out_of_order;  // last_ stays the latest stamp
     } else if (dt == 0.0) {
       ++r_.duplicates;
     } else if (period_ > 0.0 && dt > kGapPeriods * period_) {
@@ -128,8 +130,8 @@ TopicInfo choose_topic(RecordingReader& reader, const std::string& wanted,
                     "topics are:{}",
                     list.empty() ? std::string(" none") : list));
   }
-  throw core::InputError(path.string(),
-                         fmt::format("{} IMU topics; choose one with --topic:{}", imu.size(), list));
+  throw core::InputError(
+      path.string(), fmt::format("{} IMU topics; choose one with --topic:{}", imu.size(), list));
 }
 
 void resolve_site(const RecordingImportOptions& o, RecordingImportResult& r) {
@@ -160,9 +162,8 @@ void resolve_site(const RecordingImportOptions& o, RecordingImportResult& r) {
 nlohmann::ordered_json import_meta(const RecordingImportResult& r, double rate_hz) {
   nlohmann::ordered_json meta;
   meta["format"] = std::string(detail::kImportFormat2);
-  meta["site"] = {{"latitude_deg", r.latitude_deg},
-                  {"height_m", r.height_m},
-                  {"gravity_mps2", r.gravity_mps2}};
+  meta["site"] = {
+      {"latitude_deg", r.latitude_deg}, {"height_m", r.height_m}, {"gravity_mps2", r.gravity_mps2}};
   meta["sample_rate_hz"] = rate_hz;
   meta["units"] = {{"gyro", "rad/s"}, {"accel", "m/s^2"}, {"time", "s"}};
   return meta;
@@ -256,9 +257,9 @@ RecordingImportResult import_recording(Database& db, const std::filesystem::path
       if (options.progress) options.progress(reader->progress(), result.samples);
     }
     if (result.samples == 0) {
-      throw core::InputError(reader->position(),
-                             fmt::format("no messages on topic {}: nothing to import",
-                                         result.topic.name));
+      throw core::InputError(
+          reader->position(),
+          fmt::format("no messages on topic {}: nothing to import", result.topic.name));
     }
     stamps.finish();
     writer.finish();

@@ -50,8 +50,7 @@ class StepWriter {
 /// orientation is not known). The caller owns the transaction.
 class StepStreamWriter {
  public:
-  StepStreamWriter(SQLite::Database& db, std::int64_t run, const StepRow& step,
-                   std::string device);
+  StepStreamWriter(SQLite::Database& db, std::int64_t run, const StepRow& step, std::string device);
   /// Appends samples in order; full chunks are written at once.
   void append(std::span<const core::ImuSample> samples);
   /// Writes the last chunk, the step's first and last sample time and its means; returns the

@@ -47,13 +47,13 @@ struct RecordingImportResult {
   double gravity_mps2 = 0.0;
   /// "given", "normal gravity at the given site", or which default was used.
   std::string site_source;
-  double first_s = 0.0;        ///< first header stamp [s]
-  double last_s = 0.0;         ///< last header stamp [s]
-  double period_s = 0.0;       ///< median interval between stamps (first 1000) [s]
-  double rate_hz = 0.0;        ///< 1 / period_s (meta's sample_rate_hz)
-  std::uint64_t gaps = 0;      ///< intervals longer than 1.5 periods
-  double gap_time_s = 0.0;     ///< time missing in them (interval - period, summed) [s]
-  double largest_gap_s = 0.0;  ///< the longest interval of a gap [s]
+  double first_s = 0.0;            ///< first header stamp [s]
+  double last_s = 0.0;             ///< last header stamp [s]
+  double period_s = 0.0;           ///< median interval between stamps (first 1000) [s]
+  double rate_hz = 0.0;            ///< 1 / period_s (meta's sample_rate_hz)
+  std::uint64_t gaps = 0;          ///< intervals longer than 1.5 periods
+  double gap_time_s = 0.0;         ///< time missing in them (interval - period, summed) [s]
+  double largest_gap_s = 0.0;      ///< the longest interval of a gap [s]
   double largest_gap_at_s = 0.0;   ///< stamp of the sample after it [s]
   std::uint64_t out_of_order = 0;  ///< stamps earlier than the one before
   std::uint64_t duplicates = 0;    ///< stamps equal to the one before

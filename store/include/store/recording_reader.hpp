@@ -22,12 +22,12 @@ struct ImuRecord {
 
 /// A topic (a MCAP channel, a bag connection, a EuRoC sensor folder).
 struct TopicInfo {
-  std::string name;            ///< e.g. "/imu/data"; EuRoC: "/imu0" for mav0/imu0
-  std::string type;            ///< e.g. "sensor_msgs/msg/Imu", "sensor_msgs/Imu"
-  std::string encoding;        ///< "cdr", "ros1" or "csv"
-  std::uint64_t count = 0;     ///< messages
-  double rate_hz = 0.0;        ///< (count - 1) / recorded time span; 0 when unknown
-  bool imu = false;            ///< a sensor_msgs Imu this reader decodes
+  std::string name;         ///< e.g. "/imu/data"; EuRoC: "/imu0" for mav0/imu0
+  std::string type;         ///< e.g. "sensor_msgs/msg/Imu", "sensor_msgs/Imu"
+  std::string encoding;     ///< "cdr", "ros1" or "csv"
+  std::uint64_t count = 0;  ///< messages
+  double rate_hz = 0.0;     ///< (count - 1) / recorded time span; 0 when unknown
+  bool imu = false;         ///< a sensor_msgs Imu this reader decodes
 };
 
 /// A recording opened for reading. Not thread-safe; one reader per thread.

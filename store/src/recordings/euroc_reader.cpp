@@ -121,9 +121,9 @@ class EurocReader final : public RecordingReader {
   std::optional<TopicInfo> selected() const override { return selected_; }
   std::string position() const override { return csv_ ? csv_->where() : mav0_.string(); }
   double progress() const override {
-    return expected_ == 0 ? 1.0
-                          : std::min(1.0, static_cast<double>(rows_) /
-                                              static_cast<double>(expected_));
+    return expected_ == 0
+               ? 1.0
+               : std::min(1.0, static_cast<double>(rows_) / static_cast<double>(expected_));
   }
 
  private:

@@ -68,16 +68,16 @@ class McapSource final : public MessageSource {
 
   std::string position() const override {
     if (in_chunk_) {
-      return fmt::format("{}: byte {} (chunk), byte {} of its records", file_.name(),
-                         chunk_offset_, inner_offset_);
+      return fmt::format("{}: byte {} (chunk), byte {} of its records", file_.name(), chunk_offset_,
+                         inner_offset_);
     }
     return at_byte(file_.name(), record_offset_);
   }
 
   double progress() const override {
-    return file_.size() == 0 ? 1.0
-                             : static_cast<double>(file_.offset()) /
-                                   static_cast<double>(file_.size());
+    return file_.size() == 0 || ended_
+               ? 1.0
+               : static_cast<double>(file_.offset()) / static_cast<double>(file_.size());
   }
 
  private:
@@ -160,9 +160,10 @@ class McapSource final : public MessageSource {
     t.encoding = encoding;
     if (schema_id != 0) {
       if (schema_id >= schema_names_.size()) {
-        c.fail(fmt::format("channel {} ({}) names schema {}, which no schema record before it "
-                           "defines",
-                           id, topic, schema_id));
+        c.fail(
+            fmt::format("channel {} ({}) names schema {}, which no schema record before it "
+                        "defines",
+                        id, topic, schema_id));
       }
       t.type = schema_names_[schema_id];
     }

@@ -102,8 +102,8 @@ void decompress(std::string_view method, std::span<const std::uint8_t> in, std::
     while (status != 0 && consumed < in.size()) {
       std::size_t dst = size - produced;
       std::size_t src = in.size() - consumed;
-      status = LZ4F_decompress(ctx, out.data() + produced, &dst, in.data() + consumed, &src,
-                               nullptr);
+      status =
+          LZ4F_decompress(ctx, out.data() + produced, &dst, in.data() + consumed, &src, nullptr);
       if (LZ4F_isError(status) != 0) {
         const std::string why = LZ4F_getErrorName(status);
         LZ4F_freeDecompressionContext(ctx);
@@ -123,10 +123,10 @@ void decompress(std::string_view method, std::span<const std::uint8_t> in, std::
   if (method == "bz2") {
     auto dst = static_cast<unsigned int>(size);
     // bzlib's API takes non-const pointers but does not write the source.
-    const int rc = BZ2_bzBuffToBuffDecompress(
-        reinterpret_cast<char*>(out.data()), &dst,
-        const_cast<char*>(reinterpret_cast<const char*>(in.data())),
-        static_cast<unsigned int>(in.size()), 0, 0);
+    const int rc =
+        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &dst,
+                                   const_cast<char*>(reinterpret_cast<const char*>(in.data())),
+                                   static_cast<unsigned int>(in.size()), 0, 0);
     if (rc != BZ_OK) throw core::InputError(where, fmt::format("bz2: error {}", rc));
     if (dst != size) {
       throw core::InputError(

@@ -143,9 +143,9 @@ class Ros1BagSource final : public MessageSource {
   }
 
   double progress() const override {
-    return file_.size() == 0 ? 1.0
-                             : static_cast<double>(file_.offset()) /
-                                   static_cast<double>(file_.size());
+    return file_.size() == 0
+               ? 1.0
+               : static_cast<double>(file_.offset()) / static_cast<double>(file_.size());
   }
 
  private:
@@ -219,9 +219,10 @@ class Ros1BagSource final : public MessageSource {
     const std::uint32_t conn = header_.u32("conn", where);
     const auto it = conn_index_.find(conn);
     if (it == conn_index_.end()) {
-      where.fail(fmt::format("message on connection {}, which no connection record before it "
-                             "defines",
-                             conn));
+      where.fail(
+          fmt::format("message on connection {}, which no connection record before it "
+                      "defines",
+                      conn));
     }
     if (only_ >= 0 && it->second != only_) return false;
     m.channel = static_cast<std::uint32_t>(it->second);

@@ -57,8 +57,8 @@ class Db3Source final : public MessageSource {
         t.count = static_cast<std::uint64_t>(counts.getColumn(1).getInt64());
         const double span =
             static_cast<double>(counts.getColumn(3).getInt64() - counts.getColumn(2).getInt64());
-        t.rate_hz = t.count > 1 && span > 0 ? static_cast<double>(t.count - 1) / (span * 1e-9)
-                                            : 0.0;
+        t.rate_hz =
+            t.count > 1 && span > 0 ? static_cast<double>(t.count - 1) / (span * 1e-9) : 0.0;
         total_ += t.count;
       }
     } catch (const SQLite::Exception& e) {
@@ -75,6 +75,7 @@ class Db3Source final : public MessageSource {
   void rewind(int only) override {
     rows_ = 0;
     row_id_ = 0;
+    done_ = false;
     guard([&] {
       if (only >= 0) {
         std::int64_t id = 0;
@@ -82,8 +83,9 @@ class Db3Source final : public MessageSource {
           if (i == only) id = topic_id;
         }
         query_ = std::make_unique<SQLite::Statement>(
-            *db_, "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id = ? "
-                  "ORDER BY id");
+            *db_,
+            "SELECT id, topic_id, timestamp, data FROM messages WHERE topic_id = ? "
+            "ORDER BY id");
         query_->bind(1, id);
       } else {
         query_ = std::make_unique<SQLite::Statement>(
@@ -94,7 +96,10 @@ class Db3Source final : public MessageSource {
 
   bool next(RawMessage& m) override {
     return guard([&] {
-      if (!query_->executeStep()) return false;
+      if (done_ || !query_->executeStep()) {
+        done_ = true;  // SQLite refuses a step after the last
+        return false;
+      }
       ++rows_;
       row_id_ = query_->getColumn(0).getInt64();
       const auto it = index_.find(query_->getColumn(1).getInt64());
@@ -128,6 +133,7 @@ class Db3Source final : public MessageSource {
   std::uint64_t total_ = 0;
   std::uint64_t rows_ = 0;
   std::int64_t row_id_ = 0;
+  bool done_ = false;
 };
 
 /// The storage files of a bag folder, in order, from metadata.yaml (relative_file_paths), or
@@ -207,8 +213,7 @@ class ChainSource final : public MessageSource {
 
   std::string position() const override { return current_->position(); }
   double progress() const override {
-    return (static_cast<double>(file_) + current_->progress()) /
-           static_cast<double>(files_.size());
+    return (static_cast<double>(file_) + current_->progress()) / static_cast<double>(files_.size());
   }
 
  private:
