@@ -104,6 +104,7 @@ void run_recording_import(const ImportOptions& o) {
 }
 
 struct ExportOptions {
+  std::string format = "calstand";
   std::string db = "calstand.db";
   std::int64_t run = 0;
   std::string out;
@@ -142,6 +143,10 @@ void run_import(const ImportOptions& o) {
 
 void run_export(const ExportOptions& o) {
   store::Database db = open_existing_database(o.db);
+  if (o.format == "mcap") {
+    store::export_run_mcap(db, o.run, o.out, {o.device});
+    return;
+  }
   store::export_run(db, o.run, o.out, {o.device});
 }
 
@@ -174,8 +179,14 @@ void register_import_export(CLI::App& app) {
       "export", "Write a run as a calstand-import/1 folder (meta.json + samples.csv)");
   exp->add_option("--db", out->db, "database file")->capture_default_str();
   exp->add_option("--run", out->run, "run id (see calstand runs)")->required();
-  exp->add_option("--out", out->out, "output folder (created; its two files are overwritten)")
+  exp->add_option("--out", out->out,
+                  "output folder (created; its two files are overwritten), or the .mcap file")
       ->required();
+  exp->add_option("--format", out->format,
+                  "calstand (a calstand-import folder) or mcap (ROS 2 sensor_msgs/Imu on "
+                  "/imu/data, zstd chunks)")
+      ->check(CLI::IsMember({"calstand", "mcap"}))
+      ->capture_default_str();
   exp->add_option("--device", out->device, "IMU to export when the run has several");
   exp->callback([out] { run_export(*out); });
 }

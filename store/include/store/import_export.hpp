@@ -90,4 +90,14 @@ struct ExportOptions {
 void export_run(Database& db, std::int64_t run, const std::filesystem::path& out_dir,
                 const ExportOptions& options = {});
 
+/// Writes the samples of one IMU of run `run` (completed steps in index order) as an MCAP file
+/// (docs/import.md): schema sensor_msgs/msg/Imu (ros2msg), channel /imu/data (cdr), zstd
+/// chunks with CRC, a summary with statistics. Each message: header stamp = the sample's time
+/// (seconds split into sec and nanosec, rounded to the nanosecond), frame_id "imu",
+/// orientation unknown (covariance[0] = -1, REP 145), angular_velocity in rad/s,
+/// linear_acceleration in m/s^2, covariances zero (not known). Written to `FILE.part`, renamed
+/// when whole. Throws as export_run().
+void export_run_mcap(Database& db, std::int64_t run, const std::filesystem::path& file,
+                     const ExportOptions& options = {});
+
 }  // namespace calstand::store

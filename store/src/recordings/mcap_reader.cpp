@@ -31,7 +31,8 @@ constexpr std::uint64_t kMessageFixed = 2 + 4 + 8 + 8;
 
 class McapSource final : public MessageSource {
  public:
-  explicit McapSource(const std::filesystem::path& path) : file_(path) {
+  explicit McapSource(const std::filesystem::path& path)
+      : file_(path), prefix_(file_.name() + ":") {
     std::vector<std::uint8_t> head;
     file_.read(kMcapMagic.size(), head, "the leading magic");
     if (std::string_view(reinterpret_cast<const char*>(head.data()), head.size()) != kMcapMagic) {
@@ -97,7 +98,7 @@ class McapSource final : public MessageSource {
                              "truncated: the file does not end with the MCAP magic (a recording "
                              "cut short, or still being written)");
     }
-    Cursor c(bytes, file_.name() + ":", size - tail);
+    Cursor c(bytes, prefix_, size - tail);
     if (c.u8() != kOpFooter || c.u64() != kFooterContent) {
       throw core::InputError(at_byte(file_.name(), size - tail),
                              "no footer record before the closing magic");
@@ -121,7 +122,7 @@ class McapSource final : public MessageSource {
     while (file_.offset() < end) {
       const std::uint64_t at = file_.offset();
       file_.read(kRecordHeader, rec, "a summary record's opcode and length");
-      Cursor h(rec, file_.name() + ":", at);
+      Cursor h(rec, prefix_, at);
       const std::uint8_t op = h.u8();
       const std::uint64_t len = h.u64();
       if (op != kOpSchema && op != kOpChannel && op != kOpStatistics) {
@@ -132,7 +133,7 @@ class McapSource final : public MessageSource {
         continue;
       }
       file_.read(len, rec, "a summary record");
-      Cursor c(rec, file_.name() + ":", at + kRecordHeader);
+      Cursor c(rec, prefix_, at + kRecordHeader);
       if (op == kOpSchema) schema(c);
       if (op == kOpChannel) channel(c);
       if (op == kOpStatistics) statistics(c);
@@ -206,7 +207,7 @@ class McapSource final : public MessageSource {
                              "truncated: the data section ends without a Data End record");
     }
     file_.read(kRecordHeader, record_, "a record's opcode and length");
-    Cursor h(record_, file_.name() + ":", record_offset_);
+    Cursor h(record_, prefix_, record_offset_);
     const std::uint8_t op = h.u8();
     const std::uint64_t len = h.u64();
     if (op == kOpDataEnd || op == kOpFooter) {
@@ -224,7 +225,7 @@ class McapSource final : public MessageSource {
       return false;
     }
     file_.read(len, record_, fmt::format("a record (opcode 0x{:02x})", op));
-    Cursor c(record_, file_.name() + ":", record_offset_ + kRecordHeader);
+    Cursor c(record_, prefix_, record_offset_ + kRecordHeader);
     if (op == kOpChunk) {
       open_chunk(c);
       return false;
@@ -266,13 +267,14 @@ class McapSource final : public MessageSource {
       }
     }
     chunk_records_ = chunk_view_;
+    chunk_prefix_ = fmt::format("{}: byte {} (chunk), records", file_.name(), chunk_offset_);
     chunk_pos_ = 0;
     in_chunk_ = true;
   }
 
   bool inner_record(RawMessage& m) {
     inner_offset_ = chunk_pos_;
-    Cursor h(chunk_records_.subspan(chunk_pos_), position() + ":", 0);
+    Cursor h(chunk_records_.subspan(chunk_pos_), chunk_prefix_, chunk_pos_);
     if (h.remaining() < kRecordHeader) {
       h.fail("truncated: a record header in the chunk's records");
     }
@@ -283,7 +285,8 @@ class McapSource final : public MessageSource {
                                                      "bytes, the chunk has {} left",
                                                      op, len, h.remaining()));
     }
-    Cursor c(chunk_records_.subspan(chunk_pos_ + kRecordHeader, len), position() + ":", 0);
+    Cursor c(chunk_records_.subspan(chunk_pos_ + kRecordHeader, len), chunk_prefix_,
+             chunk_pos_ + kRecordHeader);
     chunk_pos_ += kRecordHeader + len;
     if (op == kOpMessage) return message(c, m);
     if (op == kOpSchema) schema(c);
@@ -309,6 +312,8 @@ class McapSource final : public MessageSource {
   }
 
   InputFile file_;
+  std::string prefix_;        // "FILE:"
+  std::string chunk_prefix_;  // "FILE: byte N (chunk), records"
   std::vector<TopicInfo> channels_;
   std::vector<int> channel_index_ = std::vector<int>(65536, -1);
   std::vector<std::string> schema_names_;

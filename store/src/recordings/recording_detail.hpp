@@ -47,11 +47,12 @@ class InputFile {
 };
 
 /// Little-endian fields of a byte range, with bounds checks. `base` is the range's offset in
-/// the file (or in a decompressed chunk, see `where`), for messages.
+/// the file (or in a decompressed chunk), for messages: `where_prefix byte N`. The prefix is
+/// borrowed (no allocation per record): it must outlive the cursor.
 class Cursor {
  public:
-  Cursor(std::span<const std::uint8_t> bytes, std::string where_prefix, std::uint64_t base)
-      : bytes_(bytes), where_(std::move(where_prefix)), base_(base) {}
+  Cursor(std::span<const std::uint8_t> bytes, std::string_view where_prefix, std::uint64_t base)
+      : bytes_(bytes), where_(where_prefix), base_(base) {}
 
   std::size_t pos() const { return pos_; }
   std::size_t remaining() const { return bytes_.size() - pos_; }
@@ -94,7 +95,7 @@ class Cursor {
   }
 
   std::span<const std::uint8_t> bytes_;
-  std::string where_;
+  std::string_view where_;
   std::uint64_t base_ = 0;
   std::size_t pos_ = 0;
 };

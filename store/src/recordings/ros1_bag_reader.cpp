@@ -77,13 +77,14 @@ std::uint64_t ros1_time_ns(std::uint64_t packed) {
 
 class Ros1BagSource final : public MessageSource {
  public:
-  explicit Ros1BagSource(const std::filesystem::path& path) : file_(path) {
+  explicit Ros1BagSource(const std::filesystem::path& path)
+      : file_(path), prefix_(file_.name() + ":") {
     std::vector<std::uint8_t> line;
     file_.read(kRos1BagVersion.size(), line, "the version line");
     // The bag header record follows the version line.
     const std::uint64_t at = file_.offset();
     read_record(at);
-    Cursor where(header_bytes_, file_.name() + ":", at);
+    Cursor where(header_bytes_, prefix_, at);
     if (header_.op != kRos1BagHeader) where.fail("the first record is not the bag header");
     index_pos_ = header_.u64("index_pos", where);
     data_start_ = file_.offset();
@@ -123,7 +124,7 @@ class Ros1BagSource final : public MessageSource {
       if (file_.offset() >= end) return false;
       record_offset_ = file_.offset();
       read_record(record_offset_);
-      Cursor where(header_bytes_, file_.name() + ":", record_offset_);
+      Cursor where(header_bytes_, prefix_, record_offset_);
       if (header_.op == kRos1Chunk) {
         open_chunk(where);
       } else if (header_.op == kRos1Connection) {
@@ -160,7 +161,7 @@ class Ros1BagSource final : public MessageSource {
     std::uint32_t d = 0;
     std::memcpy(&d, len.data(), 4);
     file_.read(d, data_, "a record's data");
-    parse_ros1_header(header_bytes_, header_, Cursor(header_bytes_, file_.name() + ":", at));
+    parse_ros1_header(header_bytes_, header_, Cursor(header_bytes_, prefix_, at));
   }
 
   void read_index() {
@@ -169,12 +170,12 @@ class Ros1BagSource final : public MessageSource {
     while (file_.offset() < file_.size()) {
       const std::uint64_t at = file_.offset();
       read_record(at);
-      Cursor where(header_bytes_, file_.name() + ":", at);
+      Cursor where(header_bytes_, prefix_, at);
       if (header_.op == kRos1Connection) connection(where, data_);
       if (header_.op != kRos1ChunkInfo) continue;
       const std::uint64_t start = ros1_time_ns(header_.u64("start_time", where));
       const std::uint64_t end = ros1_time_ns(header_.u64("end_time", where));
-      Cursor c(data_, file_.name() + ":", at);
+      Cursor c(data_, prefix_, at);
       while (!c.done()) {
         const std::uint32_t conn = c.u32();
         const std::uint32_t count = c.u32();
@@ -245,19 +246,20 @@ class Ros1BagSource final : public MessageSource {
     } else {
       decompress(compression, data_, size, chunk_, at);
     }
+    chunk_prefix_ = fmt::format("{}: byte {} (chunk), records", file_.name(), record_offset_);
     chunk_pos_ = 0;
     in_chunk_ = true;
   }
 
   bool inner_record(RawMessage& m) {
     inner_offset_ = chunk_pos_;
-    Cursor c(std::span<const std::uint8_t>(chunk_).subspan(chunk_pos_), position() + ":", 0);
+    Cursor c(std::span<const std::uint8_t>(chunk_).subspan(chunk_pos_), chunk_prefix_, chunk_pos_);
     const std::uint32_t hn = c.u32();
     const auto header = c.bytes(hn);
     const std::uint32_t dn = c.u32();
     const auto data = c.bytes(dn);
     chunk_pos_ += 8 + hn + dn;
-    const Cursor where(header, position() + ":", 0);
+    const Cursor where(header, chunk_prefix_, inner_offset_ + 4);
     parse_ros1_header(header, header_, where);
     if (header_.op == kRos1Connection) connection(where, data);
     if (header_.op == kRos1MessageData) return message(where, data, m);
@@ -265,6 +267,8 @@ class Ros1BagSource final : public MessageSource {
   }
 
   InputFile file_;
+  std::string prefix_;        // "FILE:"
+  std::string chunk_prefix_;  // "FILE: byte N (chunk), records"
   std::vector<TopicInfo> channels_;
   std::unordered_map<std::uint32_t, int> conn_index_;
   bool indexed_ = false;
