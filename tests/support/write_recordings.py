@@ -3,6 +3,7 @@
 calstand's readers, and the same samples as a calstand-import/2 folder (the reference).
 
     write_recordings.py OUT [--samples N] [--seed S]
+    write_recordings.py --from-csv FOLDER OUT.mcap   (a calstand-import/2 folder as MCAP)
 
 OUT/csv/                 meta.json + samples.csv (calstand-import/2, rad/s and m/s^2)
 OUT/zstd.mcap, lz4.mcap, none.mcap   MCAP from the specification (mcap.dev/spec): /imu/data
@@ -271,8 +272,38 @@ def write_euroc(out, samples):
                 "rate_hz: 200\n")
 
 
+def csv_to_mcap(folder, path):
+    """A calstand-import/2 folder's samples (t, gx..az in its units) as an MCAP file with zstd
+    chunks (uncompressed without python3-zstandard): the same recording as a ROS 2 recorder
+    would have written it (angular rate in rad/s, stamps in sec + nanosec)."""
+    import csv
+    import json
+    import math
+    meta = json.load(open(os.path.join(folder, "meta.json")))
+    gyro_unit = meta["units"]["gyro"]
+    scale = {"rad/s": 1.0, "deg/s": math.pi / 180.0}[gyro_unit]
+    accel = {"m/s^2": 1.0, "g": 9.80665}[meta["units"]["accel"]]
+    messages = []
+    with open(os.path.join(folder, "samples.csv")) as f:
+        for row in csv.DictReader(f):
+            ns = round(float(row["t"]) * 1e9)
+            g = [float(row[k]) * scale for k in ("gx", "gy", "gz")]
+            a = [float(row[k]) * accel for k in ("ax", "ay", "az")]
+            messages.append((1, ns, cdr_imu(ns, g, a)))
+    try:
+        import zstandard  # noqa: F401
+        comp = "zstd"
+    except ImportError:
+        comp = ""
+    write_mcap(path, [(1, "/imu/data", "sensor_msgs/msg/Imu", "ros2msg", "cdr")], messages, comp,
+               chunk_messages=3000)
+
+
 def main():
     args = sys.argv[1:]
+    if args[0] == "--from-csv":
+        csv_to_mcap(args[1], args[2])
+        return
     out = args[0]
     n = int(args[args.index("--samples") + 1]) if "--samples" in args else 2000
     seed = int(args[args.index("--seed") + 1]) if "--seed" in args else 7
