@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -97,6 +99,62 @@ TEST_F(ImportRecordingCli, TheCsvFolderStillImports) {
   const Result r = run("import " + path("csv") + " --json --db " + path("csv.db"));
   ASSERT_EQ(r.exit_code, 0) << r.out;
   EXPECT_EQ(nlohmann::json::parse(r.out)["samples"], 3000) << r.out;
+}
+
+// Every number of `a` and `b` (same shape) within a relative 1e-6 (absolute 1e-12 near zero).
+void expect_close(const nlohmann::json& a, const nlohmann::json& b, const std::string& at) {
+  if (a.is_number() && b.is_number()) {
+    const double x = a.get<double>();
+    const double y = b.get<double>();
+    EXPECT_NEAR(x, y, 1e-6 * std::max(std::abs(x), std::abs(y)) + 1e-12) << at;
+    return;
+  }
+  ASSERT_EQ(a.type(), b.type()) << at;
+  if (a.is_array()) {
+    ASSERT_EQ(a.size(), b.size()) << at;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      expect_close(a[i], b[i], at + "[" + std::to_string(i) + "]");
+    }
+  } else if (a.is_object()) {
+    for (const auto& [k, v] : a.items()) {
+      ASSERT_TRUE(b.contains(k)) << at << "." << k;
+      expect_close(v, b[k], at + "." + k);
+    }
+  } else {
+    EXPECT_EQ(a, b) << at;
+  }
+}
+
+// The table-free calibration of a hand-held session is the same whether the session comes as
+// its calstand-import/2 CSV or as the MCAP file a ROS 2 recorder would have written (angular
+// rate in rad/s, stamps in sec + nanosec).
+TEST_F(ImportRecordingCli, AHandHeldSessionFromMcapCalibratesAsFromCsv) {
+  Result r = run("sim-session --kind hand --model adis16488 --seed 5 --poses 16 --rate 200 --out " +
+                 path("hand"));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string cmd = "/usr/bin/python3 " + std::string(CALSTAND_SOURCE_DIR) +
+                          "/tests/support/write_recordings.py --from-csv " + path("hand") + " " +
+                          path("hand.mcap");
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const auto meta =
+      nlohmann::json::parse(calstand::testing::read_text(path("hand") + "/meta.json"));
+  const auto& site = meta.at("site");
+  const std::string db = path("hand.db");
+  r = run("import " + path("hand") + " --db " + db, "/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  r = run("import " + path("hand.mcap") + " --db " + db + " --latitude " +
+              site.at("latitude_deg").dump() + " --height " + site.at("height_m").dump() +
+              " --gravity " + site.at("gravity_mps2").dump(),
+          "/dev/null");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const Result csv = run("fit --db " + db + " --run 1 --json", "/dev/null");
+  const Result mcap = run("fit --db " + db + " --run 2 --json", "/dev/null");
+  ASSERT_EQ(csv.exit_code, 0) << csv.out;
+  ASSERT_EQ(mcap.exit_code, 0) << mcap.out;
+  const auto a = nlohmann::json::parse(csv.out);
+  const auto b = nlohmann::json::parse(mcap.out);
+  EXPECT_EQ(a.at("method"), b.at("method"));
+  expect_close(a.at("parameters"), b.at("parameters"), "parameters");
 }
 
 }  // namespace

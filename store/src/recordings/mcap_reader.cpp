@@ -42,6 +42,7 @@ class McapSource final : public MessageSource {
   }
 
   std::string format() const override { return "mcap"; }
+  std::string name() const override { return file_.name(); }
   const std::vector<TopicInfo>& channels() const override { return channels_; }
   bool indexed() const override { return has_statistics_; }
 

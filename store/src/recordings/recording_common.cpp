@@ -265,7 +265,7 @@ class MessageRecording final : public RecordingReader {
       const auto& ch = source_->channels();
       for (std::size_t i = 0; i < ch.size(); ++i) {
         if (ch[i].name == topic) {
-          check_imu(ch[i], source_->format() + " " + source_->position());
+          check_imu(ch[i], source_->name());
           channel_ = static_cast<int>(i);
         }
       }
@@ -325,7 +325,7 @@ class MessageRecording final : public RecordingReader {
     for (const TopicInfo& t : source_->channels()) {
       names += (names.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
     }
-    return core::InputError(source_->position(),
+    return core::InputError(source_->name(),
                             fmt::format("no topic {} in the recording (topics: {})", topic_,
                                         names.empty() ? "none" : names));
   }

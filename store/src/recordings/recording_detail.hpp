@@ -136,6 +136,8 @@ class MessageSource {
  public:
   virtual ~MessageSource() = default;
   virtual std::string format() const = 0;
+  /// The file or folder read, for messages about the whole recording.
+  virtual std::string name() const = 0;
   /// Channels known so far (all of them once next() has returned false, or from the index).
   virtual const std::vector<TopicInfo>& channels() const = 0;
   /// True when channels() and their counts are complete without reading (an index or summary).

@@ -101,6 +101,7 @@ class Ros1BagSource final : public MessageSource {
   }
 
   std::string format() const override { return "ros1-bag"; }
+  std::string name() const override { return file_.name(); }
   const std::vector<TopicInfo>& channels() const override { return channels_; }
   bool indexed() const override { return indexed_; }
 

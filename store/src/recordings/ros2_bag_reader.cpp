@@ -69,6 +69,7 @@ class Db3Source final : public MessageSource {
   }
 
   std::string format() const override { return "ros2-bag"; }
+  std::string name() const override { return name_; }
   const std::vector<TopicInfo>& channels() const override { return channels_; }
   bool indexed() const override { return true; }
 
@@ -188,6 +189,7 @@ class ChainSource final : public MessageSource {
   }
 
   std::string format() const override { return "ros2-bag"; }
+  std::string name() const override { return files_.front().parent_path().string(); }
   const std::vector<TopicInfo>& channels() const override { return channels_; }
   bool indexed() const override { return indexed_; }
 
