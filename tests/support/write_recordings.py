@@ -12,6 +12,8 @@ OUT/zstd.mcap, lz4.mcap, none.mcap   MCAP from the specification (mcap.dev/spec)
 OUT/nosummary.mcap       the same uncompressed, without a summary (readers must scan)
 OUT/ros1.mcap            /imu/data in the ros1 encoding (ros1msg schema)
 OUT/two_imu.mcap         two IMU channels (/imu/data and /imu2)
+OUT/mcap_bag/            a ROS 2 bag with the mcap storage, split in two files (the second
+                         without a summary)
 OUT/db3/                 a ROS 2 bag: metadata.yaml + bag_0.db3 (rosbag2's sqlite3 schema, CDR
                          encoded by hand); with /status too
 OUT/none.bag, bz2.bag, lz4.bag   ROS 1 bags written by Debian's python3-rosbag (raw messages),
@@ -184,6 +186,14 @@ def merge_by_time(a, b):
     return sorted(a + b, key=lambda m: m[1])
 
 
+def write_mcap_bag(out):
+    """A ROS 2 bag folder with the mcap storage plugin: metadata.yaml naming two MCAP files
+    (the recording split in two, as `ros2 bag record --max-bag-size` does)."""
+    folder = os.path.join(out, "mcap_bag")
+    os.makedirs(folder, exist_ok=True)
+    return folder
+
+
 def write_mcaps(out, samples):
     imu = [(1, recv, cdr_imu(stamp, g, a)) for stamp, g, a, recv in samples]
     channels = [(1, "/imu/data", "sensor_msgs/msg/Imu", "ros2msg", "cdr"),
@@ -195,6 +205,13 @@ def write_mcaps(out, samples):
         except ImportError:
             pass
     write_mcap(os.path.join(out, "nosummary.mcap"), channels, messages, "", summary=False)
+    bag = write_mcap_bag(out)
+    half = len(messages) // 2
+    write_mcap(os.path.join(bag, "bag_0.mcap"), channels, messages[:half], "")
+    write_mcap(os.path.join(bag, "bag_1.mcap"), channels, messages[half:], "", summary=False)
+    with open(os.path.join(bag, "metadata.yaml"), "w") as f:
+        f.write("rosbag2_bagfile_information:\n  version: 8\n  storage_identifier: mcap\n"
+                "  relative_file_paths:\n    - bag_0.mcap\n    - bag_1.mcap\n")
     write_mcap(os.path.join(out, "crc.mcap"), channels, messages, "", corrupt_crc=True)
     ros1 = [(1, recv, ros1_imu(i, stamp, g, a)) for i, (stamp, g, a, recv) in enumerate(samples)]
     write_mcap(os.path.join(out, "ros1.mcap"),

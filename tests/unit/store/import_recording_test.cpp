@@ -151,6 +151,15 @@ TEST_F(Recordings, Ros2Db3EqualsTheCsvImport) {
   expect_same_as_csv("db3/bag_0.db3");
 }
 
+TEST_F(Recordings, Ros2BagWithMcapStorageInTwoFilesEqualsTheCsvImport) {
+  const auto r = expect_same_as_csv("mcap_bag");
+  EXPECT_EQ(r.format, "ros2-bag");
+  EXPECT_EQ(r.topic.type, "sensor_msgs/msg/Imu");
+  auto o = site();
+  o.topic = "/status";
+  EXPECT_CONTAINS(refusal(file("mcap_bag"), o), "not an IMU topic");
+}
+
 TEST_F(Recordings, Ros1BagsOfEachCompressionEqualTheCsvImport) {
   for (const char* name : {"none.bag", "bz2.bag", "lz4.bag"}) {
     if (!std::filesystem::exists(file(name))) GTEST_SKIP() << "python3-rosbag missing";
