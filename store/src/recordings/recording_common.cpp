@@ -154,12 +154,13 @@ constexpr std::size_t kAngularVelocityIndex = 4 + 9;
 constexpr std::size_t kLinearAccelerationIndex = 4 + 9 + 3 + 9;
 
 void read_imu_body(const std::uint8_t* p, ImuRecord& out) {
-  double v[kImuDoubles];
-  std::memcpy(v, p, sizeof v);
-  out.gyro_rad_s = {v[kAngularVelocityIndex], v[kAngularVelocityIndex + 1],
-                    v[kAngularVelocityIndex + 2]};
-  out.accel_mps2 = {v[kLinearAccelerationIndex], v[kLinearAccelerationIndex + 1],
-                    v[kLinearAccelerationIndex + 2]};
+  // Only the six doubles used (copying all 37 was a tenth of an import's time).
+  double w[3];
+  double f[3];
+  std::memcpy(w, p + kAngularVelocityIndex * 8, sizeof w);
+  std::memcpy(f, p + kLinearAccelerationIndex * 8, sizeof f);
+  out.gyro_rad_s = {w[0], w[1], w[2]};
+  out.accel_mps2 = {f[0], f[1], f[2]};
 }
 
 std::string decode_imu_cdr(std::span<const std::uint8_t> data, ImuRecord& out) {
