@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 
 #include "recording_detail.hpp"
 
@@ -81,7 +82,13 @@ void decompress(std::string_view method, std::span<const std::uint8_t> in, std::
                 std::vector<std::uint8_t>& out, const std::string& where) {
   out.resize(size);
   if (method == "zstd") {
-    const std::size_t got = ZSTD_decompress(out.data(), size, in.data(), in.size());
+    // One decompression context per thread, reused chunk after chunk (a fresh one per chunk
+    // allocates and clears its tables each time).
+    thread_local const std::unique_ptr<ZSTD_DCtx, std::size_t (*)(ZSTD_DCtx*)> context(
+        ZSTD_createDCtx(), &ZSTD_freeDCtx);
+    if (!context) throw core::InputError(where, "zstd: cannot create a decompression context");
+    const std::size_t got =
+        ZSTD_decompressDCtx(context.get(), out.data(), size, in.data(), in.size());
     if (ZSTD_isError(got) != 0) {
       throw core::InputError(where, fmt::format("zstd: {}", ZSTD_getErrorName(got)));
     }
