@@ -49,6 +49,14 @@ void InputFile::read(std::size_t n, std::vector<std::uint8_t>& out, std::string_
                            fmt::format("truncated: {} needs {} bytes, the file has {} left", what,
                                        n, size_ - std::min(size_, offset_)));
   }
+  // A record holds at most a chunk and its header: a longer one is a corrupt length field
+  // that would otherwise be read into memory whole.
+  if (n > kMaxChunkBytes + (std::size_t{1} << 20)) {
+    throw core::InputError(at_byte(name_, offset_),
+                           fmt::format("{} of {} bytes: more than calstand reads at once (a "
+                                       "corrupt length field?)",
+                                       what, n));
+  }
   out.resize(n);
   const std::size_t got = n == 0 ? 0 : std::fread(out.data(), 1, n, f_);
   if (got != n) {
@@ -80,6 +88,11 @@ void Cursor::need(std::size_t n, const char* what) const {
 
 void decompress(std::string_view method, std::span<const std::uint8_t> in, std::size_t size,
                 std::vector<std::uint8_t>& out, const std::string& where) {
+  if (size > kMaxChunkBytes) {
+    throw core::InputError(where, fmt::format("a chunk of {} bytes uncompressed: more than the "
+                                              "{} calstand reads (a corrupt size field?)",
+                                              size, kMaxChunkBytes));
+  }
   out.resize(size);
   if (method == "zstd") {
     // One decompression context per thread, reused chunk after chunk (a fresh one per chunk
@@ -300,6 +313,13 @@ class MessageRecording final : public RecordingReader {
       if (!why.empty()) {
         throw core::InputError(where(m), fmt::format("a message on {} ({}, {}) does not decode: {}",
                                                      ch.name, ch.type, ch.encoding, why));
+      }
+      if (!r.gyro_rad_s.allFinite() || !r.accel_mps2.allFinite()) {
+        throw core::InputError(
+            where(m), fmt::format("a message on {} has a value that is not a finite number "
+                                  "(angular_velocity {} {} {}, linear_acceleration {} {} {})",
+                                  ch.name, r.gyro_rad_s.x(), r.gyro_rad_s.y(), r.gyro_rad_s.z(),
+                                  r.accel_mps2.x(), r.accel_mps2.y(), r.accel_mps2.z()));
       }
       batch.push_back(r);
     }

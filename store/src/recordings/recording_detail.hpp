@@ -100,6 +100,10 @@ class Cursor {
   std::size_t pos_ = 0;
 };
 
+/// The largest chunk decompressed [bytes]: writers make chunks of a few MiB; a size field
+/// beyond this is a corrupt file, refused rather than allocated.
+inline constexpr std::size_t kMaxChunkBytes = std::size_t{1} << 30;
+
 /// Decompresses `in` into `out`, which holds exactly `size` bytes afterwards. `method`:
 /// "lz4" (the LZ4 frame format), "zstd", "bz2". Throws InputError at `where` on any failure,
 /// including a decompressed size other than `size`.

@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
+#include <random>
 
 #include "core/error.hpp"
 #include "store/import_export.hpp"
@@ -328,6 +330,50 @@ TEST_F(Recordings, AnExportedMcapImportsBackToTheSameSamples) {
   }
   EXPECT_EQ(again.out_of_order, first.out_of_order);
   EXPECT_EQ(again.gaps, first.gaps);
+}
+
+// Damaged files of every binary format (random bytes changed, or cut at a random place) are
+// imported or refused with an InputError: never another exception, a crash or a hang.
+TEST_F(Recordings, DamagedFilesAreImportedOrRefusedNeverWorse) {
+  TempDir d;
+  std::mt19937 rng(20261205);
+  int refused = 0;
+  int imported = 0;
+  for (const char* name : {"none.mcap", "zstd.mcap", "lz4.mcap", "nosummary.mcap", "ros1.mcap",
+                           "none.bag", "bz2.bag", "lz4.bag"}) {
+    if (!std::filesystem::exists(file(name))) continue;
+    const std::string original = test::read(file(name));
+    for (int trial = 0; trial < 60; ++trial) {
+      std::string bytes = original;
+      if (trial % 4 == 3) {
+        bytes.resize(std::uniform_int_distribution<std::size_t>(0, bytes.size() - 1)(rng));
+      } else {
+        // Mostly in the first kilobytes, where the headers, schemas and lengths are.
+        const std::size_t span =
+            trial % 2 == 0 ? std::min<std::size_t>(bytes.size(), 2048) : bytes.size();
+        for (int k = 0; k < 1 + trial % 3; ++k) {
+          bytes[std::uniform_int_distribution<std::size_t>(0, span - 1)(rng)] =
+              static_cast<char>(std::uniform_int_distribution<int>(0, 255)(rng));
+        }
+      }
+      const auto path = d.path() / (std::string("damaged-") + name);
+      test::write(path, bytes);
+      Database db(":memory:");
+      try {
+        RecordingImportOptions o = site();
+        o.topic = "/imu/data";
+        import_recording(db, path, o);
+        ++imported;
+      } catch (const core::InputError&) {
+        ++refused;
+        EXPECT_EQ(runs(db), 0) << name << " trial " << trial;
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << name << " trial " << trial << ": " << e.what();
+      }
+    }
+  }
+  EXPECT_GT(refused, 0);
+  std::cout << refused << " damaged files refused, " << imported << " imported\n";
 }
 
 TEST_F(Recordings, ReadsInBatchesOfBoundedSize) {
