@@ -7,11 +7,15 @@
 //   calstand device --station lab.json imu stream --count N [--imu NAME]
 //   calstand device --station lab.json imu info [--imu NAME]
 // Output is JSON (one object, or JSON lines for `imu stream`), so scripts can read it.
+// A table or chamber whose link drops is ridden out as a run does (drivers/ride_out.hpp):
+// reads, setpoints, demands and stops are repeated until the link is back, for up to the
+// station's policy.link_outage_s; closing an interlock never is (an operator's act, once).
 #include <fmt/format.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -21,6 +25,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/state_json.hpp"
+#include "drivers/ride_out.hpp"
 #include "drivers/station.hpp"
 #include "sim/sim_world.hpp"
 #include "store/stamp.hpp"
@@ -62,23 +67,49 @@ std::unique_ptr<drivers::Station> open_station(const DeviceOptions& opt) {
   return drivers::make_station(config);
 }
 
+void check(const drivers::Result& r, const std::string& what) {
+  if (r) return;
+  // Drivers usually name themselves already ("chamber: ramp ...", "table link down for ...");
+  // do not say it twice.
+  const bool named = r.message.rfind(what + ":", 0) == 0 || r.message.rfind(what + " ", 0) == 0;
+  throw std::runtime_error(named ? r.message : what + ": " + r.message);
+}
+
+/// Rides out a dropped link for the station's policy.link_outage_s.
+drivers::RideOutPolicy ride_out_policy(drivers::Station& station) {
+  return drivers::RideOutPolicy::from_policy(station.config().policy);
+}
+
+/// `command` on `device`, repeated while its link is down (harmless commands only).
+void ride_out(drivers::Station& station, drivers::Device& device,
+              const std::function<drivers::Result()>& command) {
+  check(drivers::ride_out(device.name(), station.clock(), ride_out_policy(station), command),
+        device.name());
+}
+
 /// configure() and activate() one device; a failure ends the command (exit 1).
-void bring_up(drivers::Device& device) {
-  if (auto r = device.configure(); !r) throw std::runtime_error(device.name() + ": " + r.message);
-  if (auto r = device.activate(); !r) throw std::runtime_error(device.name() + ": " + r.message);
+void bring_up(drivers::Station& station, drivers::Device& device) {
+  ride_out(station, device, [&] { return device.configure(); });
+  ride_out(station, device, [&] { return device.activate(); });
 }
 
 /// configure() only: reading needs the link, not activation (which would, e.g., try to close
 /// an open interlock).
-void configure(drivers::Device& device) {
-  if (auto r = device.configure(); !r) throw std::runtime_error(device.name() + ": " + r.message);
+void configure(drivers::Station& station, drivers::Device& device) {
+  ride_out(station, device, [&] { return device.configure(); });
 }
 
-void check(const drivers::Result& r, const std::string& what) {
-  if (r) return;
-  // Drivers usually name themselves already ("chamber: ramp ..."); do not say it twice.
-  const bool named = r.message.rfind(what + ":", 0) == 0;
-  throw std::runtime_error(named ? r.message : what + ": " + r.message);
+core::TableState read_table(drivers::Station& station) {
+  auto read = drivers::read_riding_out(station.table(), station.clock(), ride_out_policy(station));
+  check(read.result, station.table().name());
+  return read.state;
+}
+
+core::ChamberState read_chamber(drivers::Station& station) {
+  auto read =
+      drivers::read_riding_out(station.chamber(), station.clock(), ride_out_policy(station));
+  check(read.result, station.chamber().name());
+  return read.state;
 }
 
 json device_json(drivers::Device& d) {
@@ -120,9 +151,9 @@ void device_status(const DeviceOptions& opt) {
 
 void chamber_get(const DeviceOptions& opt) {
   auto station = open_station(opt);
-  configure(station->chamber());
+  configure(*station, station->chamber());
   settle_first_reading();
-  json out = core::to_json(station->chamber().read_state());
+  json out = core::to_json(read_chamber(*station));
   out["device"] = device_json(station->chamber());
   print(out);
 }
@@ -130,15 +161,16 @@ void chamber_get(const DeviceOptions& opt) {
 void chamber_set(const DeviceOptions& opt) {
   auto station = open_station(opt);
   auto& chamber = station->chamber();
-  bring_up(chamber);
-  check(chamber.set_temperature(opt.temperature_c, opt.ramp_c_per_min), "chamber");
+  bring_up(*station, chamber);
+  ride_out(*station, chamber,
+           [&] { return chamber.set_temperature(opt.temperature_c, opt.ramp_c_per_min); });
   // The driver steps the setpoint itself when the controller cannot ramp: stay until the
   // setpoint has reached the target (and, with --wait, the air has too).
   auto& clock = station->clock();
   const double start = clock.now_s();
   for (;;) {
     std::this_thread::sleep_for(250ms);
-    const auto s = chamber.read_state();
+    const auto s = read_chamber(*station);
     if (s.fault) throw std::runtime_error("chamber fault: " + s.fault_text);
     const bool setpoint_there = std::abs(s.setpoint_c - opt.temperature_c) < 0.05;
     const bool air_there = std::abs(s.air_temperature_c - opt.temperature_c) <= opt.tolerance_c;
@@ -150,21 +182,22 @@ void chamber_set(const DeviceOptions& opt) {
                       opt.temperature_c, opt.timeout_s, s.air_temperature_c, s.setpoint_c));
     }
   }
-  print(core::to_json(chamber.read_state()));
+  print(core::to_json(read_chamber(*station)));
 }
 
 void chamber_standby(const DeviceOptions& opt) {
   auto station = open_station(opt);
-  bring_up(station->chamber());
-  check(station->chamber().standby(), "chamber");
+  auto& chamber = station->chamber();
+  bring_up(*station, chamber);
+  ride_out(*station, chamber, [&] { return chamber.standby(); });
   settle_first_reading();
-  print(core::to_json(station->chamber().read_state()));
+  print(core::to_json(read_chamber(*station)));
 }
 
 void table_get(const DeviceOptions& opt) {
   auto station = open_station(opt);
-  configure(station->table());
-  json out = core::to_json(station->table().read_state());
+  configure(*station, station->table());
+  json out = core::to_json(read_table(*station));
   out["device"] = device_json(station->table());
   print(out);
 }
@@ -174,7 +207,7 @@ template <typename Done>
 void wait_table(drivers::Station& station, double timeout_s, Done done, const char* what) {
   const double start = station.clock().now_s();
   for (;;) {
-    const auto s = station.table().read_state();
+    const auto s = read_table(station);  // rides a dropped link out; throws past the policy
     if (s.outer.fault || s.inner.fault) {
       station.table().stop();  // never leave an axis moving when the command gives up
       throw std::runtime_error("table fault: " +
@@ -192,20 +225,23 @@ void wait_table(drivers::Station& station, double timeout_s, Done done, const ch
 
 void table_move(const DeviceOptions& opt) {
   auto station = open_station(opt);
-  bring_up(station->table());
-  check(station->table().move_to(opt.outer_deg, opt.inner_deg), "table");
+  auto& table = station->table();
+  bring_up(*station, table);
+  ride_out(*station, table, [&] { return table.move_to(opt.outer_deg, opt.inner_deg); });
   std::this_thread::sleep_for(50ms);  // let the controller take the move before polling
   wait_table(
       *station, opt.timeout_s,
       [](const core::TableState& s) { return s.outer.in_position && s.inner.in_position; }, "move");
-  print(core::to_json(station->table().read_state()));
+  print(core::to_json(read_table(*station)));
 }
 
 void table_rate(const DeviceOptions& opt) {
   const auto axis = opt.axis == "outer" ? drivers::TableAxis::kOuter : drivers::TableAxis::kInner;
   auto station = open_station(opt);
-  bring_up(station->table());
-  check(station->table().set_rate(axis, opt.rate_dps), "table");
+  auto& table = station->table();
+  bring_up(*station, table);
+  // The same rate demanded twice is the same rate: harmless to repeat.
+  ride_out(*station, table, [&] { return table.set_rate(axis, opt.rate_dps); });
   std::this_thread::sleep_for(50ms);
   wait_table(
       *station, opt.timeout_s,
@@ -214,15 +250,15 @@ void table_rate(const DeviceOptions& opt) {
       },
       "rate");
   // The axis keeps turning after the command returns: that is what was asked for.
-  print(core::to_json(station->table().read_state()));
+  print(core::to_json(read_table(*station)));
 }
 
 void table_stop(const DeviceOptions& opt) {
   auto station = open_station(opt);
   auto& table = station->table();
   table.configure();  // stop is allowed in every state; try even if the link is troubled
-  check(table.stop(), "table");
-  print(core::to_json(table.read_state()));
+  ride_out(*station, table, [&] { return table.stop(); });
+  print(core::to_json(read_table(*station)));
 }
 
 /// Who closes an interlock, for the record: --by, else the login name.
@@ -237,7 +273,8 @@ std::string operator_name(const DeviceOptions& opt) {
 void table_close_interlock(const DeviceOptions& opt) {
   auto station = open_station(opt);
   auto& table = station->table();
-  configure(table);  // the link only: activation refuses while an interlock is latched
+  configure(*station, table);  // the link only: activation refuses while an interlock is latched
+  // Not repeated on a lost link: closing is the operator's act, done once, knowingly.
   const auto closure = table.close_interlocks();
   check(closure.result, "table");
   print({{"closed", closure.closed},
@@ -258,7 +295,7 @@ drivers::Imu& chosen_imu(drivers::Station& station, const DeviceOptions& opt) {
 void imu_info(const DeviceOptions& opt) {
   auto station = open_station(opt);
   auto& imu = chosen_imu(*station, opt);
-  configure(imu);  // the configuration dialogue reads the identity; no streaming needed
+  configure(*station, imu);  // the configuration dialogue reads the identity; no streaming needed
   const std::optional<drivers::UnitIdentity> id = imu.identity();
   if (!id) {
     throw std::runtime_error(imu.name() +
@@ -275,7 +312,7 @@ void imu_info(const DeviceOptions& opt) {
 void imu_stream(const DeviceOptions& opt) {
   auto station = open_station(opt);
   auto& imu = chosen_imu(*station, opt);
-  bring_up(imu);
+  bring_up(*station, imu);
   const double period_s = 1.0 / imu.sample_rate_hz();
   const auto deadline =
       std::chrono::steady_clock::now() +

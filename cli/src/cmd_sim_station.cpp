@@ -1,12 +1,13 @@
 // `calstand sim-station`: one simulated world behind the real protocols (table command server,
-// chamber over Modbus TCP and RTU, IMUs on pseudo-terminals in their wire format), so that the real
-// drivers and the engine can be rehearsed end to end on this machine. Prints the endpoints as one
-// line of JSON on start; `--station-out` writes the station file that points the real drivers at
-// them.
+// chamber over Modbus TCP in the map --chamber-protocol names and as an F4 over RTU, IMUs on
+// pseudo-terminals in their wire format), so that the real drivers and the engine can be
+// rehearsed end to end on this machine. Prints the endpoints as one line of JSON on start;
+// `--station-out` writes the station file that points the real drivers at them.
 //
 // While it runs, lines on stdin rehearse faults (one JSON line answers each):
 //   interlock open outer|inner [WHY...]   interlock clear outer|inner
-//   modbus stop | modbus start            imu silent NAME | imu talk NAME
+//   modbus stop | modbus start            table drop | table restore (its TCP link)
+//   imu silent NAME | imu talk NAME
 //   imu garbage NAME N                    imu hold NAME | imu release NAME (a burst)
 //   imu clock-jump NAME SECONDS           status | quit
 #include <fmt/format.h>
@@ -82,6 +83,10 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
     sim.set_modbus_running(what == "start");
     return {{"ok", true}};
   }
+  if (verb == "table" && (what == "drop" || what == "restore")) {
+    sim.set_table_link(what == "restore");
+    return {{"ok", true}};
+  }
   if (verb == "imu" && (what == "silent" || what == "talk")) {
     sim.set_imu_silent(sim.imu_index(arg), what == "silent");
     return {{"ok", true}};
@@ -111,7 +116,8 @@ json execute_fault_command(drivers::ProtocolSimulator& sim, const std::string& l
     return {{"ok", true}};
   }
   throw core::InputError("command", fmt::format("\"{}\" is not understood (interlock open|clear "
-                                                "AXIS, modbus stop|start, imu silent|talk|garbage|"
+                                                "AXIS, modbus stop|start, table drop|restore, "
+                                                "imu silent|talk|garbage|"
                                                 "hold|release|clock-jump NAME, status, quit)",
                                                 line));
 }
@@ -219,6 +225,12 @@ void register_sim_station(CLI::App& app) {
   cmd->add_option("--table-port", opt->serve.table_port, "table command port (0: any free)")
       ->capture_default_str();
   cmd->add_option("--modbus-port", opt->serve.modbus_port, "Modbus TCP port (0: any free)")
+      ->capture_default_str();
+  cmd->add_option("--chamber-protocol", opt->serve.chamber_protocol,
+                  "the chamber's protocol on TCP: " + drivers::chamber_protocol_names())
+      ->capture_default_str();
+  cmd->add_option("--table-protocol", opt->serve.table_protocol,
+                  "the table's command set on TCP: " + drivers::table_protocol_names())
       ->capture_default_str();
   cmd->add_flag("--no-rtu", opt->no_rtu, "do not serve the chamber as an F4 over RTU");
   cmd->add_option("--can", opt->serve.can_interface,

@@ -15,8 +15,10 @@ nlohmann::json to_json(const AxisState& axis) {
 }
 
 nlohmann::json to_json(const TableState& table) {
-  return {
-      {"time_s", table.time_s}, {"outer", to_json(table.outer)}, {"inner", to_json(table.inner)}};
+  return {{"time_s", table.time_s},
+          {"outer", to_json(table.outer)},
+          {"inner", to_json(table.inner)},
+          {"link_lost", table.link_lost}};
 }
 
 nlohmann::json to_json(const ChamberState& chamber) {
@@ -26,6 +28,7 @@ nlohmann::json to_json(const ChamberState& chamber) {
                       {"mode", std::string(to_string(chamber.mode))},
                       {"fault", chamber.fault}};
   if (chamber.fault) j["fault_text"] = chamber.fault_text;
+  j["link_lost"] = chamber.link_lost;
   return j;
 }
 

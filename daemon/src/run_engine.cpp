@@ -781,30 +781,12 @@ void RunEngine::record_device_events() {
   for (std::size_t i = 0; i < station_.imu_count(); ++i) drain(station_.imu(i));
 }
 
-namespace {
-
-// The parts of a driver's fault text that say only that the controller could not be read (its
-// link), as opposed to a fault the controller reports (interlock, alarm, axis fault).
-bool is_link_outage(const std::string& fault_text) {
-  if (fault_text.empty()) return false;
-  std::size_t start = 0;
-  while (start <= fault_text.size()) {
-    const std::size_t end = std::min(fault_text.find("; ", start), fault_text.size());
-    const std::string part = fault_text.substr(start, end - start);
-    const bool link = part.rfind("table state unreadable", 0) == 0 ||
-                      part.rfind("link down", 0) == 0 ||
-                      part.rfind("no valid process value", 0) == 0;
-    if (!link) return false;
-    start = end + 2;
-  }
-  return true;
-}
-
-}  // namespace
-
-bool RunEngine::ride_out_link_outage(const std::string& device, const std::string& fault_text,
+bool RunEngine::ride_out_link_outage(const std::string& device, bool link_lost,
+                                     const std::string& fault_text,
                                      std::optional<double>& down_since_s) {
-  if (!is_link_outage(fault_text)) return false;
+  // The driver says whether it could not read the controller (link_lost) or the controller
+  // reported a fault; only the first is ridden out.
+  if (!link_lost) return false;
   const double now = station_.clock().now_s();
   if (!down_since_s) {
     down_since_s = now;
@@ -836,7 +818,11 @@ void RunEngine::check_interlocks() {
   const auto table = station_.table().read_state();
   if (table.outer.fault || table.inner.fault) {
     const std::string& text = table.outer.fault ? table.outer.fault_text : table.inner.fault_text;
-    if (!ride_out_link_outage("table", text, table_link_down_since_s_)) {
+    // A controller fault known from before the link went (a last-known axis in fault mode) is
+    // not ridden out: the link coming back would not clear it.
+    const bool outage = table.link_lost && table.outer.mode != core::AxisMode::kFault &&
+                        table.inner.mode != core::AxisMode::kFault;
+    if (!ride_out_link_outage("table", outage, text, table_link_down_since_s_)) {
       const std::string why = table.outer.fault ? "outer axis: " + table.outer.fault_text
                                                 : "inner axis: " + table.inner.fault_text;
       record_event(EventKind::kInterlock, "table", "table fault: " + why);
@@ -847,7 +833,8 @@ void RunEngine::check_interlocks() {
   }
   const auto chamber = station_.chamber().read_state();
   if (chamber.fault) {
-    if (!ride_out_link_outage("chamber", chamber.fault_text, chamber_link_down_since_s_)) {
+    const bool outage = chamber.link_lost && chamber.mode != core::ChamberMode::kFault;
+    if (!ride_out_link_outage("chamber", outage, chamber.fault_text, chamber_link_down_since_s_)) {
       record_event(EventKind::kInterlock, "chamber", "chamber fault: " + chamber.fault_text);
       throw Aborted{"chamber fault: " + chamber.fault_text};
     }

@@ -26,7 +26,7 @@ using calstand::testing::write_text;
 using nlohmann::json;
 
 // As the other sim-station tests: fast enough for the suite, slow enough for a busy machine.
-constexpr const char* kTimeScale = "20";
+constexpr const char* kSetsTimeScale = "20";
 
 /// One table set and one chamber set served together, and how the station file names them.
 struct SetPair {
@@ -70,19 +70,22 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
   const std::string name = std::string(p.table) + "-" + p.chamber;
   const std::string sim = dir_ + name + "-sim.json";
   write_text(sim, calstand::testing::known_imu_station(name, 11));
+  // Short, so that four pairs fit the suite: two plateaus from the ambient (a soak to a far
+  // plateau is most of a thermal run's time), the table's turns and positions for the gyro
+  // fit; the accelerometers from their own six positions.
   const std::string thermal =
-      "thermal-calibration --set temperatures=[25,30] --set soak_s=5 --set capture_s=10 "
-      "--set ramp_c_per_min=5 --set outer_angles=[0,90,180,270] --set inner_angles=[0,90] "
-      "--set rates=[30,90] --set revolutions=1";
-  const std::string six = "six-position --set capture_s=10";
-  const std::string ladder = "rate-ladder --set rates=[30,90] --set revolutions=1";
-  for (const auto& [procedure, db] : {std::pair{thermal, "thermal"}, std::pair{six, "six"},
-                                      std::pair{ladder, "ladder"}}) {
+      "thermal-calibration --set temperatures=[23,24] --set final_c=24 --set soak_s=5 "
+      "--set capture_s=5 --set ramp_c_per_min=5 --set outer_angles=[0,180] "
+      "--set inner_angles=[0,90] --set rates=[60] --set revolutions=1";
+  const std::string six = "six-position --set capture_s=5";
+  const std::string ladder = "rate-ladder --set rates=[60] --set revolutions=1 --set settle_s=1";
+  for (const auto& [procedure, db] :
+       {std::pair{thermal, "thermal"}, std::pair{six, "six"}, std::pair{ladder, "ladder"}}) {
     ASSERT_EQ(run_procedure(procedure, sim, dir_ + name + "-" + db + "-inproc.db").exit_code, 0);
   }
 
   const std::string lab = dir_ + name + "-lab.json";
-  SimStationProcess station({"--station", sim, "--time-scale", kTimeScale, "--station-out", lab,
+  SimStationProcess station({"--station", sim, "--time-scale", kSetsTimeScale, "--station-out", lab,
                              "--table-protocol", p.table, "--chamber-protocol", p.chamber});
   const json lab_file = json::parse(read_text(lab));
   EXPECT_EQ(lab_file["table"]["backend"], p.table_backend);
@@ -102,24 +105,28 @@ TEST_P(CommandSetStations, CampaignsThroughTheControllersWordsFitAsWellAsInProce
   for (const auto& [procedure, db, model] :
        {std::tuple{thermal, "thermal", gyro}, std::tuple{six, "six", accel},
         std::tuple{ladder, "ladder", gyro}}) {
+    SCOPED_TRACE(procedure);
     const std::string real_db = dir_ + name + "-" + db + "-real.db";
     const auto r = run_procedure(procedure, lab, real_db);
     ASSERT_EQ(r.exit_code, 0) << procedure << "\n" << r.out;
-    calstand::testing::expect_same_quality(
-        fit_json(dir_ + name + "-" + db + "-inproc.db", model), fit_json(real_db, model), 4.0);
+    calstand::testing::expect_same_quality(fit_json(dir_ + name + "-" + db + "-inproc.db", model),
+                                           fit_json(real_db, model), 4.0);
     const std::string events = events_text(real_db);
     EXPECT_EQ(events.find("link lost"), std::string::npos) << events;
     EXPECT_EQ(events.find("bad reply"), std::string::npos) << events;
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Sets, CommandSetStations,
-    ::testing::Values(SetPair{"acutrol-style", "watlow-f4t", "acutrol", "modbus"}),
-    [](const auto& info) {
-      std::string n = std::string(info.param.table) + "_" + info.param.chamber;
-      std::replace(n.begin(), n.end(), '-', '_');
-      return n;
-    });
+INSTANTIATE_TEST_SUITE_P(Sets, CommandSetStations,
+                         ::testing::Values(SetPair{"acutrol3000", "espec", "acutrol", "espec"},
+                                           SetPair{"aerosmith", "simserv", "aerosmith", "simserv"},
+                                           SetPair{"actidyn", "thermotron", "actidyn",
+                                                   "thermotron"},
+                                           SetPair{"aerotech", "csz-ezt570", "aerotech", "modbus"}),
+                         [](const auto& info) {
+                           std::string n = std::string(info.param.table) + "_" + info.param.chamber;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
 
 }  // namespace

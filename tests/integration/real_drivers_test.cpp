@@ -36,7 +36,6 @@ using nlohmann::json;
 // enough that the engine's 0.1 s ticks (5 ms of wall time) keep up on a busy 2-core machine.
 constexpr const char* kTimeScale = "20";
 
-
 class RealDrivers : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -293,6 +292,69 @@ TEST_F(RealDrivers, ModbusControllerFlappingIsRiddenOutAndRecorded) {
   EXPECT_NE(events.find("link back after"), std::string::npos) << events;
 }
 
+/// Sets the lab file's policy.link_outage_s [station s].
+void set_link_outage(const std::string& lab, double seconds) {
+  json lab_file = json::parse(read_text(lab));
+  lab_file["policy"]["link_outage_s"] = seconds;
+  write_text(lab, lab_file.dump(2));
+}
+
+/// The events of `source` in a run shown by `show --json`, one JSON line each.
+std::string events_of(const json& shown, const std::string& source) {
+  std::string text;
+  for (const auto& e : shown["events"]) {
+    if (e.value("source", "") == source) text += e.dump() + "\n";
+  }
+  return text;
+}
+
+// One rate step long enough (4 turns at 30 deg/s: 2.4 s of wall time at 20x) for the table's
+// link to drop and come back while it turns.
+constexpr const char* kLongRateStep =
+    "rate-ladder --set rates=[30] --set 'axes=[\"inner\"]' --set revolutions=4";
+
+// The table's TCP link drops mid-rate for less than the policy's link_outage_s: the controller
+// keeps turning by itself, the engine rides the outage out, and the run completes saying that
+// the link was lost and came back.
+TEST_F(RealDrivers, TableLinkDroppedMidRateBrieflyIsRiddenOut) {
+  auto generous_policy = [](FaultedRun& f) { set_link_outage(f.lab, 120.0); };
+  auto restore = [](FaultedRun& f) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));  // 20 s of station time
+    EXPECT_TRUE(f.station->command("table restore").value("ok", false));
+  };
+  auto f = run_with_fault("table-drop-short", kLongRateStep, "table drop", 0.3, &RealDrivers::serve,
+                          dir_, generous_policy, restore);
+  EXPECT_EQ(f.result.exit_code, 0) << f.result.out;
+  EXPECT_EQ(f.shown["status"], "completed") << f.shown.value("exit_reason", "");
+  const std::string table = events_of(f.shown, "table");
+  EXPECT_NE(table.find("link lost"), std::string::npos) << events_text(f.shown);
+  EXPECT_NE(table.find("link back after"), std::string::npos) << events_text(f.shown);
+}
+
+// Dropped for longer than link_outage_s: the run aborts naming the table's link, and the table
+// is brought to rest once the link is back (the engine keeps trying its safe state meanwhile).
+TEST_F(RealDrivers, TableLinkDroppedMidRateTooLongAbortsWithTheTableAtRest) {
+  auto short_policy = [](FaultedRun& f) { set_link_outage(f.lab, 10.0); };  // 0.5 s of wall time
+  auto restore = [](FaultedRun& f) {
+    std::this_thread::sleep_for(std::chrono::seconds(3));  // 60 s of station time
+    EXPECT_TRUE(f.station->command("table restore").value("ok", false));
+  };
+  auto f = run_with_fault("table-drop-long", kLongRateStep, "table drop", 0.3, &RealDrivers::serve,
+                          dir_, short_policy, restore);
+  EXPECT_NE(f.result.exit_code, 0) << f.result.out;
+  EXPECT_EQ(f.shown["status"], "aborted") << f.shown.dump(2);
+  const std::string reason = f.shown.value("exit_reason", "");
+  EXPECT_NE(reason.find("table link down for"), std::string::npos) << reason;
+  EXPECT_EQ(reason.find("NOT safe"), std::string::npos) << reason;
+  EXPECT_NE(events_of(f.shown, "table").find("link lost"), std::string::npos)
+      << events_text(f.shown);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // 6 s of world time to brake
+  const auto t = table_state(f.lab);
+  EXPECT_FALSE(t.value("link_lost", true)) << t.dump();
+  EXPECT_NEAR(t["outer"]["rate_dps"].get<double>(), 0.0, 1e-3) << t.dump();
+  EXPECT_NEAR(t["inner"]["rate_dps"].get<double>(), 0.0, 1e-3) << t.dump();
+}
+
 // An IMU that delivers a burst (frames held back, then all at once), garbage on the line and a
 // jump of its own clock, all during captures: each is recorded and ridden out, the run ends
 // completed with whole captures (policy on_sequence_gap: record).
@@ -392,6 +454,99 @@ TEST_F(RealDrivers, DeviceCommandsDriveTheStationByHand) {
   const auto bad = station->command("levitate table");
   EXPECT_FALSE(bad.value("ok", true));
   EXPECT_NE(bad.value("error", "").find("not understood"), std::string::npos) << bad.dump();
+}
+
+// `calstand device` rides out a dropped link as a run does: a read that finds the table's or the
+// chamber's link down waits for it (reconnecting with backoff) and answers once it is back;
+// down for longer than the policy's link_outage_s, it fails naming the device and how long.
+TEST_F(RealDrivers, DeviceCommandsRideOutADroppedLink) {
+  const std::string lab = dir_ + "device-ride-lab.json";
+  auto station = serve(lab);
+  set_link_outage(lab, 200.0);  // 10 s of wall time at 20x: far more than the outages below
+  const std::string device = "device --station " + lab + " ";
+  // Starts `args` with the link already down, brings the link back after a second of wall
+  // time, and returns the command's JSON.
+  auto across_outage = [&](const std::string& args, const std::string& down,
+                           const std::string& up) {
+    EXPECT_TRUE(station->command(down).value("ok", false)) << down;
+    auto waiting = std::async(std::launch::async,
+                              [&] { return run(device + args, dir_ + "ride-stderr.txt"); });
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    EXPECT_EQ(waiting.wait_for(std::chrono::seconds(0)), std::future_status::timeout)
+        << args << " did not wait for the link";
+    EXPECT_TRUE(station->command(up).value("ok", false)) << up;
+    const auto r = waiting.get();
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << read_text(dir_ + "ride-stderr.txt");
+    return json::parse(r.out, nullptr, false);
+  };
+
+  const auto table = across_outage("table get", "table drop", "table restore");
+  EXPECT_FALSE(table.value("link_lost", true)) << table.dump();
+  EXPECT_FALSE(table["outer"].value("fault", true)) << table.dump();
+  const auto moved =
+      across_outage("table move --outer 30 --inner 0", "table drop", "table restore");
+  EXPECT_NEAR(moved["outer"]["angle_deg"].get<double>(), 30.0, 1e-3) << moved.dump();
+  const auto chamber = across_outage("chamber get", "modbus stop", "modbus start");
+  EXPECT_FALSE(chamber.value("link_lost", true)) << chamber.dump();
+  EXPECT_FALSE(chamber.value("fault", true)) << chamber.dump();
+
+  // Down for longer than the policy allows: the error says which device and for how long.
+  set_link_outage(lab, 10.0);  // 0.5 s of wall time
+  ASSERT_TRUE(station->command("table drop").value("ok", false));
+  const auto gone = run(device + "table get", dir_ + "ride-stderr.txt");
+  EXPECT_NE(gone.exit_code, 0) << gone.out;
+  const std::string why = read_text(dir_ + "ride-stderr.txt");
+  EXPECT_NE(why.find("table link down for"), std::string::npos) << why;
+  EXPECT_NE(why.find("more than the policy's 10 s"), std::string::npos) << why;
+  ASSERT_TRUE(station->command("table restore").value("ok", false));
+}
+
+// sim-station serves the chamber in the map --chamber-protocol names (CSZ EZT-570 here): the
+// endpoints and the station file follow it, and the real Modbus driver sets, reads and stands
+// the chamber by through it. An unknown name is refused with the names it knows.
+TEST_F(RealDrivers, SimStationServesTheChamberInTheChosenMap) {
+  const std::string lab = dir_ + "csz-lab.json";
+  SimStationProcess station({"--station", sim_station_, "--time-scale", kTimeScale, "--station-out",
+                             lab, "--chamber-protocol", "csz-ezt570"});
+  EXPECT_EQ(station.endpoints()["chamber"]["map"], "csz-ezt570") << station.endpoints().dump();
+  EXPECT_EQ(station.endpoints()["table"]["protocol"], "acutrol");
+  EXPECT_EQ(json::parse(read_text(lab))["chamber"]["connection"]["map"], "csz-ezt570");
+  const std::string device = "device --station " + lab + " ";
+  auto json_of = [&](const std::string& args) {
+    const auto r = run(device + args, dir_ + "stderr.txt");
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << read_text(dir_ + "stderr.txt");
+    return json::parse(r.out, nullptr, false);
+  };
+  const auto set = json_of("chamber set 30 --ramp 5");
+  EXPECT_NEAR(set["setpoint_c"].get<double>(), 30.0, 0.05) << set.dump();
+  EXPECT_EQ(set["mode"], "active") << set.dump();
+  EXPECT_EQ(json_of("chamber standby")["mode"], "standby");
+  // A run through the map: a setpoint, a soak, a capture, the chamber to standby at its end.
+  const std::string procedure = dir_ + "csz-plateau.json";
+  write_text(procedure, R"({"format": "calstand-procedure/1", "name": "csz-plateau",
+    "description": "one plateau near the lab's air, through the chamber's register map",
+    "steps": [
+      {"kind": "set_temperature", "target_c": 26, "ramp_c_per_min": 5, "label": "to 26 degC",
+       "soak": {"tolerance_c": 3, "stable_s": 1, "timeout_s": 600}},
+      {"kind": "capture", "duration_s": 2, "label": "at 26 degC"}]})");
+  const std::string db = dir_ + "csz.db";
+  const auto r = run_procedure(procedure, lab, db);
+  EXPECT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "stderr.txt");
+  EXPECT_EQ(show_json(db).value("status", ""), "completed");
+  EXPECT_EQ(json_of("chamber get")["mode"], "standby");
+
+  const auto refused =
+      run("sim-station --chamber-protocol nosuch --duration 1", dir_ + "stderr.txt");
+  EXPECT_NE(refused.exit_code, 0);
+  const std::string why = refused.out + read_text(dir_ + "stderr.txt");
+  EXPECT_NE(why.find("--chamber-protocol"), std::string::npos) << why;
+  EXPECT_NE(why.find("csz-ezt570"), std::string::npos) << why;
+  const auto no_table =
+      run("sim-station --table-protocol nosuch --duration 1", dir_ + "stderr.txt");
+  EXPECT_NE(no_table.exit_code, 0);
+  // The refusal lists what is served: the ACUTROL-style server and the table command sets.
+  EXPECT_NE(read_text(dir_ + "stderr.txt").find("acutrol, "), std::string::npos);
+  EXPECT_NE(read_text(dir_ + "stderr.txt").find("aerotech"), std::string::npos);
 }
 
 }  // namespace

@@ -22,6 +22,10 @@ struct ChamberState {
   ChamberMode mode = ChamberMode::kStandby;
   bool fault = false;
   std::string fault_text;
+  /// The controller could not be read (link down, no valid reading for too long): the fields
+  /// are the last known. Set together with `fault`; the engine rides such an outage out for
+  /// the policy's link_outage_s instead of aborting at once.
+  bool link_lost = false;
 };
 
 }  // namespace calstand::core

@@ -12,9 +12,9 @@ namespace calstand::core {
 /// `fault_text` only while `fault` is set. schemas/api.md documents it.
 /// {"angle_deg", "rate_dps", "mode", "in_position", "fault", "fault_text"?}
 nlohmann::json to_json(const AxisState& axis);
-/// {"time_s", "outer": AXIS, "inner": AXIS}
+/// {"time_s", "outer": AXIS, "inner": AXIS, "link_lost"}
 nlohmann::json to_json(const TableState& table);
-/// {"time_s", "air_c", "setpoint_c", "mode", "fault", "fault_text"?}
+/// {"time_s", "air_c", "setpoint_c", "mode", "fault", "fault_text"?, "link_lost"}
 nlohmann::json to_json(const ChamberState& chamber);
 
 }  // namespace calstand::core

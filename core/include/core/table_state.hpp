@@ -33,6 +33,10 @@ struct TableState {
   double time_s = 0.0;  ///< station clock [s]
   AxisState outer;
   AxisState inner;
+  /// The controller could not be read (link down, timeouts, unreadable replies): the fields
+  /// are the last known, and both axes carry `fault` with the reason. The engine rides such an
+  /// outage out for the policy's link_outage_s instead of aborting at once.
+  bool link_lost = false;
 };
 
 }  // namespace calstand::core

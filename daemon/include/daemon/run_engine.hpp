@@ -215,10 +215,10 @@ class RunEngine {
   // Table and chamber links that dropped: since when (station time), while they are down.
   std::optional<double> table_link_down_since_s_;
   std::optional<double> chamber_link_down_since_s_;
-  /// Rides out a link outage of `device` (records it, aborts past the policy's limit); false
-  /// when `fault_text` is not a link outage alone (a real fault).
-  bool ride_out_link_outage(const std::string& device, const std::string& fault_text,
-                            std::optional<double>& down_since_s);
+  /// Rides out a link outage of `device` (records it with `fault_text`, aborts past the
+  /// policy's limit); false when `link_lost` is not set (a fault the controller reports).
+  bool ride_out_link_outage(const std::string& device, bool link_lost,
+                            const std::string& fault_text, std::optional<double>& down_since_s);
   /// Records that `device`'s link is back after an outage.
   void note_link_back(const std::string& device, std::optional<double>& down_since_s);
 

@@ -162,6 +162,10 @@ class AcutrolServer {
   void set_answering(bool answering) { answering_ = answering; }
   /// Drops every TCP client connection now (rehearses a broken link); listening goes on.
   void drop_clients();
+  /// true: every new TCP connection is closed as soon as it is accepted (a cable pulled: the
+  /// clients' reconnects fail) until set_refusing(false). Clients already connected are not
+  /// touched (drop_clients() for those).
+  void set_refusing(bool refusing) { refusing_ = refusing; }
 
   std::uint64_t commands_served() const { return commands_; }
   std::size_t client_count() const { return clients_; }
@@ -179,6 +183,7 @@ class AcutrolServer {
   std::uint16_t port_ = 0;
   std::atomic<bool> stopping_{false};
   std::atomic<bool> answering_{true};
+  std::atomic<bool> refusing_{false};
   std::atomic<std::uint64_t> commands_{0};
   std::atomic<std::size_t> clients_{0};
   std::thread accept_thread_;

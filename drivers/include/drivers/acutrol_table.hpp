@@ -92,6 +92,12 @@ class AcutrolTable final : public Turntable {
     acutrol::Reply reply;
     std::string message;  ///< why, when not kReply
     bool ok() const { return outcome == Outcome::kReply; }
+    /// The failure with `message`: a refusal is the controller's answer; a timeout, a link
+    /// error or a garbled reply says nothing about whether the command was taken (link_lost).
+    Result failure() const {
+      return outcome == Outcome::kRefused ? Result::failure(message)
+                                          : Result::link_failure(message);
+    }
   };
   // All private members are called with mutex_ held.
   Exchange exchange(const acutrol::Command& command);

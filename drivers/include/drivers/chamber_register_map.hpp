@@ -68,6 +68,13 @@ struct ModeField {
   std::uint16_t standby = 0;  ///< value meaning "off": the air drifts to ambient
 };
 
+/// A bit-oriented alarm word the controller keeps: each set bit is an alarm it reports (which
+/// alarm a bit means is the controller's manual's business; the driver reports the word).
+struct AlarmRegister {
+  std::uint16_t address = 0;  ///< protocol address of a holding register
+  std::string name;           ///< what the word holds, for fault texts (e.g. "chamber alarms")
+};
+
 /// Where a chamber controller keeps its process value, setpoint and mode, as data: built-in
 /// maps for known controllers, or a generic map from the station file. Temperatures in degC.
 struct ChamberRegisterMap {
@@ -84,6 +91,9 @@ struct ChamberRegisterMap {
   /// for single-register encodings. A float32 process value that is NaN or infinite is always a
   /// fault.
   std::vector<std::uint16_t> sensor_fault_raw;
+  /// Alarm words read with every poll; any bit set is a chamber fault (and an event), not a
+  /// lost link. Empty for controllers mapped without them.
+  std::vector<AlarmRegister> alarms;
 
   /// Sets the word order of every float32 field (controllers configure it globally).
   void set_word_order(WordOrder order);
@@ -100,13 +110,26 @@ ChamberRegisterMap watlow_f4_map();
 /// 2782, control mode 2730 (10 = auto, 62 = off). The word order must match the controller's
 /// Modbus "data map" setting.
 ChamberRegisterMap watlow_f4t_map(WordOrder order = WordOrder::kHighFirst);
+/// Cincinnati Sub-Zero EZT-570i/EZT-570S, loop 1 (air temperature), from the controller's User
+/// Communication Reference Manual, section 2.4 (docs/protocols.md, "CSZ EZT-570"): signed int16
+/// with one implied decimal (scale 0.1: the manual leaves the decimal point to the loop's
+/// configuration; a generic map with another scale covers a loop set otherwise), setpoint 60,
+/// process value 61, chamber on/off in the manual event word 22 (1 = on, 0 = off: bit 0 only,
+/// every other event off), alarm words 55 to 58. Sensor fault: the int16 full-scale words.
+ChamberRegisterMap csz_ezt570_map();
+
+/// The names of the built-in maps, for errors and help: "watlow-f4, watlow-f4t, csz-ezt570".
+std::string builtin_map_names();
+/// The built-in map `name`, or nullopt when there is none by that name.
+std::optional<ChamberRegisterMap> builtin_map(std::string_view name,
+                                              WordOrder word_order = WordOrder::kHighFirst);
 
 /// Parses "high_first" / "low_first"; throws core::InputError naming `where` otherwise.
 WordOrder word_order_from_json(const nlohmann::json& j, const std::string& where);
 
-/// A map from the station file: a built-in name ("watlow-f4", "watlow-f4t") or a generic map
-/// object (fields documented in docs/protocols.md, "Chamber over Modbus"). `word_order` applies to
-/// float32 fields. Throws core::InputError naming the field path under `where` (e.g.
+/// A map from the station file: a built-in name ("watlow-f4", "watlow-f4t", "csz-ezt570") or a
+/// generic map object (fields documented in docs/protocols.md, "Chamber over Modbus"). `word_order`
+/// applies to float32 fields. Throws core::InputError naming the field path under `where` (e.g.
 /// `chamber.connection.map.setpoint.address`) and why.
 ChamberRegisterMap register_map_from_json(const nlohmann::json& j, const std::string& where,
                                           WordOrder word_order);

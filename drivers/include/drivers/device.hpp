@@ -13,9 +13,17 @@ namespace calstand::drivers {
 struct Result {
   bool ok = true;
   std::string message;  ///< why it failed; empty when ok
+  /// Failed because the device could not be reached (link down, no reply), not because it
+  /// refused: a harmless command may be repeated once the link is back (ride_out.hpp).
+  bool link_lost = false;
 
   static Result success() { return {}; }
   static Result failure(std::string why) { return {false, std::move(why)}; }
+  static Result link_failure(std::string why) { return {false, std::move(why), true}; }
+  /// This failure with `context` before its message ("outer axis: ..."), link_lost kept.
+  Result in(const std::string& context) const {
+    return ok ? *this : Result{false, context + ": " + message, link_lost};
+  }
   explicit operator bool() const { return ok; }
 };
 

@@ -153,7 +153,7 @@ void AcutrolServer::accept_loop() {
     const int fd = ::accept4(listen_fd_, reinterpret_cast<sockaddr*>(&peer), &len,
                              SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0) continue;
-    if (clients_ >= options_.max_clients) {
+    if (refusing_ || clients_ >= options_.max_clients) {
       ::close(fd);  // refused by closing: the client sees end of stream
       continue;
     }

@@ -205,7 +205,7 @@ AcutrolTable::Exchange AcutrolTable::exchange(const Command& command) {
 
 Result AcutrolTable::command_ok(const Command& command) {
   const Exchange ex = exchange(command);
-  if (!ex.ok()) return Result::failure(ex.message);
+  if (!ex.ok()) return ex.failure();
   if (!acutrol::is_ok(ex.reply)) {
     const auto why = fmt::format("'{}': expected OK, got '{}'", acutrol::format_command(command),
                                  acutrol::sanitize_text(ex.reply.payload, 60));
@@ -219,17 +219,19 @@ Result AcutrolTable::command_ok(const Command& command) {
 
 Result AcutrolTable::configure() {
   std::lock_guard lock(mutex_);
-  const auto failed = [&](const std::string& why) {
+  const auto failed = [&](const std::string& why, bool link_lost = false) {
     life_.set(DeviceState::kError);
-    return Result::failure(fmt::format("{} ({}): configure: {}", name_, link_name_, why));
+    Result r = Result::failure(fmt::format("{} ({}): configure: {}", name_, link_name_, why));
+    r.link_lost = link_lost;
+    return r;
   };
   if (tcp_ != nullptr) {
     if (auto error = tcp_->connect(connection_.tcp.connect_timeout); !error.empty()) {
-      return failed(error);
+      return failed(error, true);
     }
   }
   const Exchange idn = exchange({CommandKind::kIdentify, 0, 0.0, 0.0});
-  if (!idn.ok()) return failed(idn.message);
+  if (!idn.ok()) return failed(idn.message, idn.failure().link_lost);
   events_.push(clock_.now_s(), false,
                "table controller: " + acutrol::sanitize_text(idn.reply.payload, 80));
 
@@ -238,12 +240,12 @@ Result AcutrolTable::configure() {
     if (auto r = command_ok(
             axis_command(CommandKind::kLimit, axis, limits.max_rate_dps, limits.max_accel_dps2));
         !r) {
-      return failed(fmt::format("{} axis limits: {}", axis_name(axis), r.message));
+      return failed(fmt::format("{} axis limits: {}", axis_name(axis), r.message), r.link_lost);
     }
   }
   for (const int axis : kWireAxes) {
     const Exchange ex = exchange(axis_command(CommandKind::kInterlockQuery, axis));
-    if (!ex.ok()) return failed(ex.message);
+    if (!ex.ok()) return failed(ex.message, ex.failure().link_lost);
     const auto il = acutrol::parse_interlock(ex.reply.payload);
     if (!il) {
       note_bad_reply(il.error);
@@ -269,7 +271,7 @@ Result AcutrolTable::activate() {
   }
   for (const int axis : kWireAxes) {
     const Exchange ex = exchange(axis_command(CommandKind::kInterlockQuery, axis));
-    if (!ex.ok()) return Result::failure(ex.message);
+    if (!ex.ok()) return ex.failure();
     const auto il = acutrol::parse_interlock(ex.reply.payload);
     if (!il) {
       note_bad_reply(il.error);
@@ -339,11 +341,11 @@ Result AcutrolTable::move_to(double outer_deg, double inner_deg) {
           fmt::format("{} axis: angle {} deg is not finite", axis_name(axis), deg));
     }
     if (auto r = command_ok(axis_command(CommandKind::kModePosition, axis)); !r) {
-      return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+      return r.in(fmt::format("{} axis", axis_name(axis)));
     }
     // The controller takes any angle; wrapped here so the wire shows the angle the axis reports.
     if (auto r = command_ok(axis_command(CommandKind::kDemandPosition, axis, wrap_180(deg))); !r) {
-      return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+      return r.in(fmt::format("{} axis", axis_name(axis)));
     }
   }
   return Result::success();
@@ -361,10 +363,10 @@ Result AcutrolTable::set_rate(TableAxis table_axis, double rate_dps) {
                                        axis_name(axis), rate_dps, limits.max_rate_dps));
   }
   if (auto r = command_ok(axis_command(CommandKind::kModeRate, axis)); !r) {
-    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+    return r.in(fmt::format("{} axis", axis_name(axis)));
   }
   if (auto r = command_ok(axis_command(CommandKind::kDemandRate, axis, rate_dps)); !r) {
-    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+    return r.in(fmt::format("{} axis", axis_name(axis)));
   }
   return Result::success();
 }
@@ -386,12 +388,12 @@ Result AcutrolTable::start_sine(TableAxis table_axis, double amplitude_deg, doub
         limits.max_rate_dps, limits.max_accel_dps2));
   }
   if (auto r = command_ok(axis_command(CommandKind::kModeSine, axis)); !r) {
-    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+    return r.in(fmt::format("{} axis", axis_name(axis)));
   }
   if (auto r =
           command_ok(axis_command(CommandKind::kDemandSine, axis, amplitude_deg, frequency_hz));
       !r) {
-    return Result::failure(fmt::format("{} axis: {}", axis_name(axis), r.message));
+    return r.in(fmt::format("{} axis", axis_name(axis)));
   }
   return Result::success();
 }
@@ -400,14 +402,18 @@ Result AcutrolTable::stop() {
   std::lock_guard lock(mutex_);
   // Both axes are tried whatever happens to the first: half a stop is still safer than none.
   std::string failures;
+  bool link_lost = false;
   for (const int axis : kWireAxes) {
     if (auto r = command_ok(axis_command(CommandKind::kStop, axis)); !r) {
       failures +=
           fmt::format("{}{} axis: {}", failures.empty() ? "" : "; ", axis_name(axis), r.message);
+      link_lost = link_lost || r.link_lost;
     }
   }
-  if (!failures.empty()) return Result::failure(name_ + " stop: " + failures);
-  return Result::success();
+  if (failures.empty()) return Result::success();
+  Result out = Result::failure(name_ + " stop: " + failures);
+  out.link_lost = link_lost;
+  return out;
 }
 
 // ---- state -----------------------------------------------------------------------------------
@@ -488,6 +494,7 @@ core::TableState AcutrolTable::read_state() {
     // turn's window then moved by up to 0.05 m/s^2).
     s.time_s = outer_at_s;
     s.inner.angle_deg = wrap_180(s.inner.angle_deg - s.inner.rate_dps * (inner_at_s - outer_at_s));
+    s.link_lost = false;
     last_ = s;
     bad_reply_reported_ = false;
     note_axis_faults(s);
@@ -498,6 +505,8 @@ core::TableState AcutrolTable::read_state() {
     a->in_position = false;
     a->fault_text = "table state unreadable: " + why;
   }
+  // Unreadable is not a fault the controller reports: the engine rides it out for a while.
+  s.link_lost = true;
   return s;
 }
 

@@ -332,7 +332,11 @@ Fields CommandSetHandler::chamber_fields(const std::string& operation, const Arg
   } else if (operation == "set_setpoint") {
     return result(chamber_->set_setpoint(number("setpoint_c")));
   } else if (operation == "set_ramp") {
-    return result(chamber_->set_ramp(number("ramp_c_per_min")));
+    // A set whose ramp command carries the target too (SimServ's gradients and setpoint).
+    if (auto r = chamber_->set_ramp(number("ramp_c_per_min")); !r) return result(r);
+    if (args.numbers.count("setpoint_c") > 0) {
+      return result(chamber_->set_setpoint(number("setpoint_c")));
+    }
   } else if (operation == "start") {
     return result(chamber_->set_mode(ChamberServerBackend::Mode::kControl));
   } else if (operation == "standby") {

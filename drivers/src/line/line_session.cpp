@@ -249,6 +249,25 @@ Outcome LineSession::run_step(const Step& step, const Arguments& args,
     return fail(Outcome::Kind::kLinkError, fmt::format("sending '{}': {}", text, w.error));
   if (!step.reply) {
     if (set_.line.delay_ms > 0) std::this_thread::sleep_for(milliseconds(set_.line.delay_ms));
+    // A controller that answers nothing to a command it takes may still answer one it refuses
+    // (Actidyn): what came meanwhile is read now, so that its words reach this command.
+    for (int i = 0; i < 16; ++i) {
+      const IoResult r = impl_->transport->read(buffer, milliseconds(0));
+      if (!r.ok() || r.bytes == 0) break;
+      impl_->push(std::span<const std::uint8_t>(buffer, r.bytes));
+    }
+    while (!impl_->lines.empty()) {
+      const std::string line = std::move(impl_->lines.front());
+      impl_->lines.pop_front();
+      if (auto words = match_error(set_, line)) {
+        counters_.add("refused_commands");
+        Outcome o;
+        o.kind = Outcome::Kind::kRefused;
+        o.message = fmt::format("the {} refused '{}': {}", who_, text, *words);
+        return o;
+      }
+      counters_.add("stray_bytes", line.size() + 1);
+    }
     note_link_ok();
     return {};
   }

@@ -165,6 +165,10 @@ void ChamberRegisterMap::validate(const std::string& where) const {
   add("setpoint", setpoint);
   if (ramp_rate) add("ramp_rate", *ramp_rate);
   if (mode) spans.push_back({"mode", RegisterKind::kHolding, mode->address, mode->address});
+  for (std::size_t i = 0; i < alarms.size(); ++i) {
+    spans.push_back({fmt::format("alarms[{}]", i), RegisterKind::kHolding, alarms[i].address,
+                     alarms[i].address});
+  }
   for (std::size_t i = 0; i < spans.size(); ++i) {
     for (std::size_t k = 0; k < i; ++k) {
       const auto& a = spans[i];
@@ -203,6 +207,45 @@ ChamberRegisterMap watlow_f4t_map(WordOrder order) {
   return m;
 }
 
+// CSZ EZT-570i/S: the User Communication Reference Manual, section 2.4 "Control Registers"
+// (docs/protocols.md, "CSZ EZT-570", cites it). Where the public material leaves a detail open
+// the map takes the cautious reading; a station file's generic map can change each one:
+//   - scale: the decimal point is the loop's configuration; one place (tenths) assumed;
+//   - on/off: which bit of the chamber manual event word runs the chamber is not spelt out;
+//     bit 0, as on CSZ's EZT-550, and the whole word compared (see below);
+//   - sensor fault: reported in alarm word 55, not as a process-value sentinel; the int16 full
+//     scale is treated as one too, as for the F4;
+//   - alarms: which bit is which alarm is not decoded; any bit set is a fault.
+ChamberRegisterMap csz_ezt570_map() {
+  ChamberRegisterMap m;
+  m.name = "csz-ezt570";
+  // Control registers 60..119 are the loops, 12 registers each; loop 1 is the air temperature.
+  m.process_value = {61, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
+  m.setpoint = {60, RegisterKind::kHolding, RegisterEncoding::kInt16, 0.1, {}};
+  // The whole event word is written and compared: another event on (humidity, purge) reads as
+  // neither control nor standby, which the driver reports as a fault rather than guess what
+  // the chamber does.
+  m.mode = ModeField{22, 1, 0};
+  // No ramp register for constant mode (the controller ramps in its own programs only): the
+  // driver steps the setpoint at the requested ramp.
+  m.sensor_fault_raw = {0x7FFF, 0x8000};
+  // EZT-570 alarm status (input sensor breaks), input, chamber and refrigeration alarm words.
+  m.alarms = {{55, "controller alarms"},
+              {56, "input alarms"},
+              {57, "chamber alarms"},
+              {58, "refrigeration alarms"}};
+  return m;
+}
+
+std::string builtin_map_names() { return "watlow-f4, watlow-f4t, csz-ezt570"; }
+
+std::optional<ChamberRegisterMap> builtin_map(std::string_view name, WordOrder word_order) {
+  if (name == "watlow-f4") return watlow_f4_map();
+  if (name == "watlow-f4t") return watlow_f4t_map(word_order);
+  if (name == "csz-ezt570") return csz_ezt570_map();
+  return std::nullopt;
+}
+
 WordOrder word_order_from_json(const json& j, const std::string& where) {
   if (j == "high_first") return WordOrder::kHighFirst;
   if (j == "low_first") return WordOrder::kLowFirst;
@@ -217,7 +260,9 @@ ChamberRegisterMap register_map_from_json(const json& j, const std::string& wher
   core::validate_part_or_throw(core::schema_definition("station.schema.json", "chamber_map"), j, "",
                                where);
   if (j.is_string()) {
-    return j == "watlow-f4" ? watlow_f4_map() : watlow_f4t_map(word_order);
+    if (auto m = builtin_map(j.get<std::string>(), word_order)) return *m;
+    throw core::InputError(where,
+                           fmt::format("no built-in map {} ({})", j.dump(), builtin_map_names()));
   }
   ChamberRegisterMap m;
   m.name = j.value("name", "generic");
@@ -230,6 +275,11 @@ ChamberRegisterMap register_map_from_json(const json& j, const std::string& wher
   // Signed controllers document their sentinels as negative numbers (-32768): both are words.
   for (const auto& v : j.value("sensor_fault_raw", json::array())) {
     m.sensor_fault_raw.push_back(static_cast<std::uint16_t>(v.get<std::int64_t>() & 0xFFFF));
+  }
+  if (j.contains("alarms")) {
+    for (const auto& a : j.at("alarms")) {
+      m.alarms.push_back({a.at("address").get<std::uint16_t>(), a.value("name", "alarms")});
+    }
   }
   m.set_word_order(word_order);
   m.validate(where);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <vector>
 
 namespace calstand::drivers {
 namespace {
@@ -22,7 +23,8 @@ struct ModbusChamber::Reading {
   double pv_c = 0.0;
   RegisterWords pv_raw;
   double sp_c = 0.0;
-  std::optional<std::uint16_t> mode_raw;  // set when the map has a mode register
+  std::optional<std::uint16_t> mode_raw;   // set when the map has a mode register
+  std::vector<std::uint16_t> alarm_words;  // one per map.alarms, in its order
 };
 
 ModbusChamber::ModbusChamber(ModbusChamberOptions options, core::Clock& clock, std::string name)
@@ -70,6 +72,11 @@ LinkStatus ModbusChamber::read_all(Reading& r) {
     if (!s.ok()) return s;
     r.mode_raw = mode;
   }
+  r.alarm_words.assign(map.alarms.size(), 0);
+  for (std::size_t i = 0; i < map.alarms.size(); ++i) {
+    s = link_.read_registers(RegisterKind::kHolding, map.alarms[i].address, {&r.alarm_words[i], 1});
+    if (!s.ok()) return s;
+  }
   return s;
 }
 
@@ -89,7 +96,11 @@ Result ModbusChamber::configure() {
     }
     life_.set(DeviceState::kError);
     if (s.ok()) reason = link_.name() + ": " + reason;
-    return Result::failure(fmt::format("{} ({} map): {}", name_, options_.map.name, reason));
+    Result out = Result::failure(fmt::format("{} ({} map): {}", name_, options_.map.name, reason));
+    // Not connected or not answering is a link problem; a controller that answered with an
+    // exception or an implausible value is not.
+    out.link_lost = !s.ok() && s.kind != LinkStatus::Kind::kException;
+    return out;
   }
   {
     std::lock_guard lock(state_mutex_);
@@ -115,7 +126,9 @@ Result ModbusChamber::activate() {
   {
     std::lock_guard lock(state_mutex_);
     if (!configured_) return Result::failure(name_ + ": not configured");
-    if (!link_up_) return Result::failure(fmt::format("{}: link down: {}", name_, link_error_));
+    if (!link_up_) {
+      return Result::link_failure(fmt::format("{}: link down: {}", name_, link_error_));
+    }
   }
   return life_.activate();
 }
@@ -157,7 +170,7 @@ Result ModbusChamber::set_temperature(double target_c, std::optional<double> ram
   {
     std::lock_guard lock(state_mutex_);
     if (!link_up_) {
-      return Result::failure(
+      return Result::link_failure(
           fmt::format("{}: link down ({}): setpoint not written", name_, link_error_));
     }
     // A ramp continues from the last step written while controlling; otherwise it starts where
@@ -186,7 +199,7 @@ Result ModbusChamber::standby() {
     written_setpoint_c_.reset();
     refusal_reported_ = false;
     if (!link_up_) {
-      return Result::failure(fmt::format(
+      return Result::link_failure(fmt::format(
           "{}: link down ({}): standby will be written when the link is back", name_, link_error_));
     }
   }
@@ -198,12 +211,14 @@ Result ModbusChamber::write_command_now(const char* what) {
   // anything else is a link problem the poll thread recovers from.
   const auto s = drive_command();
   if (s.ok()) return Result::success();
-  if (s.kind == LinkStatus::Kind::kException) {
+  const bool refused = s.kind == LinkStatus::Kind::kException;
+  if (refused) {
     note_refused_write(s);
   } else {
     handle_failure(s);
   }
-  return Result::failure(fmt::format("{}: {} not written: {}", name_, what, s.message));
+  const auto why = fmt::format("{}: {} not written: {}", name_, what, s.message);
+  return refused ? Result::failure(why) : Result::link_failure(why);
 }
 
 core::ChamberState ModbusChamber::read_state() {
@@ -222,6 +237,11 @@ core::ChamberState ModbusChamber::read_state() {
     s.fault = true;
     s.fault_text = reasons;
   }
+  // Not read (link down), or no valid reading for too long while nothing implausible was read:
+  // the controller could not be read. An implausible reading (a sensor fault, a mode neither
+  // control nor standby) is the controller's own word, not a lost link.
+  const bool stale = now - last_good_s_ > options_.stale_after_s;
+  s.link_lost = !link_up_ || (stale && reading_fault_.empty());
   return s;
 }
 
@@ -383,6 +403,15 @@ void ModbusChamber::apply_reading(const Reading& r) {
     // Without a mode register the controller always controls; standby is our ambient setpoint.
     cache_.mode =
         command_ == Command::kStandby ? core::ChamberMode::kStandby : core::ChamberMode::kActive;
+  }
+  // The controller's own alarms: a fault with its words (which bit is which alarm is in its
+  // manual), recorded as an event when it appears like any implausible reading.
+  for (std::size_t i = 0; i < r.alarm_words.size() && i < options_.map.alarms.size(); ++i) {
+    if (r.alarm_words[i] == 0) continue;
+    const auto& alarm = options_.map.alarms[i];
+    reading_fault_ += fmt::format("{}controller alarm: {} (register {}) reads {:#06x}",
+                                  reading_fault_.empty() ? "" : "; ", alarm.name, alarm.address,
+                                  r.alarm_words[i]);
   }
 }
 

@@ -107,6 +107,7 @@ ModbusChamberServer::ModbusChamberServer(ChamberRegisterMap map, ChamberServerBa
   add(map_.setpoint);
   if (map_.ramp_rate) add(*map_.ramp_rate);
   if (map_.mode) hr.add(map_.mode->address, 1);
+  for (const auto& alarm : map_.alarms) hr.add(alarm.address, 1);
   impl_->mapping =
       modbus_mapping_new_start_address(0, 0, 0, 0, unsigned(hr.start()), unsigned(hr.count()),
                                        unsigned(ir.start()), unsigned(ir.count()));

@@ -16,6 +16,8 @@
 #include "drivers/socketcan_port.hpp"
 #endif
 #include "drivers/chamber_register_map.hpp"
+#include "drivers/command_set_backends.hpp"
+#include "drivers/command_set_server.hpp"
 #include "drivers/imu_frame_streamer.hpp"
 #include "drivers/imu_wire_format.hpp"
 #include "drivers/modbus_chamber_server.hpp"
@@ -31,7 +33,88 @@ namespace {
 std::string connect_host(const std::string& listen_host) {
   return listen_host == "0.0.0.0" ? "127.0.0.1" : listen_host;
 }
+
+/// How the simulated chamber is served in one protocol. Today every chamber protocol is a
+/// register map over Modbus TCP; a protocol served otherwise (a line command set) gets its own
+/// entry kind here and its own server in start().
+struct ChamberProtocol {
+  const char* name;
+  ChamberRegisterMap (*modbus_map)();
+};
+
+ChamberRegisterMap f4t_map() { return watlow_f4t_map(); }
+
+constexpr ChamberProtocol kChamberProtocols[] = {
+    {"watlow-f4t", &f4t_map},
+    {"watlow-f4", &watlow_f4_map},
+    {"csz-ezt570", &csz_ezt570_map},
+};
+
+/// The table's own protocol simulator (AcutrolServer); every other table protocol is a command
+/// set served by a CommandSetHandler.
+constexpr const char* kAcutrolProtocol = "acutrol";
+
+const ChamberProtocol* find_chamber_protocol(const std::string& name) {
+  for (const auto& p : kChamberProtocols) {
+    if (name == p.name) return &p;
+  }
+  return nullptr;
+}
+
+ProtocolSimOptions validated(ProtocolSimOptions options) {
+  options.validate();
+  return options;
+}
+
 }  // namespace
+
+std::string chamber_protocol_names() {
+  std::string out;
+  for (const auto& p : kChamberProtocols) out += (out.empty() ? "" : ", ") + std::string(p.name);
+  for (const auto& n : line::builtin_command_set_names(line::DeviceKind::kChamber)) out += ", " + n;
+  return out + ", or a chamber command-set file";
+}
+
+std::string table_protocol_names() {
+  std::string out = kAcutrolProtocol;
+  for (const auto& n : line::builtin_command_set_names(line::DeviceKind::kTable)) out += ", " + n;
+  return out + ", or a table command-set file";
+}
+
+namespace {
+
+/// The command set `protocol` names for `device` (a built-in or a file), or nullopt when it is
+/// served otherwise (Modbus maps, the acutrol server). Throws core::InputError naming `option`.
+std::optional<line::CommandSet> command_set_protocol(const std::string& protocol,
+                                                     line::DeviceKind device,
+                                                     const std::string& option,
+                                                     const std::string& known) {
+  const bool is_file = protocol.find('/') != std::string::npos || protocol.ends_with(".json");
+  if (!is_file && !line::builtin_command_set(protocol)) {
+    throw core::InputError(
+        option, fmt::format("\"{}\" is not a protocol sim-station serves ({})", protocol, known));
+  }
+  return line::load_command_set(protocol, "", device, option);
+}
+
+std::optional<line::CommandSet> chamber_command_set(const ProtocolSimOptions& o) {
+  if (find_chamber_protocol(o.chamber_protocol) != nullptr) return std::nullopt;
+  return command_set_protocol(o.chamber_protocol, line::DeviceKind::kChamber, "--chamber-protocol",
+                              chamber_protocol_names());
+}
+
+std::optional<line::CommandSet> table_command_set(const ProtocolSimOptions& o) {
+  if (o.table_protocol == kAcutrolProtocol) return std::nullopt;
+  return command_set_protocol(o.table_protocol, line::DeviceKind::kTable, "--table-protocol",
+                              table_protocol_names());
+}
+
+}  // namespace
+
+void ProtocolSimOptions::validate() const {
+  chamber_command_set(*this);
+  table_command_set(*this);
+}
 
 struct ProtocolSimulator::Impl {
   Impl(const core::StationConfig& config, ProtocolSimOptions o)
@@ -39,15 +122,20 @@ struct ProtocolSimulator::Impl {
         sim_config(config),
         runner(config, options.time_scale),
         table_backend(runner.world(), runner.mutex()),
-        chamber_backend(runner.world(), runner.mutex()) {}
+        chamber_backend(runner.world(), runner.mutex()),
+        table_set(table_command_set(options)),
+        chamber_set(chamber_command_set(options)) {}
 
   ProtocolSimOptions options;
   core::StationConfig sim_config;
   SimWorldRunner runner;
   SimTableBackend table_backend;
   SimChamberBackend chamber_backend;
+  std::optional<line::CommandSet> table_set;    ///< the table's command set, if served in one
+  std::optional<line::CommandSet> chamber_set;  ///< the chamber's command set, if served in one
   std::unique_ptr<AcutrolServer> table_server;
-  std::unique_ptr<ModbusChamberServer> f4t_server;
+  std::unique_ptr<AcutrolServer> chamber_line_server;  ///< the chamber in its command set
+  std::unique_ptr<ModbusChamberServer> chamber_tcp_server;
   std::unique_ptr<ModbusChamberServer> f4_server;
   std::vector<std::unique_ptr<ImuFrameStreamer>> imu_lines;
   /// One SCPI server per simulated supply, in the station file's order.
@@ -91,7 +179,7 @@ struct ProtocolSimulator::Impl {
 
 ProtocolSimulator::ProtocolSimulator(const core::StationConfig& sim_config,
                                      ProtocolSimOptions options)
-    : impl_(std::make_unique<Impl>(sim_config, std::move(options))) {}
+    : impl_(std::make_unique<Impl>(sim_config, validated(std::move(options)))) {}
 
 ProtocolSimulator::~ProtocolSimulator() { stop(); }
 
@@ -104,11 +192,26 @@ void ProtocolSimulator::start() {
   table_options.bind_host = m.options.host;
   table_options.port = static_cast<std::uint16_t>(m.options.table_port);
   m.table_backend.set_clock([&runner = m.runner] { return runner.clock_s(); });
-  m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
+  if (m.table_set) {
+    m.table_server = line::make_command_set_server(
+        std::make_shared<line::CommandSetHandler>(*m.table_set, m.table_backend), table_options);
+  } else {
+    m.table_server = std::make_unique<AcutrolServer>(m.table_backend, table_options);
+  }
   m.table_server->start();
-  m.f4t_server = ModbusChamberServer::tcp(watlow_f4t_map(), m.chamber_backend,
-                                          m.options.modbus_port, 1, m.options.host);
-  m.f4t_server->start();
+  if (m.chamber_set) {
+    AcutrolServerOptions chamber_options;
+    chamber_options.bind_host = m.options.host;
+    m.chamber_line_server = line::make_command_set_server(
+        std::make_shared<line::CommandSetHandler>(*m.chamber_set, m.chamber_backend),
+        chamber_options);
+    m.chamber_line_server->start();
+  } else {
+    const ChamberProtocol& chamber = *find_chamber_protocol(m.options.chamber_protocol);
+    m.chamber_tcp_server = ModbusChamberServer::tcp(chamber.modbus_map(), m.chamber_backend,
+                                                    m.options.modbus_port, 1, m.options.host);
+    m.chamber_tcp_server->start();
+  }
   if (m.options.f4_rtu) {
     m.f4_server = ModbusChamberServer::rtu(watlow_f4_map(), m.chamber_backend);
     m.f4_server->start();
@@ -161,7 +264,8 @@ void ProtocolSimulator::stop() {
   if (!m.started) return;
   m.runner.stop();
   if (m.table_server) m.table_server->stop();
-  if (m.f4t_server) m.f4t_server->stop();
+  if (m.chamber_line_server) m.chamber_line_server->stop();
+  if (m.chamber_tcp_server) m.chamber_tcp_server->stop();
   if (m.f4_server) m.f4_server->stop();
   for (auto& server : m.supply_servers) server->stop();
   m.supply_servers.clear();
@@ -180,9 +284,16 @@ json ProtocolSimulator::endpoints() const {
     if (m.can && i == 0) entry["can"] = m.options.can_interface;
     imus.push_back(std::move(entry));
   }
-  json chamber = {
-      {"modbus_tcp", fmt::format("{}:{}", connect_host(m.options.host), m.f4t_server->port())},
-      {"map", "watlow-f4t"}};
+  json chamber;
+  if (m.chamber_line_server) {
+    chamber = {
+        {"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.chamber_line_server->port())},
+        {"protocol", m.options.chamber_protocol}};
+  } else {
+    chamber = {{"modbus_tcp",
+                fmt::format("{}:{}", connect_host(m.options.host), m.chamber_tcp_server->port())},
+               {"map", m.options.chamber_protocol}};
+  }
   if (m.f4_server)
     chamber["modbus_rtu"] = {{"path", m.f4_server->slave_path()}, {"map", "watlow-f4"}};
   json supplies = json::array();
@@ -198,7 +309,7 @@ json ProtocolSimulator::endpoints() const {
           {"power_supplies", supplies},
           {"table",
            {{"tcp", fmt::format("{}:{}", connect_host(m.options.host), m.table_server->port())},
-            {"protocol", "acutrol"}}},
+            {"protocol", m.options.table_protocol}}},
           {"chamber", chamber},
           {"imus", imus}};
 }
@@ -216,17 +327,33 @@ core::StationConfig ProtocolSimulator::client_station() const {
   c.table.connection = {{"transport", "tcp"},
                         {"host", connect_host(m.options.host)},
                         {"port", m.table_server->port()}};
-  c.chamber.backend = "modbus";
-  c.chamber.connection = {
-      {"transport", "tcp"},
-      {"host", connect_host(m.options.host)},
-      {"port", m.f4t_server->port()},
-      {"unit_id", 1},
-      {"map", "watlow-f4t"},
-      // Poll as often in world time as a lab station does (4 Hz); the
-      // staleness rule (5 s in a lab) scaled as the policy above.
-      {"poll_period_ms", std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
-      {"stale_after_s", 5.0 * m.options.time_scale}};
+  if (m.table_set) {
+    const auto naming = line::station_naming(m.options.table_protocol, line::DeviceKind::kTable);
+    c.table.backend = naming.backend;
+    c.table.command_set = naming.command_set;
+  }
+  if (m.chamber_set) {
+    const auto naming =
+        line::station_naming(m.options.chamber_protocol, line::DeviceKind::kChamber);
+    c.chamber.backend = naming.backend;
+    c.chamber.command_set = naming.command_set;
+    c.chamber.connection = {{"transport", "tcp"},
+                            {"host", connect_host(m.options.host)},
+                            {"port", m.chamber_line_server->port()}};
+  } else {
+    c.chamber.backend = "modbus";
+    c.chamber.connection = {
+        {"transport", "tcp"},
+        {"host", connect_host(m.options.host)},
+        {"port", m.chamber_tcp_server->port()},
+        {"unit_id", 1},
+        {"map", m.options.chamber_protocol},
+        // Poll as often in world time as a lab station does (4 Hz); the
+        // staleness rule (5 s in a lab) scaled as the policy above.
+        {"poll_period_ms",
+         std::max(10, static_cast<int>(std::lround(250.0 / m.options.time_scale)))},
+        {"stale_after_s", 5.0 * m.options.time_scale}};
+  }
   for (std::size_t i = 0; i < c.imus.size(); ++i) {
     auto& imu = c.imus[i];
     const auto& truth = m.runner.world().imu(i).truth();
@@ -266,7 +393,7 @@ void ProtocolSimulator::clear_interlock_cause(TableAxis axis) {
 }
 
 void ProtocolSimulator::set_modbus_running(bool running) {
-  for (auto* server : {impl_->f4t_server.get(), impl_->f4_server.get()}) {
+  for (auto* server : {impl_->chamber_tcp_server.get(), impl_->f4_server.get()}) {
     if (!server) continue;
     if (running) {
       server->start();
@@ -274,6 +401,13 @@ void ProtocolSimulator::set_modbus_running(bool running) {
       server->stop();
     }
   }
+}
+
+void ProtocolSimulator::set_table_link(bool up) {
+  auto& server = *impl_->table_server;
+  // Refuse first, so that a client reconnecting between the two calls is refused too.
+  server.set_refusing(!up);
+  if (!up) server.drop_clients();
 }
 
 void ProtocolSimulator::set_imu_silent(std::size_t index, bool silent) {
@@ -311,7 +445,7 @@ json ProtocolSimulator::statistics() const {
   }
   return {{"world_lag_s", m.runner.lag_s()},
           {"table_commands", m.table_server ? m.table_server->commands_served() : 0},
-          {"modbus_requests", m.f4t_server ? m.f4t_server->requests() : 0},
+          {"modbus_requests", m.chamber_tcp_server ? m.chamber_tcp_server->requests() : 0},
           {"can_frames_sent", m.can ? m.can->frames_sent() : 0},
           {"can_frames_dropped", m.can ? m.can->frames_dropped() : 0},
           {"imus", imus}};

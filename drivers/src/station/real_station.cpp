@@ -4,6 +4,9 @@
 
 #include "core/error.hpp"
 #include "drivers/acutrol_table.hpp"
+#include "drivers/command_set_backends.hpp"
+#include "drivers/line_chamber.hpp"
+#include "drivers/line_table.hpp"
 #if CALSTAND_WITH_SOCKETCAN
 #include "drivers/can_imu.hpp"
 #endif
@@ -24,14 +27,24 @@ namespace {
 
 RealStation::RealStation(const core::StationConfig& config, double start_time_s)
     : config_(config), clock_(config.time_scale, start_time_s) {
-  if (config_.table.backend != "acutrol") {
-    unknown_backend("table.backend", config_.table.backend, "acutrol");
+  // A command set (the backend's built-in, or the station file's command_set) drives the
+  // device when there is one; otherwise its own driver.
+  if (auto set = line::station_command_set(config_.table)) {
+    table_ = make_line_table(config_.table, clock_, *set);
+  } else if (config_.table.backend == "acutrol") {
+    table_ = make_acutrol_table(config_.table, clock_);
+  } else {
+    unknown_backend("table.backend", config_.table.backend,
+                    "acutrol, aerosmith, actidyn, aerotech, line");
   }
-  table_ = make_acutrol_table(config_.table, clock_);
-  if (config_.chamber.backend != "modbus") {
-    unknown_backend("chamber.backend", config_.chamber.backend, "modbus");
+  if (auto set = line::station_command_set(config_.chamber)) {
+    chamber_ = line::make_line_chamber(config_.chamber, clock_, *set);
+  } else if (config_.chamber.backend == "modbus") {
+    chamber_ = make_modbus_chamber(config_.chamber, clock_);
+  } else {
+    unknown_backend("chamber.backend", config_.chamber.backend,
+                    "modbus, espec, simserv, thermotron, line");
   }
-  chamber_ = make_modbus_chamber(config_.chamber, clock_);
   for (std::size_t i = 0; i < config_.imus.size(); ++i) {
     const auto& imu = config_.imus[i];
     const std::string where = fmt::format("imus[{}].connection", i);

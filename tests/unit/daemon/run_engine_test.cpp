@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -289,6 +290,108 @@ TEST(RunEngine, TableFaultAbortsToSafeState) {
   EXPECT_TRUE(f.journal.has_event(EventKind::kInterlock, "table fault"));
   f.station.world().advance(10.0);
   EXPECT_NEAR(f.station.table().read_state().inner.rate_dps, 0.0, 1e-6);
+}
+
+/// The simulated chamber behind a link that is down between station times [lost_from_s,
+/// lost_until_s): meanwhile its state is the last known with a link fault, as the Modbus driver
+/// reports it. `flagged` false gives the same fault text without link_lost; `fault_mode` makes
+/// the last known state a controller fault.
+class ChamberBehindALink final : public drivers::Chamber {
+ public:
+  ChamberBehindALink(drivers::Chamber& inner, core::Clock& clock) : inner_(inner), clock_(clock) {}
+  double lost_from_s = 1e300;
+  double lost_until_s = 1e300;
+  bool flagged = true;
+  bool fault_mode = false;
+
+  const std::string& name() const override { return inner_.name(); }
+  drivers::Result configure() override { return inner_.configure(); }
+  drivers::Result activate() override { return inner_.activate(); }
+  drivers::Result deactivate() override { return inner_.deactivate(); }
+  drivers::DeviceState state() const override { return inner_.state(); }
+  std::map<std::string, std::uint64_t> fault_counters() const override { return {}; }
+  drivers::Result set_temperature(double c, std::optional<double> ramp) override {
+    return inner_.set_temperature(c, ramp);
+  }
+  drivers::Result standby() override { return inner_.standby(); }
+  core::ChamberState read_state() override {
+    const double now = clock_.now_s();
+    if (now < lost_from_s || now >= lost_until_s) return last_ = inner_.read_state();
+    core::ChamberState s = last_;
+    s.fault = true;
+    s.fault_text = "link down: scripted outage";
+    s.link_lost = flagged;
+    if (fault_mode) s.mode = core::ChamberMode::kFault;
+    return s;
+  }
+
+ private:
+  drivers::Chamber& inner_;
+  core::Clock& clock_;
+  core::ChamberState last_;
+};
+
+/// The simulated station with its chamber behind ChamberBehindALink.
+class StationWithALink final : public drivers::Station {
+ public:
+  StationWithALink() : chamber_(sim_.chamber(), sim_.clock()) {}
+  ChamberBehindALink& link() { return chamber_; }
+  const core::StationConfig& config() const override { return sim_.config(); }
+  core::Clock& clock() override { return sim_.clock(); }
+  drivers::Turntable& table() override { return sim_.table(); }
+  drivers::Chamber& chamber() override { return chamber_; }
+  std::size_t imu_count() const override { return sim_.imu_count(); }
+  drivers::Imu& imu(std::size_t i) override { return sim_.imu(i); }
+  void wait_until(double t_s) override { sim_.wait_until(t_s); }
+
+ private:
+  drivers::SimStation sim_{sim::default_station()};
+  ChamberBehindALink chamber_;
+};
+
+TEST(RunEngine, AChamberLinkLostForLessThanThePolicyIsRiddenOut) {
+  StationWithALink station;
+  station.link().lost_from_s = 2.0;
+  station.link().lost_until_s = 4.0;
+  MemoryJournal journal;
+  EngineOptions opt;
+  opt.link_outage_s = 5.0;
+  RunEngine engine(station, journal, plan_of({capture(8.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kCompleted) << engine.exit_reason();
+  EXPECT_TRUE(journal.has_event(EventKind::kFault, "link lost (link down: scripted outage)"));
+  EXPECT_TRUE(journal.has_event(EventKind::kInfo, "chamber: link back after"));
+}
+
+TEST(RunEngine, AChamberLinkLostForLongerThanThePolicyAbortsNamingIt) {
+  StationWithALink station;
+  station.link().lost_from_s = 2.0;
+  MemoryJournal journal;
+  EngineOptions opt;
+  opt.link_outage_s = 3.0;
+  RunEngine engine(station, journal, plan_of({capture(20.0)}), opt);
+  EXPECT_EQ(engine.run(), RunState::kAborted);
+  const std::string why = engine.exit_reason();
+  EXPECT_NE(why.find("chamber link down for "), std::string::npos) << why;
+  EXPECT_NE(why.find("(more than the policy's 3 s): link down: scripted outage"), std::string::npos)
+      << why;
+}
+
+// The flag, not the wording: a fault that reads like a lost link but is not flagged as one, or
+// a lost link whose last known state was a controller fault, aborts at once.
+TEST(RunEngine, OnlyAFlaggedLinkLossOfAControllerNotInFaultIsRiddenOut) {
+  for (const bool text_only : {true, false}) {
+    StationWithALink station;
+    station.link().lost_from_s = 2.0;
+    station.link().lost_until_s = 2.5;
+    station.link().flagged = !text_only;
+    station.link().fault_mode = !text_only;
+    MemoryJournal journal;
+    RunEngine engine(station, journal, plan_of({capture(8.0)}));
+    EXPECT_EQ(engine.run(), RunState::kAborted) << (text_only ? "text only" : "in fault");
+    EXPECT_NE(engine.exit_reason().find("chamber fault: link down: scripted outage"),
+              std::string::npos)
+        << engine.exit_reason();
+  }
 }
 
 TEST(RunEngine, SequenceGapIsRecordedOrRepeatsTheCaptureByPolicy) {

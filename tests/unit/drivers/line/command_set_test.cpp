@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "drivers/command_set_backends.hpp"
 
 namespace calstand::drivers::line {
 namespace {
@@ -133,6 +134,32 @@ TEST(CommandSet, AnUnknownBuiltInNameListsTheKnownOnes) {
   }
   EXPECT_THROW(load_command_set("acutrol-style", "", DeviceKind::kChamber, "chamber.command_set"),
                core::InputError);
+}
+
+}  // namespace
+}  // namespace calstand::drivers::line
+
+namespace calstand::drivers::line {
+namespace {
+
+TEST(CommandSetBackends, AStationNamesASetByItsBackendOrByCommandSet) {
+  EXPECT_EQ(station_naming("espec", DeviceKind::kChamber).backend, "espec");
+  EXPECT_EQ(station_naming("espec", DeviceKind::kChamber).command_set, "");
+  EXPECT_EQ(station_naming("acutrol3000", DeviceKind::kTable).backend, "acutrol");
+  EXPECT_EQ(station_naming("acutrol3000", DeviceKind::kTable).command_set, "acutrol3000");
+  EXPECT_EQ(station_naming("/lab/our-table.json", DeviceKind::kTable).backend, "line");
+  core::TableConfig table;
+  table.backend = "acutrol";
+  EXPECT_FALSE(station_command_set(table).has_value());  // today's ACUTROL-style driver
+  table.command_set = "acutrol-style";
+  ASSERT_TRUE(station_command_set(table).has_value());
+  EXPECT_EQ(station_command_set(table)->name, "acutrol-style");
+  core::ChamberConfig chamber;
+  chamber.backend = "modbus";
+  EXPECT_FALSE(station_command_set(chamber).has_value());
+  chamber.backend = "line";
+  chamber.command_set = "acutrol-style";  // a table's set for a chamber
+  EXPECT_THROW(station_command_set(chamber), core::InputError);
 }
 
 }  // namespace

@@ -89,6 +89,36 @@ TEST(ChamberRegisterMap, BuiltInMaps) {
       WordOrder::kLowFirst);
 }
 
+// CSZ EZT-570i/S loop 1 as its User Communication Reference Manual (section 2.4) lists it.
+TEST(ChamberRegisterMap, CszEzt570BuiltInMap) {
+  const auto csz = register_map_from_json("csz-ezt570", "m", WordOrder::kHighFirst);
+  EXPECT_EQ(csz.name, "csz-ezt570");
+  EXPECT_EQ(csz.setpoint.address, 60);
+  EXPECT_EQ(csz.process_value.address, 61);
+  EXPECT_EQ(csz.process_value.encoding, RegisterEncoding::kInt16);
+  EXPECT_DOUBLE_EQ(csz.process_value.scale, 0.1);
+  ASSERT_TRUE(csz.mode);
+  EXPECT_EQ(csz.mode->address, 22);
+  EXPECT_EQ(csz.mode->control, 1);
+  EXPECT_EQ(csz.mode->standby, 0);
+  EXPECT_FALSE(csz.ramp_rate) << "constant mode has no ramp register: the driver steps";
+  ASSERT_EQ(csz.alarms.size(), 4u);
+  EXPECT_EQ(csz.alarms[2].address, 57);
+  EXPECT_NO_THROW(csz.validate("map"));
+  EXPECT_NEAR(decode_value(csz.process_value, std::vector<std::uint16_t>{0xFF9C}), -10.0, 1e-12);
+}
+
+TEST(ChamberRegisterMap, UnknownBuiltInMapIsRefusedWithTheNames) {
+  try {
+    register_map_from_json("csz-ezt999", "chamber.connection.map", WordOrder::kHighFirst);
+    FAIL() << "accepted an unknown map";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("chamber.connection.map"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(builtin_map("csz-ezt999"));
+  EXPECT_NE(builtin_map_names().find("csz-ezt570"), std::string::npos);
+}
+
 json generic_map() {
   return json::parse(R"({
     "name": "eurotherm-ish",
@@ -112,6 +142,17 @@ TEST(ChamberRegisterMap, GenericMapFromJson) {
   ASSERT_TRUE(m.mode);
   EXPECT_EQ(m.mode->standby, 0);
   EXPECT_EQ(m.sensor_fault_raw, (std::vector<std::uint16_t>{0x8000, 0x7FFF}));
+  EXPECT_TRUE(m.alarms.empty());
+
+  auto with_alarms = generic_map();
+  with_alarms["alarms"] = json::parse(R"([{"address": 30, "name": "chamber"}, {"address": 31}])");
+  const auto a = register_map_from_json(with_alarms, "m", WordOrder::kHighFirst);
+  ASSERT_EQ(a.alarms.size(), 2u);
+  EXPECT_EQ(a.alarms[0].name, "chamber");
+  EXPECT_EQ(a.alarms[1].address, 31);
+  // An alarm word on the mode register would read the mode as an alarm.
+  with_alarms["alarms"] = json::parse(R"([{"address": 10}])");
+  EXPECT_THROW(register_map_from_json(with_alarms, "m", WordOrder::kHighFirst), core::InputError);
 }
 
 /// The InputError's `where` for `doc`, or "" when it parses.
