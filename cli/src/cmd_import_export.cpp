@@ -34,10 +34,10 @@ struct ImportOptions {
 };
 
 /// A one-line progress display of a long import on a terminal (stderr), redrawn at most every
-/// 200 ms; nothing when stderr is not a terminal.
+/// 200 ms; nothing when stderr is not a terminal or the output is JSON.
 class ImportProgress {
  public:
-  ImportProgress() : enabled_(::isatty(STDERR_FILENO) == 1) {}
+  explicit ImportProgress(bool json) : enabled_(!json && ::isatty(STDERR_FILENO) == 1) {}
   void update(double fraction, std::uint64_t samples) {
     if (!enabled_) return;
     const auto now = std::chrono::steady_clock::now();
@@ -91,7 +91,7 @@ void run_recording_import(const ImportOptions& o) {
   options.latitude_deg = o.latitude_deg;
   options.height_m = o.height_m;
   options.gravity_mps2 = o.gravity_mps2;
-  ImportProgress progress;
+  ImportProgress progress(o.json);
   options.progress = [&](double f, std::uint64_t n) { progress.update(f, n); };
   store::Database db(o.db);
   const store::RecordingImportResult r = store::import_recording(db, o.dir, options);
@@ -128,8 +128,11 @@ void run_import(const ImportOptions& o) {
                              "folder's meta.json holds its site");
     }
   }
+  store::ImportRunOptions options;
+  ImportProgress progress(o.json);
+  options.progress = [&](double f, std::uint64_t n) { progress.update(f, n); };
   store::Database db(o.db);
-  const store::ImportResult r = store::import_run(db, o.dir);
+  const store::ImportResult r = store::import_run(db, o.dir, options);
   if (o.json) {
     nlohmann::ordered_json j;
     j["run"] = r.run;

@@ -110,6 +110,7 @@ bool CsvReader::read_line(std::string_view& line) {
     }
     if (got == 0) eof_ = true;
     end_ += static_cast<std::size_t>(got);
+    read_bytes_ += static_cast<std::uint64_t>(got);
   }
 }
 

@@ -6,13 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <condition_variable>
-#include <deque>
-#include <exception>
-#include <mutex>
 #include <numbers>
-#include <thread>
 
+#include "batch_prefetch.hpp"
 #include "core/error.hpp"
 #include "core/json_schema.hpp"
 #include "core/schemas.hpp"
@@ -100,76 +96,6 @@ class StampCheck {
   double last_ = 0.0;
   double period_ = 0.0;
   std::vector<std::pair<double, double>> pending_;
-};
-
-/// Reads batches on a thread of its own, a few ahead of the writer, so that reading,
-/// decompressing and decoding overlap with the database's writes; at most kQueuedBatches
-/// batches wait (memory stays bounded). The reader's exceptions come out of next() after the
-/// batches read before them.
-class BatchPrefetch {
- public:
-  static constexpr std::size_t kQueuedBatches = 4;
-
-  BatchPrefetch(RecordingReader& reader, std::size_t batch)
-      : reader_(reader), batch_(batch), thread_([this] { run(); }) {}
-  ~BatchPrefetch() {
-    {
-      std::lock_guard lock(mutex_);
-      stop_ = true;
-    }
-    changed_.notify_all();
-    thread_.join();
-  }
-  BatchPrefetch(const BatchPrefetch&) = delete;
-  BatchPrefetch& operator=(const BatchPrefetch&) = delete;
-
-  /// The next batch into `out` with the fraction of the input read; false at the end.
-  bool next(std::vector<ImuRecord>& out, double& progress) {
-    std::unique_lock lock(mutex_);
-    changed_.wait(lock, [&] { return !queue_.empty() || done_; });
-    if (queue_.empty()) {
-      if (error_) std::rethrow_exception(error_);
-      return false;
-    }
-    out.swap(queue_.front().first);
-    progress = queue_.front().second;
-    queue_.pop_front();
-    changed_.notify_all();
-    return true;
-  }
-
- private:
-  void run() {
-    try {
-      for (;;) {
-        std::vector<ImuRecord> batch;
-        batch.reserve(batch_);
-        if (!reader_.read(batch, batch_)) break;
-        const double progress = reader_.progress();
-        std::unique_lock lock(mutex_);
-        changed_.wait(lock, [&] { return queue_.size() < kQueuedBatches || stop_; });
-        if (stop_) break;
-        queue_.emplace_back(std::move(batch), progress);
-        changed_.notify_all();
-      }
-    } catch (...) {
-      std::lock_guard lock(mutex_);
-      error_ = std::current_exception();
-    }
-    std::lock_guard lock(mutex_);
-    done_ = true;
-    changed_.notify_all();
-  }
-
-  RecordingReader& reader_;
-  std::size_t batch_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::deque<std::pair<std::vector<ImuRecord>, double>> queue_;
-  bool done_ = false;
-  bool stop_ = false;
-  std::exception_ptr error_;
-  std::thread thread_;  // last: started once the members above exist
 };
 
 std::string topic_line(const TopicInfo& t) {
@@ -318,7 +244,7 @@ RecordingImportResult import_recording(Database& db, const std::filesystem::path
     double fraction = 0.0;
     // The reader is not touched here again before the prefetch has ended (its destructor
     // joins the thread; next() returning false means the thread is done with the reader).
-    BatchPrefetch prefetch(*reader, options.batch);
+    detail::BatchPrefetch<RecordingReader, ImuRecord> prefetch(*reader, options.batch);
     while (prefetch.next(batch, fraction)) {
       samples.resize(batch.size());
       for (std::size_t i = 0; i < batch.size(); ++i) {
