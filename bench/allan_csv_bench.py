@@ -10,7 +10,7 @@ numpy: `numpy.loadtxt(usecols=column)`, the mean removed, the phase as the cumul
 the overlapping Allan variance at m = 1, 2, 4, ... N/2 (NIST SP 1065 eq. 14) with vectorised
 second differences: the fastest plain numpy way. calstand: `calstand allan --csv FILE --column gx
 --rate 400 --json`, which also computes the degrees of freedom, the intervals and the noise fit.
-Each run is timed as a child process (its wall time and ru_maxrss); the best of --repeat runs
+Each run is timed as a child process (its wall time, ru_maxrss and CPU time); the best of --repeat runs
 (default 3) is kept, since the machine is shared. Needs Debian's python3-numpy.
 """
 
@@ -37,7 +37,8 @@ print(len(out), out[0][1], file=sys.stderr)
 TIMED = ("import resource, subprocess, sys, time; s = time.perf_counter(); "
          "subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL); "
          "e = time.perf_counter() - s; "
-         "print(e, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+         "r = resource.getrusage(resource.RUSAGE_CHILDREN); "
+         "print(e, r.ru_maxrss, r.ru_utime + r.ru_stime)")
 
 
 def write_csv(path, n):
@@ -57,8 +58,8 @@ def write_csv(path, n):
 def timed(cmd):
     out = subprocess.run(["/usr/bin/python3", "-c", TIMED] + cmd, check=True,
                          capture_output=True, text=True)
-    seconds, rss_kb = out.stdout.split()
-    return float(seconds), float(rss_kb) / 1024.0
+    seconds, rss_kb, cpu = out.stdout.split()
+    return float(seconds), float(rss_kb) / 1024.0, float(cpu)
 
 
 def main():
@@ -80,13 +81,15 @@ def main():
     best = {}
     for _ in range(repeat):
         for name, cmd in tools:  # interleaved, so that both see the same load
-            s, rss = timed(cmd)
+            s, rss, cpu = timed(cmd)
             if name not in best or s < best[name][0]:
-                best[name] = (s, rss)
-    for name, (s, rss) in best.items():
-        print(f"{name:30s} {s:7.2f} s  {n / s / 1e6:6.2f} M samples/s  peak {rss:7.1f} MB")
-    base = best["numpy loadtxt + cumsum ADEV"][0]
-    print(f"calstand allan --csv: {best['calstand allan --csv'][0] / base:.3f} x numpy")
+                best[name] = (s, rss, cpu)
+    for name, (s, rss, cpu) in best.items():
+        print(f"{name:30s} {s:7.2f} s  {n / s / 1e6:6.2f} M samples/s  peak {rss:7.1f} MB  "
+              f"CPU {cpu:6.2f} s")
+    numpy, ours = best["numpy loadtxt + cumsum ADEV"], best["calstand allan --csv"]
+    print(f"calstand allan --csv: {ours[0] / numpy[0]:.3f} x numpy's time "
+          f"({ours[2] / numpy[2]:.3f} x its CPU time)")
     if keep is None:
         shutil.rmtree(folder)
 
