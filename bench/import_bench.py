@@ -3,7 +3,12 @@
 of the same samples as a calstand-import/2 CSV folder, side by side with numpy.loadtxt reading
 the CSV, in one run. Prints seconds, samples per second and peak resident memory of each.
 
-    import_bench.py CALSTAND_BIN [--samples N] [--keep DIR]
+    import_bench.py CALSTAND_BIN [--samples N] [--keep DIR] [--csv-only] [--compare OTHER_BIN]
+
+--csv-only writes and imports only the CSV folder (numpy writes it, quickly); --compare also
+imports the CSV folder with another calstand binary (e.g. one built before a change), side by
+side. Each import's peak resident memory is checked against the issue's bar: 2 M samples under
+300 MB, memory independent of the length.
 
 The recording is written by tests/support/write_recordings.py's MCAP and CDR writers, chunk by
 chunk (1 MiB of records per chunk, as ROS 2's recorder writes them), from the MCAP
@@ -70,18 +75,48 @@ def write_inputs(folder, n):
     csv.close()
 
 
+def write_csv_only(folder, n):
+    import numpy as np
+    rng = np.random.default_rng(3)
+    os.makedirs(os.path.join(folder, "csv"), exist_ok=True)
+    with open(os.path.join(folder, "csv", "meta.json"), "w") as f:
+        f.write('{"format": "calstand-import/2", "site": {"latitude_deg": 45.0, "height_m": 0.0, '
+                '"gravity_mps2": 9.8062}, "sample_rate_hz": 400, '
+                '"units": {"gyro": "rad/s", "accel": "m/s^2", "time": "s"}}\n')
+    with open(os.path.join(folder, "csv", "samples.csv"), "w") as f:
+        f.write("t,gx,gy,gz,ax,ay,az\n")
+        for i in range(0, n, 200_000):
+            k = min(n, i + 200_000) - i
+            t = 1700000000.0 + (i + np.arange(k)) * 0.0025
+            g = rng.normal(0.0, 0.01, (k, 3))
+            a = rng.normal(0.0, 0.02, (k, 3)) + [0.0, 0.0, 9.80665]
+            np.savetxt(f, np.column_stack([t, g, a]), fmt="%.17g", delimiter=",")
+
+
+BAR_MB = 300.0
+
+
 def main():
     args = sys.argv[1:]
     calstand = args[0]
     n = int(args[args.index("--samples") + 1]) if "--samples" in args else 2_000_000
     keep = args[args.index("--keep") + 1] if "--keep" in args else None
+    csv_only = "--csv-only" in args
+    compare = args[args.index("--compare") + 1] if "--compare" in args else None
     folder = keep or tempfile.mkdtemp(prefix="calstand-import-bench-")
-    if not os.path.exists(os.path.join(folder, "imu.mcap")):
+    if csv_only:
+        if not os.path.exists(os.path.join(folder, "csv", "samples.csv")):
+            print(f"writing {n} rows of CSV to {folder} ...", flush=True)
+            write_csv_only(folder, n)
+    elif not os.path.exists(os.path.join(folder, "imu.mcap")):
         print(f"writing {n} samples (MCAP zstd and CSV) to {folder} ...", flush=True)
         write_inputs(folder, n)
-    mcap_mb = os.path.getsize(os.path.join(folder, "imu.mcap")) / 1e6
     csv_mb = os.path.getsize(os.path.join(folder, "csv", "samples.csv")) / 1e6
-    print(f"{n} samples: imu.mcap {mcap_mb:.0f} MB (zstd), samples.csv {csv_mb:.0f} MB")
+    if csv_only:
+        print(f"{n} samples: samples.csv {csv_mb:.0f} MB")
+    else:
+        mcap_mb = os.path.getsize(os.path.join(folder, "imu.mcap")) / 1e6
+        print(f"{n} samples: imu.mcap {mcap_mb:.0f} MB (zstd), samples.csv {csv_mb:.0f} MB")
 
     results = {}
     loadtxt = ("/usr/bin/python3", "-c",
@@ -89,15 +124,19 @@ def main():
                os.path.join(folder, "csv", "samples.csv"))
     # ru_maxrss of RUSAGE_CHILDREN is the maximum over all children so far, so each tool runs
     # under a fresh python wrapper that reports its own child's time and peak.
-    for name, cmd in [
-            ("numpy.loadtxt (CSV)", list(loadtxt)),
-            ("calstand import (MCAP zstd)",
-             [calstand, "import", os.path.join(folder, "imu.mcap"), "--db",
-              os.path.join(folder, "mcap.db"), "--latitude", "45", "--height", "0"]),
-            ("calstand import (CSV folder)",
-             [calstand, "import", os.path.join(folder, "csv"), "--db",
-              os.path.join(folder, "csv.db")]),
-    ]:
+    tools = [("numpy.loadtxt (CSV)", list(loadtxt))]
+    if not csv_only:
+        tools.append(("calstand import (MCAP zstd)",
+                      [calstand, "import", os.path.join(folder, "imu.mcap"), "--db",
+                       os.path.join(folder, "mcap.db"), "--latitude", "45", "--height", "0"]))
+    tools.append(("calstand import (CSV folder)",
+                  [calstand, "import", os.path.join(folder, "csv"), "--db",
+                   os.path.join(folder, "csv.db")]))
+    if compare:
+        tools.append(("compare: import (CSV folder)",
+                      [compare, "import", os.path.join(folder, "csv"), "--db",
+                       os.path.join(folder, "csv.db")]))
+    for name, cmd in tools:
         for db in ("mcap.db", "csv.db"):
             for suffix in ("", "-wal", "-shm"):
                 p = os.path.join(folder, db + suffix)
@@ -116,6 +155,11 @@ def main():
     base = results["numpy.loadtxt (CSV)"][0]
     for name, (s, _) in results.items():
         print(f"{name:32s} {s / base:5.2f} x numpy.loadtxt")
+    # The issue's bar: 2 M samples under 300 MB resident (and memory flat in the length).
+    for name, (_, rss) in results.items():
+        if "import" in name:
+            print(f"{name:32s} peak {rss:7.1f} MB: {'under' if rss < BAR_MB else 'OVER'} "
+                  f"the issue's {BAR_MB:.0f} MB")
     if keep is None:
         shutil.rmtree(folder)
 

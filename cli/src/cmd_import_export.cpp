@@ -113,8 +113,9 @@ struct ExportOptions {
 
 void run_import(const ImportOptions& o) {
   const auto format = store::detect_recording_format(o.dir);
-  const bool folder = !format || *format == "calstand-import";
-  if (!folder || (!std::filesystem::is_directory(o.dir) && std::filesystem::exists(o.dir))) {
+  // A folder of none of the kinds (no meta.json either) is refused by the recordings' message,
+  // which lists every kind, rather than by a missing meta.json.
+  if (!format || *format != "calstand-import") {
     run_recording_import(o);
     return;
   }

@@ -417,7 +417,9 @@ std::unique_ptr<RecordingReader> open_recording(const std::filesystem::path& pat
     throw core::InputError(
         path.string(),
         "not a recording calstand reads: a MCAP file, a ROS 1 bag (#ROSBAG V2.0), a ROS 2 bag "
-        "folder (metadata.yaml) or .db3 file, or a EuRoC/TUM-VI folder (mav0/imu0/data.csv)");
+        "folder (metadata.yaml) or .db3 file, a EuRoC/TUM-VI folder (mav0/imu0/data.csv), or a "
+        "calstand-import folder (meta.json and samples.csv: a CSV of another tool imports once "
+        "a meta.json describes its columns and units, docs/import.md)");
   }
   if (*format == "mcap") return make_message_recording(open_mcap(path));
   if (*format == "ros1-bag") return make_message_recording(open_ros1_bag(path));
