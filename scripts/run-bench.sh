@@ -3,7 +3,8 @@
 # e.g. --benchmark_filter=World; `daemon-load [ARGS]` runs the calstandd load bench instead,
 # `fleet-sync [--hours H]` the sync to the fleet's central database, `imu-capture [SECONDS]` 8 IMUs
 # of mixed wire formats at their top rates through sim-station and the serial driver, `import
-# [--samples N]` the import of recordings against numpy.loadtxt.
+# [--samples N]` the import of recordings against numpy.loadtxt, `allan-csv [--samples N]`
+# calstand allan --csv against numpy (loadtxt and the cumulative-sum Allan deviation).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Explicit: the test command configures the same build folder without benchmarks.
@@ -37,5 +38,12 @@ if [ "${1:-}" = "import" ]; then
     none.bag bz2.bag lz4.bag euroc)
   rm -rf "$tmp"
   exit 0
+fi
+# `run-bench.sh allan-csv [--samples N] [--keep DIR] [--repeat R]`: calstand allan --csv on
+# 5.4 M rows (default) against numpy.loadtxt plus its Allan deviation (bench/allan_csv_bench.py).
+if [ "${1:-}" = "allan-csv" ]; then
+  shift
+  exec /usr/bin/python3 "$root/bench/allan_csv_bench.py" \
+    "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" "$@"
 fi
 exec "$bench/calstand_bench" "$@"
