@@ -51,8 +51,16 @@ class ImportProgress {
                  static_cast<unsigned long long>(samples));
     std::fflush(stderr);
   }
+  /// Draws the last state and ends the line, before the result is printed.
+  void finish(std::uint64_t samples) {
+    if (!drawn_) return;
+    drawn_ = false;  // the next update draws at once
+    update(1.0, samples);
+    std::fputs("\n", stderr);
+    drawn_ = false;
+  }
   ~ImportProgress() {
-    if (drawn_) std::fputs("\n", stderr);
+    if (drawn_) std::fputs("\n", stderr);  // an import that failed midway
   }
   ImportProgress(const ImportProgress&) = delete;
   ImportProgress& operator=(const ImportProgress&) = delete;
@@ -95,6 +103,7 @@ void run_recording_import(const ImportOptions& o) {
   options.progress = [&](double f, std::uint64_t n) { progress.update(f, n); };
   store::Database db(o.db);
   const store::RecordingImportResult r = store::import_recording(db, o.dir, options);
+  progress.finish(r.samples);
   if (o.json) {
     std::cout << r.to_json().dump() << "\n";
     return;
@@ -134,6 +143,7 @@ void run_import(const ImportOptions& o) {
   options.progress = [&](double f, std::uint64_t n) { progress.update(f, n); };
   store::Database db(o.db);
   const store::ImportResult r = store::import_run(db, o.dir, options);
+  progress.finish(r.samples);
   if (o.json) {
     nlohmann::ordered_json j;
     j["run"] = r.run;
