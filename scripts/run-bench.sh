@@ -2,7 +2,9 @@
 # The benchmarks (bench/), from a bare machine. Extra arguments go to Google Benchmark,
 # e.g. --benchmark_filter=World; `daemon-load [ARGS]` runs the calstandd load bench instead,
 # `fleet-sync [--hours H]` the sync to the fleet's central database, `imu-capture [SECONDS]` 8 IMUs
-# of mixed wire formats at their top rates through sim-station and the serial driver.
+# of mixed wire formats at their top rates through sim-station and the serial driver, `import
+# [--samples N]` the import of recordings against numpy.loadtxt, `allan-csv [--samples N]`
+# calstand allan --csv against numpy (loadtxt and the cumulative-sum Allan deviation).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Explicit: the test command configures the same build folder without benchmarks.
@@ -23,5 +25,25 @@ fi
 if [ "${1:-}" = "imu-capture" ]; then
   shift
   exec "$bench/calstand_imu_capture_bench" "$@"
+fi
+# `run-bench.sh import [--samples N] [--keep DIR]`: calstand import of an MCAP file with zstd
+# chunks and of the same CSV against numpy.loadtxt (bench/import_bench.py); then the readers
+# per format on the test recordings (calstand_recording_import_bench).
+if [ "${1:-}" = "import" ]; then
+  shift
+  /usr/bin/python3 "$root/bench/import_bench.py" "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" "$@"
+  tmp="$(mktemp -d)"
+  /usr/bin/python3 "$root/tests/support/write_recordings.py" "$tmp" --samples 200000
+  (cd "$tmp" && "$bench/calstand_recording_import_bench" zstd.mcap lz4.mcap none.mcap db3 \
+    none.bag bz2.bag lz4.bag euroc)
+  rm -rf "$tmp"
+  exit 0
+fi
+# `run-bench.sh allan-csv [--samples N] [--keep DIR] [--repeat R]`: calstand allan --csv on
+# 5.4 M rows (default) against numpy.loadtxt plus its Allan deviation (bench/allan_csv_bench.py).
+if [ "${1:-}" = "allan-csv" ]; then
+  shift
+  exec /usr/bin/python3 "$root/bench/allan_csv_bench.py" \
+    "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" "$@"
 fi
 exec "$bench/calstand_bench" "$@"

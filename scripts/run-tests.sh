@@ -17,6 +17,9 @@ export CALSTAND_REQUIRE_SSE_CLIENT=1
 export CALSTAND_REQUIRE_BROWSER=1
 # ... and postgresql: the fleet tests start a throw-away PostgreSQL server and must not skip.
 export CALSTAND_REQUIRE_POSTGRES=1
+# ... and python3-zstandard, python3-lz4, python3-rosbag: the recordings' independent writers
+# (tests/support/write_recordings.py) must write every format, none skipped.
+export CALSTAND_REQUIRE_RECORDING_WRITERS=1
 ctest --output-on-failure -j "$(nproc)" --timeout 600
 # Fuzzing itself (clang, libFuzzer, sanitizers: a build of its own) is not part of this command:
 # `bash scripts/run-fuzz.sh [SECONDS]`. ctest above replays every fuzz target's kept seeds.

@@ -11,6 +11,8 @@ packages=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsqlite3-dev libsqlitecpp-dev libssl-dev openssl sqlite3 libfast-float-dev
+  liblz4-dev libzstd-dev libbz2-dev libisal-dev python3-rosbag python3-zstandard python3-lz4
+  python3-numpy
   libpqxx-dev postgresql
   libmuparser-dev libfftw3-dev libboost-math-dev libceres-dev
   libmodbus-dev python3-pymodbus python3-serial python3-serial-asyncio libcpp-httplib-dev

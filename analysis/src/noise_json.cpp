@@ -1,5 +1,7 @@
 #include "analysis/noise_json.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -210,6 +212,29 @@ std::optional<solver::RunNoise> calibration_noise_terms(const nlohmann::json& no
     out.channels.push_back(std::move(ch));
   }
   return out;
+}
+
+nlohmann::ordered_json record_length_json(const solver::RunNoise& noise,
+                                          const solver::RecordLengthRule& rule) {
+  nlohmann::ordered_json j;
+  j["record_length_s"] = noise.duration_s;
+  j["rule"] = {
+      {"confidence", rule.confidence},
+      {"half_width", rule.half_width},
+      {"required_edf", solver::required_edf(rule)},
+      {"text", fmt::format("the {:.0f} % confidence interval of the Allan deviation at the "
+                           "figure's tau within +-{:.0f} %",
+                           100.0 * rule.confidence, 100.0 * rule.half_width)}};
+  for (const solver::FigureRecordNeed& n : solver::record_length_needs(noise, rule)) {
+    j[n.gyro ? "gyro" : "accel"][n.figure] = {{"tau_s", n.tau_s},
+                                              {"alpha", n.alpha},
+                                              {"channel", n.channel},
+                                              {"needed_s", n.needed_s},
+                                              {"record_length_s", n.record_length_s},
+                                              {"enough", n.enough},
+                                              {"located", n.located}};
+  }
+  return j;
 }
 
 }  // namespace calstand::analysis

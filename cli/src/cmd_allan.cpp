@@ -24,6 +24,7 @@
 #include "solver/allan.hpp"
 #include "solver/kalibr.hpp"
 #include "solver/noise_fit.hpp"
+#include "solver/record_length.hpp"
 #include "solver/run_noise.hpp"
 #include "store/database.hpp"
 #include "store/sample_reader.hpp"
@@ -236,6 +237,31 @@ void print_noise_table(const solver::RunNoise& r, bool gyro) {
   }
 }
 
+// What the record gives against what each figure needs (solver/record_length.hpp).
+void print_record_length(const solver::RunNoise& r) {
+  const solver::RecordLengthRule rule;
+  std::cout << fmt::format(
+      "\nrecord length: this record has {}; what each figure needs for its {:.0f} % interval "
+      "within +-{:.0f} % (the Allan variance's edf >= {:.0f} at the figure's tau):\n",
+      solver::format_record_length(r.duration_s), 100.0 * rule.confidence, 100.0 * rule.half_width,
+      solver::required_edf(rule));
+  for (const solver::FigureRecordNeed& n : solver::record_length_needs(r, rule)) {
+    const char* label = n.figure == "random_walk"
+                            ? (n.gyro ? "angle random walk" : "velocity random walk")
+                        : n.figure == "bias_instability"
+                            ? "bias instability"
+                            : (n.gyro ? "rate random walk" : "acceleration random walk");
+    const std::string verdict = n.enough
+                                    ? "enough"
+                                    : fmt::format("not enough: this record has {}",
+                                                  solver::format_record_length(n.record_length_s));
+    std::cout << fmt::format(
+        "  {:<13} {:<25} needs {}{} (tau {:.3g} s{}): {}\n", n.gyro ? "gyro" : "accelerometer",
+        label, n.located ? "about " : "more than ", solver::format_record_length(n.needed_s),
+        n.tau_s, n.located ? "" : ", the minimum not reached yet", verdict);
+  }
+}
+
 void run_noise(const NoiseArgs& a) {
   if (a.db.empty() || a.run.empty()) throw core::InputError("noise", "needs --db FILE --run ID");
   solver::RunNoiseOptions options;
@@ -263,6 +289,7 @@ void run_noise(const NoiseArgs& a) {
   }
   if (a.json) {
     Json out = analysis::run_noise_json(r);
+    out["record_length"] = analysis::record_length_json(r);
     if (!a.kalibr.empty()) out["kalibr"] = a.kalibr;
     std::cout << out.dump(2) << "\n";
     return;
@@ -276,6 +303,7 @@ void run_noise(const NoiseArgs& a) {
                "B = minimum / 0.664 is the IEEE coefficient.\n";
   print_noise_table(r, true);
   print_noise_table(r, false);
+  print_record_length(r);
   if (!a.kalibr.empty()) std::cout << fmt::format("\nKalibr imu.yaml written to {}\n", a.kalibr);
 }
 

@@ -6,7 +6,9 @@
 
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
+#include <typeinfo>
 #include <vector>
 
 #include "analysis/gnuplot_svg.hpp"
@@ -37,7 +39,20 @@ void run_report(const ReportOptions& opt) {
   analysis::find_gnuplot();  // before the work: a missing plotter is the first thing to say
   store::Database db = open_existing_database(opt.request.db);
   if (analysis::needs_table_free_fit(db, opt.request.run)) {
-    const analysis::TableFreeReportData data = analysis::gather_table_free_report(db, opt.request);
+    std::optional<analysis::TableFreeReportData> gathered;
+    try {
+      gathered = analysis::gather_table_free_report(db, opt.request);
+    } catch (const core::InputError& e) {
+      if (typeid(e) != typeid(core::InputError)) throw;  // RunNotFound and the like as they are
+      // A static recording (an imported bag at rest) has no poses to calibrate from: say what
+      // its record is good for instead of only what the fit lacks.
+      throw core::InputError(
+          "", fmt::format("{}; the report of a run without a table is its table-free "
+                          "calibration. A static record's noise is `calstand noise --run {}` "
+                          "(and `calstand analyze stability`)",
+                          e.what(), opt.request.run));
+    }
+    const analysis::TableFreeReportData& data = *gathered;
     const std::string page = analysis::render_table_free_report_html(data);
     write_page(opt.out, page);
     fmt::print(

@@ -110,27 +110,36 @@ bool CsvReader::read_line(std::string_view& line) {
     }
     if (got == 0) eof_ = true;
     end_ += static_cast<std::size_t>(got);
+    read_bytes_ += static_cast<std::uint64_t>(got);
   }
 }
 
+// A field is trimmed only when it starts or ends with a blank (what most writers never write),
+// so that a row costs little more than finding its commas (memchr: a byte loop is slower).
 void CsvReader::split(std::string_view line) {
   fields_.clear();
+  const char* p = line.data();
+  const char* const end = p + line.size();
   for (;;) {
-    const std::size_t comma = line.find(',');
-    std::string_view f = trim(line.substr(0, comma));
+    const char* const start = p;
+    const auto* comma =
+        static_cast<const char*>(std::memchr(p, ',', static_cast<std::size_t>(end - p)));
+    p = comma != nullptr ? comma : end;
+    std::string_view f(start, static_cast<std::size_t>(p - start));
+    if (!f.empty() && (blank(f.front()) || blank(f.back()))) f = trim(f);
     if (options_.unquote && f.size() >= 2 && f.front() == '"' && f.back() == '"') {
       f = trim(f.substr(1, f.size() - 2));
     }
     fields_.push_back(f);
-    if (comma == std::string_view::npos) break;
-    line.remove_prefix(comma + 1);
+    if (p == end) break;
+    ++p;
   }
 }
 
 bool CsvReader::next() {
   std::string_view line;
   while (read_line(line)) {
-    if (trim(line).empty()) {
+    if (line.empty() || (blank(line.front()) && trim(line).empty())) {
       if (!options_.blank_lines_anywhere && blank_line_ == 0) blank_line_ = line_;
       continue;
     }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 #include <set>
+#include <system_error>
 #include <tuple>
 
 #include "core/csv_reader.hpp"
@@ -253,46 +254,47 @@ ImportMeta read_import_meta(const std::filesystem::path& path) {
   return meta;
 }
 
-ImportSamples read_import_samples(const std::filesystem::path& path, const ImportMeta& meta,
-                                  const std::filesystem::path& meta_path) {
-  core::CsvReader csv(path);
-  ImportSamples out;
-  std::vector<ImportRow>& rows = out.rows;
-  if (meta.version == 1) {
-    if (csv.header() != kImportCsvHeader) {
-      throw core::InputError(
-          csv.file() + ":1",
-          fmt::format("the header must be exactly '{}', got '{}'", kImportCsvHeader, csv.header()));
-    }
-    while (csv.next()) {
-      ImportRow r;
-      r.line = csv.line();
-      r.t_s = csv.number(0);
-      r.step = csv.integer(1);
-      r.outer_deg = csv.number(2);
-      r.inner_deg = csv.number(3);
-      r.outer_rate_dps = csv.number(4);
-      r.inner_rate_dps = csv.number(5);
-      r.temp_c = csv.number(6);
-      for (int i = 0; i < 3; ++i) {
-        r.gyro_dps[i] = csv.number(7 + static_cast<std::size_t>(i));
-        r.accel_mps2[i] = csv.number(10 + static_cast<std::size_t>(i));
-      }
-      rows.push_back(r);
-    }
-    if (rows.empty()) throw core::InputError(csv.file(), "no samples after the header");
-    return out;
+// How a /2 column's values convert to the store's units (decided once, not per value).
+enum class Convert { kAsIs, kScale, kCounts };
+
+struct ImportSampleReader::Impl {
+  Impl(const std::filesystem::path& path, const ImportMeta& m, std::filesystem::path mp)
+      : csv(path), meta(m), meta_path(std::move(mp)) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    file_bytes = ec ? 0 : size;
   }
 
-  const Columns2 c = map_columns_2(csv);
-  check_meta_against_columns(meta, c, csv, meta_path.string());
-  out.has_step = c.step.has_value();
-  out.has_table = c.table.has_value();
-  out.has_temperature = c.temp.has_value();
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-  while (csv.next()) {
-    ImportRow r;
+  core::CsvReader csv;
+  const ImportMeta& meta;
+  std::filesystem::path meta_path;
+  std::uint64_t file_bytes = 0;
+  std::optional<Columns2> columns;  // /2 only
+  Convert gyro = Convert::kAsIs;
+  Convert accel = Convert::kAsIs;
+  std::uint64_t rows = 0;
+  std::set<std::int64_t> steps;  // the step values seen, when meta.json has sections
+  bool ended = false;
+
+  void row_1(ImportRow& r) const {
+    r.line = csv.line();
+    r.t_s = csv.number(0);
+    r.step = csv.integer(1);
+    r.outer_deg = csv.number(2);
+    r.inner_deg = csv.number(3);
+    r.outer_rate_dps = csv.number(4);
+    r.inner_rate_dps = csv.number(5);
+    r.temp_c = csv.number(6);
+    for (int i = 0; i < 3; ++i) {
+      r.gyro_dps[i] = csv.number(7 + static_cast<std::size_t>(i));
+      r.accel_mps2[i] = csv.number(10 + static_cast<std::size_t>(i));
+    }
+  }
+
+  void row_2(ImportRow& r) const {
+    const Columns2& c = *columns;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    constexpr double kDegPerRad = 180.0 / std::numbers::pi;
     r.line = csv.line();
     r.t_s = csv.number(c.t);
     r.step = c.step ? csv.integer(*c.step) : 0;
@@ -308,32 +310,87 @@ ImportSamples read_import_samples(const std::filesystem::path& path, const Impor
     for (int i = 0; i < 3; ++i) {
       const double g = csv.number(c.gyro[static_cast<std::size_t>(i)]);
       const double a = csv.number(c.accel[static_cast<std::size_t>(i)]);
-      r.gyro_dps[i] = meta.gyro_unit == "deg/s" ? g
-                      : meta.gyro_unit == "rad/s"
+      r.gyro_dps[i] = gyro == Convert::kAsIs ? g
+                      : gyro == Convert::kScale
                           ? g * kDegPerRad
                           : (g - meta.gyro_offset_counts[i]) / meta.gyro_counts_per_dps[i];
-      r.accel_mps2[i] = meta.accel_unit == "m/s^2" ? a
-                        : meta.accel_unit == "g"
+      r.accel_mps2[i] = accel == Convert::kAsIs ? a
+                        : accel == Convert::kScale
                             ? a * kG0
                             : (a - meta.accel_offset_counts[i]) / meta.accel_counts_per_mps2[i];
     }
-    rows.push_back(r);
   }
-  if (rows.empty()) throw core::InputError(csv.file(), "no samples after the header");
-  // Every section names a step that has samples: a typo in a key must not leave a section
-  // silently unused.
-  std::set<std::int64_t> steps;
-  if (!meta.sections.empty()) {
-    for (const ImportRow& r : rows) steps.insert(r.step);
-  }
-  for (const auto& [step, section] : meta.sections) {
-    if (!steps.contains(step)) {
-      throw core::InputError(
-          fmt::format("{}: sections[\"{}\"]", meta_path.string(), step),
-          fmt::format("no sample of {} has step {} (label '{}')", csv.file(), step, section.label));
+
+  // The rules about the whole file, once it has been read.
+  void check_end() const {
+    if (rows == 0) throw core::InputError(csv.file(), "no samples after the header");
+    // Every section names a step that has samples: a typo in a key must not leave a section
+    // silently unused.
+    for (const auto& [step, section] : meta.sections) {
+      if (!steps.contains(step)) {
+        throw core::InputError(fmt::format("{}: sections[\"{}\"]", meta_path.string(), step),
+                               fmt::format("no sample of {} has step {} (label '{}')", csv.file(),
+                                           step, section.label));
+      }
     }
   }
-  return out;
+};
+
+ImportSampleReader::ImportSampleReader(const std::filesystem::path& path, const ImportMeta& meta,
+                                       std::filesystem::path meta_path)
+    : impl_(std::make_unique<Impl>(path, meta, std::move(meta_path))) {
+  core::CsvReader& csv = impl_->csv;
+  if (meta.version == 1) {
+    if (csv.header() != kImportCsvHeader) {
+      throw core::InputError(
+          csv.file() + ":1",
+          fmt::format("the header must be exactly '{}', got '{}'", kImportCsvHeader, csv.header()));
+    }
+    return;
+  }
+  const Columns2 c = map_columns_2(csv);
+  check_meta_against_columns(meta, c, csv, impl_->meta_path.string());
+  impl_->columns = c;
+  has_step_ = c.step.has_value();
+  has_table_ = c.table.has_value();
+  has_temperature_ = c.temp.has_value();
+  const auto convert = [](const std::string& unit, const char* as_is, const char* scaled) {
+    return unit == as_is ? Convert::kAsIs : unit == scaled ? Convert::kScale : Convert::kCounts;
+  };
+  impl_->gyro = convert(meta.gyro_unit, "deg/s", "rad/s");
+  impl_->accel = convert(meta.accel_unit, "m/s^2", "g");
+}
+
+ImportSampleReader::~ImportSampleReader() = default;
+
+const std::string& ImportSampleReader::file() const { return impl_->csv.file(); }
+
+double ImportSampleReader::progress() const {
+  if (impl_->file_bytes == 0) return 0.0;
+  return std::min(
+      1.0, static_cast<double>(impl_->csv.offset()) / static_cast<double>(impl_->file_bytes));
+}
+
+bool ImportSampleReader::read(std::vector<ImportRow>& batch, std::size_t max) {
+  Impl& m = *impl_;
+  batch.clear();
+  if (m.ended) return false;
+  const bool v1 = m.meta.version == 1;
+  const bool track_steps = !m.meta.sections.empty();
+  while (batch.size() < max && m.csv.next()) {
+    ImportRow& r = batch.emplace_back();
+    if (v1) {
+      m.row_1(r);
+    } else {
+      m.row_2(r);
+    }
+    if (track_steps) m.steps.insert(r.step);
+    ++m.rows;
+  }
+  if (!batch.empty()) return true;
+  m.ended = true;
+  m.check_end();
+  return false;
 }
 
 }  // namespace calstand::store::detail

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -66,23 +67,43 @@ struct ImportRow {
   Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();
 };
 
-/// samples.csv, validated against its meta.json.
-struct ImportSamples {
-  std::vector<ImportRow> rows;
-  bool has_step = true;
-  bool has_table = true;
-  bool has_temperature = true;
-};
-
 /// Reads and validates meta.json at `path` (its own rules only; those between meta.json and
 /// samples.csv are checked by read_import_samples()). Throws core::InputError (SchemaError for
 /// schema violations, listing all) naming the file and field.
 ImportMeta read_import_meta(const std::filesystem::path& path);
 
-/// Reads and validates samples.csv at `path` against `meta`. Throws core::InputError whose
-/// where() is `FILE:LINE` and whose message names the column, or (a rule between the two
-/// files) names meta.json's field.
-ImportSamples read_import_samples(const std::filesystem::path& path, const ImportMeta& meta,
-                                  const std::filesystem::path& meta_path);
+/// samples.csv read front to back in batches and validated against its meta.json as it goes
+/// (memory independent of the file's length). Errors are core::InputError whose where() is
+/// `FILE:LINE` and whose message names the column, or (a rule between the two files) names
+/// meta.json's field: the header's at construction, a row's when read() reaches it, and those
+/// about the whole file (no samples; a section whose step has none) when read() reaches the end.
+class ImportSampleReader {
+ public:
+  /// Opens `path` and checks its header against `meta`.
+  ImportSampleReader(const std::filesystem::path& path, const ImportMeta& meta,
+                     std::filesystem::path meta_path);
+  ~ImportSampleReader();
+  ImportSampleReader(const ImportSampleReader&) = delete;
+  ImportSampleReader& operator=(const ImportSampleReader&) = delete;
+
+  bool has_step() const { return has_step_; }
+  bool has_table() const { return has_table_; }
+  bool has_temperature() const { return has_temperature_; }
+  /// The file name as in messages.
+  const std::string& file() const;
+
+  /// Replaces `batch` with the next rows, at most `max`; false (and `batch` empty) at the end,
+  /// once the checks of the whole file have passed.
+  bool read(std::vector<ImportRow>& batch, std::size_t max);
+  /// Fraction of the file read, in [0, 1].
+  double progress() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  bool has_step_ = true;
+  bool has_table_ = true;
+  bool has_temperature_ = true;
+};
 
 }  // namespace calstand::store::detail

@@ -144,6 +144,21 @@ TEST_F(NoiseCli, NoiseGivesDatasheetFiguresAndAKalibrFile) {
     EXPECT_NEAR(vrw["value"].get<double>(), truth, 0.05 * truth) << "channel " << c;
     EXPECT_EQ(figure(c, "bias_instability_min")["unit"], "ug");
   }
+  // The record against what each figure needs: the white noise at 1 s is resolved by any
+  // capture of this length, each need is the record that gives the rule's edf there.
+  const auto& length = j["record_length"];
+  EXPECT_NEAR(length["record_length_s"].get<double>(), j["duration_s"].get<double>(), 1e-9);
+  EXPECT_NEAR(length["rule"]["required_edf"].get<double>(), 47.8, 0.1);
+  for (const char* sensor : {"gyro", "accel"}) {
+    const auto& rw = length[sensor]["random_walk"];
+    EXPECT_EQ(rw["tau_s"], 1.0);
+    EXPECT_TRUE(rw["enough"].get<bool>()) << rw;
+    const auto& bi = length[sensor]["bias_instability"];
+    EXPECT_GT(bi["needed_s"].get<double>(), rw["needed_s"].get<double>());
+    EXPECT_EQ(bi["enough"].get<bool>(),
+              bi["located"].get<bool>() &&
+                  bi["record_length_s"].get<double>() >= bi["needed_s"].get<double>());
+  }
   const std::string text = read_text(yaml);
   EXPECT_NE(text.find("gyroscope_noise_density:"), std::string::npos) << text;
   EXPECT_NE(text.find("accelerometer_random_walk:"), std::string::npos) << text;
@@ -153,6 +168,8 @@ TEST_F(NoiseCli, NoiseGivesDatasheetFiguresAndAKalibrFile) {
   ASSERT_EQ(human.exit_code, 0) << human.out;
   EXPECT_NE(human.out.find("angle random walk N"), std::string::npos) << human.out;
   EXPECT_NE(human.out.find("deg/sqrt(h)"), std::string::npos);
+  EXPECT_NE(human.out.find("record length: this record has"), std::string::npos) << human.out;
+  EXPECT_NE(human.out.find("bias instability          needs "), std::string::npos) << human.out;
 }
 
 TEST_F(NoiseCli, CsvSource) {

@@ -10,6 +10,7 @@
 
 #include "solver/allan.hpp"
 #include "solver/noise_fit.hpp"
+#include "solver/record_length.hpp"
 #include "solver/run_noise.hpp"
 #include "store/database.hpp"
 
@@ -39,6 +40,13 @@ nlohmann::ordered_json datasheet_figures_json(const std::vector<solver::Datashee
 /// `calstand noise --json` without the Kalibr file: run, device, step, step_label, samples,
 /// sample_rate_hz, duration_s, gaps and per channel its figures and terms.
 nlohmann::ordered_json run_noise_json(const solver::RunNoise& noise);
+
+/// What the record gives against what each noise figure needs (solver::record_length_needs()):
+/// {"record_length_s", "rule": {"confidence", "half_width", "required_edf", "text"},
+///  "gyro": {"random_walk": {"tau_s", "alpha", "channel", "needed_s", "enough", "located"},
+///           "bias_instability": {...}, "rate_random_walk": {...}}, "accel": {...}}.
+nlohmann::ordered_json record_length_json(const solver::RunNoise& noise,
+                                          const solver::RecordLengthRule& rule = {});
 
 /// How the noise terms of data in `unit` become datasheet figures (solver::datasheet_figures
 /// works in deg/s and m/s^2): a gyro unit (deg/s, rad/s) or an accelerometer unit (m/s^2, g =

@@ -74,6 +74,8 @@ class CsvReader {
   std::size_t line() const { return line_; }
   /// `FILE:LINE` of the current row.
   std::string where() const;
+  /// Bytes of the file consumed so far (through the current row), for a progress display.
+  std::uint64_t offset() const { return read_bytes_ - (end_ - begin_); }
   /// Field `i` of the current row, trimmed. Precondition: i < columns().size().
   std::string_view field(std::size_t i) const { return fields_[i]; }
   /// Field `i` as a finite number. Throws InputError naming the line and column otherwise.
@@ -93,8 +95,9 @@ class CsvReader {
   std::size_t begin_ = 0;  // first unconsumed byte of buffer_
   std::size_t end_ = 0;    // one past the last byte read into buffer_
   bool eof_ = false;
-  std::size_t line_ = 0;        // line number of the line read last
-  std::size_t blank_line_ = 0;  // first blank line seen while blank lines are only allowed last
+  std::uint64_t read_bytes_ = 0;  // bytes read from the file so far
+  std::size_t line_ = 0;          // line number of the line read last
+  std::size_t blank_line_ = 0;    // first blank line seen while blank lines are only allowed last
   std::string header_;
   std::vector<std::string> columns_;
   std::vector<std::string_view> fields_;

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "store/database.hpp"
@@ -16,17 +17,28 @@ struct ImportResult {
   std::size_t samples = 0;  ///< data rows of samples.csv
 };
 
+/// Options of import_run().
+struct ImportRunOptions {
+  /// Rows per batch parsed and written.
+  std::size_t batch = 8192;
+  /// Called after each batch with the fraction of samples.csv read and the samples so far.
+  std::function<void(double fraction, std::uint64_t samples)> progress;
+};
+
 /// Imports a `calstand-import/1` or `calstand-import/2` folder (meta.json + samples.csv, see
 /// ../shared/docs/error-model.md) as a new run with status 'imported' and procedure name the
 /// format.
 ///
-/// Everything is validated before anything is written: meta.json against
-/// schemas/import-meta.schema.json (/1: fixed units; any other value is an error naming the
-/// field) or schemas/import-meta-2.schema.json (/2), unit-vector axes, and /2's rules between
-/// fields; samples.csv's header and every row (column count, finite numbers, integer step).
-/// Then one transaction writes the run, one completed step per distinct step value (in order
-/// of first appearance), the samples of device "imu0" in exact (float64) chunks, the table
-/// state of every row when there are table columns, and the step means.
+/// meta.json is validated against schemas/import-meta.schema.json (/1: fixed units; any other
+/// value is an error naming the field) or schemas/import-meta-2.schema.json (/2), unit-vector
+/// axes, and /2's rules between fields, and samples.csv's header against it, before anything
+/// is written. Then samples.csv streams through one transaction in batches (memory independent
+/// of its length; parsing on a thread of its own, ahead of the writes), every row checked as it
+/// comes (column count, finite numbers, integer step): the run, one completed step per distinct
+/// step value (in order of first appearance; a value that comes back later in the file joins
+/// its step), the samples of device "imu0" in exact (float64) chunks, the table state of every
+/// row when there are table columns, and the step means. A refusal anywhere, also at the last
+/// row, rolls the whole transaction back: nothing partial is written.
 ///
 /// /1: the exact header `t,step,outer_deg,...,az`. Commanded state per step: `import_step`,
 /// then `"mode": "position"` with the mean angles, or `"mode": "rate"` (a mean axis rate of at
@@ -64,7 +76,8 @@ struct ImportResult {
 /// Throws core::InputError naming the file and the field (`meta.json: units.gyro: ...`) or the
 /// line and column (`samples.csv:12: column gx: ...`); nothing is written then. Throws
 /// StoreError when writing fails (the transaction is rolled back).
-ImportResult import_run(Database& db, const std::filesystem::path& dir);
+ImportResult import_run(Database& db, const std::filesystem::path& dir,
+                        const ImportRunOptions& options = {});
 
 /// The samples device name import_run() uses.
 inline constexpr const char* kImportDevice = "imu0";
@@ -89,5 +102,15 @@ struct ExportOptions {
 /// std::runtime_error naming the file when it cannot be written.
 void export_run(Database& db, std::int64_t run, const std::filesystem::path& out_dir,
                 const ExportOptions& options = {});
+
+/// Writes the samples of one IMU of run `run` (completed steps in index order) as an MCAP file
+/// (docs/import.md): schema sensor_msgs/msg/Imu (ros2msg), channel /imu/data (cdr), zstd
+/// chunks with CRC, a summary with statistics. Each message: header stamp = the sample's time
+/// (seconds split into sec and nanosec, rounded to the nanosecond), frame_id "imu",
+/// orientation unknown (covariance[0] = -1, REP 145), angular_velocity in rad/s,
+/// linear_acceleration in m/s^2, covariances zero (not known). Written to `FILE.part`, renamed
+/// when whole. Throws as export_run().
+void export_run_mcap(Database& db, std::int64_t run, const std::filesystem::path& file,
+                     const ExportOptions& options = {});
 
 }  // namespace calstand::store

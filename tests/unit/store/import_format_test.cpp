@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -519,6 +520,117 @@ TEST(Import2CsvErrors, RowsNameLineAndColumn) {
   EXPECT_CONTAINS(import_error_text(base_meta(), short_row),
                   "samples.csv:22: expected 7 columns, got 3");
   EXPECT_CONTAINS(import_error_text(base_meta(), "t,gx,gy,gz,ax,ay,az\n"), "no samples");
+}
+
+// ---- streaming: batches, steps that come back, refusals late in the file ----
+
+// A table session whose step values come back later in the file (10, 11, 10, 12, 11), with an
+// angle near +-180 deg (a circular mean) and a rate step: the rows of a value form one step, in
+// file order, whatever the batch size.
+std::vector<Column> interleaved_table_columns() {
+  const auto step_of = [](int i) {
+    static constexpr int kSteps[] = {10, 11, 10, 12, 11};
+    return kSteps[i / 7];
+  };
+  return with(sensor_columns(),
+              {{"step", [=](int i) { return std::to_string(step_of(i)); }},
+               {"outer_deg",
+                [=](int i) { return num(step_of(i) == 11 ? (i % 2 ? 179.99 : -179.98) : 30.0); }},
+               {"inner_deg", [](int i) { return num(0.001 * i); }},
+               {"outer_rate_dps", [=](int i) { return num(step_of(i) == 12 ? 10.0 + i : 0.0); }},
+               {"inner_rate_dps", [](int) { return num(0.0); }}});
+}
+
+TEST(Import2Streaming, StepsThatComeBackJoinTheirStepWhateverTheBatch) {
+  Folder f(table_meta(), csv_of(interleaved_table_columns(), 35));
+  Database db(":memory:");
+  std::vector<std::int64_t> runs;
+  for (const std::size_t batch : {std::size_t{8192}, std::size_t{3}, std::size_t{1}}) {
+    ImportRunOptions options;
+    options.batch = batch;
+    std::vector<double> fractions;
+    options.progress = [&](double fraction, std::uint64_t) { fractions.push_back(fraction); };
+    const ImportResult r = import_run(db, f.dir.path(), options);
+    EXPECT_EQ(r.steps, 3u);
+    EXPECT_EQ(r.samples, 35u);
+    ASSERT_FALSE(fractions.empty());
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+    EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+    runs.push_back(r.run);
+  }
+  // Rows of step 10: 0-6 and 14-20; of 11: 7-13 and 28-34; of 12: 21-27.
+  const std::vector<std::vector<int>> rows = {{0, 1, 2, 3, 4, 5, 6, 14, 15, 16, 17, 18, 19, 20},
+                                              {7, 8, 9, 10, 11, 12, 13, 28, 29, 30, 31, 32, 33, 34},
+                                              {21, 22, 23, 24, 25, 26, 27}};
+  for (const std::int64_t run_id : runs) {
+    const RunRecord run = RunStore(db).load_run(run_id);
+    ASSERT_EQ(run.steps.size(), 3u);
+    EXPECT_EQ(run.steps[0].label, "step 10");
+    EXPECT_EQ(run.steps[1].label, "step 11");
+    EXPECT_EQ(run.steps[2].label, "step 12");
+    EXPECT_EQ(run.steps[0].commanded["mode"], "position");
+    EXPECT_NEAR(run.steps[0].commanded["outer_deg"].get<double>(), 30.0, 1e-9);
+    // The circular mean of 179.99 and -179.98 (7 and 7 of them) is 180.005, i.e. -179.995.
+    EXPECT_NEAR(std::remainder(run.steps[1].commanded["outer_deg"].get<double>() + 179.995, 360.0),
+                0.0, 1e-9);
+    EXPECT_EQ(run.steps[2].commanded["mode"], "rate");
+    EXPECT_NEAR(run.steps[2].commanded["outer_rate_dps"].get<double>(), 10.0 + 24.0, 1e-9);
+    EXPECT_NEAR(run.steps[2].commanded["outer_start_deg"].get<double>(), 30.0, 1e-12);
+    EXPECT_NEAR(run.steps[2].commanded["inner_start_deg"].get<double>(), 0.021, 1e-12);
+    EXPECT_EQ(run.steps[0].origin.substr(run.steps[0].origin.size() - 13), "samples.csv:2");
+    EXPECT_EQ(run.steps[2].origin.substr(run.steps[2].origin.size() - 14), "samples.csv:23");
+    const auto data = read_step_data(db, run_id, kImportDevice);
+    ASSERT_EQ(data.size(), 3u);
+    for (std::size_t step = 0; step < 3; ++step) {
+      const auto s = read_samples(db, run_id, step, kImportDevice);
+      ASSERT_EQ(s.size(), rows[step].size());
+      ASSERT_EQ(data[step].table.size(), rows[step].size());
+      for (std::size_t k = 0; k < s.size(); ++k) {
+        const int i = rows[step][k];
+        EXPECT_EQ(s[k].receive_time_s, 0.01 * i);
+        EXPECT_EQ(s[k].sequence, k);
+        EXPECT_EQ(s[k].gyro_dps[1], gyro_truth(i, 1));
+        EXPECT_EQ(s[k].accel_mps2[2], accel_truth(i, 2));
+        EXPECT_EQ(data[step].table[k].inner_deg, 0.001 * i);
+      }
+      // The step's span covers its rows where they come back.
+      EXPECT_DOUBLE_EQ(run.steps[step].started_clock_s.value(), 0.01 * rows[step].front());
+      EXPECT_DOUBLE_EQ(run.steps[step].ended_clock_s.value(), 0.01 * rows[step].back());
+    }
+  }
+  EXPECT_EQ(count(db, "table_telemetry"), 3 * 35);
+}
+
+TEST(Import2Streaming, ARefusalAtTheLastRowLeavesNothingAfterManyBatches) {
+  // 20000 rows in batches of 1000: many chunks are written before the last row is read.
+  std::vector<Column> c = with(sensor_columns(), table_columns());
+  c[4].value = [](int i) { return i == 19999 ? std::string("nan") : num(accel_truth(i, 0)); };
+  Folder f(table_meta(), csv_of(c, 20000));
+  Database db(":memory:");
+  ImportRunOptions options;
+  options.batch = 1000;
+  try {
+    import_run(db, f.dir.path(), options);
+    ADD_FAILURE() << "import succeeded";
+  } catch (const core::InputError& e) {
+    EXPECT_CONTAINS(std::string(e.what()), "samples.csv:20001: column ax");
+  }
+  for (const char* table : {"runs", "steps", "sample_chunks", "table_telemetry", "step_means"}) {
+    EXPECT_EQ(count(db, table), 0) << table;
+  }
+  // A section whose step has no sample is found only at the end of the file: also nothing.
+  json meta = ferraris_meta();
+  meta["sections"]["99"] = {{"label", "z_p"}, {"kind", "static"}, {"up", "+z"}};
+  Folder g(meta, csv_of(with(sensor_columns(), {step_column(1000)}), 5000));
+  try {
+    import_run(db, g.dir.path(), options);
+    ADD_FAILURE() << "import succeeded";
+  } catch (const core::InputError& e) {
+    EXPECT_CONTAINS(std::string(e.what()), "no sample of");
+  }
+  for (const char* table : {"runs", "steps", "sample_chunks", "step_means"}) {
+    EXPECT_EQ(count(db, table), 0) << table;
+  }
 }
 
 }  // namespace
