@@ -83,8 +83,17 @@ std::int64_t copy_rows(pqxx::transaction_base& tx, std::set<std::string>& staged
   const std::string staging = "calstand_staging_" + table;
   if (staged.insert(table).second &&
       tx.exec("SELECT to_regclass('pg_temp." + staging + "') IS NULL")[0][0].as<bool>()) {
+    // The session's temporary tables live in its temp_buffers: room for a batch of sample
+    // chunks (64 of ~150 kB) so that staging does not spill to disk. Settable only before the
+    // session's first temporary table, which this is.
+    if (staged.size() == 1) tx.exec("SET temp_buffers = '32MB'");
     tx.exec("CREATE TEMPORARY TABLE " + staging + " (LIKE " + table +
             " INCLUDING DEFAULTS) ON COMMIT DELETE ROWS");
+    // Staged blobs are read once and dropped at commit: not worth compressing (the central
+    // table still compresses them as it stores them).
+    if (table == "sample_chunks") {
+      tx.exec("ALTER TABLE " + staging + " ALTER COLUMN data SET STORAGE EXTERNAL");
+    }
   }
   std::int64_t rows = 0;
   {
