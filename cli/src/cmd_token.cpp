@@ -55,14 +55,12 @@ void register_token(CLI::App& app) {
       "token", "Named bearer tokens of calstandd (--tokens FILE), stored as salted hashes");
   cmd->require_subcommand(1);
   const auto file_option = [opt](CLI::App* sub) {
-    sub->add_option("--file", opt->file, "Tokens file (calstandd --tokens)")
-        ->capture_default_str();
+    sub->add_option("--file", opt->file, "Tokens file (calstandd --tokens)")->capture_default_str();
   };
 
   auto* add = cmd->add_subcommand(
       "add", "Add a token; prints its secret once (the file keeps only a salted hash)");
-  add->add_option("name", opt->name, "Name recorded with every action taken with it")
-      ->required();
+  add->add_option("name", opt->name, "Name recorded with every action taken with it")->required();
   add->add_option("--role", opt->role, "read or operator")
       ->check(CLI::IsMember({"read", "operator"}))
       ->capture_default_str();

@@ -465,31 +465,48 @@ class StationSync {
                             "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c "
                             "FROM step_means WHERE run_id = ?");
     means.bind(1, local_run);
-    const std::int64_t step_means = copy_rows<22>(
-        tx, staged_, "step_means",
-        {"station", "run_id", "step_local_id", "attempt", "device", "count",
-         "first_receive_time_s", "last_receive_time_s", "gx_dps", "gy_dps", "gz_dps", "ax_mps2",
-         "ay_mps2", "az_mps2", "temperature_c", "std_gx_dps", "std_gy_dps", "std_gz_dps",
-         "std_ax_mps2", "std_ay_mps2", "std_az_mps2", "std_temperature_c"},
-        fixed, means, nothing);
+    const std::int64_t step_means = copy_rows<22>(tx, staged_, "step_means",
+                                                  {"station",
+                                                   "run_id",
+                                                   "step_local_id",
+                                                   "attempt",
+                                                   "device",
+                                                   "count",
+                                                   "first_receive_time_s",
+                                                   "last_receive_time_s",
+                                                   "gx_dps",
+                                                   "gy_dps",
+                                                   "gz_dps",
+                                                   "ax_mps2",
+                                                   "ay_mps2",
+                                                   "az_mps2",
+                                                   "temperature_c",
+                                                   "std_gx_dps",
+                                                   "std_gy_dps",
+                                                   "std_gz_dps",
+                                                   "std_ax_mps2",
+                                                   "std_ay_mps2",
+                                                   "std_az_mps2",
+                                                   "std_temperature_c"},
+                                                  fixed, means, nothing);
     SQLite::Statement table(station_.sql(),
                             "SELECT id, step_id, time_s, outer_deg, inner_deg, outer_rate_dps, "
                             "inner_rate_dps, outer_mode, inner_mode FROM table_telemetry "
                             "WHERE run_id = ? ORDER BY id");
     table.bind(1, local_run);
-    const std::int64_t table_rows = copy_rows<11>(
-        tx, staged_, "table_telemetry",
-        {"station", "run_id", "local_id", "step_local_id", "time_s", "outer_deg", "inner_deg",
-         "outer_rate_dps", "inner_rate_dps", "outer_mode", "inner_mode"},
-        fixed, table, nothing);
+    const std::int64_t table_rows =
+        copy_rows<11>(tx, staged_, "table_telemetry",
+                      {"station", "run_id", "local_id", "step_local_id", "time_s", "outer_deg",
+                       "inner_deg", "outer_rate_dps", "inner_rate_dps", "outer_mode", "inner_mode"},
+                      fixed, table, nothing);
     SQLite::Statement chamber(station_.sql(),
                               "SELECT id, time_s, air_c, setpoint_c, mode FROM chamber_telemetry "
                               "WHERE run_id = ? ORDER BY id");
     chamber.bind(1, local_run);
-    const std::int64_t chamber_rows = copy_rows<7>(
-        tx, staged_, "chamber_telemetry",
-        {"station", "run_id", "local_id", "time_s", "air_c", "setpoint_c", "mode"}, fixed,
-        chamber, nothing);
+    const std::int64_t chamber_rows =
+        copy_rows<7>(tx, staged_, "chamber_telemetry",
+                     {"station", "run_id", "local_id", "time_s", "air_c", "setpoint_c", "mode"},
+                     fixed, chamber, nothing);
     tx.exec_params("INSERT INTO run_details (station, local_id, run_id) VALUES ($1, $2, $3)",
                    report_.station_uuid, local_run, central_run);
     report_.copied.step_means += step_means;
@@ -514,13 +531,12 @@ class StationSync {
                               "WHERE id = ?");
           q.bind(1, r.id);
           if (!q.executeStep()) return 0;
-          tx.exec_prepared("calstand_insert_event", report_.station_uuid, r.id,
-                           std::optional<std::int64_t>(), q.getColumn(0).getDouble(),
-                           q.getColumn(1).getString(), q.getColumn(2).getString(),
-                           q.getColumn(3).getString(), q.getColumn(4).getString(),
-                           q.getColumn(5).isNull()
-                               ? std::optional<std::string>()
-                               : std::optional<std::string>(q.getColumn(5).getString()));
+          tx.exec_prepared(
+              "calstand_insert_event", report_.station_uuid, r.id, std::optional<std::int64_t>(),
+              q.getColumn(0).getDouble(), q.getColumn(1).getString(), q.getColumn(2).getString(),
+              q.getColumn(3).getString(), q.getColumn(4).getString(),
+              q.getColumn(5).isNull() ? std::optional<std::string>()
+                                      : std::optional<std::string>(q.getColumn(5).getString()));
           ++report_.copied.station_events;
           return 1;
         });

@@ -598,9 +598,8 @@ TEST(DaemonSecurity, ATrickledRequestIsCutAtItsDeadlineAndAnAddressHoldsAtMostIt
       for (std::size_t k = 0; k < slow.size(); ++k) {
         if (cut_after_s[k] >= 0.0) continue;
         if (!slow[k]->send_text(i % 2 == 0 ? "X" : ":")) {
-          cut_after_s[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                         started)
-                               .count();
+          cut_after_s[k] =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
         }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -623,8 +622,8 @@ TEST(DaemonSecurity, ATrickledRequestIsCutAtItsDeadlineAndAnAddressHoldsAtMostIt
     bool closed = false;
     slow[k]->read_until_closed(8000, closed);
     EXPECT_TRUE(closed) << "trickler " << k << " outlived the 2 s deadline";
-    const double at = std::chrono::duration<double>(std::chrono::steady_clock::now() - started)
-                          .count();
+    const double at =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     EXPECT_GE(at, 1.9) << "trickler " << k << " cut before its deadline";
     EXPECT_LE(at, 4.5) << "trickler " << k;
   }

@@ -53,7 +53,7 @@ constexpr const char* kReader = "fleet_reader";
 
 /// Tables a sync copies, each counted on the station (SQLite) and centrally for that station.
 const std::vector<std::string> kTables = {
-    "runs", "steps",         "events", "run_units",  "calibrations",    "acceptances",
+    "runs", "steps",         "events",     "run_units",       "calibrations",     "acceptances",
     "fits", "sample_chunks", "step_means", "table_telemetry", "chamber_telemetry"};
 
 /// A simulated station: its database file and the login role it syncs as.
@@ -269,8 +269,9 @@ TEST_F(FleetSync, ThreeStationsSyncingAtOnceCopyEveryRowOnceAndASecondSyncChange
     EXPECT_EQ(central_rows, local_rows) << s.name;
     // Step means as the station has them, by step and device.
     const double local_gz = db.sql()
-                                .execAndGet("SELECT gz_dps FROM step_means ORDER BY step_id, "
-                                            "attempt, device LIMIT 1")
+                                .execAndGet(
+                                    "SELECT gz_dps FROM step_means ORDER BY step_id, "
+                                    "attempt, device LIMIT 1")
                                 .getDouble();
     EXPECT_EQ(tx.exec_params("SELECT gz_dps FROM step_means WHERE station = $1 ORDER BY "
                              "step_local_id, attempt, device LIMIT 1",
@@ -654,7 +655,8 @@ TEST_F(FleetSync, MigratingAVersion1DatabaseKeepsItsRowsAndTellsRepeatedNamesApa
   EXPECT_EQ(tx.exec("SELECT max(version) FROM calstand_schema")[0][0].as<int>(),
             static_cast<int>(blocks.size()));
   const auto name_of = [&](const char* uuid) {
-    return tx.exec_params("SELECT name FROM stations WHERE uuid = $1", uuid)[0][0].as<std::string>();
+    return tx.exec_params("SELECT name FROM stations WHERE uuid = $1", uuid)[0][0]
+        .as<std::string>();
   };
   EXPECT_EQ(name_of(first), "bench") << "the first registration keeps its name";
   EXPECT_EQ(name_of(second), "bench #22222222");

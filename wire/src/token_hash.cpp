@@ -62,9 +62,10 @@ struct ParsedHash {
 
 ParsedHash parse_hash(std::string_view stored, const std::string& where) {
   const auto bad = [&](const std::string& why) {
-    return core::InputError(where, "not a token hash of `calstand token add` ($scrypt$ln=N,r=R,p=P"
-                                   "$SALT$KEY): " +
-                                       why);
+    return core::InputError(where,
+                            "not a token hash of `calstand token add` ($scrypt$ln=N,r=R,p=P"
+                            "$SALT$KEY): " +
+                                why);
   };
   constexpr std::string_view kPrefix = "$scrypt$";
   if (stored.substr(0, kPrefix.size()) != kPrefix) throw bad("it does not start with $scrypt$");
@@ -94,7 +95,8 @@ std::vector<unsigned char> derive(std::string_view secret, const std::vector<uns
   std::vector<unsigned char> key(key_bytes);
   const std::uint64_t n = std::uint64_t{1} << log_n;
   // scrypt needs 128 * N * r * p bytes and a little more; allow twice that.
-  const std::uint64_t max_mem = 256 * n * static_cast<std::uint64_t>(r) * static_cast<std::uint64_t>(p);
+  const std::uint64_t max_mem =
+      256 * n * static_cast<std::uint64_t>(r) * static_cast<std::uint64_t>(p);
   if (EVP_PBE_scrypt(secret.data(), secret.size(), salt.data(), salt.size(), n,
                      static_cast<std::uint64_t>(r), static_cast<std::uint64_t>(p), max_mem,
                      key.data(), key.size()) != 1) {

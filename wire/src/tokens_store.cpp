@@ -34,8 +34,8 @@ void check_unique(const std::vector<TokenEntry>& entries, const std::string& whe
     }
     if (!e.hashed() && !secrets.insert(e.plain_secret).second) {
       throw core::InputError(
-          where, fmt::format("tokens[{}].token: the secret of '{}' is another token's too", i,
-                             e.name));
+          where,
+          fmt::format("tokens[{}].token: the secret of '{}' is another token's too", i, e.name));
     }
   }
 }

@@ -7,10 +7,10 @@
 #include <fstream>
 #include <thread>
 
+#include "connection_guard.hpp"
 #include "core/error.hpp"
 #include "daemon/api/access.hpp"
 #include "daemon/api/tokens_file.hpp"
-#include "connection_guard.hpp"
 #include "http_util.hpp"
 #include "request_context.hpp"
 #include "routes.hpp"
@@ -35,8 +35,8 @@ std::unique_ptr<httplib::Server> make_server(const ApiOptions& o) {
   if (!o.uses_tls()) return std::make_unique<GuardedServer>(limits);
   require_readable(o.tls_cert_file, "--tls-cert");
   require_readable(o.tls_key_file, "--tls-key");
-  auto server = std::make_unique<GuardedSslServer>(o.tls_cert_file.c_str(),
-                                                   o.tls_key_file.c_str(), limits);
+  auto server =
+      std::make_unique<GuardedSslServer>(o.tls_cert_file.c_str(), o.tls_key_file.c_str(), limits);
   if (!server->is_valid()) {
     throw core::InputError("--tls-cert", fmt::format("{} and {} are not a PEM certificate chain "
                                                      "and its private key",

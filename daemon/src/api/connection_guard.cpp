@@ -225,10 +225,11 @@ void refuse(GuardedStream& strm, const std::string& peer, int cap) {
                       {"where", "connection from " + peer}})
           .dump() +
       "\n";
-  const std::string answer = "HTTP/1.1 503 Service Unavailable\r\nContent-Type: "
-                             "application/json\r\nRetry-After: 5\r\nConnection: close\r\n"
-                             "Content-Length: " +
-                             std::to_string(body.size()) + "\r\n\r\n" + body;
+  const std::string answer =
+      "HTTP/1.1 503 Service Unavailable\r\nContent-Type: "
+      "application/json\r\nRetry-After: 5\r\nConnection: close\r\n"
+      "Content-Length: " +
+      std::to_string(body.size()) + "\r\n\r\n" + body;
   std::size_t sent = 0;
   while (sent < answer.size()) {
     const ssize_t n = strm.write(answer.data() + sent, answer.size() - sent);
@@ -253,7 +254,9 @@ bool serve_connection(socket_t sock, SSL_CTX* tls, const ConnectionSettings& s,
     if (ssl != nullptr) SSL_set_fd(ssl, static_cast<int>(sock));
   }
   GuardedStream strm(sock, ssl, s.read_timeout, s.write_timeout);
-  const auto deadline = [&] { return Clock::now() + std::chrono::seconds(s.limits.request_deadline_s); };
+  const auto deadline = [&] {
+    return Clock::now() + std::chrono::seconds(s.limits.request_deadline_s);
+  };
   bool ret = false;
   bool ready = tls == nullptr || ssl != nullptr;
   if (ready && ssl != nullptr) {
@@ -292,7 +295,9 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
   const ConnectionSettings s{to_ms(read_timeout_sec_, read_timeout_usec_),
                              to_ms(write_timeout_sec_, write_timeout_usec_),
                              milliseconds(static_cast<long long>(keep_alive_timeout_sec_) * 1000),
-                             keep_alive_max_count_, &svr_sock_, limits_};
+                             keep_alive_max_count_,
+                             &svr_sock_,
+                             limits_};
   return serve_connection(sock, nullptr, s, counter_,
                           [this](httplib::Stream& strm, bool close, bool& closed) {
                             return process_request(strm, close, closed, nullptr);
@@ -303,7 +308,9 @@ bool GuardedSslServer::process_and_close_socket(socket_t sock) {
   const ConnectionSettings s{to_ms(read_timeout_sec_, read_timeout_usec_),
                              to_ms(write_timeout_sec_, write_timeout_usec_),
                              milliseconds(static_cast<long long>(keep_alive_timeout_sec_) * 1000),
-                             keep_alive_max_count_, &svr_sock_, limits_};
+                             keep_alive_max_count_,
+                             &svr_sock_,
+                             limits_};
   return serve_connection(sock, ssl_context(), s, counter_,
                           [this](httplib::Stream& strm, bool close, bool& closed) {
                             return process_request(strm, close, closed, nullptr);

@@ -14,8 +14,8 @@ namespace calstand::daemon::api {
 std::vector<NamedToken> load_tokens_file(const std::string& path) {
   std::vector<NamedToken> out;
   for (const wire::TokenEntry& e : wire::read_tokens_file(path)) {
-    out.push_back({e.name, e.role == "read" ? Role::kRead : Role::kOperator, e.plain_secret, e.id,
-                   e.hash});
+    out.push_back(
+        {e.name, e.role == "read" ? Role::kRead : Role::kOperator, e.plain_secret, e.id, e.hash});
   }
   return out;
 }

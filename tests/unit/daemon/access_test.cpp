@@ -120,10 +120,10 @@ TEST(Access, AHashedTokenAcceptsItsSecretOnly) {
   const auto op = calstand::wire::new_token_secret();
   const auto viewer = calstand::wire::new_token_secret();
   AccessPolicy p;
-  p.tokens = {{"lab-op", Role::kOperator, "", op.id, calstand::wire::hash_token_secret(op.secret)},
-              {"viewer", Role::kRead, "", viewer.id,
-               calstand::wire::hash_token_secret(viewer.secret)},
-              {"old-op", Role::kOperator, "op-secret-01234567", "", ""}};
+  p.tokens = {
+      {"lab-op", Role::kOperator, "", op.id, calstand::wire::hash_token_secret(op.secret)},
+      {"viewer", Role::kRead, "", viewer.id, calstand::wire::hash_token_secret(viewer.secret)},
+      {"old-op", Role::kOperator, "op-secret-01234567", "", ""}};
   p.reads_need_token = true;
   for (int twice = 0; twice < 2; ++twice) {
     const AccessDecision ok = check_access(p, "POST", "/runs", op.secret);

@@ -33,7 +33,7 @@ struct NamedToken {
   std::string name;
   Role role = Role::kOperator;
   std::string secret;
-  std::string id{};    // braces: tokens listed as {name, role, secret} stay warning-free
+  std::string id{};  // braces: tokens listed as {name, role, secret} stay warning-free
   std::string hash{};
   bool hashed() const { return !hash.empty(); }
 };
