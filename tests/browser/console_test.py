@@ -160,9 +160,9 @@ class Postgres:
 
     def __init__(self, workdir):
         import glob
+        # Debian's server programs with their psql first (an initdb on PATH may be a wrapper).
         found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"))
-        on_path = shutil.which("initdb")
-        initdb = on_path or (found[-1] if found else None)
+        initdb = found[-1] if found else shutil.which("initdb")
         if not initdb:
             raise RuntimeError("no PostgreSQL server (initdb): apt-get install postgresql")
         self.bin = os.path.dirname(initdb)

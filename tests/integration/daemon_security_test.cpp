@@ -629,6 +629,22 @@ TEST(DaemonSecurity, ATrickledRequestIsCutAtItsDeadlineAndAnAddressHoldsAtMostIt
   }
   stop = true;
   trickler.join();
+  // A request refused before its body was read (no token) leaves the kept-alive connection
+  // usable: the unread body is not taken for the start of the next request (as the console's
+  // refused abort followed by a read once was).
+  {
+    RawConnection keep(port);
+    ASSERT_TRUE(keep.send_text(
+        "POST /runs/1/abort HTTP/1.1\r\nHost: station\r\nContent-Type: application/json\r\n"
+        "Content-Length: 2\r\n\r\n{}"));
+    bool closed = false;
+    const std::string refused = keep.read_until_closed(1000, closed);
+    EXPECT_EQ(refused.rfind("HTTP/1.1 401", 0), 0u) << refused.substr(0, 200);
+    ASSERT_FALSE(closed);
+    ASSERT_TRUE(keep.send_text("GET /station HTTP/1.1\r\nHost: station\r\n\r\n"));
+    const std::string next = keep.read_until_closed(1000, closed);
+    EXPECT_EQ(next.rfind("HTTP/1.1 200", 0), 0u) << next.substr(0, 200);
+  }
   // The stream, older than the deadline now, still stands; and with the tricklers gone the
   // address has room again.
   stream.read_until_closed(300, stream_closed);

@@ -71,11 +71,17 @@ class GuardedStream final : public httplib::Stream {
       : sock_(sock), ssl_(ssl), read_timeout_(read_timeout), write_timeout_(write_timeout) {}
 
   void set_deadline(Clock::time_point at) { deadline_ = at; }
-  bool has_pending_input() const {
-    return buffered_ < filled_ || (ssl_ != nullptr && SSL_pending(ssl_) > 0);
-  }
+  /// Forgets what was read beyond the last request, as httplib does (its stream, buffer and
+  /// all, lives for one request): the unread body of a request refused before its body was
+  /// read is not taken for the start of the next one.
+  void drop_read_ahead() { buffered_ = filled_ = 0; }
+  /// Input already decrypted by TLS, not yet read (bytes in our own buffer are dropped at the
+  /// next request: drop_read_ahead).
+  bool has_pending_input() const { return ssl_ != nullptr && SSL_pending(ssl_) > 0; }
 
-  bool is_readable() const override { return has_pending_input() || wait(POLLIN, read_wait()); }
+  bool is_readable() const override {
+    return buffered_ < filled_ || has_pending_input() || wait(POLLIN, read_wait());
+  }
   bool is_writable() const override { return wait(POLLOUT, write_timeout_) && peer_open(); }
 
   ssize_t read(char* ptr, size_t size) override {
@@ -271,6 +277,7 @@ bool serve_connection(socket_t sock, SSL_CTX* tls, const ConnectionSettings& s,
       while (count > 0 && next_request_arrives(strm, s)) {
         // Each request from its first byte: line, headers and body within the deadline.
         strm.set_deadline(deadline());
+        strm.drop_read_ahead();
         const bool close_connection = count == 1;
         bool connection_closed = false;
         ret = process(strm, close_connection, connection_closed);
