@@ -2,8 +2,10 @@
 // database, and how long a station that was offline for a day of captures takes to catch up.
 // A plain program printing figures, not a Google Benchmark:
 //
-//   calstand_fleet_sync_bench [--hours H] [--keep DIR]
+//   calstand_fleet_sync_bench [--hours H] [--keep DIR] [--station DB]
 //
+// `--station DB` syncs a station database made before (e.g. by an earlier --keep DIR, as
+// DIR/station.db) instead of making one: before-and-after figures on the same station.
 // It starts a throw-away PostgreSQL server (tests/support/postgres_server.hpp), makes a station
 // database with H hours (default 24) of station time of six-position runs on the simulator
 // through the calstand command (each run calibrated: records and fit history), then syncs it
@@ -58,14 +60,18 @@ calstand::fleet::SyncReport timed_sync(const std::string& db_path, pqxx::connect
 int main(int argc, char** argv) {
   double hours = 24.0;
   std::string keep;
+  std::string given_station;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--hours") {
       hours = std::atof(argv[i + 1]);
     } else if (flag == "--keep") {
       keep = argv[i + 1];
+    } else if (flag == "--station") {
+      given_station = argv[i + 1];
     } else {
-      fmt::print(stderr, "usage: calstand_fleet_sync_bench [--hours H] [--keep DIR]\n");
+      fmt::print(stderr,
+                 "usage: calstand_fleet_sync_bench [--hours H] [--keep DIR] [--station DB]\n");
       return 2;
     }
   }
@@ -78,13 +84,20 @@ int main(int argc, char** argv) {
                                              "/calstand-fleet-bench-" + std::to_string(::getpid())
                                        : keep;
   std::filesystem::create_directories(dir);
-  const std::string db = dir + "/station.db";
+  const std::string db = given_station.empty() ? dir + "/station.db" : given_station;
 
   // A day at the station: six-position runs back to back, each calibrated.
   const auto made = std::chrono::steady_clock::now();
   double station_s = 0.0;
   int runs = 0;
-  while (station_s < hours * 3600.0) {
+  if (!given_station.empty()) {
+    calstand::store::Database station(db);
+    runs = station.sql().execAndGet("SELECT count(*) FROM runs").getInt();
+    station_s = station.sql()
+                    .execAndGet("SELECT TOTAL(ended_clock_s - started_clock_s) FROM runs")
+                    .getDouble();
+  }
+  while (given_station.empty() && station_s < hours * 3600.0) {
     const std::string run_id = std::to_string(runs + 1);
     if (sh(fmt::format("{} run six-position --quiet --db {} --unit imu0=B-{:04d} > /dev/null",
                        CALSTAND_BIN, db, runs + 1)) != 0 ||

@@ -55,6 +55,8 @@ struct Options {
   bool publish_samples = false;
   std::string fleet;  ///< the central database shown read-only under /fleet, or none
   std::string fleet_password_file;
+  int request_deadline_s = 30;
+  int max_connections_per_address = 16;
 };
 
 // A secret anyone on the machine can read is no secret; warned rather than refused, since a
@@ -107,13 +109,30 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   api::ApiOptions api_options;
   std::tie(api_options.host, api_options.port) = calstand::wire::parse_listen_address(opt.listen);
   api_options.token = read_token(opt);
+  // Plain-text secrets keep working, with a word on how to stop keeping them (docs/security.md).
+  if (!api_options.token.empty()) {
+    spdlog::warn(
+        "{}: the operator token is kept in plain text; prefer a hashed one: calstand token add "
+        "NAME --role operator --file FILE, then calstandd --tokens FILE",
+        opt.token_file.empty() ? std::string("CALSTAND_TOKEN") : opt.token_file);
+  }
   if (!opt.tokens_file.empty()) {
     api_options.tokens = api::load_tokens_file(opt.tokens_file);
     warn_if_others_read(opt.tokens_file);
+    for (const api::NamedToken& t : api_options.tokens) {
+      if (t.hashed()) continue;
+      spdlog::warn(
+          "{}: token '{}' is kept in plain text; replace it with a hashed one: calstand token "
+          "remove {} --file {}, then calstand token add {} --role {} --file {}",
+          opt.tokens_file, t.name, t.name, opt.tokens_file, t.name, api::to_string(t.role),
+          opt.tokens_file);
+    }
   }
   api_options.tls_cert_file = opt.tls_cert;
   api_options.tls_key_file = opt.tls_key;
   api_options.allow_plaintext = opt.allow_plaintext;
+  api_options.request_deadline_s = opt.request_deadline_s;
+  api_options.max_connections_per_address = opt.max_connections_per_address;
   if (!opt.fleet.empty()) {
     api_options.fleet =
         calstand::fleet::parse_central_address(opt.fleet, opt.fleet_password_file, "--fleet");
@@ -206,6 +225,12 @@ int main(int argc, char** argv) {
   app.add_option("--tls-key", opt.tls_key, "Private key of --tls-cert (PEM)");
   app.add_flag("--allow-plaintext", opt.allow_plaintext,
                "Serve plain http beyond loopback (a network you trust; else TLS is required)");
+  app.add_option("--request-deadline-s", opt.request_deadline_s,
+                 "A request (line, headers, body) must arrive within this from its first byte [s]")
+      ->capture_default_str();
+  app.add_option("--max-connections-per-address", opt.max_connections_per_address,
+                 "Connections one client address may hold at once; more get 503")
+      ->capture_default_str();
   app.add_option("--log-dir", opt.log_dir, "Directory of the rotating log file calstandd.log");
   app.add_option("--recovery", opt.recovery, "Interrupted run on start: auto (resume) or hold")
       ->capture_default_str();

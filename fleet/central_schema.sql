@@ -220,3 +220,95 @@ GRANT SELECT, INSERT ON stations TO calstand_station;
 -- Cursors move: the only rows a station may change (its own, by the policy above).
 GRANT UPDATE ON sync_cursors, sample_cursors TO calstand_station;
 GRANT USAGE ON SEQUENCE runs_id_seq, calibrations_id_seq, acceptances_id_seq TO calstand_station;
+
+-- migration 2: telemetry, step means, station-wide events, unique station names
+-- What a station records besides runs and records, so that the central database answers "which
+-- stations ran hot last week" (chamber telemetry by run, runs by their UTC times). Each is
+-- copied once its run has ended and is central, all of a run in one transaction together with
+-- its `run_details` row (the mark that the run's details are here: a sync cut in between copies
+-- them whole next time). Step ids are the station's (`step_local_id`, the steps' `local_id`).
+CREATE TABLE run_details (
+  station  uuid NOT NULL REFERENCES stations (uuid),
+  local_id bigint NOT NULL,  -- the run's id on the station
+  run_id   bigint PRIMARY KEY REFERENCES runs (id),
+  UNIQUE (station, local_id)
+);
+
+-- Per step attempt and device, over its samples (the station's step_means): a central fit of
+-- step means needs no samples.
+CREATE TABLE step_means (
+  station              uuid NOT NULL REFERENCES stations (uuid),
+  run_id               bigint NOT NULL REFERENCES runs (id),
+  step_local_id        bigint NOT NULL,
+  attempt              integer NOT NULL,
+  device               text NOT NULL,
+  count                integer NOT NULL,
+  first_receive_time_s double precision NOT NULL,
+  last_receive_time_s  double precision NOT NULL,
+  gx_dps double precision, gy_dps double precision, gz_dps double precision,
+  ax_mps2 double precision, ay_mps2 double precision, az_mps2 double precision,
+  temperature_c double precision,
+  std_gx_dps double precision, std_gy_dps double precision, std_gz_dps double precision,
+  std_ax_mps2 double precision, std_ay_mps2 double precision, std_az_mps2 double precision,
+  std_temperature_c double precision,
+  PRIMARY KEY (station, step_local_id, attempt, device)
+);
+CREATE INDEX step_means_by_run ON step_means (run_id);
+
+-- Table and chamber state as the station decimated it.
+CREATE TABLE table_telemetry (
+  station        uuid NOT NULL REFERENCES stations (uuid),
+  local_id       bigint NOT NULL,
+  run_id         bigint NOT NULL REFERENCES runs (id),
+  step_local_id  bigint,
+  time_s         double precision NOT NULL,
+  outer_deg      double precision NOT NULL,
+  inner_deg      double precision NOT NULL,
+  outer_rate_dps double precision NOT NULL,
+  inner_rate_dps double precision NOT NULL,
+  outer_mode     text,
+  inner_mode     text,
+  PRIMARY KEY (station, local_id)
+);
+CREATE INDEX table_telemetry_by_run_time ON table_telemetry (run_id, time_s);
+
+CREATE TABLE chamber_telemetry (
+  station    uuid NOT NULL REFERENCES stations (uuid),
+  local_id   bigint NOT NULL,
+  run_id     bigint NOT NULL REFERENCES runs (id),
+  time_s     double precision NOT NULL,
+  air_c      double precision NOT NULL,
+  setpoint_c double precision NOT NULL,
+  mode       text,
+  PRIMARY KEY (station, local_id)
+);
+CREATE INDEX chamber_telemetry_by_run_time ON chamber_telemetry (run_id, time_s);
+
+-- Station-wide events (an interlock closed between runs, ...) have no run, as on the station.
+ALTER TABLE events ALTER COLUMN run_id DROP NOT NULL;
+
+-- A station's name is unique in its fleet (`calstand fleet --station NAME` names one station).
+-- Names registered twice before this version keep the first registration's; the later ones
+-- get ' #' and the first 8 characters of their uuid, so that the index can be made.
+UPDATE stations s SET name = s.name || ' #' || left(s.uuid::text, 8)
+WHERE EXISTS (SELECT 1 FROM stations o WHERE o.name = s.name AND
+              (o.registered_utc, o.uuid::text) < (s.registered_utc, s.uuid::text));
+CREATE UNIQUE INDEX stations_by_name ON stations (name);
+
+DO $$
+DECLARE
+  t text;
+BEGIN
+  FOREACH t IN ARRAY ARRAY['run_details', 'step_means', 'table_telemetry',
+                           'chamber_telemetry'] LOOP
+    EXECUTE format('ALTER TABLE %I ENABLE ROW LEVEL SECURITY', t);
+    EXECUTE format('CREATE POLICY station_own ON %I TO calstand_station '
+                   'USING (station IN (SELECT uuid FROM stations WHERE db_role = current_user)) '
+                   'WITH CHECK (station IN (SELECT uuid FROM stations WHERE db_role = current_user))',
+                   t);
+    EXECUTE format('CREATE POLICY reader_all ON %I FOR SELECT TO calstand_reader USING (true)', t);
+    EXECUTE format('GRANT SELECT ON %I TO calstand_reader', t);
+    EXECUTE format('GRANT SELECT, INSERT ON %I TO calstand_station', t);
+  END LOOP;
+END
+$$;

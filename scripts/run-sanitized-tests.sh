@@ -23,4 +23,6 @@ export CALSTAND_REQUIRE_BROWSER=1
 # abort_on_error=0 keeps the exit code (1) ctest reports, rather than a core dump per finding.
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:check_initialization_order=1:strict_init_order=1:abort_on_error=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# Leaks of libraries, each with whose it is and how that was found (none of calstand's own).
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$root/scripts/lsan-suppressions.txt:print_suppressions=0}"
 ctest --output-on-failure -j "$(nproc)" --timeout $((600 * factor)) "$@"

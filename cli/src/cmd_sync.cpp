@@ -52,9 +52,10 @@ void run_sync(const SyncCliOptions& opt) {
     fmt::print("nothing new: the central database has every ended run of this station\n");
   } else {
     fmt::print(
-        "copied {} runs ({} steps, {} events, {} units), {} calibrations, {} acceptances, {} "
-        "fits",
-        c.runs, c.steps, c.events, c.run_units, c.calibrations, c.acceptances, c.fits);
+        "copied {} runs ({} steps, {} events, {} units, {} step means, {} table and {} chamber "
+        "telemetry rows), {} station events, {} calibrations, {} acceptances, {} fits",
+        c.runs, c.steps, c.events, c.run_units, c.step_means, c.table_telemetry,
+        c.chamber_telemetry, c.station_events, c.calibrations, c.acceptances, c.fits);
     if (opt.samples) {
       fmt::print(", {} sample chunks ({} samples, {:.1f} MB)", c.sample_chunks, c.samples,
                  static_cast<double>(c.sample_bytes) / 1e6);

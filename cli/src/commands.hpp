@@ -31,7 +31,8 @@ void register_runs(CLI::App& app);         // runs and show
 void register_sim_session(CLI::App& app);  // hand-held / Ferraris sessions, no table
 void register_sim_station(CLI::App& app);
 void register_station(CLI::App& app);
-void register_sync(CLI::App& app);  // a station's database to the central one
+void register_sync(CLI::App& app);   // a station's database to the central one
+void register_token(CLI::App& app);  // calstandd's named tokens, hashed: add, list, remove
 void register_trend(CLI::App& app);
 void register_truth_from_spec(CLI::App& app);
 void register_units(CLI::App& app);

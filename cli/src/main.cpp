@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_sim_station(app);
   calstand::cli::register_station(app);
   calstand::cli::register_sync(app);
+  calstand::cli::register_token(app);
   calstand::cli::register_trend(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);

@@ -1,8 +1,10 @@
 #include "fleet/sync.hpp"
 
+#include <SQLiteCpp/Column.h>
 #include <SQLiteCpp/Statement.h>
 #include <fmt/format.h>
 
+#include <array>
 #include <chrono>
 #include <map>
 #include <optional>
@@ -17,8 +19,105 @@
 #include "store/stamp.hpp"
 #include "store/station_identity.hpp"
 
+namespace calstand::fleet::copy_text {
+
+/// One field of a COPY row in PostgreSQL's text format, or NULL (std::nullopt): what
+/// pqxx::stream_to writes for it (escaping tabs, newlines and backslashes itself).
+struct Field {
+  std::optional<std::string> text;
+};
+
+}  // namespace calstand::fleet::copy_text
+
+namespace pqxx {
+template <>
+struct string_traits<calstand::fleet::copy_text::Field> {
+  using Field = calstand::fleet::copy_text::Field;
+  static constexpr const char* name() noexcept { return "calstand COPY field"; }
+  static constexpr bool has_null() noexcept { return true; }
+  static bool is_null(const Field& f) { return !f.text.has_value(); }
+  static Field null() { return {}; }
+  static void from_string(const char* text, Field& f) { f.text = text; }
+  static std::string to_string(const Field& f) { return f.text.value_or(""); }
+};
+}  // namespace pqxx
+
 namespace calstand::fleet {
 namespace {
+
+using copy_text::Field;
+
+/// A SQLite value as PostgreSQL reads it in COPY's text format: integers and reals exactly
+/// (the shortest text that reads back to the same double), blobs as bytea's hex form.
+Field field_of(const SQLite::Column& c) {
+  const int type = c.getType();
+  if (type == SQLite::Null) return {};
+  if (type == SQLite::INTEGER) return {std::to_string(c.getInt64())};
+  if (type == SQLite::FLOAT) return {fmt::format("{}", c.getDouble())};
+  if (type == SQLite::BLOB) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    const auto* data = static_cast<const unsigned char*>(c.getBlob());
+    const auto bytes = static_cast<std::size_t>(c.getBytes());
+    std::string hex(2 + 2 * bytes, '\\');
+    hex[1] = 'x';
+    for (std::size_t i = 0; i < bytes; ++i) {
+      hex[2 + 2 * i] = kHex[data[i] >> 4];
+      hex[3 + 2 * i] = kHex[data[i] & 0x0f];
+    }
+    return {std::move(hex)};
+  }
+  return {c.getString()};
+}
+
+/// Copies the rows of `q` into central `table` by COPY (one stream, not a round trip per row)
+/// into the session's staging table of it, then one INSERT ... SELECT from there that skips
+/// rows already central. PostgreSQL refuses COPY into a table under row-level security, and
+/// COPY has no ON CONFLICT: the staging table (temporary, so without either, emptied at
+/// commit or rollback) gives both. Each row is `fixed` (the same for every row, e.g. the
+/// station and the central run) then the query's columns, in the order of `columns` (N of
+/// them). `each(q)` is called per row before it is sent. Returns the rows read from `q`.
+template <std::size_t N, class Each>
+std::int64_t copy_rows(pqxx::transaction_base& tx, std::set<std::string>& staged,
+                       const std::string& table, const std::array<const char*, N>& columns,
+                       const std::vector<Field>& fixed, SQLite::Statement& q, Each each) {
+  const std::string staging = "calstand_staging_" + table;
+  if (staged.insert(table).second &&
+      tx.exec("SELECT to_regclass('pg_temp." + staging + "') IS NULL")[0][0].as<bool>()) {
+    // The session's temporary tables live in its temp_buffers: room for a batch of sample
+    // chunks (64 of ~150 kB) so that staging does not spill to disk. Settable only before the
+    // session's first temporary table, which this is.
+    if (staged.size() == 1) tx.exec("SET temp_buffers = '32MB'");
+    tx.exec("CREATE TEMPORARY TABLE " + staging + " (LIKE " + table +
+            " INCLUDING DEFAULTS) ON COMMIT DELETE ROWS");
+    // Staged blobs are read once and dropped at commit: not worth compressing (the central
+    // table still compresses them as it stores them).
+    if (table == "sample_chunks") {
+      tx.exec("ALTER TABLE " + staging + " ALTER COLUMN data SET STORAGE EXTERNAL");
+    }
+  }
+  std::int64_t rows = 0;
+  {
+    pqxx::stream_to copy(tx, staging, std::vector<std::string>(columns.begin(), columns.end()));
+    std::array<Field, N> row;
+    for (std::size_t i = 0; i < fixed.size(); ++i) row[i] = fixed[i];
+    while (q.executeStep()) {
+      each(q);
+      for (std::size_t i = fixed.size(); i < N; ++i) {
+        row[i] = field_of(q.getColumn(static_cast<int>(i - fixed.size())));
+      }
+      copy << row;
+      ++rows;
+    }
+    copy.complete();
+  }
+  if (rows > 0) {
+    std::string list;
+    for (const char* c : columns) list += (list.empty() ? "" : ", ") + std::string(c);
+    tx.exec("INSERT INTO " + table + " (" + list + ") SELECT " + list + " FROM " + staging +
+            " ON CONFLICT DO NOTHING");
+  }
+  return rows;
+}
 
 template <class T>
 std::optional<T> optional_field(const pqxx::field& f) {
@@ -88,6 +187,8 @@ class StationSync {
     prepare();
     register_station();
     copy_runs();
+    if (!stopped()) copy_run_details();
+    if (!stopped()) copy_station_events();
     if (!stopped()) copy_calibrations();
     if (!stopped()) copy_acceptances();
     if (!stopped()) copy_fits();
@@ -162,11 +263,6 @@ class StationSync {
                        "rms_accel_mps2, rms_turn_deg, created_utc) VALUES ($1, $2, $3, $4, $5, "
                        "$6, $7::jsonb, $8, $9, $10, $11, $12, $13, $14) "
                        "ON CONFLICT (station, local_id) DO NOTHING");
-      central_.prepare("calstand_insert_chunk",
-                       "INSERT INTO sample_chunks (station, local_id, run_id, step_idx, attempt, "
-                       "device, first_receive_time_s, last_receive_time_s, count, encoding, "
-                       "data) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11) "
-                       "ON CONFLICT (station, local_id) DO NOTHING");
     } catch (...) {
       rethrow_as_central("prepare statements");
     }
@@ -176,13 +272,25 @@ class StationSync {
     try {
       pqxx::work tx(central_);
       lock_station(tx);
-      tx.exec_params(
-          "INSERT INTO stations (uuid, name, store_schema, registered_utc) "
-          "VALUES ($1, $2, $3, $4) ON CONFLICT (uuid) DO NOTHING",
-          report_.station_uuid, options_.station_name, station_.schema_version(),
-          store::utc_now_iso8601());
-      const pqxx::result r =
+      pqxx::result r =
           tx.exec_params("SELECT name FROM stations WHERE uuid = $1", report_.station_uuid);
+      if (r.empty()) {
+        // A name is unique in the fleet (central migration 2): the index refuses a taken one
+        // whichever role registered it, though row-level security hides that station from us.
+        try {
+          tx.exec_params(
+              "INSERT INTO stations (uuid, name, store_schema, registered_utc) "
+              "VALUES ($1, $2, $3, $4) ON CONFLICT (uuid) DO NOTHING",
+              report_.station_uuid, options_.station_name, station_.schema_version(),
+              store::utc_now_iso8601());
+        } catch (const pqxx::unique_violation&) {
+          throw CentralError("register station " + report_.station_uuid,
+                             fmt::format("the name '{}' is another station's in this fleet; "
+                                         "a station's name is unique: choose another (--name)",
+                                         options_.station_name));
+        }
+        r = tx.exec_params("SELECT name FROM stations WHERE uuid = $1", report_.station_uuid);
+      }
       if (r.empty()) {
         throw CentralError(
             "register station " + report_.station_uuid,
@@ -332,6 +440,108 @@ class StationSync {
         [&](pqxx::work& tx, const LocalRef& r, std::int64_t) { return insert_run(tx, r.id); });
   }
 
+  // A run's step means and telemetry, once the run is central: all of it in one transaction
+  // with its run_details row, so that a cut sync copies a run's details whole or not at all.
+  void copy_run_details() {
+    copy_stream(
+        "run_details", "run_details", "runs", 16,
+        [&](std::int64_t after, std::size_t limit) {
+          return read_local("SELECT id, id FROM runs WHERE id > ? ORDER BY id LIMIT ?", after,
+                            limit, false);
+        },
+        [&](pqxx::work& tx, const LocalRef& r, std::int64_t central_run) -> std::int64_t {
+          return insert_run_details(tx, r.id, central_run);
+        });
+  }
+
+  std::int64_t insert_run_details(pqxx::work& tx, std::int64_t local_run,
+                                  std::int64_t central_run) {
+    const std::vector<Field> fixed = {{report_.station_uuid}, {std::to_string(central_run)}};
+    const auto nothing = [](const SQLite::Statement&) {};
+    SQLite::Statement means(station_.sql(),
+                            "SELECT step_id, attempt, device, count, first_receive_time_s, "
+                            "last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, ay_mps2, "
+                            "az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
+                            "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c "
+                            "FROM step_means WHERE run_id = ?");
+    means.bind(1, local_run);
+    const std::int64_t step_means = copy_rows<22>(tx, staged_, "step_means",
+                                                  {"station",
+                                                   "run_id",
+                                                   "step_local_id",
+                                                   "attempt",
+                                                   "device",
+                                                   "count",
+                                                   "first_receive_time_s",
+                                                   "last_receive_time_s",
+                                                   "gx_dps",
+                                                   "gy_dps",
+                                                   "gz_dps",
+                                                   "ax_mps2",
+                                                   "ay_mps2",
+                                                   "az_mps2",
+                                                   "temperature_c",
+                                                   "std_gx_dps",
+                                                   "std_gy_dps",
+                                                   "std_gz_dps",
+                                                   "std_ax_mps2",
+                                                   "std_ay_mps2",
+                                                   "std_az_mps2",
+                                                   "std_temperature_c"},
+                                                  fixed, means, nothing);
+    SQLite::Statement table(station_.sql(),
+                            "SELECT id, step_id, time_s, outer_deg, inner_deg, outer_rate_dps, "
+                            "inner_rate_dps, outer_mode, inner_mode FROM table_telemetry "
+                            "WHERE run_id = ? ORDER BY id");
+    table.bind(1, local_run);
+    const std::int64_t table_rows =
+        copy_rows<11>(tx, staged_, "table_telemetry",
+                      {"station", "run_id", "local_id", "step_local_id", "time_s", "outer_deg",
+                       "inner_deg", "outer_rate_dps", "inner_rate_dps", "outer_mode", "inner_mode"},
+                      fixed, table, nothing);
+    SQLite::Statement chamber(station_.sql(),
+                              "SELECT id, time_s, air_c, setpoint_c, mode FROM chamber_telemetry "
+                              "WHERE run_id = ? ORDER BY id");
+    chamber.bind(1, local_run);
+    const std::int64_t chamber_rows =
+        copy_rows<7>(tx, staged_, "chamber_telemetry",
+                     {"station", "run_id", "local_id", "time_s", "air_c", "setpoint_c", "mode"},
+                     fixed, chamber, nothing);
+    tx.exec_params("INSERT INTO run_details (station, local_id, run_id) VALUES ($1, $2, $3)",
+                   report_.station_uuid, local_run, central_run);
+    report_.copied.step_means += step_means;
+    report_.copied.table_telemetry += table_rows;
+    report_.copied.chamber_telemetry += chamber_rows;
+    return 1 + step_means + table_rows + chamber_rows;
+  }
+
+  // Events of no run (an interlock closed between runs, a link lost while idle); a run's own
+  // events go with the run.
+  void copy_station_events() {
+    copy_stream(
+        "station_events", "events", "", options_.batch_rows,
+        [&](std::int64_t after, std::size_t limit) {
+          return read_local(
+              "SELECT id, id FROM events WHERE run_id IS NULL AND id > ? ORDER BY id LIMIT ?",
+              after, limit, false);
+        },
+        [&](pqxx::work& tx, const LocalRef& r, std::int64_t) -> std::int64_t {
+          SQLite::Statement q(station_.sql(),
+                              "SELECT time_s, wall_utc, kind, source, message, detail FROM events "
+                              "WHERE id = ?");
+          q.bind(1, r.id);
+          if (!q.executeStep()) return 0;
+          tx.exec_prepared(
+              "calstand_insert_event", report_.station_uuid, r.id, std::optional<std::int64_t>(),
+              q.getColumn(0).getDouble(), q.getColumn(1).getString(), q.getColumn(2).getString(),
+              q.getColumn(3).getString(), q.getColumn(4).getString(),
+              q.getColumn(5).isNull() ? std::optional<std::string>()
+                                      : std::optional<std::string>(q.getColumn(5).getString()));
+          ++report_.copied.station_events;
+          return 1;
+        });
+  }
+
   void copy_calibrations() {
     copy_stream(
         "calibrations", "calibrations", "runs", options_.batch_rows,
@@ -439,29 +649,32 @@ class StationSync {
           q.bind(1, local_run);
           q.bind(2, cursor);
           q.bind(3, static_cast<std::int64_t>(options_.batch_chunks));
-          std::size_t fetched = 0;
-          while (q.executeStep()) {
-            ++fetched;
-            const std::int64_t chunk = q.getColumn(0).getInt64();
-            const auto* data = static_cast<const unsigned char*>(q.getColumn(8).getBlob());
-            const auto bytes = static_cast<std::size_t>(q.getColumn(8).getBytes());
-            tx.exec_prepared("calstand_insert_chunk", report_.station_uuid, chunk, central_run,
-                             q.getColumn(1).getInt(), q.getColumn(2).getInt(),
-                             q.getColumn(3).getString(), q.getColumn(4).getDouble(),
-                             q.getColumn(5).getDouble(), q.getColumn(6).getInt(),
-                             q.getColumn(7).getInt(), pqxx::binarystring(data, bytes));
-            ++report_.copied.sample_chunks;
-            report_.copied.samples += q.getColumn(6).getInt64();
-            report_.copied.sample_bytes += static_cast<std::int64_t>(bytes);
-            cursor = chunk;
-          }
-          complete = fetched < options_.batch_chunks;
+          // The batch's chunks go into the session's staging table with COPY (one stream
+          // instead of a round trip per chunk), then into sample_chunks with one insert that
+          // skips chunks already central: all in this transaction with the cursor, so a cut
+          // sync resumes exactly. The staging table empties itself at commit or rollback.
+          SyncCounts batch;
+          const std::int64_t fetched = copy_rows<11>(
+              tx, staged_, "sample_chunks",
+              {"station", "run_id", "local_id", "step_idx", "attempt", "device",
+               "first_receive_time_s", "last_receive_time_s", "count", "encoding", "data"},
+              {{report_.station_uuid}, {std::to_string(central_run)}}, q,
+              [&](const SQLite::Statement& row) {
+                cursor = row.getColumn(0).getInt64();
+                ++batch.sample_chunks;
+                batch.samples += row.getColumn(6).getInt64();
+                batch.sample_bytes += row.getColumn(8).getBytes();
+              });
+          complete = fetched < static_cast<std::int64_t>(options_.batch_chunks);
           tx.exec_params(
               "INSERT INTO sample_cursors (station, run_id, last_local_id, complete) "
               "VALUES ($1, $2, $3, $4) ON CONFLICT (run_id) DO UPDATE SET "
               "last_local_id = EXCLUDED.last_local_id, complete = EXCLUDED.complete",
               report_.station_uuid, central_run, cursor, complete);
           commit(tx);
+          report_.copied.sample_chunks += batch.sample_chunks;
+          report_.copied.samples += batch.samples;
+          report_.copied.sample_bytes += batch.sample_bytes;
         }
         if (stopped()) return;
       }
@@ -474,6 +687,8 @@ class StationSync {
   pqxx::connection& central_;
   const SyncOptions& options_;
   SyncReport report_;
+  /// Central tables whose staging table this sync has made sure of (copy_rows).
+  std::set<std::string> staged_;
 };
 
 }  // namespace
@@ -501,6 +716,10 @@ nlohmann::json to_json(const SyncReport& report) {
             {"calibrations", c.calibrations},
             {"acceptances", c.acceptances},
             {"fits", c.fits},
+            {"step_means", c.step_means},
+            {"table_telemetry", c.table_telemetry},
+            {"chamber_telemetry", c.chamber_telemetry},
+            {"station_events", c.station_events},
             {"sample_chunks", c.sample_chunks},
             {"samples", c.samples},
             {"sample_bytes", c.sample_bytes},

@@ -15,6 +15,9 @@ Checks, in one daemon's life (it takes seconds: the simulated station runs faste
   5. on the loop page of a run recorded without a table (a simulated hand-held session imported
      with `calstand import`), fit and diagnose show the table-free fit: its method, the frame
      convention's parameters, and the candidates such a run can fit.
+  8. the fleet page (#/fleet) against calstandd --fleet on a throw-away PostgreSQL server that
+     the console's station and the fixture's line synced to: stations, units, parameters and
+     records as the API has them (a screenshot console_fleet.png), and empty for a later `since`.
   7. on a fixture of three units of the demo IMU (the third with its gyro x bias ten times a
      line's limit) run, calibrated and judged: the lot page shows the yield and the verdicts, the
      parameter table with the API's numbers and the odd unit flagged, and a control chart per
@@ -146,6 +149,60 @@ def prepare_lot(daemon, calstand, workdir):
     assert status == 200, verdict
     verdicts = [u["verdict"] for u in verdict["units"]]
     assert verdicts == ["pass", "pass", "fail"], verdicts
+
+
+class Postgres:
+    """A throw-away PostgreSQL server, as tests/support/postgres_server.hpp makes one: initdb into
+    a temporary folder, a unix socket there and no TCP port, scram-sha-256 passwords in a
+    password file; as `nobody` under root (the server refuses root)."""
+
+    PORT = 5432  # only names the socket file
+
+    def __init__(self, workdir):
+        import glob
+        # Debian's server programs with their psql first (an initdb on PATH may be a wrapper).
+        found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"))
+        initdb = found[-1] if found else shutil.which("initdb")
+        if not initdb:
+            raise RuntimeError("no PostgreSQL server (initdb): apt-get install postgresql")
+        self.bin = os.path.dirname(initdb)
+        self.dir = os.path.join(workdir, "pg")
+        os.makedirs(self.dir)
+        self.as_user = ["runuser", "-u", "nobody", "--"] if os.geteuid() == 0 else []
+        owner_pw = os.path.join(self.dir, "owner.pw")
+        self.owner_password = f"owner-{os.getpid()}"
+        with open(owner_pw, "w") as f:
+            f.write(self.owner_password + "\n")
+        if os.geteuid() == 0:
+            os.chmod(workdir, 0o755)
+            subprocess.run(["chown", "nobody", self.dir, owner_pw], check=True)
+        self.passfile = os.path.join(self.dir, "test.pgpass")
+        self.add_password("calstand_owner", self.owner_password)
+        subprocess.run(self.as_user + [os.path.join(self.bin, "initdb"), "-D", os.path.join(self.dir, "data"),
+                                       "-U", "calstand_owner", "--auth=scram-sha-256", f"--pwfile={owner_pw}"],
+                       check=True, capture_output=True)
+        subprocess.run(self.as_user + [os.path.join(self.bin, "pg_ctl"), "-D", os.path.join(self.dir, "data"),
+                                       "-l", os.path.join(self.dir, "server.log"), "-w", "-t", "60", "-o",
+                                       f"-c listen_addresses='' -c unix_socket_directories={self.dir} -p {self.PORT}",
+                                       "start"], check=True, capture_output=True)
+
+    def add_password(self, role, password):
+        with open(self.passfile, "a") as f:
+            f.write(f"*:*:*:{role}:{password}\n")
+        os.chmod(self.passfile, 0o600)
+
+    def url(self, role, db):
+        return f"postgresql://{role}@{self.dir.replace('/', '%2F')}:{self.PORT}/{db}"
+
+    def sql(self, db, statement):
+        env = dict(os.environ, PGPASSFILE=self.passfile)
+        subprocess.run([os.path.join(self.bin, "psql"), "-h", self.dir, "-p", str(self.PORT), "-U",
+                        "calstand_owner", "-d", db, "-v", "ON_ERROR_STOP=1", "-q", "-c", statement],
+                       check=True, capture_output=True, env=env)
+
+    def stop(self):
+        subprocess.run(self.as_user + [os.path.join(self.bin, "pg_ctl"), "-D", os.path.join(self.dir, "data"),
+                                       "-m", "fast", "-w", "stop"], capture_output=True)
 
 
 def make_driver():
@@ -442,6 +499,48 @@ class ConsoleTest:
         assert doc["status"] not in ("aborted",), f"the run was aborted without the token: {doc['status']}"
         self.daemon.request("POST", f"/runs/{run}/abort", {"reason": "test over"})
 
+    def fleet_page_shows_the_central_database(self):
+        """#/fleet against calstandd --fleet on a central database two stations synced to: the
+        stations, units, each parameter's spread per station and the newest records, as the
+        API (the code of `calstand fleet`) has them; a `since` after everything empties it."""
+        from selenium.webdriver.common.by import By
+        self.open("#/fleet")
+        stations = self.daemon.request("GET", "/fleet")[1]["stations"]
+        assert sorted(s["name"] for s in stations) == ["line-a", "line-b"], stations
+        rows = self.wait("the stations table", lambda: (lambda r: len(r) == len(stations) and r)(
+            self.driver.find_elements(By.CSS_SELECTOR, "#fleet-stations tbody tr")))
+        for row, s in zip(rows, stations):
+            cells = [c.text for c in row.find_elements(By.CSS_SELECTOR, "td")]
+            assert row.get_attribute("data-station") == s["name"], (row.get_attribute("data-station"), s)
+            assert cells[1] == str(s["runs"]) and cells[3] == str(s["calibrations"]), (cells, s)
+            assert cells[6] == s["uuid"], (cells, s)
+        units = self.daemon.request("GET", "/fleet/units")[1]["units"]
+        unit_rows = self.wait("the units table", lambda: (lambda r: len(r) == len(units) and r)(
+            self.driver.find_elements(By.CSS_SELECTOR, "#fleet-units tbody tr")))
+        assert [r.get_attribute("data-serial") for r in unit_rows] == [u["serial"] for u in units], \
+            ([r.get_attribute("data-serial") for r in unit_rows], units)
+        odd = next(r for r in unit_rows if r.get_attribute("data-serial") == "CON-1003")
+        assert "fail" in odd.text and "line-a" in odd.text, odd.text
+        parameters = self.daemon.request("GET", "/fleet/parameters")[1]["parameters"]
+        assert parameters, "no parameter in the fleet"
+        parameter_rows = self.driver.find_elements(By.CSS_SELECTOR, "#fleet-parameters tbody tr")
+        assert len(parameter_rows) == sum(len(p["stations"]) for p in parameters), len(parameter_rows)
+        first = parameters[0]["stations"][0]
+        cells = [c.text for c in parameter_rows[0].find_elements(By.CSS_SELECTOR, "td")]
+        assert cells[2] == first["station"] and cells[3] == str(first["n"]), (cells, first)
+        assert abs(float(cells[4]) - first["mean"]) <= 1e-4 * abs(first["mean"]) + 1e-300, (cells, first)
+        records = self.daemon.request("GET", "/fleet/calibrations")[1]["calibrations"]
+        record_rows = self.driver.find_elements(By.CSS_SELECTOR, "#fleet-records tbody tr")
+        assert len(record_rows) == min(50, len(records)) and records, (len(record_rows), len(records))
+        self.driver.save_screenshot(os.path.join(self.out_dir, "console_fleet.png"))
+        self.driver.execute_script(
+            "const f = document.getElementById('fleet-since'); f.value = '2999-12-31';"
+            "f.dispatchEvent(new Event('change'));")
+        self.wait("the fleet since 2999-12-31 in the address",
+                  lambda: self.driver.current_url.endswith("#/fleet/2999-12-31"))
+        self.wait("no units made since", lambda: "No unit with a serial" in self.text("#page"))
+        assert not self.driver.find_elements(By.CSS_SELECTOR, "#fleet-units tbody tr"), "units made after 2999"
+
     def read_token_beyond_loopback(self):
         self.open("#/station")
         self.set_token("", leave=True)
@@ -462,6 +561,35 @@ class ConsoleTest:
         _, doc = self.daemon.request("GET", f"/runs/{run}")
         assert doc["status"] != "aborted", "a read token aborted the run"
         self.daemon.request("POST", f"/runs/{run}/abort", {"reason": "test over"})
+
+
+def run_fleet_page(driver, args, workdir, outer):
+    """The console's own station (line-b) and the fixture's line (line-a), synced to a fresh
+    central database by their own station roles; a daemon with --fleet (a reader role) shows it."""
+    pg = Postgres(workdir)
+    fleet = None
+    try:
+        pg.sql("postgres", "CREATE DATABASE fleet")
+        subprocess.run([args.calstand, "fleet", "migrate", "--to", pg.url("calstand_owner", "fleet"),
+                        "--password-file", pg.passfile], check=True, capture_output=True)
+        for role, group in (("station_a", "calstand_station"), ("station_b", "calstand_station"),
+                            ("dashboard", "calstand_reader")):
+            pg.sql("fleet", f"CREATE ROLE {role} LOGIN PASSWORD 'pw-{role}' IN ROLE {group}")
+            pg.add_password(role, f"pw-{role}")
+        for db, role, name in ((os.path.join(workdir, "line.db"), "station_a", "line-a"),
+                               (os.path.join(workdir, "console.db"), "station_b", "line-b")):
+            synced = subprocess.run([args.calstand, "sync", "--db", db, "--to", pg.url(role, "fleet"),
+                                     "--password-file", pg.passfile, "--name", name],
+                                    capture_output=True, text=True)
+            assert synced.returncode == 0, synced.stdout + synced.stderr
+        fleet = Daemon(args.calstandd, workdir, args.station, name="fleet",
+                       extra=("--fleet", pg.url("dashboard", "fleet"), "--fleet-password-file", pg.passfile))
+        page = ConsoleTest(driver, fleet, args.out)
+        page.fleet_page_shows_the_central_database()
+    finally:
+        if fleet:
+            fleet.stop()
+        pg.stop()
 
 
 def main():
@@ -505,6 +633,10 @@ def main():
                 test.failures += line_test.failures
             finally:
                 line.stop()
+            fleet_test = ConsoleTest(driver, daemon, args.out)
+            fleet_test.check("fleet page shows the central database",
+                             lambda: run_fleet_page(driver, args, workdir, fleet_test))
+            test.failures += fleet_test.failures
             with open(os.path.join(workdir, "tokens.json"), "w") as f:
                 json.dump({"format": "calstand-tokens/1",
                            "tokens": [{"name": "screen", "role": "read", "token": VIEWER_TOKEN}]}, f)

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <memory>
 #include <random>
@@ -459,9 +460,14 @@ class RawConnection {
 // Slow clients trickling their headers a byte at a time and one sending an oversized body hold
 // a connection thread each, but neither the other clients nor the engine: a normal client is
 // answered and a run completes while they are all still connected. A client that stops
-// sending mid-request is disconnected.
+// sending mid-request is disconnected. (The request deadline, which cuts trickling clients, is
+// set beyond this test's length here: it has its test below.)
 TEST(DaemonSecurity, SlowAndOversizedClientsHoldNeitherTheEngineNorOtherClients) {
-  InProcessDaemon d(calstand::testing::fresh_dir("sec-slowloris") + "/station.db");
+  ApiOptions options;
+  options.token = calstand::testing::kTestToken;
+  options.max_body_bytes = 64 * 1024;
+  options.request_deadline_s = 3600;
+  InProcessDaemon d(calstand::testing::fresh_dir("sec-slowloris") + "/station.db", options);
   const int port = d.port();
   constexpr int kSlowClients = 6;
   std::vector<std::unique_ptr<RawConnection>> slow;
@@ -522,6 +528,129 @@ TEST(DaemonSecurity, SlowAndOversizedClientsHoldNeitherTheEngineNorOtherClients)
   huge.shut();
   trickler.join();
   huge_sender.join();
+}
+
+// `calstand token add` prints a secret once and keeps only its hash; calstandd --tokens accepts
+// that secret, refuses a wrong one, and warns of the plain-text token it was also given.
+TEST(DaemonSecurity, ATokenAddedByTheCommandLineIsHashedAndAcceptedByTheDaemon) {
+  const std::string dir = calstand::testing::fresh_dir("sec-hashed-token");
+  const std::string file = dir + "/tokens.json";
+  const calstand::testing::Result added =
+      calstand::testing::run("token add lab-op --role operator --file " + file, dir + "/err.txt");
+  ASSERT_EQ(added.exit_code, 0) << added.out << calstand::testing::read_text(dir + "/err.txt");
+  std::string secret = added.out;
+  while (!secret.empty() && (secret.back() == '\n' || secret.back() == '\r')) secret.pop_back();
+  ASSERT_EQ(secret.size(), 81u) << secret;
+  EXPECT_EQ(calstand::testing::read_text(file).find(secret.substr(17)), std::string::npos)
+      << "the file holds the secret";
+  const calstand::testing::Result listed = calstand::testing::run("token list --file " + file);
+  EXPECT_NE(listed.out.find("lab-op"), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("hashed"), std::string::npos) << listed.out;
+  EXPECT_EQ(listed.out.find(secret.substr(17)), std::string::npos) << listed.out;
+
+  const std::string log = dir + "/calstandd.log";
+  calstand::testing::DaemonProcess daemon(dir + "/station.db", log, "127.0.0.1:0",
+                                          {"--tokens", file});
+  ASSERT_GT(daemon.port(), 0) << calstand::testing::read_text(log);
+  // An action with the secret reaches the route (404: no such run), without it is refused.
+  EXPECT_EQ(call(daemon.port(), "POST", "/runs/999/pause", secret).status, 404);
+  std::string wrong = secret;
+  wrong.back() = wrong.back() == '0' ? '1' : '0';
+  EXPECT_EQ(call(daemon.port(), "POST", "/runs/999/pause", wrong).status, 401);
+  EXPECT_EQ(call(daemon.port(), "POST", "/runs/999/pause", secret).status, 404);
+  // The test harness's CALSTAND_TOKEN is a plain-text token: still accepted, with a warning.
+  EXPECT_EQ(call(daemon.port(), "POST", "/runs/999/pause", calstand::testing::kTestToken).status,
+            404);
+  EXPECT_NE(calstand::testing::read_text(log).find("kept in plain text"), std::string::npos)
+      << calstand::testing::read_text(log);
+}
+
+// The guard of connection_guard.hpp: a request trickled within the read timeout but past the
+// whole-request deadline is cut at the deadline; one address holds at most its cap of
+// connections (the next is answered 503 and closed) and gets its room back as they close; a
+// live stream outlasts the deadline (it limits requests, not answers).
+TEST(DaemonSecurity, ATrickledRequestIsCutAtItsDeadlineAndAnAddressHoldsAtMostItsCap) {
+  ApiOptions options;
+  options.token = calstand::testing::kTestToken;
+  options.request_deadline_s = 2;
+  options.max_connections_per_address = 4;
+  InProcessDaemon d(calstand::testing::fresh_dir("sec-deadline") + "/station.db", options);
+  const int port = d.port();
+
+  // A live stream, then three tricklers: the address's four connections.
+  RawConnection stream(port);
+  ASSERT_TRUE(stream.send_text("GET /events HTTP/1.1\r\nHost: station\r\n\r\n"));
+  bool stream_closed = false;
+  const std::string stream_head = stream.read_until_closed(1000, stream_closed);
+  ASSERT_EQ(stream_head.rfind("HTTP/1.1 200", 0), 0u) << stream_head.substr(0, 200);
+  const auto started = std::chrono::steady_clock::now();
+  std::vector<std::unique_ptr<RawConnection>> slow;
+  for (int i = 0; i < 3; ++i) {
+    slow.push_back(std::make_unique<RawConnection>(port));
+    ASSERT_TRUE(slow.back()->send_text("GET /station HTTP/1.1\r\nHost: station\r\n"));
+  }
+  std::atomic<bool> stop{false};
+  std::vector<std::atomic<double>> cut_after_s(slow.size());
+  for (auto& c : cut_after_s) c = -1.0;
+  std::thread trickler([&] {
+    // A byte every 200 ms: far within the read timeout (5 s), so only the deadline cuts them.
+    for (std::size_t i = 0; !stop; ++i) {
+      for (std::size_t k = 0; k < slow.size(); ++k) {
+        if (cut_after_s[k] >= 0.0) continue;
+        if (!slow[k]->send_text(i % 2 == 0 ? "X" : ":")) {
+          cut_after_s[k] =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  });
+  // While the four are open, a fifth connection of the address is refused by name.
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  {
+    RawConnection fifth(port);
+    ASSERT_TRUE(fifth.send_text("GET /station HTTP/1.1\r\nHost: station\r\n\r\n"));
+    bool closed = false;
+    const std::string answer = fifth.read_until_closed(5000, closed);
+    EXPECT_EQ(answer.rfind("HTTP/1.1 503", 0), 0u) << answer.substr(0, 300);
+    EXPECT_NE(answer.find("holds 4 connections already"), std::string::npos) << answer;
+    EXPECT_TRUE(closed);
+  }
+  // The tricklers are cut at the deadline: each sees its connection closed (a send fails, or
+  // the daemon's answer arrives) between 2 s and 2 s + a few pieces after its first byte.
+  for (std::size_t k = 0; k < slow.size(); ++k) {
+    bool closed = false;
+    slow[k]->read_until_closed(8000, closed);
+    EXPECT_TRUE(closed) << "trickler " << k << " outlived the 2 s deadline";
+    const double at =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    EXPECT_GE(at, 1.9) << "trickler " << k << " cut before its deadline";
+    EXPECT_LE(at, 4.5) << "trickler " << k;
+  }
+  stop = true;
+  trickler.join();
+  // A request refused before its body was read (no token) leaves the kept-alive connection
+  // usable: the unread body is not taken for the start of the next request (as the console's
+  // refused abort followed by a read once was).
+  {
+    RawConnection keep(port);
+    ASSERT_TRUE(keep.send_text(
+        "POST /runs/1/abort HTTP/1.1\r\nHost: station\r\nContent-Type: application/json\r\n"
+        "Content-Length: 2\r\n\r\n{}"));
+    bool closed = false;
+    const std::string refused = keep.read_until_closed(1000, closed);
+    EXPECT_EQ(refused.rfind("HTTP/1.1 401", 0), 0u) << refused.substr(0, 200);
+    ASSERT_FALSE(closed);
+    ASSERT_TRUE(keep.send_text("GET /station HTTP/1.1\r\nHost: station\r\n\r\n"));
+    const std::string next = keep.read_until_closed(1000, closed);
+    EXPECT_EQ(next.rfind("HTTP/1.1 200", 0), 0u) << next.substr(0, 200);
+  }
+  // The stream, older than the deadline now, still stands; and with the tricklers gone the
+  // address has room again.
+  stream.read_until_closed(300, stream_closed);
+  EXPECT_FALSE(stream_closed) << "a live stream was cut by the request deadline";
+  calstand::testing::ApiClient api(port);
+  EXPECT_TRUE(wait_until([&] { return api.get("/station").status == 200; }));
 }
 
 }  // namespace

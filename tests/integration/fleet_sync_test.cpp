@@ -34,6 +34,8 @@
 #include "postgres_server.hpp"
 #include "store/database.hpp"
 #include "store/hash.hpp"
+#include "store/migration_blocks.hpp"
+#include "store/run_store.hpp"
 #include "store/station_identity.hpp"
 
 extern char** environ;
@@ -50,8 +52,9 @@ constexpr const char* kDbName = "fleet";
 constexpr const char* kReader = "fleet_reader";
 
 /// Tables a sync copies, each counted on the station (SQLite) and centrally for that station.
-const std::vector<std::string> kTables = {"runs",         "steps",       "events", "run_units",
-                                          "calibrations", "acceptances", "fits",   "sample_chunks"};
+const std::vector<std::string> kTables = {
+    "runs", "steps",         "events",     "run_units",       "calibrations",     "acceptances",
+    "fits", "sample_chunks", "step_means", "table_telemetry", "chamber_telemetry"};
 
 /// A simulated station: its database file and the login role it syncs as.
 struct Station {
@@ -137,6 +140,14 @@ class FleetSync : public ::testing::Test {
     }
     calstand::store::Database db(s.db);
     s.uuid = calstand::store::station_uuid(db);
+    // A station-wide event (no run), as a daemon records an interlock between runs.
+    calstand::store::EventRecord interlock;
+    interlock.time_s = 12.5;
+    interlock.kind = calstand::store::EventKind::kInterlock;
+    interlock.source = "chamber";
+    interlock.message = "door opened between runs";
+    interlock.detail = {{"air_c", 24.5}};
+    calstand::store::RunStore(db).add_event(interlock);
     return s;
   }
 
@@ -225,6 +236,48 @@ TEST_F(FleetSync, ThreeStationsSyncingAtOnceCopyEveryRowOnceAndASecondSyncChange
     EXPECT_GT(local.at("acceptances"), 0);
     EXPECT_GT(local.at("fits"), 0);
     EXPECT_EQ(central_counts(s), local) << s.name;
+  }
+  // Every station-wide event arrived without a run; telemetry arrived value for value (the
+  // COPY text of a double reads back to the same double).
+  for (const Station& s : stations_) {
+    pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, kDbName));
+    pqxx::read_transaction tx(owner);
+    EXPECT_EQ(tx.exec_params("SELECT count(*) FROM events WHERE station = $1 AND run_id IS NULL "
+                             "AND kind = 'interlock' AND detail->>'air_c' = '24.5'",
+                             s.uuid)[0][0]
+                  .as<int>(),
+              1)
+        << s.name;
+    std::vector<std::tuple<long long, double, double, double>> local_rows;
+    std::vector<std::tuple<long long, double, double, double>> central_rows;
+    calstand::store::Database db(s.db);
+    SQLite::Statement q(db.sql(),
+                        "SELECT id, time_s, outer_deg, inner_rate_dps FROM table_telemetry "
+                        "ORDER BY id");
+    while (q.executeStep()) {
+      local_rows.emplace_back(q.getColumn(0).getInt64(), q.getColumn(1).getDouble(),
+                              q.getColumn(2).getDouble(), q.getColumn(3).getDouble());
+    }
+    for (const auto& row : tx.exec_params("SELECT local_id, time_s, outer_deg, inner_rate_dps "
+                                          "FROM table_telemetry WHERE station = $1 ORDER BY "
+                                          "local_id",
+                                          s.uuid)) {
+      central_rows.emplace_back(row[0].as<long long>(), row[1].as<double>(), row[2].as<double>(),
+                                row[3].as<double>());
+    }
+    EXPECT_GT(local_rows.size(), 0u) << s.name;
+    EXPECT_EQ(central_rows, local_rows) << s.name;
+    // Step means as the station has them, by step and device.
+    const double local_gz = db.sql()
+                                .execAndGet(
+                                    "SELECT gz_dps FROM step_means ORDER BY step_id, "
+                                    "attempt, device LIMIT 1")
+                                .getDouble();
+    EXPECT_EQ(tx.exec_params("SELECT gz_dps FROM step_means WHERE station = $1 ORDER BY "
+                             "step_local_id, attempt, device LIMIT 1",
+                             s.uuid)[0][0]
+                  .as<double>(),
+              local_gz);
   }
   // A second sync: nothing copied, nothing changed.
   for (const Station& s : stations_) {
@@ -543,6 +596,71 @@ TEST_F(FleetSync, ACentralSchemaOfAnotherVersionIsRefusedByName) {
   EXPECT_EQ(r.exit_code, 1) << r.out;
   EXPECT_NE(r.out.find("no calstand schema there"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("calstand fleet migrate"), std::string::npos) << r.out;
+}
+
+TEST_F(FleetSync, AStationNameIsUniqueInTheFleet) {
+  ASSERT_EQ(stations_.size(), 3u) << "needs the stations of the first test";
+  // Another station (its own file, its own role) asking for line-2's name is refused by name,
+  // though row-level security hides line-2's row from it; nothing of it is registered.
+  Station s = make_station("line-2b", {"U-221"});
+  const Result r = run("sync --db " + s.db + " --to " + server_->url(s.role, kDbName) +
+                       " --password-file " + server_->passfile() + " --name line-2");
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_NE(r.out.find("the name 'line-2' is another station's in this fleet"), std::string::npos)
+      << r.out;
+  pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, kDbName));
+  pqxx::read_transaction tx(owner);
+  EXPECT_EQ(tx.exec_params("SELECT count(*) FROM stations WHERE uuid = $1", s.uuid)[0][0].as<int>(),
+            0);
+  EXPECT_EQ(tx.exec("SELECT count(*) FROM stations WHERE name = 'line-2'")[0][0].as<int>(), 1);
+}
+
+TEST_F(FleetSync, MigratingAVersion1DatabaseKeepsItsRowsAndTellsRepeatedNamesApart) {
+  // A central database at version 1 (before names were unique, telemetry synced): two stations
+  // registered as "bench", one run of the first.
+  {
+    pqxx::connection admin(server_->conninfo(PostgresServer::kOwner, "postgres"));
+    pqxx::nontransaction tx(admin);
+    tx.exec("CREATE DATABASE fleet_v1");
+  }
+  pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, "fleet_v1"));
+  const std::string schema =
+      calstand::testing::read_text(std::string(CALSTAND_SOURCE_DIR) + "/fleet/central_schema.sql");
+  const auto blocks = calstand::store::parse_migrations(schema);
+  ASSERT_GE(blocks.size(), 2u);
+  const char* first = "11111111-1111-4111-8111-111111111111";
+  const char* second = "22222222-2222-4222-8222-222222222222";
+  {
+    pqxx::work tx(owner);
+    tx.exec(
+        "CREATE TABLE calstand_schema (version integer PRIMARY KEY, title text NOT NULL, "
+        "applied_utc timestamptz NOT NULL DEFAULT now())");
+    tx.exec(blocks[0].sql);
+    tx.exec_params("INSERT INTO calstand_schema (version, title) VALUES (1, $1)", blocks[0].title);
+    tx.exec_params(
+        "INSERT INTO stations (uuid, name, store_schema, registered_utc) VALUES "
+        "($1, 'bench', 6, '2026-01-02T00:00:00Z'), ($2, 'bench', 6, '2026-03-04T00:00:00Z')",
+        first, second);
+    tx.exec_params(
+        "INSERT INTO runs (station, local_id, procedure_name, procedure_text, procedure_sha256, "
+        "parameters, station_snapshot, status, created_utc) VALUES ($1, 1, 'six-position', "
+        "'{}', 'x', '{}', '{}', 'completed', '2026-01-02T01:00:00Z')",
+        first);
+    tx.commit();
+  }
+  const Result r = run("fleet migrate --to " + server_->url(PostgresServer::kOwner, "fleet_v1") +
+                       " --password-file " + server_->passfile());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  pqxx::read_transaction tx(owner);
+  EXPECT_EQ(tx.exec("SELECT max(version) FROM calstand_schema")[0][0].as<int>(),
+            static_cast<int>(blocks.size()));
+  const auto name_of = [&](const char* uuid) {
+    return tx.exec_params("SELECT name FROM stations WHERE uuid = $1", uuid)[0][0]
+        .as<std::string>();
+  };
+  EXPECT_EQ(name_of(first), "bench") << "the first registration keeps its name";
+  EXPECT_EQ(name_of(second), "bench #22222222");
+  EXPECT_EQ(tx.exec("SELECT count(*) FROM runs")[0][0].as<int>(), 1);
 }
 
 TEST_F(FleetSync, TheDaemonPublishesInTheBackgroundAndRetriesWhileTheServerIsDown) {

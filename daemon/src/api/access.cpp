@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "store/hash.hpp"
+#include "wire/token_hash.hpp"
+
 namespace calstand::daemon::api {
 
 bool constant_time_equal(std::string_view a, std::string_view b) {
@@ -50,9 +53,31 @@ const NamedToken* AccessPolicy::match(std::string_view presented) const {
   const NamedToken* found = nullptr;
   for (const auto& t : tokens) {
     // No early exit: every secret is compared whichever matched.
-    if (constant_time_equal(presented, t.secret) && found == nullptr) found = &t;
+    if (!t.hashed() && constant_time_equal(presented, t.secret) && found == nullptr) found = &t;
   }
-  return found;
+  if (found != nullptr) return found;
+  const std::string_view id = wire::token_id_of(presented);
+  if (id.empty()) return nullptr;
+  const std::string digest = store::sha256_hex(presented);
+  {
+    std::lock_guard lock(verified->mutex);
+    const auto known = verified->token_of_digest.find(digest);
+    if (known != verified->token_of_digest.end()) return &tokens[known->second];
+  }
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    const NamedToken& t = tokens[i];
+    if (!t.hashed() || t.id != id) continue;
+    bool matches = false;
+    {
+      std::lock_guard hashing(verified->hashing);
+      matches = wire::token_secret_matches(presented, t.hash, "token '" + t.name + "'");
+    }
+    if (!matches) return nullptr;
+    std::lock_guard lock(verified->mutex);
+    verified->token_of_digest.emplace(digest, i);
+    return &t;
+  }
+  return nullptr;
 }
 
 AccessDecision check_access(const AccessPolicy& policy, std::string_view method,

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <thread>
 
+#include "connection_guard.hpp"
 #include "core/error.hpp"
 #include "daemon/api/access.hpp"
 #include "daemon/api/tokens_file.hpp"
@@ -28,12 +29,14 @@ void require_readable(const std::string& file, const char* option) {
 
 // The server: with TLS when a certificate is given (the files are checked first so that the
 // error names the one at fault; OpenSSL then checks that they are PEM and belong together).
+// Both guarded (connection_guard.hpp): a deadline per request, a cap per client address.
 std::unique_ptr<httplib::Server> make_server(const ApiOptions& o) {
-  if (!o.uses_tls()) return std::make_unique<httplib::Server>();
+  const GuardLimits limits{o.request_deadline_s, o.max_connections_per_address};
+  if (!o.uses_tls()) return std::make_unique<GuardedServer>(limits);
   require_readable(o.tls_cert_file, "--tls-cert");
   require_readable(o.tls_key_file, "--tls-key");
   auto server =
-      std::make_unique<httplib::SSLServer>(o.tls_cert_file.c_str(), o.tls_key_file.c_str());
+      std::make_unique<GuardedSslServer>(o.tls_cert_file.c_str(), o.tls_key_file.c_str(), limits);
   if (!server->is_valid()) {
     throw core::InputError("--tls-cert", fmt::format("{} and {} are not a PEM certificate chain "
                                                      "and its private key",
@@ -72,6 +75,14 @@ void ApiOptions::validate() const {
   if (port < 0 || port > 65535)
     throw core::InputError("--listen", fmt::format("port {} is not 0..65535", port));
   if (threads < 1) throw core::InputError("threads", "at least one connection thread is needed");
+  if (request_deadline_s < 1) {
+    throw core::InputError("--request-deadline-s", "must be at least 1 s");
+  }
+  if (max_connections_per_address < 1 || max_connections_per_address > threads) {
+    throw core::InputError("--max-connections-per-address",
+                           fmt::format("{}: need 1 .. {} (the connection threads)",
+                                       max_connections_per_address, threads));
+  }
   if (max_body_bytes == 0) throw core::InputError("max_body_bytes", "must be > 0");
   if (max_streams < 1 || max_streams >= threads) {
     throw core::InputError(

@@ -7,19 +7,16 @@
 #include "core/error.hpp"
 #include "core/json_schema.hpp"
 #include "core/schemas.hpp"
+#include "wire/tokens_store.hpp"
 
 namespace calstand::daemon::api {
 
 std::vector<NamedToken> load_tokens_file(const std::string& path) {
-  const nlohmann::json doc = core::read_json_file(path);
-  core::validate_or_throw(core::schema("tokens.schema.json"), doc, path);
   std::vector<NamedToken> out;
-  for (const auto& t : doc.at("tokens")) {
-    out.push_back({t.at("name").get<std::string>(),
-                   t.at("role").get<std::string>() == "read" ? Role::kRead : Role::kOperator,
-                   t.at("token").get<std::string>()});
+  for (const wire::TokenEntry& e : wire::read_tokens_file(path)) {
+    out.push_back(
+        {e.name, e.role == "read" ? Role::kRead : Role::kOperator, e.plain_secret, e.id, e.hash});
   }
-  check_unique_tokens(out, path);
   return out;
 }
 
@@ -32,7 +29,7 @@ void check_unique_tokens(const std::vector<NamedToken>& tokens, const std::strin
       throw core::InputError(
           where, fmt::format("tokens[{}].name: '{}' is given twice", i, tokens[i].name));
     }
-    if (!secrets.insert(tokens[i].secret).second) {
+    if (!tokens[i].hashed() && !secrets.insert(tokens[i].secret).second) {
       throw core::InputError(
           where, fmt::format("tokens[{}].token: the secret of '{}' is another token's too", i,
                              tokens[i].name));

@@ -43,13 +43,18 @@ struct SyncCounts {
   std::int64_t calibrations = 0;
   std::int64_t acceptances = 0;
   std::int64_t fits = 0;
+  std::int64_t step_means = 0;
+  std::int64_t table_telemetry = 0;
+  std::int64_t chamber_telemetry = 0;
+  std::int64_t station_events = 0;  ///< events of no run (a run's go with it: `events`)
   std::int64_t sample_chunks = 0;
   std::int64_t samples = 0;  ///< IMU samples in the chunks copied
   std::int64_t sample_bytes = 0;
   std::int64_t transactions = 0;  ///< central transactions committed
   /// Rows of every table but samples.
   std::int64_t rows() const {
-    return runs + steps + events + run_units + calibrations + acceptances + fits;
+    return runs + steps + events + run_units + calibrations + acceptances + fits + step_means +
+           table_telemetry + chamber_telemetry + station_events;
   }
 };
 
@@ -65,10 +70,11 @@ struct SyncReport {
 };
 
 /// Copies what the central database lacks of station file `station` (runs that have ended,
-/// with steps, events, units, parameters and procedure text; calibration records; acceptance
-/// verdicts; fit history; sample chunks when asked), registering the station on its first
-/// sync. Each batch is one central transaction together with the move of its cursor, so a sync
-/// cut anywhere (server gone, process killed) loses nothing and the next one resumes there;
+/// with steps, events, units, parameters and procedure text; their step means and table and
+/// chamber telemetry; station-wide events; calibration records; acceptance verdicts; fit
+/// history; sample chunks when asked, by COPY through a staging table), registering the station on
+/// its first sync. Each batch is one central transaction together with the move of its cursor, so a
+/// sync cut anywhere (server gone, process killed) loses nothing and the next one resumes there;
 /// rows already central are never copied twice (a second sync copies nothing). Concurrent
 /// syncs of one station serialise on an advisory lock; of different stations, run side by side.
 ///
@@ -80,7 +86,8 @@ SyncReport sync_station(store::Database& station, pqxx::connection& central,
                         const SyncOptions& options);
 
 /// `{"station": {"uuid", "name"}, "copied": {"runs", "steps", "events", "run_units",
-///   "calibrations", "acceptances", "fits", "sample_chunks", "samples", "sample_bytes",
+///   "calibrations", "acceptances", "fits", "step_means", "table_telemetry",
+///   "chamber_telemetry", "station_events", "sample_chunks", "samples", "sample_bytes",
 ///   "transactions"}, "waiting_runs": [local id...], "seconds", "stopped"}`
 nlohmann::json to_json(const SyncReport& report);
 

@@ -11,6 +11,8 @@
 #include "core/json_schema.hpp"
 #include "daemon/api/api_server.hpp"
 #include "daemon/api/tokens_file.hpp"
+#include "wire/token_hash.hpp"
+#include "wire/tokens_store.hpp"
 
 namespace {
 
@@ -109,6 +111,54 @@ TEST(Access, RolesDecideBetween401And403) {
   const AccessPolicy open;  // loopback without tokens: as before tokens existed
   EXPECT_EQ(check_access(open, "POST", "/runs", "").status, 0);
   EXPECT_EQ(check_access(open, "POST", "/runs", "anything").caller, nullptr);
+}
+
+// A hashed token (calstand token add): the daemon holds its id and hash only, accepts the
+// right secret (again from its memory of it), refuses a wrong one, one with another token's id,
+// and one without an id; a plain token beside it still works.
+TEST(Access, AHashedTokenAcceptsItsSecretOnly) {
+  const auto op = calstand::wire::new_token_secret();
+  const auto viewer = calstand::wire::new_token_secret();
+  AccessPolicy p;
+  p.tokens = {
+      {"lab-op", Role::kOperator, "", op.id, calstand::wire::hash_token_secret(op.secret)},
+      {"viewer", Role::kRead, "", viewer.id, calstand::wire::hash_token_secret(viewer.secret)},
+      {"old-op", Role::kOperator, "op-secret-01234567", "", ""}};
+  p.reads_need_token = true;
+  for (int twice = 0; twice < 2; ++twice) {
+    const AccessDecision ok = check_access(p, "POST", "/runs", op.secret);
+    EXPECT_EQ(ok.status, 0);
+    ASSERT_NE(ok.caller, nullptr);
+    EXPECT_EQ(ok.caller->name, "lab-op");
+  }
+  std::string wrong = op.secret;
+  wrong.back() = wrong.back() == 'a' ? 'b' : 'a';
+  EXPECT_EQ(check_access(p, "POST", "/runs", wrong).status, 401);
+  // The viewer's id with the operator's secret part: checked against the viewer's hash, refused.
+  EXPECT_EQ(check_access(p, "GET", "/station", viewer.id + op.secret.substr(16)).status, 401);
+  EXPECT_EQ(check_access(p, "GET", "/station", op.secret.substr(17)).status, 401);
+  EXPECT_EQ(check_access(p, "POST", "/runs", viewer.secret).status, 403);
+  EXPECT_EQ(check_access(p, "POST", "/runs", "op-secret-01234567").caller->name, "old-op");
+  // The hash itself is no token.
+  EXPECT_EQ(check_access(p, "GET", "/station", p.tokens[0].hash).status, 401);
+}
+
+TEST(TokensFile, ReadsHashedTokensWithoutTheirSecrets) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("calstand-access-hashed-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "tokens.json").string();
+  std::filesystem::remove(path);
+  const std::string secret = calstand::wire::add_hashed_token(path, "lab-op", "operator");
+  const auto tokens = load_tokens_file(path);
+  ASSERT_EQ(tokens.size(), 1u);
+  EXPECT_TRUE(tokens[0].hashed());
+  EXPECT_TRUE(tokens[0].secret.empty());
+  AccessPolicy p;
+  p.tokens = tokens;
+  EXPECT_EQ(check_access(p, "POST", "/runs", secret).status, 0);
+  EXPECT_EQ(check_access(p, "POST", "/runs", secret + "x").status, 401);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Access, BearerOfTakesOnlyTheBearerScheme) {

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -24,10 +27,23 @@ enum class Role { kRead, kOperator };
 std::string_view to_string(Role role);
 
 /// One bearer token the daemon accepts. `name` is recorded with every action taken with it.
+/// Either `secret` in plain text, or (a hashed token of `calstand token add`) its public `id`
+/// and salted `hash` (wire/token_hash.hpp): the daemon never holds that secret.
 struct NamedToken {
   std::string name;
   Role role = Role::kOperator;
   std::string secret;
+  std::string id{};  // braces: tokens listed as {name, role, secret} stay warning-free
+  std::string hash{};
+  bool hashed() const { return !hash.empty(); }
+};
+
+/// The hashed tokens' secrets a daemon has verified, by their SHA-256: scrypt is paid once per
+/// secret, not per request. Shared by the copies of one AccessPolicy.
+struct VerifiedSecrets {
+  std::mutex mutex;
+  std::map<std::string, std::size_t> token_of_digest;  ///< index into AccessPolicy::tokens
+  std::mutex hashing;  ///< one scrypt at a time: 32 MiB each, however many clients knock
 };
 
 /// What a request needs: nothing (the console's own files, which hold no station data), a
@@ -41,13 +57,17 @@ struct AccessPolicy {
   std::vector<NamedToken> tokens;
   /// Reads need a token too: set when the daemon listens beyond loopback.
   bool reads_need_token = false;
+  /// Filled by match(); mutable state behind a pointer, so the policy reads as immutable.
+  std::shared_ptr<VerifiedSecrets> verified = std::make_shared<VerifiedSecrets>();
 
   /// What `method` on `path` needs: GET/HEAD of `/` and `/console/...` nothing; any other GET
   /// or HEAD a read (a token of any role when reads_need_token); anything else an operator
   /// token (when any token is configured).
   Need need_of(std::string_view method, std::string_view path) const;
-  /// The token whose secret is `presented`, or nullptr. Every secret is compared, each in
-  /// constant time, so the time taken says nothing about which one nearly matched.
+  /// The token whose secret is `presented`, or nullptr. Every plain secret is compared, each in
+  /// constant time, so the time taken says nothing about which one nearly matched; a hashed
+  /// token is found by the id its secret starts with and checked by its hash (the first time:
+  /// then remembered).
   const NamedToken* match(std::string_view presented) const;
 };
 

@@ -40,6 +40,12 @@ struct ApiOptions {
   /// requests, is closed [s].
   int read_timeout_s = 5;
   int keep_alive_timeout_s = 5;
+  /// A request's line, headers and body must all arrive within this from its first byte (a
+  /// TLS handshake within it from the connection's start); else the connection is closed [s].
+  /// Responses, live streams included, are not limited.
+  int request_deadline_s = 30;
+  /// Connections one client address may hold at once; more are answered 503 and closed.
+  int max_connections_per_address = 16;
   /// The fleet's central database to show read-only under /fleet (`--fleet`): checked by
   /// fleet::parse_central_address; none: /fleet answers 404.
   std::optional<fleet::CentralAddress> fleet;
