@@ -185,7 +185,7 @@ def completion(root, name):
     subs, opts, valued = {}, {}, {}
 
     def visit(cmd):
-        key = " ".join(cmd.path)
+        key = " ".join(["_"] + cmd.path)  # "_": the program itself (bash keys cannot be empty)
         subs[key] = " ".join(s.path[-1] for s in cmd.subcommands)
         names, with_value = [], []
         for spec, _ in cmd.options:
@@ -211,13 +211,13 @@ def completion(root, name):
 {table(fn + "_valued", valued)}
 
 {fn}() {{
-  local cur="${{COMP_WORDS[COMP_CWORD]}}" prev="" path="" word i
+  local cur="${{COMP_WORDS[COMP_CWORD]}}" prev="" path="_" word i
   [ "$COMP_CWORD" -gt 0 ] && prev="${{COMP_WORDS[COMP_CWORD-1]}}"
   # The subcommand path so far: each word that names a subcommand of the path before it.
   for ((i = 1; i < COMP_CWORD; i++)); do
     word="${{COMP_WORDS[i]}}"
     case " ${{{fn}_subcommands[$path]}} " in
-      *" $word "*) path="${{path:+$path }}$word" ;;
+      *" $word "*) path="$path $word" ;;
     esac
   done
   # After an option that takes a value: file names (most values are files).
