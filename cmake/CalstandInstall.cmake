@@ -3,10 +3,13 @@
 # (scripts/package-deb.sh, cmake/CalstandPackage.cmake) is these rules staged and wrapped.
 include(GNUInstallDirs)
 
-# systemd's own answer where it has one (bookworm: /lib/systemd/system); else the prefix's lib.
-find_package(PkgConfig QUIET)
-if(PKG_CONFIG_FOUND)
-  pkg_get_variable(CALSTAND_SYSTEMD_UNIT_DIR_DEFAULT systemd systemdsystemunitdir)
+# Installed for the system (prefix /usr): systemd's own answer (bookworm: /lib/systemd/system).
+# Elsewhere the prefix's lib/systemd/system, which systemd reads for /usr/local too.
+if(CMAKE_INSTALL_PREFIX STREQUAL "/usr")
+  find_package(PkgConfig QUIET)
+  if(PKG_CONFIG_FOUND)
+    pkg_get_variable(CALSTAND_SYSTEMD_UNIT_DIR_DEFAULT systemd systemdsystemunitdir)
+  endif()
 endif()
 if(NOT CALSTAND_SYSTEMD_UNIT_DIR_DEFAULT)
   set(CALSTAND_SYSTEMD_UNIT_DIR_DEFAULT "${CMAKE_INSTALL_PREFIX}/lib/systemd/system")
@@ -36,8 +39,9 @@ install(FILES ${PROJECT_BINARY_DIR}/calstandd.service DESTINATION ${CALSTAND_SYS
 
 # The station's configuration (conffiles in the package): the daemon's options and a station
 # file that starts on the built-in simulator until the operator describes the real station.
-install(FILES ${PROJECT_SOURCE_DIR}/packaging/etc/calstandd.conf
-        DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/calstand)
+configure_file(${PROJECT_SOURCE_DIR}/packaging/etc/calstandd.conf.in
+               ${PROJECT_BINARY_DIR}/calstandd.conf @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/calstandd.conf DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/calstand)
 install(FILES ${PROJECT_SOURCE_DIR}/sim/stations/default.json
         DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/calstand RENAME station.json)
 

@@ -167,11 +167,12 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   // Opens (and migrates) once, or fails here: an older schema is backed up first, a newer one
   // (a downgrade) refused by name.
   const auto upgrade = calstand::store::upgrade_database(opt.db, [&](int from, int to) {
-    spdlog::info("database {}: schema {} is older than this calstandd's {}: backing it up, then "
-                 "migrating",
-                 opt.db, from, to);
-    notifier.notify(fmt::format("STATUS=database: backing up schema {} before migrating to {}",
-                                from, to));
+    spdlog::info(
+        "database {}: schema {} is older than this calstandd's {}: backing it up, then "
+        "migrating",
+        opt.db, from, to);
+    notifier.notify(
+        fmt::format("STATUS=database: backing up schema {} before migrating to {}", from, to));
   });
   if (!upgrade.backup.empty()) {
     spdlog::info("database {}: migrated from schema {} to {}; the copy as it was: {}", opt.db,

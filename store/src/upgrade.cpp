@@ -52,9 +52,8 @@ int file_schema_version(const std::string& path) {
   });
   // Another program's version number says nothing about calstand's schema.
   if (application_id != 0 && application_id != kCalstandApplicationId) {
-    throw StoreError("open " + path,
-                     "not a calstand database (application_id " + std::to_string(application_id) +
-                         ")");
+    throw StoreError("open " + path, "not a calstand database (application_id " +
+                                         std::to_string(application_id) + ")");
   }
   return version;
 }

@@ -2,11 +2,10 @@
 // STATUS= lines, WATCHDOG=1 from the run thread (a hung run thread stops them), STOPPING=1 on
 // SIGTERM; and the upgrade on start: an older database backed up and migrated with a log
 // line, a newer one refused by name.
+#include <SQLiteCpp/Database.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
-
-#include <SQLiteCpp/Database.h>
 
 #include <atomic>
 #include <chrono>
@@ -77,8 +76,8 @@ TEST(DaemonSystemd, SaysReadyStatusAndStoppingAndPingsTheWatchdog) {
   EXPECT_NE(running->at("STATUS").find("/"), std::string::npos) << running->at("STATUS");
   // SIGTERM: STOPPING first, then the checkpoint and a clean exit.
   ::kill(d.pid(), SIGTERM);
-  const auto stopping = systemd.wait_for(
-      [](const NotifyMessage& m) { return m.count("STOPPING"); }, milliseconds(30000));
+  const auto stopping = systemd.wait_for([](const NotifyMessage& m) { return m.count("STOPPING"); },
+                                         milliseconds(30000));
   ASSERT_TRUE(stopping);
   EXPECT_EQ(stopping->at("STOPPING"), "1");
   EXPECT_TRUE(has_status(*stopping, "stopping")) << stopping->at("STATUS");
@@ -94,10 +93,9 @@ TEST(DaemonSystemd, AHungRunThreadStopsTheWatchdogPings) {
   const daemon::service::SystemdNotifier notifier(systemd.address(),
                                                   std::chrono::microseconds(400000));
   daemon::service::EventHub hub(256);
-  daemon::service::RunService service(
-      {sim::load_station_or_default(""), dir + "/station.db",
-       daemon::service::RecoveryPolicy::kAuto},
-      hub);
+  daemon::service::RunService service({sim::load_station_or_default(""), dir + "/station.db",
+                                       daemon::service::RecoveryPolicy::kAuto},
+                                      hub);
   auto heartbeat = std::make_shared<daemon::service::ServiceHeartbeat>(
       notifier, [&service] { return service.snapshot(); });
   std::mutex gate_mutex;
@@ -133,7 +131,8 @@ TEST(DaemonSystemd, AHungRunThreadStopsTheWatchdogPings) {
   // Five watchdog periods without a ping, while the service still answers other threads.
   const auto quiet = systemd.collect(milliseconds(2000));
   int pings = 0;
-  for (const auto& [at, datagram] : quiet) pings += parse_notify_message(datagram).count("WATCHDOG");
+  for (const auto& [at, datagram] : quiet)
+    pings += parse_notify_message(datagram).count("WATCHDOG");
   EXPECT_EQ(pings, 0) << "pings while the run thread hangs";
   EXPECT_EQ(service.snapshot().run, run);
   {
@@ -163,10 +162,10 @@ TEST(DaemonUpgrade, AnOlderDatabaseIsBackedUpAndMigratedOnStartWithALogLine) {
   EXPECT_EQ(schema_of(backup), older);
   EXPECT_EQ(schema_of(db), store::latest_schema_version());
   const std::string said = slurp(log);
-  EXPECT_NE(said.find("migrated from schema " + std::to_string(older) + " to " +
-                      std::to_string(store::latest_schema_version()) +
-                      "; the copy as it was: " + backup),
-            std::string::npos)
+  EXPECT_NE(
+      said.find("migrated from schema " + std::to_string(older) + " to " +
+                std::to_string(store::latest_schema_version()) + "; the copy as it was: " + backup),
+      std::string::npos)
       << said;
   // The next start finds nothing to do: no second backup.
   {

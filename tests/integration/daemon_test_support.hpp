@@ -194,7 +194,8 @@ class DaemonProcess {
   }
   int port() const { return port_; }
   pid_t pid() const { return pid_; }
-  /// Sends `sig` (none when 0) and waits for the process; its exit code (-signal when killed by one).
+  /// Sends `sig` (none when 0) and waits for the process; its exit code (-signal when killed by
+  /// one).
   int signal_and_wait(int sig) {
     if (sig != 0) kill(pid_, sig);
     int status = 0;

@@ -1,8 +1,8 @@
 #include "daemon/service/observed_journal.hpp"
 
-#include <string>
-
 #include <spdlog/spdlog.h>
+
+#include <string>
 
 #include "core/state_json.hpp"
 #include "daemon/service/log_fields.hpp"

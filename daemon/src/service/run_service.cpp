@@ -134,8 +134,8 @@ void RunService::run_thread() {
     while (!stopping_ && (failed || generation_ == seen)) {
       const auto now = std::chrono::steady_clock::now();
       if (now >= until) break;
-      wake_.wait_for(lock, std::min<std::chrono::steady_clock::duration>(until - now,
-                                                                         heartbeat_period_));
+      wake_.wait_for(lock,
+                     std::min<std::chrono::steady_clock::duration>(until - now, heartbeat_period_));
       if (heartbeat_ && !stopping_ && std::chrono::steady_clock::now() < until) {
         lock.unlock();
         heartbeat_();

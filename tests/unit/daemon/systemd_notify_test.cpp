@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 #include <spdlog/logger.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -167,6 +168,22 @@ TEST(JournalMessage, CarriesTheThreadsRunStepAndDevice) {
   EXPECT_EQ(after.at("RUN"), "12");
   EXPECT_EQ(after.count("STEP"), 0u);
   EXPECT_EQ(after.count("DEVICE"), 0u);
+}
+
+TEST(JournalStream, StderrIsTheJournalOnlyWhenJournalStreamNamesIt) {
+  struct stat st {};
+  ASSERT_EQ(::fstat(STDERR_FILENO, &st), 0);
+  const std::string self = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+  ::setenv("JOURNAL_STREAM", self.c_str(), 1);
+  EXPECT_TRUE(stderr_is_journal());
+  // Inherited from a parent whose stderr was the journal, while ours is elsewhere.
+  const std::string other = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino + 1);
+  ::setenv("JOURNAL_STREAM", other.c_str(), 1);
+  EXPECT_FALSE(stderr_is_journal());
+  ::setenv("JOURNAL_STREAM", "not-a-stream", 1);
+  EXPECT_FALSE(stderr_is_journal());
+  ::unsetenv("JOURNAL_STREAM");
+  EXPECT_FALSE(stderr_is_journal());
 }
 
 TEST(JournalSink, SendsEachLineAsADatagramWithAMultiLineMessageFramed) {

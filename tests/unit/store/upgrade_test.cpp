@@ -129,8 +129,7 @@ TEST(Upgrade, AForeignSqliteFileIsRefusedWithoutABackup) {
     upgrade_database(path);
     FAIL() << "a foreign file was opened";
   } catch (const StoreError& e) {
-    EXPECT_NE(std::string(e.what()).find("not a calstand database"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a calstand database"), std::string::npos) << e.what();
   }
   EXPECT_EQ(user_version(path), 3);
 }

@@ -171,7 +171,7 @@ class RunService {
   // mutex_ (so only while `current_` is the run meant), taken without it.
   std::shared_ptr<EngineCommandQueue> commands_ = std::make_shared<EngineCommandQueue>();
   std::thread thread_;
-  std::function<void()> heartbeat_;                            // run thread only, once started
+  std::function<void()> heartbeat_;  // run thread only, once started
   std::chrono::milliseconds heartbeat_period_{std::chrono::seconds(1)};
 };
 
