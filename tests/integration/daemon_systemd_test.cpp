@@ -61,7 +61,8 @@ TEST(DaemonSystemd, SaysReadyStatusAndStoppingAndPingsTheWatchdog) {
   // Between runs the run thread pings at least every half second (WatchdogSec=1).
   int pings = 0;
   const auto got = systemd.collect(milliseconds(2000));
-  for (const auto& [at, datagram] : got) pings += parse_notify_message(datagram).count("WATCHDOG");
+  for (const auto& [at, datagram] : got)
+    pings += static_cast<int>(parse_notify_message(datagram).count("WATCHDOG"));
   EXPECT_GE(pings, 3) << "2 s idle at a 1 s watchdog";
   // A run shows in the status, by step.
   ApiClient api(d.port());
@@ -132,7 +133,7 @@ TEST(DaemonSystemd, AHungRunThreadStopsTheWatchdogPings) {
   const auto quiet = systemd.collect(milliseconds(2000));
   int pings = 0;
   for (const auto& [at, datagram] : quiet)
-    pings += parse_notify_message(datagram).count("WATCHDOG");
+    pings += static_cast<int>(parse_notify_message(datagram).count("WATCHDOG"));
   EXPECT_EQ(pings, 0) << "pings while the run thread hangs";
   EXPECT_EQ(service.snapshot().run, run);
   {
