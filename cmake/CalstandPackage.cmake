@@ -15,16 +15,18 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 set(CPACK_DEBIAN_PACKAGE_DESCRIPTION
     "IMU test and calibration station\n\
-calstand drives a rate table, a thermal chamber and the inertial measurement units on them\n\
-through test and calibration procedures, keeps every sample in a SQLite database, fits the\n\
-IMUs' error models and writes calibration records, certificates and exports.\n\
+calstand drives a rate table, a thermal chamber and the inertial measurement\n\
+units on them through test and calibration procedures, keeps every sample in\n\
+a SQLite database, fits the IMUs' error models and writes calibration\n\
+records, certificates and exports.\n\
 .\n\
-This package holds the station daemon calstandd (its systemd unit, not enabled), with its\n\
-control API and web console, and the command line calstand.")
+This package holds the station daemon calstandd with its control API, web\n\
+console and systemd unit (not enabled), and the command line calstand.")
 # The shared libraries' Debian packages by name, from the programs' ELF dependencies.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-# adduser: postinst makes the system user; init-system-helpers: deb-systemd-helper/-invoke.
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser, init-system-helpers")
+# adduser: postinst makes the system user. (deb-systemd-helper and -invoke come with
+# init-system-helpers, essential in Debian: a dependency on it is an error to lintian.)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "gnuplot-nox, chromium, sqlite3")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     ${PROJECT_SOURCE_DIR}/packaging/debian/conffiles

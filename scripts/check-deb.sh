@@ -27,8 +27,9 @@ field() { dpkg-deb -f "$deb" "$1"; }
 depends="$(field Depends)"
 # The libraries the programs link, by their Debian package (dpkg-shlibdeps), and the tools
 # of the maintainer scripts.
-for p in libc6 libstdc++6 libsqlite3-0 libssl3 libpqxx libmodbus5 libfmt libspdlog libceres \
-         libfftw3-double3 libmuparser adduser init-system-helpers; do
+# (Ceres is linked statically by libceres-dev: its own libraries, cholmod and glog, show.)
+for p in libc6 libstdc++6 libsqlite3-0 libssl3 libpqxx libpq5 libmodbus5 libfmt libspdlog \
+         libcpp-httplib libfftw3-double3 libmuparser libcholmod3 libgoogle-glog adduser; do
   [[ "$depends" == *"$p"* ]] || fail "Depends lacks $p: $depends"
 done
 pass "control: $(field Package) $(field Version) $(field Architecture); Depends: $depends"
@@ -75,10 +76,12 @@ bin="$work/root/usr/bin/calstand"
 sbin="$work/root/usr/sbin/calstandd"
 [ "$("$bin" --version)" = "calstand $version" ] || fail "calstand --version: $("$bin" --version)"
 [ "$("$sbin" --version)" = "calstandd $version" ] || fail "calstandd --version: $("$sbin" --version)"
-"$bin" --help | grep -q '^Subcommands:' || fail "calstand --help lists no subcommands"
-"$sbin" --help | grep -q -- '--db' || fail "calstandd --help lists no --db"
+help="$("$bin" --help)"  # (not piped into grep -q: its early exit would fail the pipe)
+grep -q '^Subcommands:' <<< "$help" || fail "calstand --help lists no subcommands"
+help="$("$sbin" --help)"
+grep -q -- '--db' <<< "$help" || fail "calstandd --help lists no --db"
 file "$bin" "$sbin" | grep -q 'not stripped' && fail "the programs are not stripped"
-"$bin" units "3600 deg/h" --to "deg/s" | grep -q '= 1 deg/s$' ||
+grep -q '= 1 deg/s$' <<< "$("$bin" units "3600 deg/h" --to "deg/s")" ||
   fail "calstand units 3600 deg/h --to deg/s: $("$bin" units "3600 deg/h" --to "deg/s")"
 # The daemon serves on the packaged station file (the simulator) and stops cleanly.
 "$sbin" --db "$work/station.db" --station "$work/root/etc/calstand/station.json" \
