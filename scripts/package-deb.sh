@@ -2,14 +2,22 @@
 # Builds the Debian package dist/calstand_VERSION_ARCH.deb from the source tree: configures a
 # build of its own (build-deb/, Debian's hardening flags from dpkg-buildflags, no tests),
 # builds the two programs with their man pages and completion, and wraps the install rules
-# with CPack's DEB generator (docs/packaging.md). Then checks it: bash scripts/check-deb.sh.
-#   bash scripts/package-deb.sh [--clean]     --clean: start build-deb/ afresh
+# with CPack's DEB generator (docs/packaging.md). Then checks it with scripts/check-deb.sh
+# (contents, the programs run, lintian without error; lintian installed by apt when missing).
+#   bash scripts/package-deb.sh [--clean] [--no-check]   --clean: start build-deb/ afresh
 # Environment: CALSTAND_DEB_BUILD_DIR (build-deb), CALSTAND_JOBS (all cores).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${CALSTAND_DEB_BUILD_DIR:-$root/build-deb}"
 jobs="${CALSTAND_JOBS:-$(nproc)}"
-if [ "${1:-}" = "--clean" ]; then rm -rf "$build"; fi
+check=1
+for arg in "$@"; do
+  case "$arg" in
+    --clean) rm -rf "$build" ;;
+    --no-check) check=0 ;;
+    *) echo "package-deb: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
 
 for tool in dpkg-buildflags dpkg-shlibdeps dpkg-deb fakeroot; do
   command -v "$tool" >/dev/null || { echo "package-deb: $tool is missing (apt-get install dpkg-dev fakeroot)" >&2; exit 1; }
@@ -34,3 +42,4 @@ mkdir -p "$root/dist"
 deb="$(ls "$build"/cpack/calstand_*.deb)"
 cp "$deb" "$root/dist/"
 echo "package-deb: dist/$(basename "$deb") in $(( $(date +%s) - start )) s"
+if [ "$check" -eq 1 ]; then bash "$root/scripts/check-deb.sh" "$root/dist/$(basename "$deb")"; fi
