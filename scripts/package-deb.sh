@@ -24,7 +24,11 @@ for tool in dpkg-buildflags dpkg-shlibdeps dpkg-deb fakeroot; do
 done
 
 # Debian's build flags (hardening: stack protector, fortify, relro, bind-now), as
-# dpkg-buildpackage would give them; NDEBUG as in the tested build.
+# dpkg-buildpackage would give them; NDEBUG as in the tested build. From the tree's root:
+# -ffile-prefix-map names the current directory, and another would rebuild everything. Given
+# to CMake each time (its cache takes CXXFLAGS and LDFLAGS from the environment only once).
+cd "$root"
+export DEB_BUILD_MAINT_OPTIONS="hardening=+all"
 CXXFLAGS="$(dpkg-buildflags --get CXXFLAGS) $(dpkg-buildflags --get CPPFLAGS)"
 LDFLAGS="$(dpkg-buildflags --get LDFLAGS)"
 export CXXFLAGS LDFLAGS
@@ -34,6 +38,7 @@ if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=cc
 start=$(date +%s)
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-DNDEBUG" -DCMAKE_INSTALL_PREFIX=/usr \
+  -DCMAKE_CXX_FLAGS="$CXXFLAGS" -DCMAKE_EXE_LINKER_FLAGS="$LDFLAGS" \
   -DCALSTAND_BUILD_TESTS=OFF -DCALSTAND_BUILD_BENCHMARKS=OFF "${launcher[@]}" >/dev/null
 cmake --build "$build" -j "$jobs" --target calstand calstandd calstand_cli_docs
 rm -rf "$build/cpack"
