@@ -1,7 +1,9 @@
 // calstandd: the station daemon. Owns the station, runs the queue of runs in its database one
 // at a time, serves the control API (schemas/api.md), and after a crash resumes or holds the
 // interrupted run (--recovery). SIGTERM/SIGINT: the run in progress is checkpointed (the
-// station made safe, the run set back to 'interrupted'), then the daemon exits 0.
+// station made safe, the run set back to 'interrupted'), then the daemon exits 0. Under
+// systemd (Type=notify): READY=1 once it serves, STATUS= lines, STOPPING=1, the watchdog fed
+// by the run thread, and the log in the journal (docs/packaging.md).
 #include <fmt/format.h>
 #include <pthread.h>
 #include <spdlog/sinks/rotating_file_sink.h>
@@ -12,6 +14,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -26,10 +29,14 @@
 #include "daemon/api/tokens_file.hpp"
 #include "daemon/service/event_hub.hpp"
 #include "daemon/service/fleet_publisher.hpp"
+#include "daemon/service/journal_sink.hpp"
 #include "daemon/service/run_service.hpp"
+#include "daemon/service/service_heartbeat.hpp"
+#include "daemon/service/systemd_notify.hpp"
 #include "sim/sim_world.hpp"
 #include "store/database.hpp"
 #include "store/database_lock.hpp"
+#include "store/upgrade.hpp"
 #include "wire/listen_address.hpp"
 
 namespace {
@@ -85,7 +92,18 @@ std::string read_token(const Options& opt) {
 }
 
 void set_up_logging(const Options& opt) {
-  std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_color_sink_mt>()};
+  namespace svc = calstand::daemon::service;
+  std::vector<spdlog::sink_ptr> sinks;
+  // Under systemd the lines go to the journal with their fields (RUN, STEP, DEVICE), not as
+  // plain text through stderr; elsewhere to stderr (and the files of --log-dir).
+  if (svc::stderr_is_journal()) {
+    try {
+      sinks.push_back(std::make_shared<svc::JournalSink>("calstandd"));
+    } catch (const std::exception& e) {
+      std::cerr << "calstandd: journal unavailable (" << e.what() << "): logging to stderr\n";
+    }
+  }
+  if (sinks.empty()) sinks.push_back(std::make_shared<spdlog::sinks::stderr_color_sink_mt>());
   if (!opt.log_dir.empty()) {
     std::filesystem::create_directories(opt.log_dir);
     // 10 MB per file, 5 files: weeks of a busy station's log.
@@ -99,8 +117,10 @@ void set_up_logging(const Options& opt) {
 }
 
 int run_daemon(const Options& opt, const sigset_t& stop_signals) {
-  set_up_logging(opt);
   namespace svc = calstand::daemon::service;
+  // Read (and taken out of the environment) before any thread or child process starts.
+  const svc::SystemdNotifier notifier = svc::SystemdNotifier::from_environment();
+  set_up_logging(opt);
   namespace api = calstand::daemon::api;
   svc::ServiceOptions service_options;
   service_options.station = calstand::sim::load_station_or_default(opt.station_file);
@@ -163,7 +183,20 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   const calstand::store::DatabaseLock owner(
       opt.db, calstand::store::DatabaseLock::Mode::kExclusive,
       fmt::format("calstandd pid {} listening on {}", ::getpid(), opt.listen));
-  { calstand::store::Database migrate(opt.db); }  // opens (and migrates) once, or fails here
+  // Opens (and migrates) once, or fails here: an older schema is backed up first, a newer one
+  // (a downgrade) refused by name.
+  const auto upgrade = calstand::store::upgrade_database(opt.db, [&](int from, int to) {
+    spdlog::info(
+        "database {}: schema {} is older than this calstandd's {}: backing it up, then "
+        "migrating",
+        opt.db, from, to);
+    notifier.notify(
+        fmt::format("STATUS=database: backing up schema {} before migrating to {}", from, to));
+  });
+  if (!upgrade.backup.empty()) {
+    spdlog::info("database {}: migrated from schema {} to {}; the copy as it was: {}", opt.db,
+                 upgrade.from_version, upgrade.to_version, upgrade.backup);
+  }
 
   svc::EventHub hub;
   svc::RunService service(service_options, hub);
@@ -172,6 +205,20 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   if (!opt.publish.empty()) {
     publisher = std::make_unique<svc::FleetPublisher>(publisher_options, hub);
     api_options.publish_status = [&publisher] { return publisher->status(); };
+  }
+  // systemd's watchdog and status, fed by the run thread (ServiceHeartbeat).
+  // Owned by the run thread's callback: it lives as long as the thread can call it.
+  auto heartbeat =
+      std::make_shared<svc::ServiceHeartbeat>(notifier, [&service] { return service.snapshot(); });
+  if (notifier.enabled()) {
+    std::chrono::milliseconds period(1000);
+    if (const auto w = notifier.watchdog()) {
+      period = std::min(period, std::chrono::duration_cast<std::chrono::milliseconds>(*w / 4));
+      spdlog::info("systemd watchdog: {} s; the run thread pings it",
+                   std::chrono::duration<double>(*w).count());
+    }
+    service.set_heartbeat([heartbeat] { heartbeat->beat(); },
+                          std::max(period, std::chrono::milliseconds(10)));
   }
   api::ApiServer server(service, hub, api_options);
   const int port = server.start();
@@ -182,6 +229,8 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   spdlog::info("station {} ({} IMUs), database {}, recovery {}", service_options.station.name,
                service_options.station.imus.size(), opt.db, opt.recovery);
   service.start();
+  // Serving now: systemd may start what comes after calstandd.service.
+  notifier.notify(fmt::format("READY=1\nSTATUS={}", svc::status_line(service.snapshot())));
   if (publisher) {
     publisher->start();
     spdlog::info("publishing to {} every {} s and when a run ends{}",
@@ -193,6 +242,7 @@ int run_daemon(const Options& opt, const sigset_t& stop_signals) {
   sigwait(&stop_signals, &sig);
   const std::string why = sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "SIGHUP";
   spdlog::info("{} received: checkpointing the run in progress and stopping", why);
+  notifier.notify("STOPPING=1\nSTATUS=stopping: checkpointing the run in progress (" + why + ")");
   service.stop(why);
   if (publisher) publisher->stop();
   server.stop();

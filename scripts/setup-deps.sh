@@ -20,6 +20,7 @@ packages=(
   gnuplot-nox chromium chromium-driver python3-selenium
   nodejs node-eventsource
   systemd
+  python3 groff-base  # the man pages and completion are made at build time (python3); ctest renders them (groff)
 )
 
 missing=()

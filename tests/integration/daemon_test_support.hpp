@@ -193,9 +193,11 @@ class DaemonProcess {
     }
   }
   int port() const { return port_; }
-  /// Sends `sig` and waits for the process; its exit code (-signal when killed by one).
+  pid_t pid() const { return pid_; }
+  /// Sends `sig` (none when 0) and waits for the process; its exit code (-signal when killed by
+  /// one).
   int signal_and_wait(int sig) {
-    kill(pid_, sig);
+    if (sig != 0) kill(pid_, sig);
     int status = 0;
     waitpid(pid_, &status, 0);
     pid_ = -1;

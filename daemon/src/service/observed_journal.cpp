@@ -1,8 +1,11 @@
 #include "daemon/service/observed_journal.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <string>
 
 #include "core/state_json.hpp"
+#include "daemon/service/log_fields.hpp"
 
 namespace calstand::daemon::service {
 
@@ -20,6 +23,9 @@ void ObservedJournal::publish_step(std::size_t step, int attempt, double t_s, co
 
 void ObservedJournal::step_started(std::size_t step, int attempt, double t_s) {
   inner_.step_started(step, attempt, t_s);
+  // The run thread's lines from here on are about this step (the journal's STEP field).
+  thread_log_fields().step = step;
+  spdlog::info("run {}: step {} started (attempt {})", run_id_, step, attempt);
   publish_step(step, attempt, t_s, "running");
 }
 
@@ -54,6 +60,7 @@ void ObservedJournal::step_completed(std::size_t step, int attempt, double t_s) 
 void ObservedJournal::step_failed(std::size_t step, int attempt, double t_s,
                                   const std::string& why) {
   inner_.step_failed(step, attempt, t_s, why);
+  spdlog::warn("run {}: step {} failed (attempt {}): {}", run_id_, step, attempt, why);
   publish_step(step, attempt, t_s, "failed", why);
 }
 
@@ -69,6 +76,13 @@ void ObservedJournal::event(double t_s, EventKind kind, const std::string& sourc
   inner_.event(t_s, kind, source, message);
   // Faults and interlocks get their own message type, so a client can watch only those.
   const bool fault = kind == EventKind::kFault || kind == EventKind::kInterlock;
+  {
+    LogFields fields;
+    if (devices_.count(source) != 0) fields.device = source;
+    const ScopedLogFields scoped(fields);
+    spdlog::log(fault ? spdlog::level::warn : spdlog::level::info, "run {}: {} ({}): {}", run_id_,
+                source, to_string(kind), message);
+  }
   hub_.publish(fault ? "fault" : "event", {{"run", run_id_},
                                            {"time_s", t_s},
                                            {"kind", std::string(to_string(kind))},

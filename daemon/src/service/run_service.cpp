@@ -6,12 +6,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <set>
 
 #include "core/error.hpp"
 #include "core/state_json.hpp"
 #include "daemon/campaign.hpp"
 #include "daemon/run_engine.hpp"
 #include "daemon/run_state.hpp"
+#include "daemon/service/log_fields.hpp"
 #include "daemon/service/observed_journal.hpp"
 #include "daemon/service/station_watch.hpp"
 #include "daemon/station_run.hpp"
@@ -44,6 +46,14 @@ double last_station_time_s(const store::RunRecord& record) {
   }
   for (const auto& e : record.events) t = std::max(t, e.time_s);
   return t;
+}
+
+// The names a run's events give as their source when a device speaks.
+std::set<std::string> device_names(const core::StationConfig& station) {
+  std::set<std::string> names;
+  for (const auto& d : offline_devices(station)) names.insert(d.name);
+  for (const auto& s : station.power_supplies) names.insert(s.name);
+  return names;
 }
 
 }  // namespace
@@ -83,8 +93,16 @@ void RunService::stop(const std::string& why) {
   if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
 }
 
+void RunService::set_heartbeat(std::function<void()> beat, std::chrono::milliseconds period) {
+  std::lock_guard lock(mutex_);
+  if (thread_.joinable()) throw std::logic_error("RunService::set_heartbeat after start()");
+  heartbeat_ = std::move(beat);
+  heartbeat_period_ = period;
+}
+
 void RunService::run_thread() {
   while (true) {
+    if (heartbeat_) heartbeat_();
     std::uint64_t seen = 0;
     {
       std::lock_guard lock(mutex_);
@@ -109,8 +127,21 @@ void RunService::run_thread() {
     }
     if (!failed) watch_idle();
     std::unique_lock lock(mutex_);
-    wake_.wait_for(lock, failed ? std::chrono::seconds(5) : kIdleReadPeriod,
-                   [&] { return stopping_ || (!failed && generation_ != seen); });
+    // Back round the loop at least every heartbeat period (the beat comes from there). After
+    // a storage failure the retry still waits its 5 s, beating meanwhile.
+    const auto until = std::chrono::steady_clock::now() +
+                       (failed ? std::chrono::milliseconds(5000) : kIdleReadPeriod);
+    while (!stopping_ && (failed || generation_ == seen)) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now >= until) break;
+      wake_.wait_for(lock,
+                     std::min<std::chrono::steady_clock::duration>(until - now, heartbeat_period_));
+      if (heartbeat_ && !stopping_ && std::chrono::steady_clock::now() < until) {
+        lock.unlock();
+        heartbeat_();
+        lock.lock();
+      }
+    }
   }
   idle_watch_.release();
 }
@@ -366,6 +397,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
     }
   } clear_current{*this};
 
+  // The run's log lines carry its id (and, from the journal, the step and the device).
+  const ScopedLogFields run_fields(LogFields{run, std::nullopt, std::nullopt});
   idle_watch_.release();  // the run opens the devices for itself
   std::optional<StoredRun> stored;
   std::unique_ptr<StationRun> wired;
@@ -400,8 +433,10 @@ void RunService::execute(std::int64_t run, bool resuming) {
   drivers::Station& station = wired->station();
   store::RunStore& runs = wired->runs();
   ObservedJournal journal(wired->store_journal(), hub_, live_, run);
+  journal.set_devices(device_names(options_.station));
   auto next_device_read = std::chrono::steady_clock::now();
   const auto on_progress = [&](RunEngine&, const Progress& p) {
+    if (heartbeat_) heartbeat_();
     // Live telemetry about twice a second of wall time, paused or not (this runs every tick).
     if (journal.telemetry_due())
       journal.publish_telemetry(station.table().read_state(), station.chamber().read_state());

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 
 #include "daemon/run_journal.hpp"
@@ -42,6 +43,10 @@ class ObservedJournal final : public RunJournal {
     return inner_.unit_identified(imu, model, serial);
   }
 
+  /// The station's device names: an event whose source is one of them is logged with the
+  /// DEVICE field (log_fields.hpp).
+  void set_devices(std::set<std::string> names) { devices_ = std::move(names); }
+
   /// True when the next telemetry message is due (wall time).
   bool telemetry_due() const { return std::chrono::steady_clock::now() >= next_telemetry_; }
   /// Publishes the station's state now as the live telemetry (and the latest in /station),
@@ -70,6 +75,7 @@ class ObservedJournal final : public RunJournal {
   std::chrono::milliseconds telemetry_period_;
   std::chrono::steady_clock::time_point next_telemetry_{};
   std::map<std::string, ImuWindow> imu_windows_;  // by device name
+  std::set<std::string> devices_;
 };
 
 }  // namespace calstand::daemon::service

@@ -1,8 +1,10 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <future>
 #include <memory>
 #include <mutex>
@@ -107,6 +109,11 @@ class RunService {
   /// starts afterwards by itself.
   drivers::InterlockClosure close_interlocks(const std::string& who);
 
+  /// Called on the run thread at least every `period` between runs and on every engine tick
+  /// in a run (systemd's watchdog and status: ServiceHeartbeat); set before start(). The run
+  /// thread calls nothing else of the kind, so a hang in it stops the calls.
+  void set_heartbeat(std::function<void()> beat, std::chrono::milliseconds period);
+
   LiveSnapshot snapshot() const { return live_.snapshot(); }
   const ServiceOptions& options() const { return options_; }
 
@@ -164,6 +171,8 @@ class RunService {
   // mutex_ (so only while `current_` is the run meant), taken without it.
   std::shared_ptr<EngineCommandQueue> commands_ = std::make_shared<EngineCommandQueue>();
   std::thread thread_;
+  std::function<void()> heartbeat_;  // run thread only, once started
+  std::chrono::milliseconds heartbeat_period_{std::chrono::seconds(1)};
 };
 
 }  // namespace calstand::daemon::service
