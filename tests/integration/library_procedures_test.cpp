@@ -16,14 +16,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/bandwidth.hpp"
 #include "core/error.hpp"
+#include "datasheet/bandwidth.hpp"
 #include "in_process_run.hpp"
+#include "noise/run_noise.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
-#include "solver/run_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
 
