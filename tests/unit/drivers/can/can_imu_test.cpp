@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <set>
 #include <thread>
 
@@ -102,6 +103,9 @@ struct BadConnection {
   json value;  // null: remove the key
   const char* where;
 };
+
+// The listing (ctest's names) shows the case's name, not the struct's bytes and pointers.
+void PrintTo(const BadConnection& b, std::ostream* os) { *os << b.name; }
 
 class CanImuConnectionErrorTest : public ::testing::TestWithParam<BadConnection> {};
 
