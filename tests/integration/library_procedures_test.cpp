@@ -152,8 +152,8 @@ INSTANTIATE_TEST_SUITE_P(
                    "accel_temp_scale,gyro_lag,accel_lag",
                    {"gyro_lag=gyro:temperature_rate", "accel_lag=accel:temperature_rate"},
                    {}}),
-    [](const auto& info) {
-      std::string n = info.param.procedure;
+    [](const auto& param_info) {  // not `info`: the macro's own parameter (-Wshadow)
+      std::string n = param_info.param.procedure;
       std::erase(n, '-');
       return n;
     });
