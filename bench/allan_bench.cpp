@@ -10,8 +10,8 @@
 
 #include <vector>
 
+#include "noise/allan.hpp"
 #include "sim/noise.hpp"
-#include "solver/allan.hpp"
 
 namespace calstand::solver {
 namespace {

@@ -8,11 +8,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "analysis/accept_run.hpp"
-#include "analysis/acceptance_spec.hpp"
-#include "analysis/junit.hpp"
 #include "commands.hpp"
 #include "core/file_output.hpp"
+#include "factory/accept_run.hpp"
+#include "factory/acceptance_spec.hpp"
+#include "factory/junit.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {

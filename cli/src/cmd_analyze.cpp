@@ -9,15 +9,15 @@
 #include <optional>
 #include <string>
 
-#include "analysis/bandwidth.hpp"
-#include "analysis/hysteresis.hpp"
-#include "analysis/repeatability.hpp"
-#include "analysis/run_analyses.hpp"
-#include "analysis/stability.hpp"
-#include "analysis/warmup.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/file_output.hpp"
+#include "datasheet/bandwidth.hpp"
+#include "datasheet/hysteresis.hpp"
+#include "datasheet/repeatability.hpp"
+#include "datasheet/run_analyses.hpp"
+#include "datasheet/stability.hpp"
+#include "datasheet/warmup.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {

@@ -5,8 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "analysis/unit_records.hpp"
 #include "commands.hpp"
+#include "factory/unit_records.hpp"
 #include "open_database.hpp"
 
 namespace calstand::cli {

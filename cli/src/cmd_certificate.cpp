@@ -5,12 +5,12 @@
 #include <fstream>
 #include <string>
 
-#include "analysis/certificate.hpp"
-#include "analysis/html_to_pdf.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/file_output.hpp"
+#include "factory/certificate.hpp"
 #include "open_database.hpp"
+#include "render/html_to_pdf.hpp"
 
 namespace calstand::cli {
 namespace {

@@ -8,10 +8,10 @@
 #include <optional>
 #include <string>
 
-#include "analysis/calibration_export.hpp"
 #include "commands.hpp"
 #include "core/file_output.hpp"
 #include "core/json_schema.hpp"
+#include "exports/calibration_export.hpp"
 #include "solver/calibration_record.hpp"
 
 namespace calstand::cli {

@@ -7,9 +7,9 @@
 #include <fstream>
 #include <string>
 
-#include "analysis/lot.hpp"
 #include "commands.hpp"
 #include "core/file_output.hpp"
+#include "factory/lot.hpp"
 #include "record_source_option.hpp"
 
 namespace calstand::cli {

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/plan_coverage.hpp"
 #include "analysis/run_model.hpp"
 #include "commands.hpp"
 #include "core/station_config.hpp"
+#include "factory/plan_coverage.hpp"
 #include "procedures/plan.hpp"
 #include "procedures/procedure.hpp"
 #include "sim/sim_world.hpp"

@@ -11,14 +11,14 @@
 #include <typeinfo>
 #include <vector>
 
-#include "analysis/gnuplot_svg.hpp"
-#include "analysis/report_data.hpp"
-#include "analysis/report_html.hpp"
-#include "analysis/table_free_report.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "fit_printer.hpp"
 #include "open_database.hpp"
+#include "render/gnuplot_svg.hpp"
+#include "report/report_data.hpp"
+#include "report/report_html.hpp"
+#include "report/table_free_report.hpp"
 
 namespace calstand::cli {
 namespace {

@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "analysis/unit_trend.hpp"
 #include "commands.hpp"
+#include "factory/unit_trend.hpp"
 #include "record_source_option.hpp"
 
 namespace calstand::cli {

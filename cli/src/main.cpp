@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
+#include "help_layout.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"calstand: IMU test and calibration on a dual-axis rate table with a chamber"};
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   calstand::cli::register_trend(app);
   calstand::cli::register_truth_from_spec(app);
   calstand::cli::register_units(app);
+  calstand::cli::arrange_help(app);  // after every register_x: groups by task, examples
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& e) {

@@ -2,8 +2,8 @@
 
 #include <pqxx/pqxx>
 
-#include "analysis/lot.hpp"
-#include "analysis/unit_records.hpp"
+#include "factory/lot.hpp"
+#include "factory/unit_records.hpp"
 #include "fleet/central_error.hpp"
 #include "fleet/central_records.hpp"
 

@@ -1,4 +1,4 @@
-#include "variance_component.hpp"
+#include "solver/variance_component.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

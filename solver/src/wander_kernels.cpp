@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "variance_component.hpp"
+#include "solver/variance_component.hpp"
 
 namespace calstand::solver::detail {
 namespace {

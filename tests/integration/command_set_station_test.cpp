@@ -127,8 +127,10 @@ INSTANTIATE_TEST_SUITE_P(Sets, CommandSetStations,
                                            SetPair{"actidyn", "thermotron", "actidyn",
                                                    "thermotron"},
                                            SetPair{"aerotech", "csz-ezt570", "aerotech", "modbus"}),
-                         [](const auto& info) {
-                           std::string n = std::string(info.param.table) + "_" + info.param.chamber;
+                         // not `info`: the macro's own parameter (-Wshadow)
+                         [](const auto& param_info) {
+                           std::string n =
+                               std::string(param_info.param.table) + "_" + param_info.param.chamber;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });

@@ -16,14 +16,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/bandwidth.hpp"
 #include "core/error.hpp"
+#include "datasheet/bandwidth.hpp"
 #include "in_process_run.hpp"
+#include "noise/run_noise.hpp"
 #include "sim/imu_truth.hpp"
 #include "sim/sim_world.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
-#include "solver/run_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
 
@@ -152,8 +152,8 @@ INSTANTIATE_TEST_SUITE_P(
                    "accel_temp_scale,gyro_lag,accel_lag",
                    {"gyro_lag=gyro:temperature_rate", "accel_lag=accel:temperature_rate"},
                    {}}),
-    [](const auto& info) {
-      std::string n = info.param.procedure;
+    [](const auto& param_info) {  // not `info`: the macro's own parameter (-Wshadow)
+      std::string n = param_info.param.procedure;
       std::erase(n, '-');
       return n;
     });

@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "solver/allan.hpp"
-#include "solver/noise_fit.hpp"
-#include "solver/record_length.hpp"
-#include "solver/run_noise.hpp"
+#include "noise/allan.hpp"
+#include "noise/noise_fit.hpp"
+#include "noise/record_length.hpp"
+#include "noise/run_noise.hpp"
 #include "store/database.hpp"
 
 namespace calstand::analysis {

@@ -16,12 +16,12 @@
 
 #include "analysis/table_free_model.hpp"
 #include "core/site.hpp"
-#include "solver/ferraris.hpp"
-#include "solver/gravity_norm.hpp"
-#include "solver/gyro_integration.hpp"
-#include "solver/static_detector.hpp"
 #include "store/database.hpp"
 #include "store/fit_history.hpp"
+#include "tablefree/ferraris.hpp"
+#include "tablefree/gravity_norm.hpp"
+#include "tablefree/gyro_integration.hpp"
+#include "tablefree/static_detector.hpp"
 
 namespace calstand::analysis {
 

@@ -9,19 +9,19 @@
 #include <filesystem>
 #include <limits>
 
-#include "analysis/accept_run.hpp"
-#include "analysis/acceptance_spec.hpp"
 #include "analysis/catalogue.hpp"
 #include "analysis/fit_history.hpp"
 #include "analysis/fit_request.hpp"
-#include "analysis/gnuplot_svg.hpp"
-#include "analysis/report_html.hpp"
 #include "analysis/run_model.hpp"
 #include "analysis/run_series.hpp"
 #include "analysis/table_free_diagnose.hpp"
 #include "core/error.hpp"
 #include "core/json_schema.hpp"
+#include "factory/accept_run.hpp"
+#include "factory/acceptance_spec.hpp"
 #include "http_util.hpp"
+#include "render/gnuplot_svg.hpp"
+#include "report/report_html.hpp"
 #include "request_context.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"

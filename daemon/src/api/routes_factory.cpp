@@ -3,10 +3,10 @@
 // `calibrations` and `certificate` do, so that the answers are the command line's.
 #include <fmt/format.h>
 
-#include "analysis/certificate.hpp"
-#include "analysis/lot.hpp"
-#include "analysis/unit_records.hpp"
 #include "core/error.hpp"
+#include "factory/certificate.hpp"
+#include "factory/lot.hpp"
+#include "factory/unit_records.hpp"
 #include "http_util.hpp"
 #include "routes.hpp"
 #include "store/calibrations.hpp"

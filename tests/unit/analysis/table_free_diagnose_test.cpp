@@ -7,7 +7,7 @@
 
 #include <algorithm>
 
-#include "../solver/session_truth.hpp"
+#include "../tablefree/session_truth.hpp"
 #include "core/error.hpp"
 #include "imported_session.hpp"
 #include "recorded_run.hpp"

@@ -7,12 +7,12 @@
 
 #include <cmath>
 
-#include "../solver/session_truth.hpp"
+#include "../tablefree/session_truth.hpp"
 #include "analysis/run_model.hpp"
 #include "imported_session.hpp"
+#include "noise/run_noise.hpp"
 #include "recorded_run.hpp"
 #include "sim/hand_session.hpp"
-#include "solver/run_noise.hpp"
 
 namespace calstand::analysis {
 namespace {

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "../solver/session_truth.hpp"
+#include "../tablefree/session_truth.hpp"
 #include "analysis/calibrate.hpp"
 #include "analysis/run_model.hpp"
 #include "core/error.hpp"

@@ -24,14 +24,15 @@ Eigen::Vector3d mean_accel(const std::vector<core::ImuSample>& s) {
 double accel_tolerance(SimWorld& w, int i, bool vertical, double capture_s) {
   const ImuTruth& t = w.imu(0).truth();
   const double g = w.config().site.gravity();
-  const double g0 = core::kStandardGravity;
+  const double standard_g = core::kStandardGravity;  // not g0: a global of the batch
   const double dT = w.chamber().imu_temperature_c() - t.temperature_ref_c;
   double bound = std::abs(t.accel_bias[i]) + std::abs(w.imu(0).turn_on_accel_bias()[i]);
   if (vertical) {
     bound += 1e-6 * g *
              (std::abs(t.accel_scale[i]) + std::abs(t.accel_scale_asymmetry[i]) +
               std::abs(t.accel_temp_scale[i] * dT));
-    bound += 1e-6 * g0 * std::abs(t.accel_quadratic[i]) * (g / g0) * (g / g0);
+    bound +=
+        1e-6 * standard_g * std::abs(t.accel_quadratic[i]) * (g / standard_g) * (g / standard_g);
   }
   bound += g * t.accel_misalignment.row(i).cwiseAbs().maxCoeff();
   double power = 1.0;

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,9 @@ void expect_warm_up_found(const WarmUpCase& c) {
   EXPECT_EQ(after.recommended, "") << after.advice;
   EXPECT_TRUE(after.suggestions.empty()) << after.advice;
 }
+
+// The listing (ctest's names) shows the case, not the struct's bytes and the string's pointer.
+void PrintTo(const WarmUpCase& c, std::ostream* os) { *os << case_name(c); }
 
 class WarmUp : public ::testing::TestWithParam<WarmUpCase> {};
 

@@ -13,12 +13,12 @@
 #include <numbers>
 #include <set>
 
+#include "noise/noise_fit.hpp"
 #include "sim/noise.hpp"
 #include "sim/spec_sheet.hpp"
 #include "sim_run.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/noise_estimate.hpp"
-#include "solver/noise_fit.hpp"
 #include "solver/step_noise.hpp"
 
 namespace calstand::solver {

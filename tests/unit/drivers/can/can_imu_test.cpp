@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <set>
 #include <thread>
 
@@ -103,8 +104,8 @@ struct BadConnection {
   const char* where;
 };
 
-/// The case by its name in ctest's test names (not the struct's bytes).
-void PrintTo(const BadConnection& c, std::ostream* os) { *os << c.name; }
+// The listing (ctest's names) shows the case's name, not the struct's bytes and pointers.
+void PrintTo(const BadConnection& b, std::ostream* os) { *os << b.name; }
 
 class CanImuConnectionErrorTest : public ::testing::TestWithParam<BadConnection> {};
 

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <ostream>
 #include <string>
 
 #include "../schema_error_field.hpp"
@@ -49,8 +50,9 @@ struct BadMap {
   const char* why;
 };
 
-/// The case by its name in ctest's test names (not the struct's bytes).
-void PrintTo(const BadMap& c, std::ostream* os) { *os << c.name; }
+// gtest prints a parameter in the test's listing (ctest's names); without this, the struct's
+// bytes, pointers included, which change from run to run.
+void PrintTo(const BadMap& m, std::ostream* os) { *os << m.name; }
 
 class CanSignalMapErrorTest : public ::testing::TestWithParam<BadMap> {};
 

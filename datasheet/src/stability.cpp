@@ -1,0 +1,150 @@
+#include "datasheet/stability.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "analysis/noise_json.hpp"
+#include "core/error.hpp"
+#include "datasheet_units.hpp"
+#include "noise/run_noise.hpp"
+
+namespace calstand::analysis {
+namespace {
+
+/// IEEE 952: the flicker floor of the Allan deviation is 0.664 B.
+constexpr double kFlickerFloor = 0.664;
+/// Degrees of freedom a point needs to count for the minimum: about +-22 % on the deviation at
+/// one sigma (solver::NoiseTerms reads its minimum so too).
+constexpr double kMinFloorEdf = 10.0;
+
+}  // namespace
+
+StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
+                                    const std::string& device, std::optional<std::size_t> step) {
+  solver::RunNoiseOptions options;
+  options.device = device;
+  options.step = step;
+  const solver::RunNoise noise = solver::analyse_run_noise(db, run, options);
+  if (!long_enough_for_noise(noise.duration_s)) {
+    throw core::InputError(
+        fmt::format("run {} step {}", run, noise.step),
+        fmt::format("the capture lasts {:.0f} s; a bias floor and a correlation time need a "
+                    "static record of at least {:.0f} s",
+                    noise.duration_s, kMinNoiseRecordS));
+  }
+  StabilityAnalysis out;
+  out.run = run;
+  out.device = noise.device;
+  out.step = noise.step;
+  out.step_label = noise.step_label;
+  out.duration_s = noise.duration_s;
+  for (std::size_t c = 0; c < noise.channels.size() && c < out.channels.size(); ++c) {
+    const solver::ChannelNoise& ch = noise.channels[c];
+    const double k = c < 3 ? kDegPerSToDegPerH : kMps2ToUg;
+    ChannelStability& s = out.channels[c];
+    s.channel = std::string(solver::to_string(ch.channel));
+    const auto& points = ch.allan.points;
+    out.confidence = ch.allan.confidence;
+    // The minimum among the points with at least kMinFloorEdf degrees of freedom (their own,
+    // from the curve's local noise type), or of all when none has: the last few points scatter
+    // by a factor of two and more, and their lowest would be a minimum of the noise, biased
+    // low, whose interval need not hold the floor.
+    const bool any_firm =
+        std::any_of(points.begin(), points.end(),
+                    [](const solver::AllanPoint& p) { return p.edf >= kMinFloorEdf; });
+    auto floor = points.end();
+    for (auto it = points.begin(); it != points.end(); ++it) {
+      if (any_firm && !(it->edf >= kMinFloorEdf)) continue;
+      if (floor == points.end() || it->deviation < floor->deviation) floor = it;
+    }
+    if (floor != points.end()) {
+      s.bias_instability = k * floor->deviation / kFlickerFloor;
+      s.bias_instability_lo = k * floor->lo / kFlickerFloor;
+      s.bias_instability_hi = k * floor->hi / kFlickerFloor;
+      s.min_tau_s = floor->tau_s;
+      // A floor is where the curve turns up again: a later point whose interval lies wholly
+      // above the minimum's. A minimum at (or near) the last averaging times that noise alone
+      // put there is not one.
+      s.floor_resolved = std::any_of(floor + 1, points.end(),
+                                     [&](const solver::AllanPoint& p) { return p.lo > floor->hi; });
+    }
+    // As the noise-term fit: without the shortest averaging times, where the IMU's
+    // anti-aliasing filter lowers the curve and a vanishing correlation time would fit it.
+    solver::BiasModelOptions model_options;
+    model_options.min_tau_s = options.min_tau_samples / noise.sample_rate_hz;
+    const solver::BiasModelChoice choice = solver::choose_bias_model(ch.allan, model_options);
+    s.bias_model = choice.model;
+    s.bias_model_reason = choice.reason;
+    s.bias_model_aic_difference = choice.aic_difference;
+    if (choice.model == solver::BiasModel::kGaussMarkov) {
+      const solver::GaussMarkovFit& gm = choice.gauss_markov;
+      s.variation_sigma = k * gm.sigma;
+      s.correlation_time_s = gm.tau_c_s;
+      s.correlation_resolved = gm.peak_in_range && 1.89 * gm.tau_c_s >= model_options.min_tau_s;
+    }
+    if (choice.model == solver::BiasModel::kFlicker) {
+      s.flicker_b = k * choice.flicker.bias_instability.value;
+      s.flicker_b_sigma = k * choice.flicker.bias_instability.sigma;
+    }
+  }
+  return out;
+}
+
+nlohmann::json to_json(const StabilityAnalysis& s) {
+  const auto optional = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+  };
+  const auto sensor = [&](std::size_t first, const char* unit) {
+    nlohmann::json bi = nlohmann::json::array();
+    nlohmann::json interval = nlohmann::json::array();
+    nlohmann::json tau = nlohmann::json::array();
+    nlohmann::json sigma = nlohmann::json::array();
+    nlohmann::json tau_c = nlohmann::json::array();
+    nlohmann::json resolved = nlohmann::json::array();
+    nlohmann::json floor_resolved = nlohmann::json::array();
+    nlohmann::json model = nlohmann::json::array();
+    nlohmann::json reason = nlohmann::json::array();
+    nlohmann::json aic = nlohmann::json::array();
+    nlohmann::json flicker_b = nlohmann::json::array();
+    nlohmann::json flicker_b_sigma = nlohmann::json::array();
+    for (std::size_t c = first; c < first + 3; ++c) {
+      const ChannelStability& ch = s.channels[c];
+      bi.push_back(ch.bias_instability);
+      interval.push_back({ch.bias_instability_lo, ch.bias_instability_hi});
+      tau.push_back(ch.min_tau_s);
+      sigma.push_back(optional(ch.variation_sigma));
+      tau_c.push_back(optional(ch.correlation_time_s));
+      resolved.push_back(ch.correlation_resolved);
+      floor_resolved.push_back(ch.floor_resolved);
+      model.push_back(std::string(solver::to_string(ch.bias_model)));
+      reason.push_back(ch.bias_model_reason);
+      aic.push_back(ch.bias_model_aic_difference);
+      flicker_b.push_back(optional(ch.flicker_b));
+      flicker_b_sigma.push_back(ch.flicker_b ? nlohmann::json(ch.flicker_b_sigma)
+                                             : nlohmann::json(nullptr));
+    }
+    return nlohmann::json{{fmt::format("bias_instability_{}", unit), bi},
+                          {fmt::format("bias_instability_interval_{}", unit), interval},
+                          {"floor_tau_s", tau},
+                          {fmt::format("bias_variation_{}", unit), sigma},
+                          {"correlation_time_s", tau_c},
+                          {"correlation_resolved", resolved},
+                          {"floor_resolved", floor_resolved},
+                          {"bias_model", model},
+                          {"bias_model_reason", reason},
+                          {"bias_model_aic_difference", aic},
+                          {fmt::format("bias_instability_fit_{}", unit), flicker_b},
+                          {fmt::format("bias_instability_fit_sigma_{}", unit), flicker_b_sigma}};
+  };
+  return {{"run", s.run},
+          {"device", s.device},
+          {"step", s.step},
+          {"step_label", s.step_label},
+          {"duration_s", s.duration_s},
+          {"confidence", s.confidence},
+          {"gyro", sensor(0, "deg_per_h")},
+          {"accel", sensor(3, "ug")}};
+}
+
+}  // namespace calstand::analysis

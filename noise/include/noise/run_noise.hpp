@@ -1,0 +1,102 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/imu_sample.hpp"
+#include "noise/allan.hpp"
+#include "noise/noise_fit.hpp"
+#include "store/database.hpp"
+
+namespace calstand::solver {
+
+/// The six output channels of an IMU sample: gyro x y z [deg/s], accelerometer x y z [m/s^2].
+enum class ImuChannel { kGx, kGy, kGz, kAx, kAy, kAz };
+inline constexpr ImuChannel kAllChannels[] = {ImuChannel::kGx, ImuChannel::kGy, ImuChannel::kGz,
+                                              ImuChannel::kAx, ImuChannel::kAy, ImuChannel::kAz};
+std::string_view to_string(ImuChannel channel);  ///< "gx" ... "az"
+/// Inverse of to_string. Throws core::InputError listing the channels for anything else.
+ImuChannel parse_channel(std::string_view text);
+bool is_gyro(ImuChannel channel);
+std::string_view channel_unit(ImuChannel channel);  ///< "deg/s" or "m/s^2"
+
+/// One channel of `samples`, in its unit (channel_unit()).
+std::vector<double> channel_series(std::span<const core::ImuSample> samples, ImuChannel channel);
+
+/// The sample rate [Hz] of `samples` from their device clock: (n - 1) over the time spanned.
+/// Throws core::InputError for fewer than 2 samples or a clock that does not advance.
+double sample_rate_of(std::span<const core::ImuSample> samples);
+
+/// A noise figure in the unit datasheets quote it in.
+struct DatasheetFigure {
+  std::string name;   ///< e.g. "angle_random_walk"
+  std::string label;  ///< e.g. "angle random walk N"
+  double value = 0.0;
+  double sigma = 0.0;    ///< one sigma, same unit; NaN for figures read off the curve
+  std::string unit;      ///< e.g. "deg/sqrt(h)", "ug"
+  bool resolved = true;  ///< false: the fit found no evidence of the term (value 0)
+};
+
+/// The noise terms of a gyro (data in deg/s) or accelerometer (m/s^2) channel in datasheet
+/// units. Gyro: angle random walk [deg/sqrt(h)], bias instability as the Allan minimum and as
+/// minimum / 0.664 and as fitted [deg/h], rate random walk [deg/h/sqrt(h)], rate ramp
+/// [deg/h/h], angle quantization [arcsec]. Accelerometer: velocity random walk [m/s/sqrt(h)],
+/// bias instability (the same three) [ug], acceleration random walk [m/s/h/sqrt(h)],
+/// acceleration ramp [m/s/h/h], velocity quantization [m/s].
+std::vector<DatasheetFigure> datasheet_figures(const NoiseTerms& terms, bool gyro);
+
+/// The Allan curve, fitted noise terms and datasheet figures of one channel.
+struct ChannelNoise {
+  ImuChannel channel = ImuChannel::kGx;
+  AllanResult allan;
+  NoiseTerms terms;  ///< in the channel's unit (deg/s or m/s^2 based, see NoiseTerms)
+  std::vector<DatasheetFigure> figures;
+};
+
+/// Options of analyse_run_noise().
+struct RunNoiseOptions {
+  std::string device;               ///< IMU name; empty: the first with samples (sorted)
+  std::optional<std::size_t> step;  ///< step index; none: see choose_noise_step()
+  AllanOptions allan;               ///< must be kAllan (the noise model is the Allan variance's)
+  NoiseFitOptions fit;              ///< its min_tau_s is raised to min_tau_samples periods
+  /// The fit leaves out averaging times shorter than this many sample periods, where the
+  /// IMU's anti-aliasing filter lowers the curve (a simulated LN200 at 400 Hz with a 100 Hz
+  /// bandwidth reads 7 % under its white-noise line at 4 samples, 3 % at 10, 1 % at 20).
+  double min_tau_samples = 20.0;
+};
+
+/// The noise analysis of one step of a run for one IMU.
+struct RunNoise {
+  std::int64_t run = 0;
+  std::string device;
+  std::size_t step = 0;
+  std::string step_label;
+  std::size_t samples = 0;
+  double sample_rate_hz = 0.0;
+  double duration_s = 0.0;
+  /// Intervals of the device clock longer than 1.5 sample periods: lost samples, which the
+  /// Allan variance (it assumes an unbroken series) does not see; shown so they are not missed.
+  std::size_t gaps = 0;
+  std::vector<ChannelNoise> channels;  ///< gx gy gz ax ay az
+};
+
+/// The step a noise analysis of `run` uses: `step` when given, else the completed capture step
+/// (the table at rest) with the longest duration on the station clock. Throws core::InputError
+/// when the run or step does not exist, or the run has no completed capture step.
+std::size_t choose_noise_step(store::Database& db, std::int64_t run,
+                              std::optional<std::size_t> step);
+
+/// Reads the samples of the chosen step (the store's data attempt) and computes, per channel,
+/// the Allan deviation curve with its intervals and the fitted noise terms. Throws
+/// core::InputError when the run, step or device does not exist, the step holds no samples of
+/// the device, too few for a curve, or the options are invalid; store::StoreError on a
+/// database failure.
+RunNoise analyse_run_noise(store::Database& db, std::int64_t run,
+                           const RunNoiseOptions& options = {});
+
+}  // namespace calstand::solver
