@@ -93,9 +93,6 @@ void expect_warm_up_found(const WarmUpCase& c) {
   EXPECT_TRUE(after.suggestions.empty()) << after.advice;
 }
 
-// The listing (ctest's names) shows the case, not the struct's bytes and the string's pointer.
-void PrintTo(const WarmUpCase& c, std::ostream* os) { *os << case_name(c); }
-
 class WarmUp : public ::testing::TestWithParam<WarmUpCase> {};
 
 TEST_P(WarmUp, IsAnEffectNotAWander) { expect_warm_up_found(GetParam()); }
