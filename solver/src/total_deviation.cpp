@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "core/error.hpp"
 #include "solver/edf.hpp"
@@ -146,6 +147,24 @@ double theo1_edf(int alpha, double n, double t) {
              (((a - 1.0) * (a - 1.0) - 8.6 * t * (a - 1.0) + 11.4 * t * t) /
               ((a - 3.0) * (a - 3.0)));
     }
+  }
+}
+
+// MTOTVAR bias, E[MTOT] = MVAR * ratio (Howe and Vernotte, PTTI 1999; SP 1065 section 5.2.12).
+// Stable32 does not apply it (its MTOTDEV of PHASE.DAT is the raw estimate at alpha 0 and 1
+// alike); SP 1065's test-set table (section 12.5) does, at white FM.
+double mtotvar_bias_ratio(int alpha) {
+  switch (alpha) {
+    case 2:
+      return 0.94;
+    case 1:
+      return 0.83;
+    case 0:
+      return 0.73;
+    case -1:
+      return 0.70;
+    default:
+      return 0.69;
   }
 }
 
@@ -546,9 +565,23 @@ double total_bias_factor(TotalKind kind, int alpha, std::size_t m, std::size_t p
       const Theo1Bias c = theo1_bias_coefficients(alpha);
       return c.a + c.b / std::pow(0.75 * md, c.c);
     }
+    case TotalKind::kModifiedTotal:
+    case TotalKind::kTimeTotal:
+      return 1.0 / mtotvar_bias_ratio(alpha);
     default:
       return 1.0;
   }
+}
+
+int theo_br_noise_type(double bias) {
+  // Nominal AVAR/Theo1 ratios of the power laws (Howe and Peppler 2003, as Stable32 names the
+  // noise of a TheoBR run); the boundaries are the geometric means of neighbours.
+  constexpr std::array<std::pair<int, double>, 5> kNominal{
+      {{2, 0.4}, {1, 0.6}, {0, 1.0}, {-1, 1.71}, {-2, 2.24}}};
+  for (std::size_t i = 0; i + 1 < kNominal.size(); ++i) {
+    if (bias < std::sqrt(kNominal[i].second * kNominal[i + 1].second)) return kNominal[i].first;
+  }
+  return kNominal.back().first;
 }
 
 double total_equivalent_dof(TotalKind kind, int alpha, std::size_t m, std::size_t phase_points) {
@@ -564,7 +597,9 @@ double total_equivalent_dof(TotalKind kind, int alpha, std::size_t m, std::size_
       break;
     case TotalKind::kModifiedTotal:
     case TotalKind::kTimeTotal:
-      edf = mtotvar_edf_coefficients(alpha, b, c)
+      // Stable32 gives the modified Allan variance's EDF below m = 16 (its MTOTDEV intervals
+      // of PHASE.DAT at m = 1 to 8 are MDEV's to four digits): the fitted form is for long taus.
+      edf = m >= 16 && mtotvar_edf_coefficients(alpha, b, c)
                 ? b * n / md - c
                 : equivalent_dof(AllanKind::kModified, alpha, m, samples);
       break;
@@ -623,6 +658,8 @@ TotalResult total_deviation(std::span<const double> rate, double sample_rate_hz,
     int alpha = 0;
     if (options.alpha) {
       alpha = *options.alpha;
+    } else if (p.estimator == Estimator::kTheoBr) {
+      alpha = theo_br_noise_type(br);  // one noise type for the run, from its bias, as Stable32
     } else {
       const std::optional<int> id = identify(x, p.estimator, p.m);
       if (id) last_alpha = id;
@@ -635,7 +672,8 @@ TotalResult total_deviation(std::span<const double> rate, double sample_rate_hz,
     double var = raw_variance(x, p.estimator, p.m);
     if (p.estimator == Estimator::kTheoBr) {
       var *= br;
-    } else if (options.bias_correction && p.estimator != Estimator::kAllan) {
+    } else if (options.bias_correction && p.estimator != Estimator::kAllan &&
+               p.estimator != Estimator::kModifiedTotal) {
       var *= total_bias_factor(options.kind, alpha, p.m, n);
     }
     double dev = std::sqrt(var);

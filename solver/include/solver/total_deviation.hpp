@@ -87,10 +87,17 @@ double total_variance_from_phase(std::span<const double> x, std::size_t m, Total
 /// core::InputError for N < 24.
 double theo_br_bias(std::span<const double> x);
 
-/// The bias factor Stable32 multiplies a raw variance of `kind` by, for noise exponent alpha at
-/// averaging factor m of N phase points; 1 where none is applied. Theo1: Howe and Tasset's
-/// AVAR/Theo1 = a + b / (0.75 m)^c.
+/// The factor the raw variance of `kind` is multiplied by to remove its bias for noise exponent
+/// alpha at averaging factor m of N phase points; 1 where there is none. TOTVAR: 1 / (1 - a m /
+/// N); HTOTVAR: 1 / (1 + a) above m = 1; Theo1: Howe and Tasset's AVAR/Theo1 = a + b / (0.75
+/// m)^c; MTOTVAR and TTOTVAR: 1 / (MTOT/MVAR ratio), which total_deviation() does not apply
+/// (Stable32 does not) but SP 1065's test-set table does.
 double total_bias_factor(TotalKind kind, int alpha, std::size_t m, std::size_t phase_points);
+
+/// The noise exponent whose nominal AVAR/Theo1 ratio (2: 0.4, 1: 0.6, 0: 1.0, -1: 1.71, -2:
+/// 2.24) is nearest, on a log scale, to a TheoBR bias factor: the noise type Stable32 prints
+/// for a TheoBR run, and the one its EDF uses unless alpha is given.
+int theo_br_noise_type(double bias);
 
 /// Equivalent degrees of freedom of `kind` at averaging factor m of N phase points for noise
 /// exponent alpha (SP 1065 section 5.3.3 and Table 7 to 9 forms; Greenhall and Riley's
