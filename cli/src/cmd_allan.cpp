@@ -25,6 +25,7 @@
 #include "solver/kalibr.hpp"
 #include "solver/noise_fit.hpp"
 #include "solver/run_noise.hpp"
+#include "solver/total_deviation.hpp"
 #include "store/database.hpp"
 #include "store/sample_reader.hpp"
 
@@ -40,6 +41,8 @@ struct AllanArgs {
   std::string taus = "octave";
   std::string kind = "adev";
   std::string confidence = "0.683";
+  std::string alpha;  // empty: identified at each tau
+  bool no_bias_correction = false;
   bool json = false;
 };
 
@@ -104,12 +107,67 @@ std::string figure_cell(const solver::DatasheetFigure& f) {
                                 : fmt::format("{:.4g}", f.value);
 }
 
+// The total and Theo kinds (solver/total_deviation.hpp): the same JSON as the Allan kinds,
+// plus whether the bias corrections were applied; no noise-term fit (that is on the Allan
+// variance, or `calstand noise-id`).
+void print_total(const solver::TotalResult& t, const std::string& source, std::string unit,
+                 double rate_hz, bool json) {
+  const std::string key(solver::to_string(t.kind));
+  if (t.kind == solver::TotalKind::kTimeTotal) unit += "*s";  // tau / sqrt(3) MTOTDEV
+  solver::AllanResult r;
+  r.sample_rate_hz = t.sample_rate_hz;
+  r.samples = t.samples;
+  r.confidence = t.confidence;
+  r.points = t.points;
+  if (json) {
+    auto out = analysis::allan_json(r, source, key, unit, rate_hz, std::nullopt, std::nullopt);
+    out["bias_corrected"] = t.bias_corrected;
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals, {} [{}]\n",
+                           key, source, r.samples, rate_hz, 100.0 * r.confidence,
+                           t.bias_corrected ? "bias-corrected as Stable32" : "no bias correction",
+                           unit);
+  std::cout << fmt::format("{:>12} {:>8} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", "m", key,
+                           "lo", "hi", "edf", "alpha");
+  for (const auto& p : r.points) {
+    std::cout << fmt::format("{:>12.6g} {:>8} {:>13.6e} {:>13.6e} {:>13.6e} {:>10.4g} {:>6}\n",
+                             p.tau_s, p.m, p.deviation, p.lo, p.hi, p.edf, p.alpha);
+  }
+}
+
 void run_allan(const AllanArgs& a) {
+  const std::optional<solver::TotalKind> total_kind = solver::parse_total_kind(a.kind);
   solver::AllanOptions options;
-  options.kind = solver::parse_allan_kind(a.kind);
+  if (!total_kind) {
+    try {
+      options.kind = solver::parse_allan_kind(a.kind);
+    } catch (const core::InputError&) {
+      throw core::InputError("--kind", fmt::format("'{}' is none of adev, mdev, ohdev, hdev, "
+                                                   "totdev, mtotdev, ttotdev, htotdev, theo1, "
+                                                   "theobr, theoh",
+                                                   a.kind));
+    }
+    if (a.no_bias_correction) {
+      throw core::InputError("--no-bias-correction",
+                             "only for the total and Theo kinds (the Allan kinds are unbiased)");
+    }
+  }
   options.taus = solver::TauSet::parse(a.taus);
   options.confidence = parse_double(a.confidence, "--confidence");
-  options.validate();
+  if (!a.alpha.empty()) options.alpha = static_cast<int>(parse_int(a.alpha, "--alpha", -4));
+  solver::TotalOptions total;
+  if (total_kind) {
+    total.kind = *total_kind;
+    total.taus = options.taus;
+    total.confidence = options.confidence;
+    total.alpha = options.alpha;
+    total.bias_correction = !a.no_bias_correction;
+    total.validate();
+  } else {
+    options.validate();
+  }
 
   std::vector<double> data;
   double rate_hz = 0.0;
@@ -158,6 +216,10 @@ void run_allan(const AllanArgs& a) {
     data = solver::channel_series(samples, *channel);
     unit = std::string(solver::channel_unit(*channel));
     source = fmt::format("run {} step {} {} {}", run, step, device, a.channel);
+  }
+  if (total_kind) {
+    print_total(solver::total_deviation(data, rate_hz, total), source, unit, rate_hz, a.json);
+    return;
   }
   const solver::AllanResult r = solver::allan(data, rate_hz, options);
   std::optional<solver::NoiseTerms> terms;
@@ -307,8 +369,16 @@ void register_allan(CLI::App& app) {
   cmd->add_option("--taus", a->taus, "octave, decade, dense or a list of seconds (1,10,100)")
       ->capture_default_str();
   cmd->add_option("--kind", a->kind,
-                  "adev (overlapping), mdev, ohdev (overlapping Hadamard) or hdev (Hadamard)")
+                  "adev (overlapping), mdev, ohdev (overlapping Hadamard), hdev (Hadamard); "
+                  "totdev, mtotdev, ttotdev, htotdev (total); theo1, theobr, theoh (Theo taus "
+                  "are 0.75 m tau0)")
       ->capture_default_str();
+  cmd->add_option("--alpha", a->alpha,
+                  "power-law noise exponent for the intervals and bias corrections (2 white PM "
+                  "... -2 random-walk FM, -4 for htotdev); default: identified at each tau")
+      ->type_name("A");
+  cmd->add_flag("--no-bias-correction", a->no_bias_correction,
+                "total and Theo kinds: the raw estimator, without Stable32's bias corrections");
   cmd->add_option("--confidence", a->confidence, "two-sided probability of the intervals")
       ->capture_default_str();
   cmd->add_flag("--json", a->json, "print the result as JSON");

@@ -1,0 +1,39 @@
+// Haar wavelet variances of a rate record (the moments of the GMWM), from the overlapping Allan
+// variance at octave averaging factors.
+#include "solver/wavelet_moments.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "solver/allan.hpp"
+
+namespace calstand::solver {
+
+WaveletMoments wavelet_moments(std::span<const double> rate, double sample_rate_hz) {
+  if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
+    throw core::InputError("rate", fmt::format("must be positive and finite, got {}",
+                                               sample_rate_hz));
+  }
+  if (rate.size() < 32) {
+    throw core::InputError("data", fmt::format("noise identification needs at least 32 samples "
+                                               "(4 dyadic scales), got {}",
+                                               rate.size()));
+  }
+  const std::vector<double> x = phase_from_rate(rate);
+  WaveletMoments out;
+  out.sample_rate_hz = sample_rate_hz;
+  out.samples = rate.size();
+  for (std::size_t m = 1; m <= rate.size() / 4; m *= 2) {
+    const double avar = allan_variance_from_phase(x, m, AllanKind::kAllan);
+    out.m.push_back(m);
+    out.variance.push_back(0.5 * avar);
+    const double coefficients = static_cast<double>(rate.size() - 2 * m + 1);
+    out.dof.push_back(std::max(coefficients / static_cast<double>(2 * m), 1.0));
+  }
+  return out;
+}
+
+}  // namespace calstand::solver
