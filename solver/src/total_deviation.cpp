@@ -658,9 +658,11 @@ TotalResult total_deviation(std::span<const double> rate, double sample_rate_hz,
     int alpha = 0;
     if (options.alpha) {
       alpha = *options.alpha;
-    } else if (p.estimator == Estimator::kTheoBr) {
-      alpha = theo_br_noise_type(br);  // one noise type for the run, from its bias, as Stable32
     } else {
+      // TheoBR too: Stable32 names one noise type for a TheoBR run from its bias factor
+      // (theo_br_noise_type()), but that factor averages AVAR/Theo1 out to N/2, where both are
+      // noisy: PHASE.DAT, white FM, gets 0.60 ("flicker PM"), whose EDF would make the
+      // intervals several times too narrow. The noise at each tau decides, as elsewhere.
       const std::optional<int> id = identify(x, p.estimator, p.m);
       if (id) last_alpha = id;
       alpha = last_alpha.value_or(0);

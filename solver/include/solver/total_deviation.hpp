@@ -96,7 +96,7 @@ double total_bias_factor(TotalKind kind, int alpha, std::size_t m, std::size_t p
 
 /// The noise exponent whose nominal AVAR/Theo1 ratio (2: 0.4, 1: 0.6, 0: 1.0, -1: 1.71, -2:
 /// 2.24) is nearest, on a log scale, to a TheoBR bias factor: the noise type Stable32 prints
-/// for a TheoBR run, and the one its EDF uses unless alpha is given.
+/// for a TheoBR run. total_deviation() does not use it for the EDF (see there).
 int theo_br_noise_type(double bias);
 
 /// Equivalent degrees of freedom of `kind` at averaging factor m of N phase points for noise
