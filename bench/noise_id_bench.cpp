@@ -73,19 +73,19 @@ int main(int argc, char** argv) {
   const std::size_t bootstrap = argc > 2 ? static_cast<std::size_t>(std::atoi(argv[2])) : 100u;
   using K = NoiseKind;
   std::vector<TrueTerm> bank;
-  for (double tc = 0.05; tc < 5000.0; tc *= 4.0) bank.push_back({K::kGaussMarkov, 0.0015, tc});
+  for (double tc = 0.05; tc < 5000.0; tc *= 2.0) bank.push_back({K::kGaussMarkov, 0.0011, tc});
   const std::vector<Scenario> scenarios{
       {"white + GM + RW",
-       {{K::kWhite, 0.005}, {K::kGaussMarkov, 0.002, 20.0}, {K::kRandomWalk, 2e-4}},
+       {{K::kWhite, 0.005}, {K::kGaussMarkov, 0.004, 2.0}, {K::kRandomWalk, 5e-4}},
        {},
        {K::kWhite, K::kGaussMarkov, K::kRandomWalk}},
       {"white + two GM",
-       {{K::kWhite, 0.005}, {K::kGaussMarkov, 0.003, 1.0}, {K::kGaussMarkov, 0.002, 60.0}},
+       {{K::kWhite, 0.005}, {K::kGaussMarkov, 0.004, 0.5}, {K::kGaussMarkov, 0.003, 100.0}},
        {},
        {K::kWhite, K::kGaussMarkov, K::kGaussMarkov}},
-      {"white + RW", {{K::kWhite, 0.005}, {K::kRandomWalk, 1e-4}}, {}, {K::kWhite, K::kRandomWalk}},
+      {"white + RW", {{K::kWhite, 0.005}, {K::kRandomWalk, 5e-4}}, {}, {K::kWhite, K::kRandomWalk}},
       {"white + flicker (GM bank) + RW",
-       {{K::kWhite, 0.005}, {K::kRandomWalk, 2e-4}},
+       {{K::kWhite, 0.005}, {K::kRandomWalk, 5e-4}},
        bank,
        {K::kWhite, K::kFlicker, K::kRandomWalk}},
   };
@@ -95,14 +95,15 @@ int main(int argc, char** argv) {
       "Allan-line K err | Allan-line truth in +-1.96 sigma | s per record |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Scenario& s : scenarios) {
-    for (std::size_t n : {std::size_t{1} << 17, std::size_t{1} << 19}) {
+    for (std::size_t n : {std::size_t{1} << 18, std::size_t{1} << 20}) {
       int selected = 0, covered = 0, checked = 0, allan_covered = 0, allan_checked = 0;
       std::vector<double> gs, gt, wn, kk, an, ak;
       double seconds = 0.0;
       for (unsigned seed = 1; seed <= seeds; ++seed) {
         std::vector<TrueTerm> all = s.truth;
         all.insert(all.end(), s.extra.begin(), s.extra.end());
-        const std::vector<double> y = simulate(all, n, 1000u * seed + static_cast<unsigned>(n % 997));
+        const std::vector<double> y =
+            simulate(all, n, 1000u * seed + static_cast<unsigned>(n % 997));
         calstand::solver::NoiseIdOptions o;
         o.bootstrap = bootstrap;
         const auto t0 = std::chrono::steady_clock::now();
@@ -116,9 +117,10 @@ int main(int argc, char** argv) {
         const auto curve = calstand::solver::allan(y, kFs, ao);
         const auto lines = calstand::solver::fit_noise_terms(curve);
         for (const TrueTerm& t : s.truth) {
-          const calstand::solver::NoiseTerm* a = t.kind == K::kWhite        ? &lines.random_walk
-                                                 : t.kind == K::kRandomWalk ? &lines.rate_random_walk
-                                                                            : nullptr;
+          const calstand::solver::NoiseTerm* a = t.kind == K::kWhite ? &lines.random_walk
+                                                 : t.kind == K::kRandomWalk
+                                                     ? &lines.rate_random_walk
+                                                     : nullptr;
           if (!a) continue;
           const double v = a->resolved ? a->value : 0.0;
           (t.kind == K::kWhite ? an : ak).push_back(v / t.value - 1.0);
@@ -147,10 +149,11 @@ int main(int argc, char** argv) {
           if (e.kind == K::kRandomWalk) kk.push_back(e.value / t.value - 1.0);
         }
       }
-      fmt::print("| {} | {} | {} of {} | {} of {} | {} | {} | {} | {} | {} | {} | {} of {} | {:.2f} |\n",
-                 s.name, n, selected, seeds, covered, checked, pct(median(gs)), pct(median(gt)),
-                 pct(median(wn)), pct(median(kk)), pct(median(an)), pct(median(ak)),
-                 allan_covered, allan_checked, seconds / seeds);
+      fmt::print(
+          "| {} | {} | {} of {} | {} of {} | {} | {} | {} | {} | {} | {} | {} of {} | {:.2f} |\n",
+          s.name, n, selected, seeds, covered, checked, pct(median(gs)), pct(median(gt)),
+          pct(median(wn)), pct(median(kk)), pct(median(an)), pct(median(ak)), allan_covered,
+          allan_checked, seconds / seeds);
       std::fflush(stdout);
     }
   }

@@ -127,8 +127,8 @@ void print_total(const solver::TotalResult& t, const std::string& source, std::s
     std::cout << out.dump(2) << "\n";
     return;
   }
-  std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals, {} [{}]\n",
-                           key, source, r.samples, rate_hz, 100.0 * r.confidence,
+  std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals, {} [{}]\n", key,
+                           source, r.samples, rate_hz, 100.0 * r.confidence,
                            t.bias_corrected ? "bias-corrected as Stable32" : "no bias correction",
                            unit);
   std::cout << fmt::format("{:>12} {:>8} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", "m", key,
@@ -316,7 +316,8 @@ std::string datasheet_cell(solver::NoiseKind kind, double v, const analysis::Dat
     case solver::NoiseKind::kWhite:
       return fmt::format("{:.4g} {}", b * 60.0, d.gyro ? "deg/sqrt(h)" : "m/s/sqrt(h)");
     case solver::NoiseKind::kRandomWalk:
-      return fmt::format("{:.4g} {}", b * 3600.0 * 60.0, d.gyro ? "deg/h/sqrt(h)" : "m/s/h/sqrt(h)");
+      return fmt::format("{:.4g} {}", b * 3600.0 * 60.0,
+                         d.gyro ? "deg/h/sqrt(h)" : "m/s/h/sqrt(h)");
     case solver::NoiseKind::kFlicker:
     case solver::NoiseKind::kGaussMarkov:
       return d.gyro ? fmt::format("{:.4g} deg/h", b * 3600.0) : fmt::format("{:.4g} ug", b / kUg);
@@ -333,7 +334,8 @@ void run_noise_id(const NoiseIdArgs& a) {
   solver::NoiseIdOptions options;
   options.bootstrap = static_cast<std::size_t>(parse_int(a.bootstrap, "--bootstrap", 20));
   const Series series = load_series(a);
-  const solver::NoiseModel model = solver::identify_noise_model(series.data, series.rate_hz, options);
+  const solver::NoiseModel model =
+      solver::identify_noise_model(series.data, series.rate_hz, options);
   if (a.json) {
     std::cout << analysis::noise_model_json(model, series.source, series.unit).dump(2) << "\n";
     return;
@@ -341,9 +343,9 @@ void run_noise_id(const NoiseIdArgs& a) {
   const std::optional<analysis::DatasheetUnit> datasheet =
       series.channel ? std::optional(analysis::DatasheetUnit{solver::is_gyro(*series.channel), 1.0})
                      : analysis::datasheet_unit(series.unit);
-  std::cout << fmt::format("noise model of {}: {} samples at {:.6g} Hz [{}]\n{}\nselected by {}\n\n",
-                           series.source, model.samples, model.sample_rate_hz, series.unit,
-                           model.estimator, model.selected_by);
+  std::cout << fmt::format(
+      "noise model of {}: {} samples at {:.6g} Hz [{}]\n{}\nselected by {}\n\n", series.source,
+      model.samples, model.sample_rate_hz, series.unit, model.estimator, model.selected_by);
   std::cout << fmt::format("{:<14} {:<18} {:>12} {:>27} {:<18} {}\n", "term", "parameter", "value",
                            "95 % interval", "unit", datasheet ? "datasheet" : "");
   for (const auto& t : model.terms) {
@@ -356,12 +358,14 @@ void run_noise_id(const NoiseIdArgs& a) {
     row(analysis::noise_parameter_name(t.kind), t.value, t.value_lo, t.value_hi,
         analysis::noise_parameter_unit(t.kind, series.unit),
         datasheet ? datasheet_cell(t.kind, t.value, *datasheet) : "");
-    if (t.kind == solver::NoiseKind::kGaussMarkov) row("tau_s", t.tau_s, t.tau_lo_s, t.tau_hi_s, "s", "");
+    if (t.kind == solver::NoiseKind::kGaussMarkov)
+      row("tau_s", t.tau_s, t.tau_lo_s, t.tau_hi_s, "s", "");
   }
   std::cout << "\ncandidates (criterion = GMWM objective + p ln J; '-': a term not resolved)\n";
   for (const auto& c : model.candidates) {
     std::string names;
-    for (auto k : c.kinds) names += (names.empty() ? "" : " + ") + std::string(solver::to_string(k));
+    for (auto k : c.kinds)
+      names += (names.empty() ? "" : " + ") + std::string(solver::to_string(k));
     std::cout << fmt::format("  {:<62} {:>10} {}\n", names,
                              c.admissible ? fmt::format("{:.2f}", c.criterion) : "-",
                              c.selected ? "selected" : "");
@@ -491,11 +495,13 @@ void register_allan(CLI::App& app) {
       ->type_name("FILE");
   noise_id->add_option("--column", id->column, "CSV column")->type_name("NAME");
   noise_id->add_option("--rate", id->rate, "CSV sample rate [Hz]")->type_name("HZ");
-  noise_id->add_option("--units", id->units,
-                       "unit of the CSV column: deg/s, rad/s, m/s^2 or g also give datasheet "
-                       "figures")
+  noise_id
+      ->add_option("--units", id->units,
+                   "unit of the CSV column: deg/s, rad/s, m/s^2 or g also give datasheet "
+                   "figures")
       ->type_name("UNIT");
-  noise_id->add_option("--bootstrap", id->bootstrap, "parametric-bootstrap records for the intervals")
+  noise_id
+      ->add_option("--bootstrap", id->bootstrap, "parametric-bootstrap records for the intervals")
       ->capture_default_str();
   noise_id->add_flag("--json", id->json, "print the result as JSON");
   noise_id->callback([id] { run_noise_id(*id); });

@@ -93,7 +93,8 @@ Eigen::VectorXd pack(const std::vector<Term>& terms) {
 Eigen::VectorXd model_nu(const std::vector<Term>& terms, const WaveletMoments& w) {
   Eigen::VectorXd nu = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(w.m.size()));
   for (std::size_t j = 0; j < w.m.size(); ++j) {
-    for (const Term& t : terms) nu[static_cast<Eigen::Index>(j)] += 0.5 * term_avar(t, w.m[j], w.sample_rate_hz);
+    for (const Term& t : terms)
+      nu[static_cast<Eigen::Index>(j)] += 0.5 * term_avar(t, w.m[j], w.sample_rate_hz);
   }
   return nu;
 }
@@ -116,7 +117,7 @@ Eigen::VectorXd levenberg_marquardt(const std::vector<NoiseKind>& kinds, Eigen::
   double lambda = 1e-3;
   Eigen::VectorXd r = residuals(kinds, p, w, nu_w);
   double cost = r.squaredNorm();
-  for (int it = 0; it < 200; ++it) {
+  for (int it = 0; it < 60; ++it) {
     Eigen::MatrixXd jac(r.size(), p.size());
     for (Eigen::Index k = 0; k < p.size(); ++k) {
       Eigen::VectorXd q = p;
@@ -159,9 +160,9 @@ struct Fit {
 // The GMWM with weights at the fit: weights from the data first, then from the fitted model
 // (the data's own wavelet variances would weight a low estimate too heavily).
 Fit fit_from(const std::vector<NoiseKind>& kinds, Eigen::VectorXd p, const WaveletMoments& w) {
-  Eigen::VectorXd nu_w = Eigen::Map<const Eigen::VectorXd>(w.variance.data(),
-                                                           static_cast<Eigen::Index>(w.variance.size()));
-  for (int round = 0; round < 4; ++round) {
+  Eigen::VectorXd nu_w = Eigen::Map<const Eigen::VectorXd>(
+      w.variance.data(), static_cast<Eigen::Index>(w.variance.size()));
+  for (int round = 0; round < 3; ++round) {
     p = levenberg_marquardt(kinds, p, w, nu_w);
     nu_w = model_nu(unpack(kinds, p), w).cwiseMax(1e-300);
   }
@@ -192,7 +193,7 @@ std::vector<Eigen::VectorXd> starts(const std::vector<NoiseKind>& kinds, const W
   };
   std::vector<double> grid;
   const double lo = 2.0 / fs, hi = 0.5 * tau_last;
-  for (int k = 0; k < 8; ++k) grid.push_back(lo * std::pow(hi / lo, k / 7.0));
+  for (int k = 0; k < 7; ++k) grid.push_back(lo * std::pow(hi / lo, k / 6.0));
   const int gm = static_cast<int>(std::count(kinds.begin(), kinds.end(), NoiseKind::kGaussMarkov));
   std::vector<std::vector<double>> taus;
   if (gm == 0) taus.push_back({});
@@ -263,7 +264,8 @@ bool admissible(const std::vector<Term>& terms, const WaveletMoments& w) {
       gm_taus.push_back(t.tau_s);
     }
   }
-  if (gm_taus.size() == 2 && std::max(gm_taus[0], gm_taus[1]) < 2.0 * std::min(gm_taus[0], gm_taus[1])) {
+  if (gm_taus.size() == 2 &&
+      std::max(gm_taus[0], gm_taus[1]) < 2.0 * std::min(gm_taus[0], gm_taus[1])) {
     return false;
   }
   return true;
@@ -308,8 +310,10 @@ std::vector<double> simulate(const std::vector<Term>& terms, std::size_t n, doub
         // common sigma is set so that the bank's Allan variance at the record's middle octave
         // is the flicker floor (the bank is flat to a few per cent between its ends).
         std::vector<double> taus;
-        for (double tc = tau0; tc < static_cast<double>(n) * tau0 * 4.0; tc *= 4.0) taus.push_back(tc);
-        const std::size_t mid = std::max<std::size_t>(1, static_cast<std::size_t>(std::sqrt(static_cast<double>(n))));
+        for (double tc = tau0; tc < static_cast<double>(n) * tau0 * 4.0; tc *= 4.0)
+          taus.push_back(tc);
+        const std::size_t mid =
+            std::max<std::size_t>(1, static_cast<std::size_t>(std::sqrt(static_cast<double>(n))));
         double unit = 0.0;
         for (double tc : taus) unit += gauss_markov_avar(1.0, tc, mid, fs);
         const double sigma = std::sqrt(kFlickerAvar * t.value * t.value / unit);
@@ -477,9 +481,10 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
     }
     out.terms.push_back(t);
   }
-  std::sort(out.terms.begin(), out.terms.end(), [](const NoiseModelTerm& a, const NoiseModelTerm& b) {
-    return a.kind != b.kind ? a.kind < b.kind : a.tau_s < b.tau_s;
-  });
+  std::sort(out.terms.begin(), out.terms.end(),
+            [](const NoiseModelTerm& a, const NoiseModelTerm& b) {
+              return a.kind != b.kind ? a.kind < b.kind : a.tau_s < b.tau_s;
+            });
   return out;
 }
 

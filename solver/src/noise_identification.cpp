@@ -26,8 +26,8 @@ double lag1_autocorrelation(const std::vector<double>& z) {
 
 }  // namespace
 
-std::optional<Lag1NoiseId> identify_noise_lag1(std::span<const double> x, std::size_t m,
-                                               int dmax, int min_alpha) {
+std::optional<Lag1NoiseId> identify_noise_lag1(std::span<const double> x, std::size_t m, int dmax,
+                                               int min_alpha) {
   if (m == 0 || x.empty()) return std::nullopt;
   std::vector<double> z;
   z.reserve(x.size() / m + 1);

@@ -179,7 +179,8 @@ enum class Estimator { kTotal, kModifiedTotal, kHadamardTotal, kTheo1, kTheoBr, 
 double reflected(std::span<const double> x, std::ptrdiff_t k) {
   const auto n = static_cast<std::ptrdiff_t>(x.size());
   if (k < 0) return 2.0 * x[0] - x[static_cast<std::size_t>(-k)];
-  if (k >= n) return 2.0 * x[static_cast<std::size_t>(n - 1)] - x[static_cast<std::size_t>(2 * (n - 1) - k)];
+  if (k >= n)
+    return 2.0 * x[static_cast<std::size_t>(n - 1)] - x[static_cast<std::size_t>(2 * (n - 1) - k)];
   return x[static_cast<std::size_t>(k)];
 }
 
@@ -188,7 +189,8 @@ double totvar(std::span<const double> x, std::size_t m) {
   const auto mm = static_cast<std::ptrdiff_t>(m);
   double sum = 0.0;
   for (std::ptrdiff_t i = 1; i <= n - 2; ++i) {
-    const double d = reflected(x, i - mm) - 2.0 * x[static_cast<std::size_t>(i)] + reflected(x, i + mm);
+    const double d =
+        reflected(x, i - mm) - 2.0 * x[static_cast<std::size_t>(i)] + reflected(x, i + mm);
     sum += d * d;
   }
   const double md = static_cast<double>(m);
@@ -416,8 +418,8 @@ std::vector<Plan> plan_points(const TotalOptions& o, std::size_t n, double rate_
     // tau = 0.75 m >= k on (SP 1065 eq. 33).
     const double t_record = static_cast<double>(n - 1);
     const std::size_t k = std::max<std::size_t>(1, static_cast<std::size_t>(0.1 * t_record));
-    for (double t : requested_taus(o.taus, 1.0, 0.75 * static_cast<double>(max_m(e, n)),
-                                   rate_hz, false)) {
+    for (double t :
+         requested_taus(o.taus, 1.0, 0.75 * static_cast<double>(max_m(e, n)), rate_hz, false)) {
       if (t < static_cast<double>(k) - 1e-9) {
         add(Estimator::kAllan, static_cast<std::size_t>(std::llround(t)));
       } else {
@@ -432,8 +434,7 @@ std::vector<Plan> plan_points(const TotalOptions& o, std::size_t n, double rate_
       add(e, nearest_even(t / 0.75));
     }
   } else {
-    for (double t :
-         requested_taus(o.taus, 1.0, static_cast<double>(max_m(e, n)), rate_hz, false)) {
+    for (double t : requested_taus(o.taus, 1.0, static_cast<double>(max_m(e, n)), rate_hz, false)) {
       add(e, static_cast<std::size_t>(std::max<long long>(1, std::llround(t))));
     }
   }
@@ -473,7 +474,9 @@ std::optional<int> identify(std::span<const double> x, Estimator e, std::size_t 
   const bool hadamard = e == Estimator::kHadamardTotal;
   const bool theo = e == Estimator::kTheo1 || e == Estimator::kTheoBr;
   const std::size_t af =
-      theo ? std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(0.75 * static_cast<double>(m)))) : m;
+      theo ? std::max<std::size_t>(
+                 1, static_cast<std::size_t>(std::llround(0.75 * static_cast<double>(m))))
+           : m;
   const auto id = identify_noise_lag1(x, af, hadamard ? 3 : 2, hadamard ? -4 : -2);
   if (!id) return std::nullopt;
   return id->alpha;
@@ -502,9 +505,9 @@ std::string_view to_string(TotalKind kind) {
 }
 
 std::optional<TotalKind> parse_total_kind(std::string_view text) {
-  for (TotalKind k : {TotalKind::kTotal, TotalKind::kModifiedTotal, TotalKind::kTimeTotal,
-                      TotalKind::kHadamardTotal, TotalKind::kTheo1, TotalKind::kTheoBr,
-                      TotalKind::kTheoH}) {
+  for (TotalKind k :
+       {TotalKind::kTotal, TotalKind::kModifiedTotal, TotalKind::kTimeTotal,
+        TotalKind::kHadamardTotal, TotalKind::kTheo1, TotalKind::kTheoBr, TotalKind::kTheoH}) {
     if (text == to_string(k)) return k;
   }
   return std::nullopt;
@@ -517,8 +520,8 @@ void TotalOptions::validate() const {
   if (alpha) {
     const int lo = kind == TotalKind::kHadamardTotal ? -4 : -2;
     if (*alpha < lo || *alpha > 2) {
-      throw core::InputError("alpha", fmt::format("{} takes alpha in [{}, 2], got {}",
-                                                  to_string(kind), lo, *alpha));
+      throw core::InputError(
+          "alpha", fmt::format("{} takes alpha in [{}, 2], got {}", to_string(kind), lo, *alpha));
     }
   }
   if (taus.spacing == TauSpacing::kExplicit && taus.taus_s.empty()) {
@@ -531,8 +534,7 @@ double total_variance_from_phase(std::span<const double> x, std::size_t m, Total
     throw core::InputError("kind", "TheoBR and TheoH are whole-record statistics");
   }
   const Estimator e = estimator_of(kind);
-  if (x.size() < 8 || m < 1 || m > max_m(e, x.size()) ||
-      (e == Estimator::kTheo1 && m % 2 != 0)) {
+  if (x.size() < 8 || m < 1 || m > max_m(e, x.size()) || (e == Estimator::kTheo1 && m % 2 != 0)) {
     throw core::InputError("m", fmt::format("averaging factor {} is out of range for {} on {} "
                                             "phase points",
                                             m, to_string(kind), x.size()));
@@ -592,8 +594,9 @@ double total_equivalent_dof(TotalKind kind, int alpha, std::size_t m, std::size_
   double edf = kNaN;
   switch (kind) {
     case TotalKind::kTotal:
-      edf = totvar_edf_coefficients(alpha, b, c) ? b * n / md - c
-                                                 : equivalent_dof(AllanKind::kAllan, alpha, m, samples);
+      edf = totvar_edf_coefficients(alpha, b, c)
+                ? b * n / md - c
+                : equivalent_dof(AllanKind::kAllan, alpha, m, samples);
       break;
     case TotalKind::kModifiedTotal:
     case TotalKind::kTimeTotal:
@@ -625,8 +628,8 @@ TotalResult total_deviation(std::span<const double> rate, double sample_rate_hz,
                             const TotalOptions& options) {
   options.validate();
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw core::InputError("rate", fmt::format("must be positive and finite, got {}",
-                                               sample_rate_hz));
+    throw core::InputError("rate",
+                           fmt::format("must be positive and finite, got {}", sample_rate_hz));
   }
   const bool whole_record = options.kind == TotalKind::kTheoBr || options.kind == TotalKind::kTheoH;
   const std::size_t min_samples = whole_record ? 24 : 8;

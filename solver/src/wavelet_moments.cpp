@@ -14,8 +14,8 @@ namespace calstand::solver {
 
 WaveletMoments wavelet_moments(std::span<const double> rate, double sample_rate_hz) {
   if (!(sample_rate_hz > 0.0) || !std::isfinite(sample_rate_hz)) {
-    throw core::InputError("rate", fmt::format("must be positive and finite, got {}",
-                                               sample_rate_hz));
+    throw core::InputError("rate",
+                           fmt::format("must be positive and finite, got {}", sample_rate_hz));
   }
   if (rate.size() < 32) {
     throw core::InputError("data", fmt::format("noise identification needs at least 32 samples "
@@ -30,8 +30,15 @@ WaveletMoments wavelet_moments(std::span<const double> rate, double sample_rate_
     const double avar = allan_variance_from_phase(x, m, AllanKind::kAllan);
     out.m.push_back(m);
     out.variance.push_back(0.5 * avar);
-    const double coefficients = static_cast<double>(rate.size() - 2 * m + 1);
-    out.dof.push_back(std::max(coefficients / static_cast<double>(2 * m), 1.0));
+    // White FM's EDF of the overlapping Allan variance (SP 1065 Table 5), the middle of the
+    // power laws: white PM has more, random walk fewer (about N / m); Percival and Walden's
+    // eta_3 = M / 2m, a lower bound, made the objective of a right model a third of its
+    // expected J - p and the selection penalty too heavy.
+    const double n = static_cast<double>(rate.size() + 1);
+    const double md = static_cast<double>(m);
+    const double white_fm = (3.0 * (n - 1.0) / (2.0 * md) - 2.0 * (n - 2.0) / n) * 4.0 * md * md /
+                            (4.0 * md * md + 5.0);
+    out.dof.push_back(std::max(white_fm, 1.0));
   }
   return out;
 }

@@ -27,11 +27,11 @@ std::string_view to_string(NoiseKind kind);
 /// One term with its parameters in the record's units and their 95 % intervals.
 struct NoiseModelTerm {
   NoiseKind kind = NoiseKind::kWhite;
-  double value = 0.0;       ///< N, Q, B, sigma, K or R (see NoiseKind)
-  double tau_s = 0.0;       ///< correlation time [s], Gauss-Markov only
-  double value_lo = 0.0;    ///< 95 % interval of value
+  double value = 0.0;     ///< N, Q, B, sigma, K or R (see NoiseKind)
+  double tau_s = 0.0;     ///< correlation time [s], Gauss-Markov only
+  double value_lo = 0.0;  ///< 95 % interval of value
   double value_hi = 0.0;
-  double tau_lo_s = 0.0;    ///< 95 % interval of tau_s (Gauss-Markov)
+  double tau_lo_s = 0.0;  ///< 95 % interval of tau_s (Gauss-Markov)
   double tau_hi_s = 0.0;
 };
 
@@ -39,8 +39,8 @@ struct NoiseModelTerm {
 struct NoiseCandidate {
   std::vector<NoiseKind> kinds;  ///< its terms (sorted by kind)
   std::size_t parameters = 0;
-  double objective = 0.0;  ///< the GMWM objective at the optimum (weighted squared distance)
-  double criterion = 0.0;  ///< objective + parameters * ln(scales); lower is better
+  double objective = 0.0;   ///< the GMWM objective at the optimum (weighted squared distance)
+  double criterion = 0.0;   ///< objective + parameters * ln(scales); lower is better
   bool admissible = false;  ///< every term resolved by the record (see identify_noise_model())
   bool selected = false;
 };
@@ -63,9 +63,9 @@ struct NoiseModel {
   std::size_t samples = 0;
   std::vector<NoiseModelTerm> terms;  ///< of the selected candidate
   std::vector<NoiseCandidate> candidates;
-  std::string selected_by;  ///< the criterion, in words
-  std::string estimator;    ///< the estimator and interval method, in words
-  WaveletMoments moments;   ///< the wavelet variances the model was fitted to
+  std::string selected_by;     ///< the criterion, in words
+  std::string estimator;       ///< the estimator and interval method, in words
+  WaveletMoments moments;      ///< the wavelet variances the model was fitted to
   std::vector<double> fitted;  ///< the selected model's wavelet variances at moments.m
 };
 

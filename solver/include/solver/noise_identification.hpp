@@ -26,7 +26,7 @@ inline constexpr std::size_t kLag1MinPoints = 30;
 /// spectrum's exponent and alpha = p + 2. The result is rounded and clamped to
 /// [min_alpha, 2]. nullopt when fewer than kLag1MinPoints decimated points remain (the
 /// caller carries the last identified type forward) or the data are constant.
-std::optional<Lag1NoiseId> identify_noise_lag1(std::span<const double> x, std::size_t m,
-                                               int dmax, int min_alpha);
+std::optional<Lag1NoiseId> identify_noise_lag1(std::span<const double> x, std::size_t m, int dmax,
+                                               int min_alpha);
 
 }  // namespace calstand::solver

@@ -43,7 +43,9 @@ TotalResult run(TotalKind kind, const std::vector<Row>& rows, std::optional<int>
   o.kind = kind;
   std::vector<double> taus;
   const bool theo = kind == TotalKind::kTheo1 || kind == TotalKind::kTheoBr;
-  for (const Row& r : rows) taus.push_back(theo ? 0.75 * static_cast<double>(r.m) : r.m);
+  for (const Row& r : rows) {
+    taus.push_back((theo ? 0.75 : 1.0) * static_cast<double>(r.m));
+  }
   o.taus.spacing = TauSpacing::kExplicit;
   o.taus.taus_s = taus;
   o.alpha = alpha;
@@ -68,15 +70,12 @@ void expect_rows(const TotalResult& r, const std::vector<Row>& rows, double dev_
 // phase_dat_totdev_octave.txt: "Sigma Type: Total", alpha 0 (white FM: no TOTVAR bias) at every
 // tau; intervals from EDF = 1.5 N / m.
 TEST(TotalDeviation, Stable32TotdevOctave) {
-  const std::vector<Row> rows{{1, 2.9223e-01, 2.8707e-01, 2.9768e-01},
-                              {2, 2.0089e-01, 1.9592e-01, 2.0625e-01},
-                              {4, 1.4444e-01, 1.3947e-01, 1.4998e-01},
-                              {8, 1.0540e-01, 1.0039e-01, 1.1126e-01},
-                              {16, 6.1788e-02, 5.7732e-02, 6.6839e-02},
-                              {32, 4.8580e-02, 4.4255e-02, 5.4484e-02},
-                              {64, 3.5905e-02, 3.1639e-02, 4.2546e-02},
-                              {128, 3.1259e-02, 2.6406e-02, 4.0383e-02},
-                              {256, 1.3369e-02, 1.0734e-02, 1.9924e-02}};
+  const std::vector<Row> rows{
+      {1, 2.9223e-01, 2.8707e-01, 2.9768e-01},  {2, 2.0089e-01, 1.9592e-01, 2.0625e-01},
+      {4, 1.4444e-01, 1.3947e-01, 1.4998e-01},  {8, 1.0540e-01, 1.0039e-01, 1.1126e-01},
+      {16, 6.1788e-02, 5.7732e-02, 6.6839e-02}, {32, 4.8580e-02, 4.4255e-02, 5.4484e-02},
+      {64, 3.5905e-02, 3.1639e-02, 4.2546e-02}, {128, 3.1259e-02, 2.6406e-02, 4.0383e-02},
+      {256, 1.3369e-02, 1.0734e-02, 1.9924e-02}};
   expect_rows(run(TotalKind::kTotal, rows, 0), rows);
   // The identified noise type is white FM at every tau, as Stable32 found.
   for (const AllanPoint& p : run(TotalKind::kTotal, rows, std::nullopt).points) {
@@ -230,7 +229,8 @@ double peer_mtotvar(const std::vector<double>& x, std::size_t m) {
       a += r[j] / static_cast<double>(k);
       b += r[3 * m - k + j] / static_cast<double>(k);
     }
-    const double slope = (b - a) / (3 * m % 2 ? static_cast<double>(k + 1) : static_cast<double>(k));
+    const double slope =
+        (b - a) / (3 * m % 2 ? static_cast<double>(k + 1) : static_cast<double>(k));
     for (std::size_t j = 0; j < r.size(); ++j) r[j] -= slope * static_cast<double>(j);
     std::vector<double> e(r.rbegin(), r.rend());
     e.insert(e.end(), r.begin(), r.end());
@@ -273,14 +273,12 @@ double peer_avar(const std::vector<double>& x, std::size_t m) {
 TEST(TotalDeviation, MatchesBruteForceDefinitions) {
   const std::vector<double> x = random_phase(181, 7);
   for (std::size_t m : {1u, 2u, 5u, 17u, 60u}) {
-    EXPECT_NEAR(total_variance_from_phase(x, m, TotalKind::kTotal) / peer_totvar(x, m), 1.0,
-                1e-12);
+    EXPECT_NEAR(total_variance_from_phase(x, m, TotalKind::kTotal) / peer_totvar(x, m), 1.0, 1e-12);
     EXPECT_NEAR(total_variance_from_phase(x, m, TotalKind::kModifiedTotal) / peer_mtotvar(x, m),
                 1.0, 1e-12);
   }
   for (std::size_t m : {2u, 10u, 64u, 180u}) {
-    EXPECT_NEAR(total_variance_from_phase(x, m, TotalKind::kTheo1) / peer_theo1(x, m), 1.0,
-                1e-12);
+    EXPECT_NEAR(total_variance_from_phase(x, m, TotalKind::kTheo1) / peer_theo1(x, m), 1.0, 1e-12);
   }
 }
 
@@ -293,7 +291,8 @@ TEST(TotalDeviation, TheoBrAndTheoHFollowTheirDefinitions) {
   const std::size_t n = x.size();
   double kf = 0.0;
   const std::size_t count = n / 6 - 3;
-  for (std::size_t i = 0; i <= count; ++i) kf += peer_avar(x, 9 + 3 * i) / peer_theo1(x, 12 + 4 * i);
+  for (std::size_t i = 0; i <= count; ++i)
+    kf += peer_avar(x, 9 + 3 * i) / peer_theo1(x, 12 + 4 * i);
   kf /= static_cast<double>(count + 1);
   EXPECT_NEAR(theo_br_bias(x) / kf, 1.0, 1e-12);
 
