@@ -17,14 +17,17 @@
 #include <vector>
 
 #include "analysis/noise_json.hpp"
+#include "analysis/noise_model_json.hpp"
 #include "commands.hpp"
 #include "core/csv_reader.hpp"
 #include "core/error.hpp"
 #include "noise/allan.hpp"
+#include "noise/composite_noise.hpp"
 #include "noise/kalibr.hpp"
 #include "noise/noise_fit.hpp"
 #include "noise/record_length.hpp"
 #include "noise/run_noise.hpp"
+#include "noise/total_deviation.hpp"
 #include "open_database.hpp"
 #include "store/database.hpp"
 #include "store/sample_reader.hpp"
@@ -41,6 +44,8 @@ struct AllanArgs {
   std::string taus = "octave";
   std::string kind = "adev";
   std::string confidence = "0.683";
+  std::string alpha;  // empty: identified at each tau
+  bool no_bias_correction = false;
   bool json = false;
 };
 
@@ -105,18 +110,53 @@ std::string figure_cell(const solver::DatasheetFigure& f) {
                                 : fmt::format("{:.4g}", f.value);
 }
 
-void run_allan(const AllanArgs& a) {
-  solver::AllanOptions options;
-  options.kind = solver::parse_allan_kind(a.kind);
-  options.taus = solver::TauSet::parse(a.taus);
-  options.confidence = parse_double(a.confidence, "--confidence");
-  options.validate();
+// The total and Theo kinds (solver/total_deviation.hpp): the same JSON as the Allan kinds,
+// plus whether the bias corrections were applied; no noise-term fit (that is on the Allan
+// variance, or `calstand noise-id`).
+void print_total(const solver::TotalResult& t, const std::string& source, std::string unit,
+                 double rate_hz, bool json) {
+  const std::string key(solver::to_string(t.kind));
+  if (t.kind == solver::TotalKind::kTimeTotal) unit += "*s";  // tau / sqrt(3) MTOTDEV
+  solver::AllanResult r;
+  r.sample_rate_hz = t.sample_rate_hz;
+  r.samples = t.samples;
+  r.confidence = t.confidence;
+  r.points = t.points;
+  if (json) {
+    auto out = analysis::allan_json(r, source, key, unit, rate_hz, std::nullopt, std::nullopt);
+    out["bias_corrected"] = t.bias_corrected;
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << fmt::format("{} of {}: {} samples at {:.6g} Hz, {:.1f} % intervals, {} [{}]\n", key,
+                           source, r.samples, rate_hz, 100.0 * r.confidence,
+                           t.bias_corrected ? "bias-corrected as Stable32" : "no bias correction",
+                           unit);
+  std::cout << fmt::format("{:>12} {:>8} {:>13} {:>13} {:>13} {:>10} {:>6}\n", "tau [s]", "m", key,
+                           "lo", "hi", "edf", "alpha");
+  for (const auto& p : r.points) {
+    std::cout << fmt::format("{:>12.6g} {:>8} {:>13.6e} {:>13.6e} {:>13.6e} {:>10.4g} {:>6}\n",
+                             p.tau_s, p.m, p.deviation, p.lo, p.hi, p.edf, p.alpha);
+  }
+}
 
+// The record of `calstand allan` and `calstand noise-id`: a CSV column, or one channel of a
+// stored run's static step.
+struct Series {
   std::vector<double> data;
   double rate_hz = 0.0;
   std::string unit = "unit";
   std::string source;
   std::optional<solver::ImuChannel> channel;
+};
+
+Series load_series(const AllanArgs& a) {
+  Series out;
+  std::vector<double>& data = out.data;
+  double& rate_hz = out.rate_hz;
+  std::string& unit = out.unit;
+  std::string& source = out.source;
+  std::optional<solver::ImuChannel>& channel = out.channel;
   if (!a.csv.empty()) {
     if (!a.db.empty() || !a.run.empty()) {
       throw core::InputError("--csv", "give either --csv or --db/--run, not both");
@@ -159,6 +199,51 @@ void run_allan(const AllanArgs& a) {
     data = solver::channel_series(samples, *channel);
     unit = std::string(solver::channel_unit(*channel));
     source = fmt::format("run {} step {} {} {}", run, step, device, a.channel);
+  }
+  return out;
+}
+
+void run_allan(const AllanArgs& a) {
+  const std::optional<solver::TotalKind> total_kind = solver::parse_total_kind(a.kind);
+  solver::AllanOptions options;
+  if (!total_kind) {
+    try {
+      options.kind = solver::parse_allan_kind(a.kind);
+    } catch (const core::InputError&) {
+      throw core::InputError("--kind", fmt::format("'{}' is none of adev, mdev, ohdev, hdev, "
+                                                   "totdev, mtotdev, ttotdev, htotdev, theo1, "
+                                                   "theobr, theoh",
+                                                   a.kind));
+    }
+    if (a.no_bias_correction) {
+      throw core::InputError("--no-bias-correction",
+                             "only for the total and Theo kinds (the Allan kinds are unbiased)");
+    }
+  }
+  options.taus = solver::TauSet::parse(a.taus);
+  options.confidence = parse_double(a.confidence, "--confidence");
+  if (!a.alpha.empty()) options.alpha = static_cast<int>(parse_int(a.alpha, "--alpha", -4));
+  solver::TotalOptions total;
+  if (total_kind) {
+    total.kind = *total_kind;
+    total.taus = options.taus;
+    total.confidence = options.confidence;
+    total.alpha = options.alpha;
+    total.bias_correction = !a.no_bias_correction;
+    total.validate();
+  } else {
+    options.validate();
+  }
+
+  Series series = load_series(a);
+  std::vector<double>& data = series.data;
+  const double rate_hz = series.rate_hz;
+  const std::string& unit = series.unit;
+  const std::string& source = series.source;
+  const std::optional<solver::ImuChannel>& channel = series.channel;
+  if (total_kind) {
+    print_total(solver::total_deviation(data, rate_hz, total), source, unit, rate_hz, a.json);
+    return;
   }
   const solver::AllanResult r = solver::allan(data, rate_hz, options);
   std::optional<solver::NoiseTerms> terms;
@@ -215,6 +300,76 @@ void run_allan(const AllanArgs& a) {
       std::cout << fmt::format("(no datasheet figures: '{}' is none of deg/s, rad/s, m/s^2, g)\n",
                                unit);
     }
+  }
+}
+
+struct NoiseIdArgs : AllanArgs {
+  std::string bootstrap = "100";
+};
+
+// A datasheet figure of one parameter (the human output): ARW deg/sqrt(h) or VRW m/s/sqrt(h)
+// from a white density, deg/h/sqrt(h) or m/s/h/sqrt(h) from a random-walk density, deg/h or ug
+// for the rest; empty for a unit that is neither a gyro's nor an accelerometer's.
+std::string datasheet_cell(solver::NoiseKind kind, double v, const analysis::DatasheetUnit& d) {
+  constexpr double kUg = 9.80665e-6;  // m/s^2 per micro-g
+  const double b = v * d.to_base;     // deg/s or m/s^2 based
+  switch (kind) {
+    case solver::NoiseKind::kWhite:
+      return fmt::format("{:.4g} {}", b * 60.0, d.gyro ? "deg/sqrt(h)" : "m/s/sqrt(h)");
+    case solver::NoiseKind::kRandomWalk:
+      return fmt::format("{:.4g} {}", b * 3600.0 * 60.0,
+                         d.gyro ? "deg/h/sqrt(h)" : "m/s/h/sqrt(h)");
+    case solver::NoiseKind::kFlicker:
+    case solver::NoiseKind::kGaussMarkov:
+      return d.gyro ? fmt::format("{:.4g} deg/h", b * 3600.0) : fmt::format("{:.4g} ug", b / kUg);
+    case solver::NoiseKind::kDrift:
+      return d.gyro ? fmt::format("{:.4g} deg/h/s", b * 3600.0)
+                    : fmt::format("{:.4g} ug/s", b / kUg);
+    case solver::NoiseKind::kQuantization:
+      return d.gyro ? fmt::format("{:.4g} deg", b) : fmt::format("{:.4g} m/s", b);
+  }
+  return {};
+}
+
+void run_noise_id(const NoiseIdArgs& a) {
+  solver::NoiseIdOptions options;
+  options.bootstrap = static_cast<std::size_t>(parse_int(a.bootstrap, "--bootstrap", 20));
+  const Series series = load_series(a);
+  const solver::NoiseModel model =
+      solver::identify_noise_model(series.data, series.rate_hz, options);
+  if (a.json) {
+    std::cout << analysis::noise_model_json(model, series.source, series.unit).dump(2) << "\n";
+    return;
+  }
+  const std::optional<analysis::DatasheetUnit> datasheet =
+      series.channel ? std::optional(analysis::DatasheetUnit{solver::is_gyro(*series.channel), 1.0})
+                     : analysis::datasheet_unit(series.unit);
+  std::cout << fmt::format(
+      "noise model of {}: {} samples at {:.6g} Hz [{}]\n{}\nselected by {}\n\n", series.source,
+      model.samples, model.sample_rate_hz, series.unit, model.estimator, model.selected_by);
+  std::cout << fmt::format("{:<14} {:<18} {:>12} {:>27} {:<18} {}\n", "term", "parameter", "value",
+                           "95 % interval", "unit", datasheet ? "datasheet" : "");
+  for (const auto& t : model.terms) {
+    const std::string kind(solver::to_string(t.kind));
+    const auto row = [&](const std::string& name, double v, double lo, double hi,
+                         const std::string& u, const std::string& sheet) {
+      std::cout << fmt::format("{:<14} {:<18} {:>12.4g} {:>27} {:<18} {}\n", kind, name, v,
+                               fmt::format("[{:.4g}, {:.4g}]", lo, hi), u, sheet);
+    };
+    row(analysis::noise_parameter_name(t.kind), t.value, t.value_lo, t.value_hi,
+        analysis::noise_parameter_unit(t.kind, series.unit),
+        datasheet ? datasheet_cell(t.kind, t.value, *datasheet) : "");
+    if (t.kind == solver::NoiseKind::kGaussMarkov)
+      row("tau_s", t.tau_s, t.tau_lo_s, t.tau_hi_s, "s", "");
+  }
+  std::cout << "\ncandidates (criterion = GMWM objective + p ln J; '-': a term not resolved)\n";
+  for (const auto& c : model.candidates) {
+    std::string names;
+    for (auto k : c.kinds)
+      names += (names.empty() ? "" : " + ") + std::string(solver::to_string(k));
+    std::cout << fmt::format("  {:<62} {:>10} {}\n", names,
+                             c.admissible ? fmt::format("{:.2f}", c.criterion) : "-",
+                             c.selected ? "selected" : "");
   }
 }
 
@@ -335,12 +490,49 @@ void register_allan(CLI::App& app) {
   cmd->add_option("--taus", a->taus, "octave, decade, dense or a list of seconds (1,10,100)")
       ->capture_default_str();
   cmd->add_option("--kind", a->kind,
-                  "adev (overlapping), mdev, ohdev (overlapping Hadamard) or hdev (Hadamard)")
+                  "adev (overlapping), mdev, ohdev (overlapping Hadamard), hdev (Hadamard); "
+                  "totdev, mtotdev, ttotdev, htotdev (total); theo1, theobr, theoh (Theo taus "
+                  "are 0.75 m tau0)")
       ->capture_default_str();
+  cmd->add_option("--alpha", a->alpha,
+                  "power-law noise exponent for the intervals and bias corrections (2 white PM "
+                  "... -2 random-walk FM, -4 for htotdev); default: identified at each tau")
+      ->type_name("A");
+  cmd->add_flag("--no-bias-correction", a->no_bias_correction,
+                "total and Theo kinds: the raw estimator, without Stable32's bias corrections");
   cmd->add_option("--confidence", a->confidence, "two-sided probability of the intervals")
       ->capture_default_str();
   cmd->add_flag("--json", a->json, "print the result as JSON");
   cmd->callback([a] { run_allan(*a); });
+
+  auto id = std::make_shared<NoiseIdArgs>();
+  CLI::App* noise_id = app.add_subcommand(
+      "noise-id",
+      "Composite noise model of a static record (white, quantization, flicker, one or two "
+      "Gauss-Markov, random walk, ramp) by the GMWM, with model selection and 95 % intervals "
+      "(docs/noise-id.md)");
+  noise_id->add_option("--db", id->db, "SQLite database file")->type_name("FILE");
+  noise_id->add_option("--run", id->run, "run id")->type_name("ID");
+  noise_id->add_option("--step", id->step, "step index (default: the longest static capture)")
+      ->type_name("N");
+  noise_id->add_option("--channel", id->channel, "gx gy gz [deg/s] or ax ay az [m/s^2]")
+      ->type_name("NAME");
+  noise_id->add_option("--device", id->device, "IMU name (default: the first with samples)")
+      ->type_name("NAME");
+  noise_id->add_option("--csv", id->csv, "CSV file with a header line, instead of --db")
+      ->type_name("FILE");
+  noise_id->add_option("--column", id->column, "CSV column")->type_name("NAME");
+  noise_id->add_option("--rate", id->rate, "CSV sample rate [Hz]")->type_name("HZ");
+  noise_id
+      ->add_option("--units", id->units,
+                   "unit of the CSV column: deg/s, rad/s, m/s^2 or g also give datasheet "
+                   "figures")
+      ->type_name("UNIT");
+  noise_id
+      ->add_option("--bootstrap", id->bootstrap, "parametric-bootstrap records for the intervals")
+      ->capture_default_str();
+  noise_id->add_flag("--json", id->json, "print the result as JSON");
+  noise_id->callback([id] { run_noise_id(*id); });
 
   auto n = std::make_shared<NoiseArgs>();
   CLI::App* noise = app.add_subcommand(

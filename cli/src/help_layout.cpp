@@ -43,6 +43,8 @@ constexpr std::array kHelpTable{
     HelpEntry{"Analyse a run", "analyze", "calstand analyze stability --db lab.db --run 2"},
     HelpEntry{"Analyse a run", "allan", "calstand allan --db lab.db --run 2 --channel gx"},
     HelpEntry{"Analyse a run", "noise", "calstand noise --db lab.db --run 2 --kalibr imu.yaml"},
+    HelpEntry{"Analyse a run", "noise-id",
+              "calstand noise-id --csv gyro.csv --column gz --rate 100 --units deg/s"},
     HelpEntry{"Analyse a run", "report", "calstand report --db lab.db --run 1 --out report.html"},
     HelpEntry{"Analyse a run", "units",
               "calstand units \"0.15 deg/sqrt(h)\" --to \"deg/s/sqrt(Hz)\""},

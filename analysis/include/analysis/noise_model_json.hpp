@@ -1,0 +1,25 @@
+#pragma once
+// `calstand noise-id --json`: an identified composite noise model (solver/composite_noise.hpp)
+// as the JSON issue 33 specifies, every parameter with its 95 % interval and its unit written out.
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "noise/composite_noise.hpp"
+
+namespace calstand::analysis {
+
+/// The unit of each parameter of `kind` for data in `unit` (e.g. "deg/s"): white "density"
+/// [unit/sqrt(Hz)], quantization "q" [unit*s], flicker "bias_instability" [unit], gauss_markov
+/// "sigma" [unit] and "tau_s" [s], random_walk "density" [unit/sqrt(s)], drift "ramp" [unit/s].
+std::string noise_parameter_name(solver::NoiseKind kind);
+std::string noise_parameter_unit(solver::NoiseKind kind, const std::string& unit);
+
+/// {"source", "unit", "sample_rate_hz", "samples", "estimator", "terms": [{"kind",
+/// "parameters": {NAME: {"value", "ci95": [lo, hi], "unit"}}}], "selected_by", "candidates":
+/// [{"terms", "parameters", "objective", "criterion", "admissible", "selected"}],
+/// "wavelet_variance": {"tau_s", "measured", "fitted", "unit"}}.
+nlohmann::ordered_json noise_model_json(const solver::NoiseModel& model, const std::string& source,
+                                        const std::string& unit);
+
+}  // namespace calstand::analysis

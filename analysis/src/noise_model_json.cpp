@@ -1,0 +1,108 @@
+// An identified composite noise model as JSON (calstand noise-id --json).
+#include "analysis/noise_model_json.hpp"
+
+#include <cmath>
+
+namespace calstand::analysis {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// NaN (an interval the bootstrap could not give) as JSON null.
+Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+Json parameter(double value, double lo, double hi, const std::string& unit) {
+  Json p;
+  p["value"] = number(value);
+  p["ci95"] = Json::array({number(lo), number(hi)});
+  p["unit"] = unit;
+  return p;
+}
+
+}  // namespace
+
+std::string noise_parameter_name(solver::NoiseKind kind) {
+  switch (kind) {
+    case solver::NoiseKind::kWhite:
+    case solver::NoiseKind::kRandomWalk:
+      return "density";
+    case solver::NoiseKind::kQuantization:
+      return "q";
+    case solver::NoiseKind::kFlicker:
+      return "bias_instability";
+    case solver::NoiseKind::kGaussMarkov:
+      return "sigma";
+    case solver::NoiseKind::kDrift:
+      return "ramp";
+  }
+  return "value";
+}
+
+std::string noise_parameter_unit(solver::NoiseKind kind, const std::string& unit) {
+  switch (kind) {
+    case solver::NoiseKind::kWhite:
+      return unit + "/sqrt(Hz)";
+    case solver::NoiseKind::kQuantization:
+      return unit + "*s";
+    case solver::NoiseKind::kRandomWalk:
+      return unit + "/sqrt(s)";
+    case solver::NoiseKind::kDrift:
+      return unit + "/s";
+    default:
+      return unit;
+  }
+}
+
+Json noise_model_json(const solver::NoiseModel& model, const std::string& source,
+                      const std::string& unit) {
+  Json out;
+  out["source"] = source;
+  out["unit"] = unit;
+  out["sample_rate_hz"] = model.sample_rate_hz;
+  out["samples"] = model.samples;
+  out["estimator"] = model.estimator;
+  Json terms = Json::array();
+  for (const auto& t : model.terms) {
+    Json term;
+    term["kind"] = std::string(solver::to_string(t.kind));
+    Json params;
+    params[noise_parameter_name(t.kind)] =
+        parameter(t.value, t.value_lo, t.value_hi, noise_parameter_unit(t.kind, unit));
+    if (t.kind == solver::NoiseKind::kGaussMarkov) {
+      params["tau_s"] = parameter(t.tau_s, t.tau_lo_s, t.tau_hi_s, "s");
+    }
+    term["parameters"] = params;
+    terms.push_back(term);
+  }
+  out["terms"] = terms;
+  out["selected_by"] = model.selected_by;
+  Json candidates = Json::array();
+  for (const auto& c : model.candidates) {
+    Json j;
+    Json names = Json::array();
+    for (auto k : c.kinds) names.push_back(std::string(solver::to_string(k)));
+    j["terms"] = names;
+    j["parameters"] = c.parameters;
+    j["objective"] = number(c.objective);
+    j["criterion"] = number(c.criterion);
+    j["admissible"] = c.admissible;
+    j["selected"] = c.selected;
+    candidates.push_back(j);
+  }
+  out["candidates"] = candidates;
+  Json wv;
+  Json tau = Json::array(), measured = Json::array(), fitted = Json::array();
+  for (std::size_t j = 0; j < model.moments.m.size(); ++j) {
+    tau.push_back(2.0 * static_cast<double>(model.moments.m[j]) / model.sample_rate_hz);
+    measured.push_back(model.moments.variance[j]);
+    fitted.push_back(model.fitted[j]);
+  }
+  wv["tau_s"] = tau;  // the Haar scale 2 m tau0
+  wv["measured"] = measured;
+  wv["fitted"] = fitted;
+  wv["unit"] = "(" + unit + ")^2";
+  out["wavelet_variance"] = wv;
+  return out;
+}
+
+}  // namespace calstand::analysis

@@ -1,0 +1,92 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "noise/wavelet_moments.hpp"
+
+namespace calstand::solver {
+
+/// The processes of a composite noise model of a static rate record (IEEE Std 952 terms and
+/// first-order Gauss-Markov processes).
+enum class NoiseKind {
+  kWhite,         ///< white rate noise: density N [unit/sqrt(Hz)] (angle/velocity random walk)
+  kQuantization,  ///< white phase noise: Q [unit*s]; AVAR = 3 Q^2 / tau^2
+  kFlicker,       ///< flicker (bias instability) B [unit]: a flat AVAR of (2 ln 2 / pi) B^2
+  kGaussMarkov,   ///< first-order Gauss-Markov: sigma [unit], correlation time tau_s [s]
+  kRandomWalk,    ///< rate random walk: density K [unit/sqrt(s)]
+  kDrift,         ///< rate ramp R [unit/s]
+};
+/// "white", "quantization", "flicker", "gauss_markov", "random_walk", "drift" (the JSON names).
+std::string_view to_string(NoiseKind kind);
+
+/// One term with its parameters in the record's units and their 95 % intervals.
+struct NoiseModelTerm {
+  NoiseKind kind = NoiseKind::kWhite;
+  double value = 0.0;     ///< N, Q, B, sigma, K or R (see NoiseKind)
+  double tau_s = 0.0;     ///< correlation time [s], Gauss-Markov only
+  double value_lo = 0.0;  ///< 95 % interval of value
+  double value_hi = 0.0;
+  double tau_lo_s = 0.0;  ///< 95 % interval of tau_s (Gauss-Markov)
+  double tau_hi_s = 0.0;
+};
+
+/// A candidate model and how it fared.
+struct NoiseCandidate {
+  std::vector<NoiseKind> kinds;  ///< its terms (sorted by kind)
+  std::size_t parameters = 0;
+  double objective = 0.0;   ///< the GMWM objective at the optimum (weighted squared distance)
+  double criterion = 0.0;   ///< objective + parameters * ln(scales); lower is better
+  bool admissible = false;  ///< every term resolved by the record (see identify_noise_model())
+  bool selected = false;
+};
+
+/// Options of identify_noise_model().
+struct NoiseIdOptions {
+  /// Parametric-bootstrap replicates for the intervals (records simulated from the fitted model
+  /// by its exact discrete recursions, each refitted). At least 20.
+  std::size_t bootstrap = 100;
+  std::uint64_t seed = 1;  ///< of the bootstrap's generator: the same record gives the same answer
+  /// Allow a rate ramp term (off by default: a static record's drift is usually removed).
+  bool drift = true;
+  /// Throws core::InputError naming the field.
+  void validate() const;
+};
+
+/// The identified model.
+struct NoiseModel {
+  double sample_rate_hz = 0.0;
+  std::size_t samples = 0;
+  std::vector<NoiseModelTerm> terms;  ///< of the selected candidate
+  std::vector<NoiseCandidate> candidates;
+  std::string selected_by;     ///< the criterion, in words
+  std::string estimator;       ///< the estimator and interval method, in words
+  WaveletMoments moments;      ///< the wavelet variances the model was fitted to
+  std::vector<double> fitted;  ///< the selected model's wavelet variances at moments.m
+};
+
+/// Identifies a composite noise model of the static rate record `rate` (unit of the data at
+/// sample_rate_hz) by the GMWM: every candidate (white noise plus any of quantization, flicker,
+/// one or two Gauss-Markov processes, random walk and ramp) is fitted to the Haar wavelet
+/// variances by minimising the distance weighted by the inverse of their variances
+/// (2 nu^4 / eta, evaluated at the fit and iterated), a consistent estimator for a fixed set
+/// of scales. A candidate is admissible when every term carries at least 2 % of the model's
+/// wavelet variance at some scale and a Gauss-Markov time lies within the scales analysed;
+/// the admissible candidate with the lowest objective + p ln(J) (p parameters, J scales; a
+/// BIC-type penalty) is selected. Intervals: parametric bootstrap percentiles.
+///
+/// Throws core::InputError for fewer than 32 samples, a non-finite sample, a non-positive rate
+/// or invalid options. Deterministic for a given seed; thread safe.
+NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate_hz,
+                                const NoiseIdOptions& options = {});
+
+/// The Haar wavelet variance of one term at half-scale m (samples) for a record at
+/// sample_rate_hz; `value` and `tau_s` as NoiseModelTerm. Exposed for the tests.
+double term_wavelet_variance(NoiseKind kind, double value, double tau_s, std::size_t m,
+                             double sample_rate_hz);
+
+}  // namespace calstand::solver
