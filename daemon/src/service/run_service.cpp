@@ -214,16 +214,22 @@ std::optional<std::string> RunService::disk_shortfall() {
     return why;
   }
   if (measure_after_full_.exchange(false)) {
+    // A new run needs its disk reserve too. And the reserve the full run released, with the
+    // journal SQLite drops as the run ends, may come back after this reading (another thread
+    // may ask first): counting the reserve keeps that from passing for space an operator freed.
+    const auto policy = options_.station.policy;
     free_bytes_needed_after_full_ =
         store::free_bytes_beside(options_.db_path) +
-        static_cast<std::uint64_t>(options_.station.policy.min_free_disk_mb * kBytesPerMb);
+        static_cast<std::uint64_t>((policy.min_free_disk_mb + policy.disk_reserve_mb) *
+                                   kBytesPerMb);
   }
   if (const std::uint64_t needed = free_bytes_needed_after_full_; needed > 0) {
     const std::uint64_t free = store::free_bytes_beside(options_.db_path);
     if (free < needed) {
       return fmt::format(
           "disk full: the last run stopped on a full disk; {:.1f} MB free now, waiting for "
-          "{:.1f} MB (what was free then plus the station policy's min_free_disk_mb)",
+          "{:.1f} MB (what was free then plus the station policy's min_free_disk_mb and "
+          "disk_reserve_mb)",
           static_cast<double>(free) / kBytesPerMb, static_cast<double>(needed) / kBytesPerMb);
     }
     free_bytes_needed_after_full_ = 0;

@@ -20,7 +20,7 @@ namespace {
 // The SP 1065 test set as frequency data at 1 Hz (Lehmer generator from n0 = 1234567890, n0
 // itself the first point; see allan_test.cpp). Its cumulative sum is PHASE.DAT up to an offset
 // and a frequency offset, which no estimator here sees.
-std::vector<double> nist_set() {
+std::vector<double> sp1065_test_set() {
   std::vector<double> y;
   std::uint64_t n = 1234567890;
   y.push_back(static_cast<double>(n) / 2147483647.0);
@@ -50,7 +50,7 @@ TotalResult run(TotalKind kind, const std::vector<Row>& rows, std::optional<int>
   o.taus.taus_s = taus;
   o.alpha = alpha;
   o.bias_correction = bias;
-  return total_deviation(nist_set(), 1.0, o);
+  return total_deviation(sp1065_test_set(), 1.0, o);
 }
 
 void expect_rows(const TotalResult& r, const std::vector<Row>& rows, double dev_tol = 1e-4,
@@ -162,7 +162,7 @@ TEST(TotalDeviation, Stable32BiasRemovedTheo1IsTheoBr) {
                               {998, 3.9001e-03, 0, 0}};
   const TotalResult r = run(TotalKind::kTheoBr, rows, std::nullopt);
   expect_rows(r, rows);
-  const std::vector<double> x = phase_from_rate(nist_set());
+  const std::vector<double> x = phase_from_rate(sp1065_test_set());
   EXPECT_NEAR(theo_br_bias(x), 0.6028, 2e-4);  // the squared ratio of the two tables
   EXPECT_EQ(theo_br_noise_type(theo_br_bias(x)), 1);
   // The intervals use the noise identified at each tau instead: white FM, as the data are.
@@ -172,7 +172,7 @@ TEST(TotalDeviation, Stable32BiasRemovedTheo1IsTheoBr) {
 // SP 1065 section 12.5, the test set's published values to seven digits at m = 1, 10, 100.
 // MTOTDEV and TTOTDEV there carry the MTOT bias correction for white FM (1 / 0.73).
 TEST(TotalDeviation, Sp1065TestSetTable) {
-  const std::vector<double> y = nist_set();
+  const std::vector<double> y = sp1065_test_set();
   const std::vector<double> x = phase_from_rate(y);
   const std::size_t ms[] = {1, 10, 100};
   const double totdev[] = {2.922319e-01, 9.134743e-02, 3.406530e-02};
@@ -339,7 +339,7 @@ TEST(NoiseIdentification, Lag1NamesSimulatedPowerLaws) {
 }
 
 TEST(TotalDeviation, BadInput) {
-  const std::vector<double> y = nist_set();
+  const std::vector<double> y = sp1065_test_set();
   TotalOptions o;
   o.kind = TotalKind::kTotal;
   o.alpha = 3;
