@@ -4,7 +4,8 @@
 Run at build time (cmake/CalstandCliDocs.cmake) on the programs just built, so that neither can
 drift from the options. Walks the command tree: `PROG --help`, then `PROG SUB --help` for each
 subcommand the help lists, and so on down. Reads CLI11's help layout: a description line,
-`Usage:`, then the sections `Positionals:`, `Options:` and `Subcommands:`, one entry a line,
+`Usage:`, then the sections `Positionals:`, `Options:` and `Subcommands:` (or the task headings
+the top-level help groups its subcommands under), one entry a line,
 the name column padded to the description (a long name puts it on the next line, indented).
 
   gen_cli_docs.py PROGRAM NAME SECTION VERSION MAN_OUT COMPLETION_OUT [--extra FILE]
@@ -43,6 +44,7 @@ def parse_help(text, path, where):
     if not lines:
         raise SystemExit(f"{where}: --help printed nothing")
     section = None
+    seen_example = False  # the footer's example: no task heading after it
     for i, line in enumerate(lines):
         if i == 0 and not line.startswith("Usage:"):
             cmd.description = line.strip()
@@ -53,6 +55,14 @@ def parse_help(text, path, where):
             continue
         if line in SECTIONS:
             section = line
+            continue
+        if line in ("Example:", "Examples:"):
+            seen_example = True
+        if (not seen_example and "SUBCOMMAND" in cmd.usage and line.endswith(":")
+                and not line.startswith(" ")):
+            # `calstand --help` lists its subcommands under task headings ("Run a station:"),
+            # each a Subcommands: section of its own (cli/src/help_layout.cpp).
+            section = "Subcommands:"
             continue
         if section == "footer" or (section is not None and not line.startswith(" ")):
             section = "footer"  # a footer: every line from here on, blank ones too

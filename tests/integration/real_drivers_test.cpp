@@ -681,7 +681,7 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
   const std::string procedure =
       "thermal-calibration --set temperatures=[25] --set soak_s=5 --set final_soak_s=5 "
       "--set capture_s=10 --set ramp_c_per_min=5 --set outer_angles=[0,90,180,270] "
-      "--set inner_angles=[0,90] --set rates=[90] --set revolutions=1";
+      "--set inner_angles=[0,90] --set rates=[30,90] --set revolutions=1";
   ASSERT_EQ(run_procedure(procedure, sim, dir_ + name + "-inproc.db").exit_code, 0);
   // The accelerometers from their own procedure: in the campaign's turns about a horizontal
   // axis the table's telemetry and the IMU's stamps still disagree by a fraction of a

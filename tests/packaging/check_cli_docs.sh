@@ -10,10 +10,16 @@ failures=0
 fail() { echo "FAIL: $*" >&2; failures=$((failures + 1)); }
 
 subcommands() { "$@" --help | awk '/^Subcommands:/{s=1; next} s && /^  [^ ]/{print $1} s && /^$/{s=0}'; }
+# calstand --help lists its subcommands under task headings (cli/src/help_layout.cpp): any
+# unindented "Heading:" but Options and the footer's Example.
+top_subcommands() {
+  "$@" --help | awk '/^(Options|Positionals|Examples?):$/{s=0; next} /^[^ ].*:$/{s=1; next}
+                     s && /^  [^ ]/{print $1} s && /^$/{s=0}'
+}
 options() { "$@" --help | awk '/^Options:/{s=1; next} s && /^  -/{print $1} s && /^$/{s=0}' | tr ',' '\n'; }
 
 page="$(zcat "$man_dir/calstand.1.gz")"
-top=($(subcommands "$calstand"))
+top=($(top_subcommands "$calstand"))
 [ ${#top[@]} -ge 10 ] || fail "calstand --help lists only ${#top[@]} subcommands"
 for s in "${top[@]}"; do
   grep -qx ".SS calstand $(printf '%s' "$s" | sed 's/-/\\\\-/g')" <<< "$page" || fail "calstand.1 has no section for '$s'"
