@@ -9,9 +9,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "sim/noise.hpp"
 #include "noise/edf.hpp"
 #include "noise/noise_fit.hpp"
+#include "sim/noise.hpp"
 
 namespace calstand::solver {
 namespace {
