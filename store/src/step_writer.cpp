@@ -10,25 +10,102 @@
 
 namespace calstand::store::detail {
 
+namespace {
+
+// One row of each table a step writes, shared by the three writers below.
+constexpr const char* kStepInsert =
+    "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, attempts, "
+    "good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, ?, ?, ?, 'completed', 1, 1, "
+    "?, ?)";
+constexpr const char* kChunkInsert =
+    "INSERT INTO sample_chunks (run_id, step_id, attempt, device, first_receive_time_s, "
+    "last_receive_time_s, count, encoding, data) VALUES (?, ?, 1, ?, ?, ?, ?, ?, ?)";
+constexpr const char* kTableInsert =
+    "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
+    "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)";
+constexpr const char* kStepMeansInsert =
+    "INSERT INTO step_means (run_id, step_id, attempt, device, count, "
+    "first_receive_time_s, last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, "
+    "ay_mps2, az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
+    "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c) VALUES (?, ?, 1, ?, "
+    "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)";
+
+/// The step's row (kStepInsert); its id.
+std::int64_t insert_step_row(SQLite::Database& db, SQLite::Statement& st, std::int64_t run,
+                             const StepRow& step) {
+  st.reset();
+  st.bind(1, run);
+  st.bind(2, static_cast<std::int64_t>(step.index));
+  st.bind(3, step.kind);
+  st.bind(4, step.label);
+  st.bind(5, step.commanded.dump());
+  st.bind(6, step.origin);
+  st.bind(7, step.first_s);
+  st.bind(8, step.last_s);
+  st.exec();
+  return db.getLastInsertRowid();
+}
+
+/// The encoder's samples as one chunk (kChunkInsert).
+void insert_chunk_row(SQLite::Statement& st, std::int64_t run, std::int64_t step_id,
+                      const std::string& device, const ChunkEncoder& enc) {
+  st.reset();
+  st.bind(1, run);
+  st.bind(2, step_id);
+  st.bind(3, device);
+  st.bind(4, enc.first_receive_time_s());
+  st.bind(5, enc.last_receive_time_s());
+  st.bind(6, static_cast<std::int64_t>(enc.count()));
+  st.bind(7, static_cast<int>(enc.encoding()));
+  const auto blob = enc.bytes();
+  st.bindNoCopy(8, blob.data(), static_cast<int>(blob.size()));
+  st.exec();
+}
+
+/// One table state at a sample's time (kTableInsert).
+void insert_table_row(SQLite::Statement& st, std::int64_t run, std::int64_t step_id, double time_s,
+                      const TableSample& table) {
+  st.reset();
+  st.bind(1, run);
+  st.bind(2, step_id);
+  st.bind(3, time_s);
+  st.bind(4, table.outer_deg);
+  st.bind(5, table.inner_deg);
+  st.bind(6, table.outer_rate_dps);
+  st.bind(7, table.inner_rate_dps);
+  st.exec();
+}
+
+/// The step's means and standard deviations (kStepMeansInsert; a deviation of one sample NULL).
+void insert_means_row(SQLite::Statement& st, std::int64_t run, std::int64_t step_id,
+                      const std::string& device, const StepStats& stats) {
+  st.reset();
+  st.bind(1, run);
+  st.bind(2, step_id);
+  st.bind(3, device);
+  st.bind(4, static_cast<std::int64_t>(stats.count()));
+  st.bind(5, stats.first_time_s());
+  st.bind(6, stats.last_time_s());
+  for (int c = 0; c < StepStats::kChannels; ++c) {
+    st.bind(7 + c, stats.mean(c));
+    const double sd = stats.stddev(c);
+    if (std::isfinite(sd)) {
+      st.bind(14 + c, sd);
+    } else {
+      st.bind(14 + c);
+    }
+  }
+  st.exec();
+}
+
+}  // namespace
+
 StepWriter::StepWriter(SQLite::Database& db)
     : db_(db),
-      step_(db,
-            "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
-            "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, ?, ?, "
-            "?, 'completed', 1, 1, ?, ?)"),
-      chunk_(db,
-             "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
-             "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
-             "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
-      table_(db,
-             "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
-             "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)"),
-      means_(db,
-             "INSERT INTO step_means (run_id, step_id, attempt, device, count, "
-             "first_receive_time_s, last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, "
-             "ay_mps2, az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
-             "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c) VALUES (?, ?, 1, ?, "
-             "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)") {}
+      step_(db, kStepInsert),
+      chunk_(db, kChunkInsert),
+      table_(db, kTableInsert),
+      means_(db, kStepMeansInsert) {}
 
 std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std::string& device,
                                std::span<const core::ImuSample> samples,
@@ -36,30 +113,9 @@ std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std:
   if (!table.empty() && table.size() != samples.size()) {
     throw std::logic_error("StepWriter::write: one table state per sample, or none");
   }
-  step_.reset();
-  step_.bind(1, run);
-  step_.bind(2, static_cast<std::int64_t>(step.index));
-  step_.bind(3, step.kind);
-  step_.bind(4, step.label);
-  step_.bind(5, step.commanded.dump());
-  step_.bind(6, step.origin);
-  step_.bind(7, step.first_s);
-  step_.bind(8, step.last_s);
-  step_.exec();
-  const std::int64_t step_id = db_.getLastInsertRowid();
-
+  const std::int64_t step_id = insert_step_row(db_, step_, run, step);
   const auto insert_chunk = [&](const ChunkEncoder& enc) {
-    chunk_.reset();
-    chunk_.bind(1, run);
-    chunk_.bind(2, step_id);
-    chunk_.bind(3, device);
-    chunk_.bind(4, enc.first_receive_time_s());
-    chunk_.bind(5, enc.last_receive_time_s());
-    chunk_.bind(6, static_cast<std::int64_t>(enc.count()));
-    chunk_.bind(7, static_cast<int>(enc.encoding()));
-    const auto blob = enc.bytes();
-    chunk_.bindNoCopy(8, blob.data(), static_cast<int>(blob.size()));
-    chunk_.exec();
+    insert_chunk_row(chunk_, run, step_id, device, enc);
   };
   ChunkEncoder enc(SampleEncoding::kExact);
   StepStats stats;
@@ -71,87 +127,27 @@ std::int64_t StepWriter::write(std::int64_t run, const StepRow& step, const std:
     enc.append(samples[i]);
     stats.add(samples[i]);
     if (table.empty()) continue;  // no table state (orientation not known)
-    table_.reset();
-    table_.bind(1, run);
-    table_.bind(2, step_id);
-    table_.bind(3, samples[i].receive_time_s);
-    table_.bind(4, table[i].outer_deg);
-    table_.bind(5, table[i].inner_deg);
-    table_.bind(6, table[i].outer_rate_dps);
-    table_.bind(7, table[i].inner_rate_dps);
-    table_.exec();
+    insert_table_row(table_, run, step_id, samples[i].receive_time_s, table[i]);
   }
   if (enc.count() > 0) insert_chunk(enc);
 
-  means_.reset();
-  means_.bind(1, run);
-  means_.bind(2, step_id);
-  means_.bind(3, device);
-  means_.bind(4, static_cast<std::int64_t>(stats.count()));
-  means_.bind(5, stats.first_time_s());
-  means_.bind(6, stats.last_time_s());
-  for (int c = 0; c < StepStats::kChannels; ++c) {
-    means_.bind(7 + c, stats.mean(c));
-    const double sd = stats.stddev(c);
-    if (std::isfinite(sd)) {
-      means_.bind(14 + c, sd);
-    } else {
-      means_.bind(14 + c);
-    }
-  }
-  means_.exec();
+  insert_means_row(means_, run, step_id, device, stats);
   return step_id;
 }
-
-namespace {
-
-constexpr const char* kStepMeansInsert =
-    "INSERT INTO step_means (run_id, step_id, attempt, device, count, "
-    "first_receive_time_s, last_receive_time_s, gx_dps, gy_dps, gz_dps, ax_mps2, "
-    "ay_mps2, az_mps2, temperature_c, std_gx_dps, std_gy_dps, std_gz_dps, "
-    "std_ax_mps2, std_ay_mps2, std_az_mps2, std_temperature_c) VALUES (?, ?, 1, ?, "
-    "?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)";
-
-}  // namespace
 
 StepStreamWriter::StepStreamWriter(SQLite::Database& db, std::int64_t run, const StepRow& step,
                                    std::string device)
     : db_(db),
       run_(run),
       device_(std::move(device)),
-      chunk_(db,
-             "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
-             "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
-             "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
+      chunk_(db, kChunkInsert),
       enc_(SampleEncoding::kExact) {
-  SQLite::Statement st(db_,
-                       "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
-                       "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, "
-                       "?, ?, ?, 'completed', 1, 1, ?, ?)");
-  st.bind(1, run);
-  st.bind(2, static_cast<std::int64_t>(step.index));
-  st.bind(3, step.kind);
-  st.bind(4, step.label);
-  st.bind(5, step.commanded.dump());
-  st.bind(6, step.origin);
-  st.bind(7, step.first_s);
-  st.bind(8, step.last_s);
-  st.exec();
-  step_id_ = db_.getLastInsertRowid();
+  SQLite::Statement st(db_, kStepInsert);
+  step_id_ = insert_step_row(db_, st, run, step);
 }
 
 void StepStreamWriter::insert_chunk() {
-  chunk_.reset();
-  chunk_.bind(1, run_);
-  chunk_.bind(2, step_id_);
-  chunk_.bind(3, device_);
-  chunk_.bind(4, enc_.first_receive_time_s());
-  chunk_.bind(5, enc_.last_receive_time_s());
-  chunk_.bind(6, static_cast<std::int64_t>(enc_.count()));
-  chunk_.bind(7, static_cast<int>(enc_.encoding()));
-  const auto blob = enc_.bytes();
-  chunk_.bindNoCopy(8, blob.data(), static_cast<int>(blob.size()));
-  chunk_.exec();
+  insert_chunk_row(chunk_, run_, step_id_, device_, enc_);
   enc_.clear();
 }
 
@@ -174,22 +170,7 @@ std::int64_t StepStreamWriter::finish() {
   span.bind(3, step_id_);
   span.exec();
   SQLite::Statement means(db_, kStepMeansInsert);
-  means.bind(1, run_);
-  means.bind(2, step_id_);
-  means.bind(3, device_);
-  means.bind(4, static_cast<std::int64_t>(stats_.count()));
-  means.bind(5, stats_.first_time_s());
-  means.bind(6, stats_.last_time_s());
-  for (int c = 0; c < StepStats::kChannels; ++c) {
-    means.bind(7 + c, stats_.mean(c));
-    const double sd = stats_.stddev(c);
-    if (std::isfinite(sd)) {
-      means.bind(14 + c, sd);
-    } else {
-      means.bind(14 + c);
-    }
-  }
-  means.exec();
+  insert_means_row(means, run_, step_id_, device_, stats_);
   return step_id_;
 }
 
@@ -199,48 +180,20 @@ StepsStreamWriter::StepsStreamWriter(SQLite::Database& db, std::int64_t run, std
       run_(run),
       device_(std::move(device)),
       table_(table),
-      step_insert_(db,
-                   "INSERT INTO steps (run_id, idx, kind, label, commanded, origin, status, "
-                   "attempts, good_attempt, started_clock_s, ended_clock_s) VALUES (?, ?, ?, ?, "
-                   "?, ?, 'completed', 1, 1, ?, ?)"),
-      chunk_(db,
-             "INSERT INTO sample_chunks (run_id, step_id, attempt, device, "
-             "first_receive_time_s, last_receive_time_s, count, encoding, data) VALUES "
-             "(?, ?, 1, ?, ?, ?, ?, ?, ?)"),
-      table_insert_(db,
-                    "INSERT INTO table_telemetry (run_id, step_id, time_s, outer_deg, inner_deg, "
-                    "outer_rate_dps, inner_rate_dps) VALUES (?, ?, ?, ?, ?, ?, ?)"),
+      step_insert_(db, kStepInsert),
+      chunk_(db, kChunkInsert),
+      table_insert_(db, kTableInsert),
       enc_(SampleEncoding::kExact) {}
 
 std::size_t StepsStreamWriter::begin(const StepRow& step) {
-  step_insert_.reset();
-  step_insert_.bind(1, run_);
-  step_insert_.bind(2, static_cast<std::int64_t>(step.index));
-  step_insert_.bind(3, step.kind);
-  step_insert_.bind(4, step.label);
-  step_insert_.bind(5, step.commanded.dump());
-  step_insert_.bind(6, step.origin);
-  step_insert_.bind(7, step.first_s);
-  step_insert_.bind(8, step.last_s);
-  step_insert_.exec();
   steps_.push_back({});
-  steps_.back().id = db_.getLastInsertRowid();
+  steps_.back().id = insert_step_row(db_, step_insert_, run_, step);
   return steps_.size() - 1;
 }
 
 void StepsStreamWriter::close_chunk() {
   if (enc_.empty()) return;
-  chunk_.reset();
-  chunk_.bind(1, run_);
-  chunk_.bind(2, steps_[open_].id);
-  chunk_.bind(3, device_);
-  chunk_.bind(4, enc_.first_receive_time_s());
-  chunk_.bind(5, enc_.last_receive_time_s());
-  chunk_.bind(6, static_cast<std::int64_t>(enc_.count()));
-  chunk_.bind(7, static_cast<int>(enc_.encoding()));
-  const auto blob = enc_.bytes();
-  chunk_.bindNoCopy(8, blob.data(), static_cast<int>(blob.size()));
-  chunk_.exec();
+  insert_chunk_row(chunk_, run_, steps_[open_].id, device_, enc_);
   enc_.clear();
 }
 
@@ -257,15 +210,7 @@ void StepsStreamWriter::append(std::size_t handle, const core::ImuSample& s,
   step.min_s = std::min(step.min_s, s.receive_time_s);
   step.max_s = std::max(step.max_s, s.receive_time_s);
   if (!table_) return;
-  table_insert_.reset();
-  table_insert_.bind(1, run_);
-  table_insert_.bind(2, step.id);
-  table_insert_.bind(3, s.receive_time_s);
-  table_insert_.bind(4, table.outer_deg);
-  table_insert_.bind(5, table.inner_deg);
-  table_insert_.bind(6, table.outer_rate_dps);
-  table_insert_.bind(7, table.inner_rate_dps);
-  table_insert_.exec();
+  insert_table_row(table_insert_, run_, step.id, s.receive_time_s, table);
 }
 
 void StepsStreamWriter::finish(const std::function<nlohmann::json(std::size_t)>& commanded) {
@@ -287,23 +232,7 @@ void StepsStreamWriter::finish(const std::function<nlohmann::json(std::size_t)>&
       update.bind(2, step.id);
       update.exec();
     }
-    means.reset();
-    means.bind(1, run_);
-    means.bind(2, step.id);
-    means.bind(3, device_);
-    means.bind(4, static_cast<std::int64_t>(step.stats.count()));
-    means.bind(5, step.stats.first_time_s());
-    means.bind(6, step.stats.last_time_s());
-    for (int c = 0; c < StepStats::kChannels; ++c) {
-      means.bind(7 + c, step.stats.mean(c));
-      const double sd = step.stats.stddev(c);
-      if (std::isfinite(sd)) {
-        means.bind(14 + c, sd);
-      } else {
-        means.bind(14 + c);
-      }
-    }
-    means.exec();
+    insert_means_row(means, run_, step.id, device_, step.stats);
   }
 }
 
