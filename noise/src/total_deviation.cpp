@@ -250,23 +250,11 @@ double mtotvar(std::span<const double> x, std::size_t m) {
   return sum / (2.0 * md * md * static_cast<double>(runs));
 }
 
-// Overlapping Hadamard variance from the phase (third differences, stride 1).
-double ohvar(std::span<const double> x, std::size_t m) {
-  const std::size_t terms = x.size() - 3 * m;
-  double sum = 0.0;
-  for (std::size_t i = 0; i < terms; ++i) {
-    const double d = x[i + 3 * m] - 3.0 * x[i + 2 * m] + 3.0 * x[i + m] - x[i];
-    sum += d * d;
-  }
-  const double md = static_cast<double>(m);
-  return sum / (6.0 * md * md * static_cast<double>(terms));
-}
-
 // HTOTVAR on the rate y = diff(x): at m = 1 the overlapping Hadamard variance, as Stable32
 // (Howe et al. 2000: "for best consistency"); above, the runs of 3m rate points detrended and
 // reflected as for MTOTVAR, the Hadamard variance of each run being its mean square over 6.
 double htotvar(std::span<const double> x, std::size_t m) {
-  if (m == 1) return ohvar(x, 1);
+  if (m == 1) return allan_variance_from_phase(x, 1, AllanKind::kHadamard);
   std::vector<double> y(x.size() - 1);
   for (std::size_t i = 0; i + 1 < x.size(); ++i) y[i] = x[i + 1] - x[i];
   const std::size_t runs = y.size() - 3 * m + 1;
@@ -291,17 +279,6 @@ double theo1var(std::span<const double> x, std::size_t m) {
   }
   const double md = static_cast<double>(m);
   return sum / (0.75 * static_cast<double>(n - m) * md * md);
-}
-
-double avar(std::span<const double> x, std::size_t m) {
-  const std::size_t terms = x.size() - 2 * m;
-  double sum = 0.0;
-  for (std::size_t i = 0; i < terms; ++i) {
-    const double d = x[i + 2 * m] - 2.0 * x[i + m] + x[i];
-    sum += d * d;
-  }
-  const double md = static_cast<double>(m);
-  return sum / (2.0 * md * md * static_cast<double>(terms));
 }
 
 std::size_t max_m(Estimator e, std::size_t n) {
@@ -463,7 +440,7 @@ double raw_variance(std::span<const double> x, Estimator e, std::size_t m) {
     case Estimator::kTheoBr:
       return theo1var(x, m);
     case Estimator::kAllan:
-      return avar(x, m);
+      return allan_variance_from_phase(x, m, AllanKind::kAllan);
   }
   return kNaN;
 }
@@ -548,7 +525,7 @@ double theo_br_bias(std::span<const double> x) {
   const auto count = static_cast<std::size_t>(std::floor(static_cast<double>(n) / 6.0 - 3.0));
   double sum = 0.0;
   for (std::size_t i = 0; i <= count; ++i) {
-    sum += avar(x, 9 + 3 * i) / theo1var(x, 12 + 4 * i);
+    sum += allan_variance_from_phase(x, 9 + 3 * i, AllanKind::kAllan) / theo1var(x, 12 + 4 * i);
   }
   return sum / static_cast<double>(count + 1);
 }
