@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "../tests/unit/noise/composite_records.hpp"
 #include "noise/allan.hpp"
 #include "noise/composite_noise.hpp"
 #include "noise/noise_fit.hpp"
@@ -19,37 +20,12 @@
 namespace {
 
 using calstand::solver::NoiseKind;
-constexpr double kFs = 100.0;
+constexpr double kFs = calstand::solver::testing::kCompositeRateHz;
 
-struct TrueTerm {
-  NoiseKind kind;
-  double value;
-  double tau_s = 0.0;
-};
+using calstand::solver::testing::TrueTerm;
 
 std::vector<double> simulate(const std::vector<TrueTerm>& truth, std::size_t n, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  std::vector<double> y(n, 0.0);
-  for (const TrueTerm& t : truth) {
-    if (t.kind == NoiseKind::kWhite) {
-      for (double& v : y) v += t.value * std::sqrt(kFs) * g(rng);
-    } else if (t.kind == NoiseKind::kGaussMarkov) {
-      const double phi = std::exp(-1.0 / (kFs * t.tau_s));
-      double x = t.value * g(rng);
-      for (double& v : y) {
-        v += x;
-        x = phi * x + t.value * std::sqrt(1.0 - phi * phi) * g(rng);
-      }
-    } else if (t.kind == NoiseKind::kRandomWalk) {
-      double r = 0.0;
-      for (double& v : y) {
-        r += t.value / std::sqrt(kFs) * g(rng);
-        v += r;
-      }
-    }
-  }
-  return y;
+  return calstand::solver::testing::simulate_composite(truth, n, seed);
 }
 
 struct Scenario {

@@ -11,44 +11,18 @@
 #include <random>
 #include <vector>
 
+#include "composite_records.hpp"
 #include "core/error.hpp"
 
 namespace calstand::solver {
 namespace {
 
-constexpr double kFs = 100.0;  // Hz
+constexpr double kFs = testing::kCompositeRateHz;  // Hz
 
-struct TrueTerm {
-  NoiseKind kind;
-  double value;
-  double tau_s = 0.0;
-};
+using testing::TrueTerm;
 
-// Exact recursions: white y = N sqrt(fs) w; Gauss-Markov x' = phi x + sigma sqrt(1 - phi^2) w
-// from its stationary law; random walk r' = r + K sqrt(1/fs) w.
 std::vector<double> simulate(const std::vector<TrueTerm>& truth, std::size_t n, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  std::vector<double> y(n, 0.0);
-  for (const TrueTerm& t : truth) {
-    if (t.kind == NoiseKind::kWhite) {
-      for (double& v : y) v += t.value * std::sqrt(kFs) * g(rng);
-    } else if (t.kind == NoiseKind::kGaussMarkov) {
-      const double phi = std::exp(-1.0 / (kFs * t.tau_s));
-      double x = t.value * g(rng);
-      for (double& v : y) {
-        v += x;
-        x = phi * x + t.value * std::sqrt(1.0 - phi * phi) * g(rng);
-      }
-    } else if (t.kind == NoiseKind::kRandomWalk) {
-      double r = 0.0;
-      for (double& v : y) {
-        r += t.value / std::sqrt(kFs) * g(rng);
-        v += r;
-      }
-    }
-  }
-  return y;
+  return testing::simulate_composite(truth, n, seed);
 }
 
 // Flicker as a sum of Gauss-Markov processes a factor of 2 apart in correlation time, equal
