@@ -3,7 +3,9 @@
 // static capture; and how often it suggests anything on the same runs without a warm-up (false
 // alarms). A plain program: calstand_warm_up_detection_bench [SEEDS=4] [CLASS] [clean] (CLASS:
 // white, ln200, adis16488, mems or all; all by default) prints one line per cell and a JSON line
-// per cell; with `clean`, only runs without a warm-up, SEEDS per class and capture. A
+// per cell; with `clean`, only runs without a warm-up, SEEDS per class and capture; with
+// `evidence [TIMES=5]`, the warm-up each diagnosis judged, one JSON line per run and sensor
+// (TIMES 0: the clean runs; a fifth argument: the first seed's index). A
 // run "finds" the warm-up when diagnose says NOT explained and its first suggestion is
 // exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
 #include <fmt/format.h>
@@ -57,10 +59,55 @@ int false_alarms(int seeds, const std::string& only) {
   return 0;
 }
 
+/// The evidence itself, one JSON line per run and sensor: the warm-up each diagnosis judged
+/// (time constant, 2 ln LR against the wander, BIC, held-out, kept), on warm-ups of `times`
+/// step means' noise at each time constant, or on clean runs when `times` is 0, so that a bar
+/// can be weighed against both rates.
+int evidence(int seeds, const std::string& only, double times, int first) {
+  for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
+    if (!only.empty() && only != noise) continue;
+    for (double capture_s : {0.0, 1800.0}) {
+      for (double tau_s : {0.0, 300.0, 900.0, 1800.0}) {
+        if ((tau_s > 0.0) != (times > 0.0)) continue;
+        for (int k = first; k < first + seeds; ++k) {
+          // Clean runs on the false-alarm seeds, warm-ups on the sweep's.
+          const auto seed =
+              static_cast<std::uint64_t>(tau_s > 0.0 ? 7000 + 97 * k : 90000 + 131 * k);
+          const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
+          const double amplitude =
+              tau_s > 0.0 ? times * solver::testing::step_mean_noise_dps(truth, seed + 1) : 0.0;
+          const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+          const solver::RunData data = solver::testing::warm_up_run(
+              truth, capture_s, tau_s > 0.0 ? tau_s : 900.0, amplitude, seed + 2);
+          const solver::Diagnosis d = solver::diagnose(data, model);
+          const bool hit = tau_s > 0.0 && found(d, tau_s);
+          const std::string top = d.suggestions.empty() ? "" : d.suggestions.front().custom;
+          for (const solver::WarmUpCheck& w : d.warm_ups) {
+            fmt::print(
+                "{{\"noise\": \"{}\", \"capture_s\": {}, \"true_tau_s\": {}, \"times\": {}, "
+                "\"seed\": {}, \"custom\": \"{}\", \"tau_s\": {}, \"two_ln_lr\": {:.2f}, "
+                "\"noise_penalty_change\": {:.2f}, \"delta_bic\": {:.2f}, \"held_out_better\": "
+                "{}, \"kept\": {}, \"found\": {}, \"top\": \"{}\", \"verdict\": \"{}\"}}\n",
+                noise, capture_s, tau_s, tau_s > 0.0 ? times : 0.0, seed, w.custom, w.tau_s,
+                w.two_log_likelihood_ratio, w.noise_penalty_change, w.delta_bic, w.held_out_better,
+                w.kept, hit, top, w.verdict);
+          }
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
   const std::string only = argc > 2 && std::string(argv[2]) != "all" ? argv[2] : "";
   if (argc > 3 && std::string(argv[3]) == "clean") return false_alarms(seeds, only);
+  if (argc > 3 && std::string(argv[3]) == "evidence") {
+    return evidence(seeds, only, argc > 4 ? std::atof(argv[4]) : 5.0,
+                    argc > 5 ? std::atoi(argv[5]) : 0);
+  }
   for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
     if (!only.empty() && only != noise) continue;
     for (double capture_s : {0.0, 1800.0}) {

@@ -31,10 +31,19 @@ struct DiagnoseOptions : RunModelOptions {
 // The best few custom terms, each ready to paste, with its figures and effect in words.
 constexpr std::size_t kSuggestionsShown = 3;
 
+void print_warm_ups(const solver::Diagnosis& d) {
+  for (const solver::WarmUpCheck& w : d.warm_ups) {
+    if (w.kept) continue;  // shown with the suggestions
+    fmt::print("warm-up checked: {}: {}\n", w.custom, w.verdict);
+  }
+}
+
 void print_suggestions(const solver::Diagnosis& d) {
   if (d.suggestions.empty()) {
     // Searched only as a check on a wander where the catalogue explains: no news to print.
     if (!d.explained) fmt::print("\ncustom terms: {}\n", d.custom_summary);
+    if (!d.warm_ups.empty()) fmt::print("\n");
+    print_warm_ups(d);
     return;
   }
   fmt::print("\ncustom terms built from the signals ({} forms tried; best first):\n",
@@ -50,6 +59,7 @@ void print_suggestions(const solver::Diagnosis& d) {
         s.held_out_chi2_dof_after);
     fmt::print("      {}\n", s.explanation);
   }
+  print_warm_ups(d);
 }
 
 void run_diagnose(const DiagnoseOptions& opt) {

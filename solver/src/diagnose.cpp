@@ -322,6 +322,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     d.custom_searched = found.ran;
     d.custom_forms_tried = found.forms_tried;
     d.custom_summary = found.summary;
+    d.warm_ups = std::move(found.warm_ups);
     d.suggestions = std::move(found.suggestions);
     for (Suggestion& s : d.suggestions) {
       s.explanation = fmt::format("{}; {}", s.effect, what_it_fixes(d.fit, d.groups, s.fit, steps));
@@ -449,9 +450,27 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
                                   {"chi2_dof_after", s.held_out_chi2_dof_after}}},
                                 {"explanation", s.explanation}});
   }
+  nlohmann::json warm_ups = nlohmann::json::array();
+  const auto number = [](double v) {
+    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  };
+  for (const WarmUpCheck& w : d.warm_ups) {
+    warm_ups.push_back({{"custom", w.custom},
+                        {"tau_s", w.tau_s},
+                        {"two_log_likelihood_ratio", number(w.two_log_likelihood_ratio)},
+                        {"noise_penalty_change", w.noise_penalty_change},
+                        {"delta_bic", number(w.delta_bic)},
+                        {"bar", w.bar},
+                        {"likelihood_ratio_bar", number(w.likelihood_ratio_bar)},
+                        {"beats_wander", w.beats_wander},
+                        {"held_out_better", w.held_out_better},
+                        {"kept", w.kept},
+                        {"verdict", w.verdict}});
+  }
   j["custom_search"] = {{"ran", d.custom_searched},
                         {"forms_tried", d.custom_forms_tried},
-                        {"summary", d.custom_summary}};
+                        {"summary", d.custom_summary},
+                        {"warm_ups", warm_ups}};
   j["explained"] = d.explained;
   j["advice"] = d.advice;
   j["recommended"] = d.recommended;

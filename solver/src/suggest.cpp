@@ -15,6 +15,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include "core/error.hpp"
 #include "solver/custom_term.hpp"
@@ -28,6 +29,24 @@ namespace {
 // "Very strong" evidence on the Kass-Raftery scale of BIC differences, as diagnose asks of a
 // catalogue term before recommending it.
 constexpr double kStrongDeltaBic = -10.0;
+// A warm-up, the one form stated before the search, is tested by its likelihood ratio against
+// the wander (2 ln LR, each wander re-estimated under its design, less the change in the
+// wanders' own BIC cost) at a measured false-alarm rate, not by BIC's ln(rows) per parameter,
+// which charges a transient that only the first hour's steps inform as if every row did (for a
+// triad, 4 ln(rows) + 10, about 44, where a 5-sigma warm-up of a MEMS gyro brings 20-45).
+// Theory gives 22.6 (chi-square with 3 degrees of freedom, one amplitude per axis, at 5e-5: a
+// rate of 1e-3 after the time constant's search over about 20 grid points), for a wander the
+// kernels describe exactly. Flicker is described less well: on 160 clean runs of white, LN200-,
+// ADIS16488- and MEMS-class noise with and without a 30 min capture
+// (bench/warm_up_detection_bench.cpp `evidence 0`), the largest statistic of a warm-up inside the
+// window below was 24.7 (ADIS16488 class, with the capture; MEMS class, a Gauss-Markov wander:
+// 15). The bar stands above it.
+constexpr double kWarmUpLikelihoodRatio = 26.0;
+// ... for a time constant up to this fraction of the run: a warm-up that settles inside it.
+// Beyond, an exp(-elapsed/tau) is a drift across the run, which flicker and random walk make
+// too (the clean runs' largest false transients had tau of 2 to 4 run lengths, 2 ln LR up to 31),
+// and it is judged as every searched form is, by BIC.
+constexpr double kWarmUpWindowOfRun = 1.0 / 3.0;
 // A form whose whitened column lies within this sine of the catalogue's span on a channel (all
 // but 1e-4 of its variance there) is that catalogue effect, which the user should add by name.
 constexpr double kCatalogueSine = 1e-2;
@@ -864,6 +883,33 @@ std::vector<Screened> interleave(const std::vector<Screened>& a, const std::vect
   return out;
 }
 
+/// Per sensor, the warm-up that came furthest (kept, then beating the wander, then the lowest
+/// BIC against it, then screened), marked kept when it is among the suggestions.
+std::vector<WarmUpCheck> best_warm_ups(std::vector<std::pair<core::TermSensor, WarmUpCheck>> checks,
+                                       const std::vector<Suggestion>& suggestions) {
+  for (auto& [sensor, check] : checks) {
+    check.kept = std::any_of(suggestions.begin(), suggestions.end(),
+                             [&](const Suggestion& s) { return s.custom == check.custom; });
+  }
+  const auto rank = [](const WarmUpCheck& c) {
+    const double bic =
+        std::isnan(c.delta_bic) ? std::numeric_limits<double>::infinity() : c.delta_bic;
+    return std::tuple{!c.kept, !(c.beats_wander && c.held_out_better), !c.beats_wander, bic};
+  };
+  std::map<core::TermSensor, WarmUpCheck> best;
+  for (auto& [sensor, check] : checks) {
+    const auto at = best.find(sensor);
+    if (at == best.end()) {
+      best.emplace(sensor, std::move(check));
+    } else if (rank(check) < rank(at->second)) {
+      at->second = std::move(check);
+    }
+  }
+  std::vector<WarmUpCheck> out;
+  for (auto& [sensor, check] : best) out.push_back(std::move(check));
+  return out;
+}
+
 /// A transient in elapsed time extrapolates in time, not in temperature.
 bool in_elapsed_time(const Screened& c) {
   return c.form.tau_s > 0.0 || c.expression.find("elapsed") != std::string::npos;
@@ -935,6 +981,12 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   const Folds held_step_folds = make_folds(held_rows.empty() ? steps : held_rows, false);
   const double transient_bar =
       std::min(in.best_catalogue_delta_bic + kStrongDeltaBic, kStrongDeltaBic);
+  // A catalogue term, with its physics, is preferred unless the warm-up beats it by very strong
+  // evidence, on the same footing.
+  const double warm_up_catalogue_bar = in.best_catalogue_delta_bic + kStrongDeltaBic;
+  double run_span_s = 0.0;
+  for (const StepSummary& st : steps) run_span_s = std::max(run_span_s, st.end_s);
+  const double warm_up_window_s = kWarmUpWindowOfRun * run_span_s;
   std::string folds_used;
   std::set<std::string> keys, names;
   for (const auto& c : in.model->customs()) names.insert(c.name);
@@ -946,6 +998,16 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     CustomTermSpec spec;
   };
   std::vector<Passed> passed;
+  // Every warm-up transient judged, with its sensor: the best per sensor is reported.
+  std::vector<std::pair<core::TermSensor, WarmUpCheck>> warm_ups;
+  const auto note_warm_up = [&](const Screened& c, WarmUpCheck check) {
+    check.tau_s = c.form.tau_s;
+    check.bar = transient_bar;
+    check.likelihood_ratio_bar = c.form.tau_s <= warm_up_window_s
+                                     ? kWarmUpLikelihoodRatio
+                                     : std::numeric_limits<double>::quiet_NaN();
+    warm_ups.emplace_back(c.form.sensor, std::move(check));
+  };
   // The wander alone, per set of channels a term acts on (the hypothesis without the term).
   std::map<std::array<bool, kChannels>, Hypothesis> without_term;
   for (const Screened& c : screened) {
@@ -959,6 +1021,17 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     }
     if (!keys.insert(c.key).second) continue;
     if (c.screen_delta_bic >= screen_bar) {
+      if (transient) {
+        WarmUpCheck check;
+        check.custom = sensor_text(c.form.sensor, c.axes) + ":" + c.expression;
+        check.two_log_likelihood_ratio = std::numeric_limits<double>::quiet_NaN();
+        check.delta_bic = std::numeric_limits<double>::quiet_NaN();
+        check.verdict = fmt::format(
+            "screened out: it would change BIC by {:+.0f} against the model's weights or white "
+            "noise (below {:.0f} is asked before the wander is weighed)",
+            c.screen_delta_bic, screen_bar);
+        note_warm_up(c, std::move(check));
+      }
       if (best_rejected.empty()) {
         best_rejected = fmt::format(
             "the best, {}:{}, would change BIC by {:+.0f} (below {:.0f} "
@@ -1033,7 +1106,43 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     // warm-up tests: the commonest effect a real IMU has), so it is tested on its own, without
     // the search's look-elsewhere cost.
     const double form_bar = c.form.tau_s > 0.0 ? transient_bar : bar;
-    if (!(s.delta_bic < form_bar)) {
+    WarmUpCheck check;
+    if (transient) {
+      check.custom = text;
+      check.two_log_likelihood_ratio =
+          2.0 * (with_term.log_likelihood - found->second.log_likelihood);
+      check.noise_penalty_change = with_term.noise_penalty - found->second.noise_penalty;
+      check.delta_bic = s.delta_bic;
+    }
+    // A warm-up inside the run's window: its likelihood ratio at the stated false-alarm rate
+    // (and a catalogue term preferred unless beaten by very strong evidence); other forms, and
+    // a transient slower than the window, by BIC.
+    const bool warm_up = transient && c.form.tau_s <= warm_up_window_s;
+    const double statistic = check.two_log_likelihood_ratio - check.noise_penalty_change;
+    const bool beats_wander =
+        warm_up ? statistic > kWarmUpLikelihoodRatio && s.delta_bic < warm_up_catalogue_bar
+                : s.delta_bic < form_bar;
+    check.beats_wander = beats_wander;
+    if (!beats_wander) {
+      if (warm_up) {
+        check.verdict = statistic > kWarmUpLikelihoodRatio
+                            ? fmt::format(
+                                  "a catalogue term explains it as well (BIC {:+.1f} against the "
+                                  "wander; below {:.0f} is asked)",
+                                  s.delta_bic, warm_up_catalogue_bar)
+                            : fmt::format(
+                                  "within what the wander makes: 2 ln LR {:.1f} against it (less "
+                                  "the wanders' cost change {:+.1f}; above {:.0f} is asked)",
+                                  check.two_log_likelihood_ratio, check.noise_penalty_change,
+                                  kWarmUpLikelihoodRatio);
+        note_warm_up(c, std::move(check));
+      } else if (transient) {
+        check.verdict = fmt::format(
+            "slower than a third of the run, so judged as a drift: BIC {:+.1f} against the "
+            "wander (2 ln LR {:.1f}; below {:.0f} is asked)",
+            s.delta_bic, check.two_log_likelihood_ratio, form_bar);
+        note_warm_up(c, std::move(check));
+      }
       if (best_rejected.empty()) {
         best_rejected = fmt::format(
             "the best, {}, changes BIC by {:+.0f} against the wander (below {:.0f} is asked)", text,
@@ -1070,7 +1179,15 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
         rows_after > 0 ? held_after / rows_after : std::numeric_limits<double>::quiet_NaN();
     // A column fitted to noise raises the held-out chi-square by about its parameters; a real
     // effect lowers it by about what it removes in the fit.
-    if (!(held_after < held_before.first - linear)) {
+    check.held_out_better = held_after < held_before.first - linear;
+    if (!check.held_out_better) {
+      if (transient) {
+        check.verdict = fmt::format(
+            "beats the wander (BIC {:+.1f}) but does not hold on held-out data (chi2/dof {:.3g} "
+            "-> {:.3g}, {})",
+            s.delta_bic, s.held_out_chi2_dof_before, s.held_out_chi2_dof_after, folds->how);
+        note_warm_up(c, std::move(check));
+      }
       if (best_rejected.empty()) {
         best_rejected = fmt::format(
             "the best, {}, does not hold on held-out data (chi2/dof {:.3g} "
@@ -1080,6 +1197,14 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       continue;
     }
     folds_used = folds->how;
+    if (transient) {
+      check.verdict = fmt::format(
+          "beats the wander (BIC {:+.1f}, 2 ln LR {:.1f}) and holds on held-out data (chi2/dof "
+          "{:.3g} -> {:.3g}, {})",
+          s.delta_bic, check.two_log_likelihood_ratio, s.held_out_chi2_dof_before,
+          s.held_out_chi2_dof_after, folds->how);
+      note_warm_up(c, std::move(check));
+    }
     names.insert(name);
     passed.push_back({std::move(s), c.form.tau_s, spec});
   }
@@ -1113,13 +1238,13 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   std::stable_sort(
       out.suggestions.begin(), out.suggestions.end(),
       [](const Suggestion& a, const Suggestion& b) { return a.delta_bic < b.delta_bic; });
+  out.warm_ups = best_warm_ups(std::move(warm_ups), out.suggestions);
   if (!out.suggestions.empty()) {
     out.summary = fmt::format(
         "{} custom forms built from the signals tried; {} pass the guards (BIC against the wander "
-        "below {:.0f}, {:.0f} for a warm-up transient, and better predictions of held-out data "
-        "with "
-        "{})",
-        out.forms_tried, out.suggestions.size(), bar, transient_bar, folds_used);
+        "below {:.0f}; for a warm-up settling within a third of the run, 2 ln LR against it "
+        "above {:.0f}; and better predictions of held-out data with {})",
+        out.forms_tried, out.suggestions.size(), bar, kWarmUpLikelihoodRatio, folds_used);
   } else {
     out.summary = fmt::format(
         "none of the {} custom forms built from the signals (each signal, its square and abs(), "

@@ -49,7 +49,8 @@ struct Diagnosis {
   std::vector<Suggestion> suggestions;
   bool custom_searched = false;  ///< the search for custom terms ran
   int custom_forms_tried = 0;
-  std::string custom_summary;  ///< one sentence: what was tried and what held
+  std::string custom_summary;         ///< one sentence: what was tried and what held
+  std::vector<WarmUpCheck> warm_ups;  ///< the warm-up judged per sensor, kept or not
 };
 
 /// When diagnose searches custom terms built from the signals.

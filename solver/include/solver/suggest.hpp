@@ -26,7 +26,12 @@
 // must lower BIC by "very strong" evidence (10) more than the best catalogue candidate does,
 // judged the same way (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
 // plateaus as a temperature term does), and by more than very strong evidence plus the
-// look-elsewhere cost of the search (2 ln of the forms tried). Then they must hold on data they
+// look-elsewhere cost of the search (2 ln of the forms tried). A warm-up exp(-elapsed/tau)
+// settling within a third of the run, the one form stated before the search, is judged instead
+// by its likelihood ratio against the wander at a measured false-alarm rate (suggest.cpp,
+// kWarmUpLikelihoodRatio, and why), and a catalogue term is still preferred unless beaten by
+// very strong evidence; each sensor's warm-up is reported with its figures whether kept or not
+// (WarmUpCheck). Then they must hold on data they
 // were not fitted on, judged against the noise that remains with the term: leave one
 // temperature plateau out when the run has three or more (a transient in elapsed time
 // extrapolates in time, not temperature: five folds of interleaved steps for it, as for a run
@@ -64,11 +69,34 @@ struct Suggestion {
   FitResult fit;            ///< fit_run with the term
 };
 
+/// The warm-up transient of one sensor as the search judged it, kept or not: a lab asking "is
+/// there a warm-up?" gets the figures either way.
+struct WarmUpCheck {
+  std::string custom;  ///< the term, NAME=SENSOR[.AXES]:exp(-elapsed/TAU)
+  double tau_s = 0.0;
+  /// 2 ln of the likelihood ratio, term against the wander, each wander re-estimated under its
+  /// design (profile likelihood); NaN when the screening already rejected the form.
+  double two_log_likelihood_ratio = 0.0;
+  /// The wanders' parameters' cost with the term less without (usually 0 or negative: the term
+  /// may leave a simpler wander).
+  double noise_penalty_change = 0.0;
+  double delta_bic = 0.0;  ///< against the wander (NaN when not reached)
+  double bar = 0.0;        ///< the delta_bic asked of a transient judged by BIC
+  /// The 2 ln LR (less the wanders' cost change) asked of a warm-up within a third of the run;
+  /// NaN for a slower transient, judged by `bar`.
+  double likelihood_ratio_bar = 0.0;
+  bool beats_wander = false;  ///< passed the bar against the wander
+  bool held_out_better = false;
+  bool kept = false;    ///< among the suggestions
+  std::string verdict;  ///< in words: why it was kept or not
+};
+
 /// The outcome of the search.
 struct SuggestionSearch {
   bool ran = false;
   int forms_tried = 0;                  ///< candidate forms screened (sensor x expression)
   std::vector<Suggestion> suggestions;  ///< best (most negative delta_bic) first
+  std::vector<WarmUpCheck> warm_ups;    ///< the best warm-up checked per sensor
   std::string summary;                  ///< one sentence: what was tried and what held
 };
 
