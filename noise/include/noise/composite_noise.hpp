@@ -47,9 +47,10 @@ struct NoiseCandidate {
 
 /// Options of identify_noise_model().
 struct NoiseIdOptions {
-  /// Parametric-bootstrap replicates for the intervals (records simulated from the fitted model
-  /// by its exact discrete recursions, each refitted). At least 20.
-  std::size_t bootstrap = 100;
+  /// 0: 95 % intervals from the efficient GMWM's asymptotic covariance (G^T Omega^-1 G)^-1 in
+  /// the log parameters. Otherwise the parametric-bootstrap replicates (records simulated from
+  /// the fitted model by its exact discrete recursions, each refitted), at least 20.
+  std::size_t bootstrap = 0;
   std::uint64_t seed = 1;  ///< of the bootstrap's generator: the same record gives the same answer
   /// Allow a rate ramp term (off by default: a static record's drift is usually removed).
   bool drift = true;
