@@ -233,6 +233,7 @@ Fit fit_from(const std::vector<NoiseKind>& kinds, Eigen::VectorXd p, const Wavel
 std::vector<Eigen::VectorXd> starts(const std::vector<NoiseKind>& kinds, const WaveletMoments& w) {
   const double fs = w.sample_rate_hz;
   const double avar1 = 2.0 * w.variance.front();
+  const double tau1 = static_cast<double>(w.m.front()) / fs;  // the first scale's averaging time
   const double avar_last = 2.0 * w.variance.back();
   const double tau_last = static_cast<double>(w.m.back()) / fs;
   const double avar_min = 2.0 * *std::min_element(w.variance.begin(), w.variance.end());
@@ -247,7 +248,7 @@ std::vector<Eigen::VectorXd> starts(const std::vector<NoiseKind>& kinds, const W
     return 2.0 * w.variance[best];
   };
   std::vector<double> grid;
-  const double lo = 2.0 / fs, hi = 0.5 * tau_last;
+  const double lo = 2.0 * tau1, hi = 0.5 * tau_last;
   for (int k = 0; k < 7; ++k) grid.push_back(lo * std::pow(hi / lo, k / 6.0));
   const int gm = static_cast<int>(std::count(kinds.begin(), kinds.end(), NoiseKind::kGaussMarkov));
   std::vector<std::vector<double>> taus;
@@ -267,10 +268,10 @@ std::vector<Eigen::VectorXd> starts(const std::vector<NoiseKind>& kinds, const W
     for (NoiseKind k : kinds) {
       switch (k) {
         case NoiseKind::kWhite:
-          terms.push_back({k, 0.7 * std::sqrt(avar1 / fs), 0.0});
+          terms.push_back({k, 0.7 * std::sqrt(avar1 * tau1), 0.0});
           break;
         case NoiseKind::kQuantization:
-          terms.push_back({k, 0.3 * std::sqrt(avar1 / 3.0) / fs, 0.0});
+          terms.push_back({k, 0.3 * std::sqrt(avar1 / 3.0) * tau1, 0.0});
           break;
         case NoiseKind::kFlicker:
           terms.push_back({k, 0.7 * std::sqrt(avar_min / kFlickerAvar), 0.0});
@@ -323,7 +324,8 @@ bool admissible(const std::vector<Term>& terms, const WaveletMoments& w) {
     if (t.kind == NoiseKind::kGaussMarkov) {
       // Its Allan variance peaks at 1.89 tau_s: that turn, which tells it from a random walk,
       // must lie an octave inside the longest averaging time.
-      if (t.tau_s < 1.0 / fs || 2.0 * 1.89 * t.tau_s > static_cast<double>(w.m.back()) / fs) {
+      if (t.tau_s < static_cast<double>(w.m.front()) / fs ||
+          2.0 * 1.89 * t.tau_s > static_cast<double>(w.m.back()) / fs) {
         return false;
       }
       gm_taus.push_back(t.tau_s);
@@ -474,6 +476,9 @@ std::string_view to_string(NoiseKind kind) {
 }
 
 void NoiseIdOptions::validate() const {
+  if (!(min_tau_s >= 0.0) || !std::isfinite(min_tau_s)) {
+    throw core::InputError("min_tau_s", fmt::format("must be finite and >= 0, got {}", min_tau_s));
+  }
   if (bootstrap != 0 && bootstrap < 20) {
     throw core::InputError("bootstrap",
                            fmt::format("0 (asymptotic intervals) or at least 20 replicates, got {}",
@@ -491,6 +496,21 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
   options.validate();
   NoiseModel out;
   out.moments = wavelet_moments(rate, sample_rate_hz);
+  {
+    WaveletMoments& wm = out.moments;
+    std::size_t skip = 0;
+    while (skip < wm.m.size() && static_cast<double>(wm.m[skip]) / sample_rate_hz < options.min_tau_s)
+      ++skip;
+    if (wm.m.size() - skip < 4) {
+      throw core::InputError(
+          "min_tau_s", fmt::format("{} s leaves {} scales of the record; at least 4 are needed",
+                                   options.min_tau_s, wm.m.size() - skip));
+    }
+    const auto d = static_cast<std::ptrdiff_t>(skip);
+    wm.m.erase(wm.m.begin(), wm.m.begin() + d);
+    wm.variance.erase(wm.variance.begin(), wm.variance.begin() + d);
+    wm.dof.erase(wm.dof.begin(), wm.dof.begin() + d);
+  }
   out.sample_rate_hz = sample_rate_hz;
   out.samples = rate.size();
   const WaveletMoments& w = out.moments;

@@ -52,8 +52,12 @@ struct NoiseIdOptions {
   /// the fitted model by its exact discrete recursions, each refitted), at least 20.
   std::size_t bootstrap = 0;
   std::uint64_t seed = 1;  ///< of the bootstrap's generator: the same record gives the same answer
-  /// Allow a rate ramp term (off by default: a static record's drift is usually removed).
+  /// Allow a rate ramp term.
   bool drift = true;
+  /// Scales whose averaging time m / fs is below this are left out [s]: a sensor's output
+  /// low-pass (not a term of the model) correlates neighbouring samples and lowers the first
+  /// scales' variance; start a few filter time constants above it. 0: every scale.
+  double min_tau_s = 0.0;
   /// Throws core::InputError naming the field.
   void validate() const;
 };
