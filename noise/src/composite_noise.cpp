@@ -159,8 +159,7 @@ ResidualFn whitened_residuals(const std::vector<NoiseKind>& kinds, const Wavelet
                               const Eigen::MatrixXd& chol_lower) {
   return [&kinds, &w, &chol_lower](const Eigen::VectorXd& p) {
     const Eigen::VectorXd nu = model_nu(unpack(kinds, p), w);
-    const Eigen::VectorXd d =
-        Eigen::Map<const Eigen::VectorXd>(w.variance.data(), nu.size()) - nu;
+    const Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(w.variance.data(), nu.size()) - nu;
     return Eigen::VectorXd(chol_lower.triangularView<Eigen::Lower>().solve(d));
   };
 }
@@ -447,6 +446,25 @@ Fit fit_efficient(const std::vector<NoiseKind>& kinds, const WaveletMoments& w,
   return best;
 }
 
+// The wavelet variances of `rate` from the first scale whose averaging time reaches min_tau_s.
+WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz, double min_tau_s) {
+  WaveletMoments wm = wavelet_moments(rate, sample_rate_hz);
+  std::size_t skip = 0;
+  while (skip < wm.m.size() && static_cast<double>(wm.m[skip]) / sample_rate_hz < min_tau_s) {
+    ++skip;
+  }
+  if (wm.m.size() - skip < 4) {
+    throw core::InputError("min_tau_s",
+                           fmt::format("{} s leaves {} scales of the record; at least 4 are needed",
+                                       min_tau_s, wm.m.size() - skip));
+  }
+  const auto d = static_cast<std::ptrdiff_t>(skip);
+  wm.m.erase(wm.m.begin(), wm.m.begin() + d);
+  wm.variance.erase(wm.variance.begin(), wm.variance.begin() + d);
+  wm.dof.erase(wm.dof.begin(), wm.dof.begin() + d);
+  return wm;
+}
+
 double percentile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
   const double pos = q * static_cast<double>(v.size() - 1);
@@ -480,9 +498,9 @@ void NoiseIdOptions::validate() const {
     throw core::InputError("min_tau_s", fmt::format("must be finite and >= 0, got {}", min_tau_s));
   }
   if (bootstrap != 0 && bootstrap < 20) {
-    throw core::InputError("bootstrap",
-                           fmt::format("0 (asymptotic intervals) or at least 20 replicates, got {}",
-                                       bootstrap));
+    throw core::InputError(
+        "bootstrap",
+        fmt::format("0 (asymptotic intervals) or at least 20 replicates, got {}", bootstrap));
   }
 }
 
@@ -495,22 +513,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
                                 const NoiseIdOptions& options) {
   options.validate();
   NoiseModel out;
-  out.moments = wavelet_moments(rate, sample_rate_hz);
-  {
-    WaveletMoments& wm = out.moments;
-    std::size_t skip = 0;
-    while (skip < wm.m.size() && static_cast<double>(wm.m[skip]) / sample_rate_hz < options.min_tau_s)
-      ++skip;
-    if (wm.m.size() - skip < 4) {
-      throw core::InputError(
-          "min_tau_s", fmt::format("{} s leaves {} scales of the record; at least 4 are needed",
-                                   options.min_tau_s, wm.m.size() - skip));
-    }
-    const auto d = static_cast<std::ptrdiff_t>(skip);
-    wm.m.erase(wm.m.begin(), wm.m.begin() + d);
-    wm.variance.erase(wm.variance.begin(), wm.variance.begin() + d);
-    wm.dof.erase(wm.dof.begin(), wm.dof.begin() + d);
-  }
+  out.moments = moments_from(rate, sample_rate_hz, options.min_tau_s);
   out.sample_rate_hz = sample_rate_hz;
   out.samples = rate.size();
   const WaveletMoments& w = out.moments;
@@ -625,8 +628,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
     }
     const Eigen::MatrixXd gw = chol.triangularView<Eigen::Lower>().solve(g);
     const Eigen::MatrixXd info = gw.transpose() * gw;
-    const Eigen::MatrixXd cov =
-        info.completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::MatrixXd cov = info.completeOrthogonalDecomposition().pseudoInverse();
     for (Eigen::Index k = 0; k < np; ++k) {
       const double se = std::sqrt(std::max(cov(k, k), 0.0));
       lo[k] = p_hat[k] - 1.959964 * se;
@@ -641,7 +643,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
     std::vector<std::vector<double>> draws(static_cast<std::size_t>(np));
     for (std::size_t b = 0; b < options.bootstrap; ++b) {
       const std::vector<double> y = simulate(terms, rate.size(), sample_rate_hz, rng);
-      const WaveletMoments wb = wavelet_moments(y, sample_rate_hz);
+      const WaveletMoments wb = moments_from(y, sample_rate_hz, options.min_tau_s);
       const Fit f = fit_efficient(kinds, wb, chol, {p_hat});
       if (!std::isfinite(f.objective)) continue;
       for (Eigen::Index k = 0; k < np; ++k) draws[static_cast<std::size_t>(k)].push_back(f.p[k]);

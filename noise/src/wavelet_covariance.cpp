@@ -46,9 +46,9 @@ double oscillation_mean(int a) {
 struct ScaleNodes {
   double m = 1.0;
   double step = 0.0;
-  std::vector<double> f, d2, s;        // dense grid
+  std::vector<double> f, d2, s;  // dense grid
   double log_from = 0.5, log_step = 0.0;
-  std::vector<double> lf, ld2, ls;     // logarithmic grid
+  std::vector<double> lf, ld2, ls;  // logarithmic grid
 };
 
 ScaleNodes scale_nodes(double m, const std::function<double(double)>& diff_psd) {
@@ -148,12 +148,12 @@ Eigen::MatrixXd wavelet_variance_covariance(const std::vector<std::size_t>& m, s
     for (Eigen::Index k = j; k < J; ++k) {
       const double mj = static_cast<double>(m[static_cast<std::size_t>(j)]);
       const double mk = static_cast<double>(m[static_cast<std::size_t>(k)]);
-      const double count = std::sqrt(std::max(1.0, n + 1.0 - 2.0 * mj) *
-                                      std::max(1.0, n + 1.0 - 2.0 * mk));
+      const double count =
+          std::sqrt(std::max(1.0, n + 1.0 - 2.0 * mj) * std::max(1.0, n + 1.0 - 2.0 * mk));
       // Two-sided integral = twice the one over (0, 1/2].
-      cov(j, k) = cov(k, j) = 2.0 / count * 2.0 *
-                              pair_integral(nodes[static_cast<std::size_t>(j)],
-                                            nodes[static_cast<std::size_t>(k)]);
+      cov(j, k) = cov(k, j) =
+          2.0 / count * 2.0 *
+          pair_integral(nodes[static_cast<std::size_t>(j)], nodes[static_cast<std::size_t>(k)]);
     }
   }
   return cov;

@@ -117,9 +117,10 @@ TEST(CompositeNoise, AcceptanceOnSimulatedModels) {
     }
     EXPECT_GE(right_set, 5) << s.name << ": true set selected in " << right_set << " of 6";
   }
-  std::printf("%zu of %zu true parameters inside their 95 %% intervals; median GM sigma error "
-              "%.3f, tau %.3f, white density %.4f\n",
-              covered, checked, median(gm_sigma_err), median(gm_tau_err), median(white_err));
+  std::printf(
+      "%zu of %zu true parameters inside their 95 %% intervals; median GM sigma error "
+      "%.3f, tau %.3f, white density %.4f\n",
+      covered, checked, median(gm_sigma_err), median(gm_tau_err), median(white_err));
   ASSERT_GT(checked, 20u);
   EXPECT_GE(static_cast<double>(covered) / static_cast<double>(checked), 0.9)
       << covered << " of " << checked << " true parameters inside their 95 % intervals";
@@ -155,6 +156,28 @@ TEST(CompositeNoise, TermWaveletVariances) {
   }
 }
 
+// The parametric-bootstrap intervals with the first scales left out: white + random walk, 2^16
+// samples, 40 replicates; each interval holds its estimate and, here, the truth.
+TEST(CompositeNoise, BootstrapIntervalsWithMinTau) {
+  const std::vector<TrueTerm> truth{{NoiseKind::kWhite, 0.005}, {NoiseKind::kRandomWalk, 5e-4}};
+  const std::vector<double> y = simulate(truth, std::size_t{1} << 16, 17u);
+  NoiseIdOptions o;
+  o.bootstrap = 40;
+  o.min_tau_s = 0.04;  // from m = 4 at 100 Hz
+  const NoiseModel m = identify_noise_model(y, kFs, o);
+  EXPECT_EQ(m.moments.m.front(), 4u);
+  ASSERT_EQ(m.terms.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const NoiseModelTerm& t = m.terms[k];
+    EXPECT_EQ(t.kind, truth[k].kind);
+    EXPECT_LT(t.value_lo, t.value);
+    EXPECT_GT(t.value_hi, t.value);
+    EXPECT_LE(t.value_lo, truth[k].value);
+    EXPECT_GE(t.value_hi, truth[k].value);
+  }
+  EXPECT_NE(m.estimator.find("40 parametric-bootstrap"), std::string::npos) << m.estimator;
+}
+
 TEST(CompositeNoise, BadInput) {
   EXPECT_THROW(identify_noise_model(std::vector<double>(20, 0.1), 100.0), core::InputError);
   std::vector<double> y(1000, 0.0);
@@ -163,6 +186,9 @@ TEST(CompositeNoise, BadInput) {
   NoiseIdOptions o;
   o.bootstrap = 5;
   EXPECT_THROW(identify_noise_model(std::vector<double>(1000, 0.1), 100.0, o), core::InputError);
+  NoiseIdOptions late;
+  late.min_tau_s = 5.0;  // 1000 samples at 100 Hz: scales to m = 250, 2.5 s
+  EXPECT_THROW(identify_noise_model(std::vector<double>(1000, 0.1), 100.0, late), core::InputError);
 }
 
 }  // namespace

@@ -124,8 +124,8 @@ INSTANTIATE_TEST_SUITE_P(
     Sheets, SpecSheetNoise,
     ::testing::Values(SpecCase{"ln200_gyro", "ln200", true, std::size_t{1} << 20, 4, 0.0, false},
                       SpecCase{"ln200_accel", "ln200", false, std::size_t{1} << 22, 32, 0.2, true},
-                      SpecCase{"adis16488_gyro", "adis16488", true, std::size_t{1} << 20, 16,
-                               0.05, false}),
+                      SpecCase{"adis16488_gyro", "adis16488", true, std::size_t{1} << 20, 16, 0.05,
+                               false}),
     [](const ::testing::TestParamInfo<SpecCase>& i) { return std::string(i.param.name); });
 
 }  // namespace

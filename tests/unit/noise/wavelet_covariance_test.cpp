@@ -68,8 +68,7 @@ INSTANTIATE_TEST_SUITE_P(
     Noises, WaveletCovarianceDiagonal,
     ::testing::Values(DiagonalCase{"white", &white_diff, 0, [](double m) { return 0.5 / m; }, 1},
                       DiagonalCase{"random_walk", &walk_diff, -2,
-                                   [](double m) { return (2.0 * m * m + 1.0) / (12.0 * m); },
-                                   8}),
+                                   [](double m) { return (2.0 * m * m + 1.0) / (12.0 * m); }, 8}),
     [](const ::testing::TestParamInfo<DiagonalCase>& i) { return std::string(i.param.name); });
 
 // The correlation between neighbouring scales of white + random walk against 400 simulated
@@ -79,9 +78,8 @@ TEST(WaveletCovariance, NeighbourCorrelationMatchesMonteCarlo) {
   const double walk = 0.02;  // increment sigma per sample against unit white noise
   std::vector<std::size_t> m;
   for (std::size_t k = 1; k <= n / 4; k *= 2) m.push_back(k);
-  const Eigen::MatrixXd cov = wavelet_variance_covariance(m, n, [&](double f) {
-    return white_diff(f) + walk * walk;
-  });
+  const Eigen::MatrixXd cov =
+      wavelet_variance_covariance(m, n, [&](double f) { return white_diff(f) + walk * walk; });
   const int records = 400;
   std::mt19937_64 rng(11);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -110,7 +108,9 @@ TEST(WaveletCovariance, NeighbourCorrelationMatchesMonteCarlo) {
   EXPECT_GE(compared, 5);
   // The walk's long scales are more strongly correlated than the white short ones: the weights
   // differ from diagonal ones most where the random walk is identified.
-  const auto rho = [&](Eigen::Index j) { return cov(j, j + 1) / std::sqrt(cov(j, j) * cov(j + 1, j + 1)); };
+  const auto rho = [&](Eigen::Index j) {
+    return cov(j, j + 1) / std::sqrt(cov(j, j) * cov(j + 1, j + 1));
+  };
   EXPECT_GT(rho(J - 2), rho(0) + 0.1);
 }
 
