@@ -117,8 +117,8 @@ TEST_P(SpecSheetNoise, FiguresInsideTheIntervals) {
 // LN200-class accelerometer: 50 ug/sqrt(Hz) and 50 ug over 60 s, behind a 100 Hz low-pass
 // (175 min, 32 averaged: 12.5 Hz, from 0.2 s). The 60 s time comes out 15 to 24 % short in
 // these three units (45 to 51 s) where records simulated by composite_records.hpp of that
-// length give -4 % on average: the ImuSim records carry about 20 % less long-scale variance
-// than the truth states (docs/noise-id.md, "Spec sheets").
+// length give -4 % on average: these three records carry about 20 % less long-scale variance
+// than the truth states, about two standard errors (docs/noise-id.md, "Spec sheets").
 // ADIS16488-class gyro: ARW 0.26 deg/sqrt(h), in-run bias stability 5.1 deg/h (the flicker
 // floor), 2460 Hz behind a 330 Hz low-pass (7 min, sixteen averaged: 154 Hz, from 0.05 s).
 INSTANTIATE_TEST_SUITE_P(
