@@ -304,7 +304,8 @@ void run_allan(const AllanArgs& a) {
 }
 
 struct NoiseIdArgs : AllanArgs {
-  std::string bootstrap = "100";
+  std::string bootstrap = "0";
+  std::string min_tau = "0";
 };
 
 // A datasheet figure of one parameter (the human output): ARW deg/sqrt(h) or VRW m/s/sqrt(h)
@@ -333,7 +334,8 @@ std::string datasheet_cell(solver::NoiseKind kind, double v, const analysis::Dat
 
 void run_noise_id(const NoiseIdArgs& a) {
   solver::NoiseIdOptions options;
-  options.bootstrap = static_cast<std::size_t>(parse_int(a.bootstrap, "--bootstrap", 20));
+  options.bootstrap = static_cast<std::size_t>(parse_int(a.bootstrap, "--bootstrap", 0));
+  options.min_tau_s = parse_double(a.min_tau, "--min-tau");
   const Series series = load_series(a);
   const solver::NoiseModel model =
       solver::identify_noise_model(series.data, series.rate_hz, options);
@@ -362,7 +364,8 @@ void run_noise_id(const NoiseIdArgs& a) {
     if (t.kind == solver::NoiseKind::kGaussMarkov)
       row("tau_s", t.tau_s, t.tau_lo_s, t.tau_hi_s, "s", "");
   }
-  std::cout << "\ncandidates (criterion = GMWM objective + p ln J; '-': a term not resolved)\n";
+  std::cout << "\ncandidates (criterion = efficient GMWM objective J + 2 p ln ln n; '-': a term "
+               "not resolved)\n";
   for (const auto& c : model.candidates) {
     std::string names;
     for (auto k : c.kinds)
@@ -529,7 +532,15 @@ void register_allan(CLI::App& app) {
                    "figures")
       ->type_name("UNIT");
   noise_id
-      ->add_option("--bootstrap", id->bootstrap, "parametric-bootstrap records for the intervals")
+      ->add_option("--bootstrap", id->bootstrap,
+                   "parametric-bootstrap records for the intervals (0: the asymptotic "
+                   "intervals; else at least 20)")
+      ->capture_default_str();
+  noise_id
+      ->add_option("--min-tau", id->min_tau,
+                   "leave out the scales whose averaging time is below this [s] (a sensor's "
+                   "output low-pass)")
+      ->type_name("S")
       ->capture_default_str();
   noise_id->add_flag("--json", id->json, "print the result as JSON");
   noise_id->callback([id] { run_noise_id(*id); });

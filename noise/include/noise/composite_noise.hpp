@@ -39,20 +39,27 @@ struct NoiseModelTerm {
 struct NoiseCandidate {
   std::vector<NoiseKind> kinds;  ///< its terms (sorted by kind)
   std::size_t parameters = 0;
-  double objective = 0.0;   ///< the GMWM objective at the optimum (weighted squared distance)
-  double criterion = 0.0;   ///< objective + parameters * ln(scales); lower is better
+  /// The efficient GMWM objective at the optimum, (nu_hat - nu)^T Omega^-1 (nu_hat - nu) with
+  /// the weights common to all candidates.
+  double objective = 0.0;
+  double criterion = 0.0;   ///< objective + parameters * 2 ln ln(samples); lower is better
   bool admissible = false;  ///< every term resolved by the record (see identify_noise_model())
   bool selected = false;
 };
 
 /// Options of identify_noise_model().
 struct NoiseIdOptions {
-  /// Parametric-bootstrap replicates for the intervals (records simulated from the fitted model
-  /// by its exact discrete recursions, each refitted). At least 20.
-  std::size_t bootstrap = 100;
+  /// 0: 95 % intervals from the efficient GMWM's asymptotic covariance (G^T Omega^-1 G)^-1 in
+  /// the log parameters. Otherwise the parametric-bootstrap replicates (records simulated from
+  /// the fitted model by its exact discrete recursions, each refitted), at least 20.
+  std::size_t bootstrap = 0;
   std::uint64_t seed = 1;  ///< of the bootstrap's generator: the same record gives the same answer
-  /// Allow a rate ramp term (off by default: a static record's drift is usually removed).
+  /// Allow a rate ramp term.
   bool drift = true;
+  /// Scales whose averaging time m / fs is below this are left out [s]: a sensor's output
+  /// low-pass (not a term of the model) correlates neighbouring samples and lowers the first
+  /// scales' variance; start a few filter time constants above it. 0: every scale.
+  double min_tau_s = 0.0;
   /// Throws core::InputError naming the field.
   void validate() const;
 };
@@ -70,17 +77,19 @@ struct NoiseModel {
 };
 
 /// Identifies a composite noise model of the static rate record `rate` (unit of the data at
-/// sample_rate_hz) by the GMWM: every candidate (white noise plus any of quantization, flicker,
-/// one or two Gauss-Markov processes, random walk and ramp) is fitted to the Haar wavelet
-/// variances by minimising the distance weighted by the inverse of their variances
-/// (2 nu^4 / eta, evaluated at the fit and iterated), a consistent estimator for a fixed set
-/// of scales. A candidate is admissible when every term carries at least 2 % of the model's
-/// wavelet variance at some scale and a Gauss-Markov time lies within the scales analysed;
-/// the admissible candidate with the lowest objective + p ln(J) (p parameters, J scales; a
-/// BIC-type penalty) is selected. Intervals: parametric bootstrap percentiles.
+/// sample_rate_hz) by the GMWM with the efficient weighting: every candidate (white noise plus
+/// any of quantization, flicker, one or two Gauss-Markov processes, random walk and ramp) is
+/// fitted to the Haar wavelet variances, first with diagonal weights, then with the inverse of
+/// the wavelet variances' covariance across scales (wavelet_variance_covariance()) under the
+/// spectrum of the best first-step fit, common to all candidates. A candidate is admissible when
+/// every term carries at least 2 % of the model's wavelet variance at some scale and a
+/// Gauss-Markov time lies within the scales with its Allan peak an octave inside the longest;
+/// the admissible candidate with the lowest J + 2 p ln ln n (Hannan-Quinn) is selected and
+/// refitted with the weights of its own spectrum. Intervals: the asymptotic covariance in the
+/// log parameters, or the parametric bootstrap (NoiseIdOptions::bootstrap). docs/noise-id.md.
 ///
-/// Throws core::InputError for fewer than 32 samples, a non-finite sample, a non-positive rate
-/// or invalid options. Deterministic for a given seed; thread safe.
+/// Throws core::InputError for fewer than 32 samples, a non-finite sample, a non-positive rate,
+/// fewer than 4 scales above min_tau_s or invalid options. Deterministic; thread safe.
 NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate_hz,
                                 const NoiseIdOptions& options = {});
 
