@@ -26,6 +26,9 @@ struct ReportRequest {
   std::vector<std::string> customs;
   std::string device;  ///< "" = the run's only IMU
   std::string sensor = "both";
+  /// The page of a record at rest identifies each channel's composite noise model (GMWM:
+  /// seconds a channel on a 12 min record at 100 Hz, minutes on hours at 400 Hz); false skips it.
+  bool noise_model = true;
 };
 
 /// One condition kind of the steps, used to colour them in the plots.
