@@ -16,14 +16,15 @@
 namespace calstand::analysis {
 namespace {
 
-constexpr const char* kModel = "accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate";
+constexpr const char* kCertificateModel =
+    "accel_bias,accel_scale,accel_misalignment,gyro_bias,earth_rate";
 
-class CertificateData : public ::testing::Test {
+class CertificateResiduals : public ::testing::Test {
  protected:
   void SetUp() override {
     run_ = testing::record_run(file_.path(), "six-position", {"capture_s=10"}, 4);
     store::Database db(file_.path());
-    calibration_ = calibrate_run(db, run_, solver::Model::parse(kModel), "");
+    calibration_ = calibrate_run(db, run_, solver::Model::parse(kCertificateModel), "");
     id_ = store_calibration(db, calibration_);
   }
   testing::TempDatabase file_{"certificate"};
@@ -46,11 +47,11 @@ void expect_same_steps(const std::vector<solver::StepResidual>& a,
   }
 }
 
-TEST_F(CertificateData, ReadsTheStoredStepResidualsWithoutReadingTheRunAgain) {
+TEST_F(CertificateResiduals, ReadsTheStoredStepResidualsWithoutReadingTheRunAgain) {
   store::Database db(file_.path());
   ASSERT_TRUE(store::load_calibration_residuals(db, id_).has_value());
   const std::uint64_t decoded = store::samples_decoded();
-  const analysis::CertificateData d = certificate_data(db, id_);
+  const CertificateData d = certificate_data(db, id_);
   EXPECT_EQ(store::samples_decoded(), decoded) << "the certificate refitted the model";
   EXPECT_FALSE(d.residuals_refitted);
   ASSERT_TRUE(d.residuals.has_value());
@@ -58,14 +59,14 @@ TEST_F(CertificateData, ReadsTheStoredStepResidualsWithoutReadingTheRunAgain) {
   expect_same_steps(*d.residuals, calibration_.fit.steps);
 }
 
-TEST_F(CertificateData, ARecordWithoutStoredResidualsIsRefittedAndLooksTheSame) {
+TEST_F(CertificateResiduals, ARecordWithoutStoredResidualsIsRefittedAndLooksTheSame) {
   store::Database db(file_.path());
-  const analysis::CertificateData stored = certificate_data(db, id_);
+  const CertificateData stored = certificate_data(db, id_);
   // A record as a calibration made before schema version 7 left it: no residuals beside it.
   db.sql().exec("DELETE FROM calibration_residuals WHERE calibration_id = " + std::to_string(id_));
   ASSERT_FALSE(store::load_calibration_residuals(db, id_).has_value());
   const std::uint64_t decoded = store::samples_decoded();
-  analysis::CertificateData old = certificate_data(db, id_);
+  CertificateData old = certificate_data(db, id_);
   EXPECT_GT(store::samples_decoded(), decoded) << "a refit reads the run";
   EXPECT_TRUE(old.residuals_refitted);
   ASSERT_TRUE(old.residuals.has_value());
@@ -79,7 +80,7 @@ TEST_F(CertificateData, ARecordWithoutStoredResidualsIsRefittedAndLooksTheSame) 
   EXPECT_EQ(certificate_html(old), certificate_html(stored));
 }
 
-TEST_F(CertificateData, AMalformedStoredDocumentIsRefusedByName) {
+TEST_F(CertificateResiduals, AMalformedStoredDocumentIsRefusedByName) {
   store::Database db(file_.path());
   db.sql().exec(
       "UPDATE calibration_residuals SET steps = '{\"format\": \"x\"}' WHERE "
