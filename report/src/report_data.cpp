@@ -12,6 +12,7 @@
 #include "analysis/noise_json.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
+#include "report/static_report.hpp"
 #include "solver/groups.hpp"
 #include "solver/signals.hpp"
 #include "store/run_store.hpp"
@@ -89,6 +90,17 @@ void analyse_noise(store::Database& db, ReportData& r, const solver::RunData& da
                                    [&](const store::StepData& d) { return d.step.index == step; });
     if (held == data.steps.end()) {
       r.noise = solver::analyse_run_noise(db, r.request.run, options);  // says why it has none
+    } else if (!r.fitted()) {
+      // A record at rest and nothing else (a static-allan run): the page of such a record.
+      std::optional<solver::NoiseIdOptions> noise_id;
+      if (r.request.noise_model) {
+        noise_id.emplace();
+        noise_id->bootstrap = kReportNoiseIdBootstrap;
+      }
+      auto record = std::make_shared<StaticRecordNoise>(analyse_static_record(
+          held->samples, r.request.run, r.device, step, held->step.label, noise_id));
+      r.noise = record->noise;
+      r.static_record = std::move(record);
     } else {
       r.noise = solver::analyse_noise_samples(held->samples, options);
       r.noise->run = r.request.run;

@@ -179,6 +179,10 @@ std::string render_report_html(const ReportData& r) {
   }
   body += datasheet_part(r);
   body += allan_section(r);
+  if (r.static_record) {
+    body += record_length_section(*r.static_record);
+    body += noise_model_section(*r.static_record);
+  }
   return report_page(r.request.run, r.procedure, body,
                      r.history.empty() ? r.run.ended_utc : r.history.back().created_utc);
 }

@@ -90,7 +90,9 @@ std::string allan_part(const StaticRecordNoise& s) {
          noise_figures_table(s.noise, true) + noise_figures_table(s.noise, false) + "</section>\n";
 }
 
-std::string record_length_part(const StaticRecordNoise& s) {
+}  // namespace
+
+std::string record_length_section(const StaticRecordNoise& s) {
   const solver::RecordLengthRule rule;
   std::string out = fmt::format(
       "<section id=\"record-length\"><h2>Is the record long enough?</h2>\n<p class=\"lead\">This "
@@ -119,7 +121,7 @@ std::string record_length_part(const StaticRecordNoise& s) {
   return out + "</tbody></table></section>\n";
 }
 
-std::string noise_model_part(const StaticRecordNoise& s) {
+std::string noise_model_section(const StaticRecordNoise& s) {
   std::string estimator, selected_by;
   for (const auto& m : s.models) {
     if (m.model) {
@@ -161,6 +163,8 @@ std::string noise_model_part(const StaticRecordNoise& s) {
   return out + "</tbody></table></section>\n";
 }
 
+namespace {
+
 std::string stability_part(const StaticRecordNoise& s) {
   if (s.stability) return stability_section(*s.stability);
   return "<section id=\"datasheet-stability\" class=\"absent\"><h2>In-run bias stability</h2>\n"
@@ -174,8 +178,8 @@ std::string render_static_report_html(const StaticReportData& r) {
   std::string body = static_header(r) + calibration_section(r) + record_section(r);
   if (r.record) {
     body += allan_part(*r.record);
-    body += record_length_part(*r.record);
-    body += noise_model_part(*r.record);
+    body += record_length_section(*r.record);
+    body += noise_model_section(*r.record);
     body += stability_part(*r.record);
   }
   return report_page(r.request.run, r.procedure, body, r.run.ended_utc);

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,8 @@
 #include "store/records.hpp"
 
 namespace calstand::analysis {
+
+struct StaticRecordNoise;  // static_report.hpp
 
 /// The request, as the command line gives it.
 struct ReportRequest {
@@ -67,8 +70,12 @@ struct ReportData {
   solver::Diagnosis diagnosis;
   std::vector<solver::StepSummary> steps;  ///< summaries of the diagnosed model, in fit order
   StepGrouping grouping;
-  double longest_static_s = 0.0;              ///< longest static step [s]
-  std::optional<solver::RunNoise> noise;      ///< Allan curves and noise fit, static runs only
+  double longest_static_s = 0.0;          ///< longest static step [s]
+  std::optional<solver::RunNoise> noise;  ///< Allan curves and noise fit, static runs only
+  /// For a static run without an error model (a static-allan run): the record-length advice and
+  /// the composite noise models of the same record, as the page of a record at rest has them
+  /// (static_report.hpp); `noise` is its noise.
+  std::shared_ptr<const StaticRecordNoise> static_record;
   std::string noise_note;                     ///< why there is no Allan section, or ""
   DatasheetAnalyses datasheet;                ///< the datasheet analyses that apply, and why not
   std::optional<WarmupSeries> warmup_series;  ///< with datasheet.warmup

@@ -59,6 +59,13 @@ StaticRecordNoise analyse_static_record(std::span<const core::ImuSample> samples
                                         const std::string& step_label,
                                         const std::optional<solver::NoiseIdOptions>& noise_id);
 
+/// Section "record-length": what each figure needs against what the record has.
+std::string record_length_section(const StaticRecordNoise& s);
+
+/// Section "noise-model": each channel's composite noise model with its 95 % intervals, or why
+/// it has none.
+std::string noise_model_section(const StaticRecordNoise& s);
+
 struct StaticReportData {
   ReportRequest request;
   std::string procedure;

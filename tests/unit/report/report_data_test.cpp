@@ -10,6 +10,7 @@
 #include "analysis/noise_json.hpp"
 #include "render/gnuplot_svg.hpp"
 #include "report/report_html.hpp"
+#include "report/static_report.hpp"
 #include "store/fit_history.hpp"
 #include "store/sample_reader.hpp"
 
@@ -111,6 +112,7 @@ TEST(ReportDataStatic, ALongStaticCaptureIsReadOnceForItsAllanPlotAndItsStabilit
   ReportRequest request;
   request.db = "test.db";
   request.run = run;
+  request.noise_model = false;  // GMWM costs seconds a channel; static_report_cli_test has it
   const std::uint64_t before = store::samples_decoded();
   const ReportData r = gather_report(db, request);
   const std::uint64_t decoded = store::samples_decoded() - before;
@@ -120,6 +122,12 @@ TEST(ReportDataStatic, ALongStaticCaptureIsReadOnceForItsAllanPlotAndItsStabilit
   EXPECT_GT(r.noise->samples, 100000u) << "a long capture";
   EXPECT_EQ(decoded, static_cast<std::uint64_t>(samples))
       << "the run holds " << samples << " samples; " << r.noise->samples << " in its capture";
+  // No error model on a static-allan run: its page has the record-length advice of the page of
+  // a record at rest, from the same analysis.
+  EXPECT_FALSE(r.fitted());
+  ASSERT_NE(r.static_record, nullptr);
+  EXPECT_EQ(r.static_record->noise.samples, r.noise->samples);
+  EXPECT_EQ(r.static_record->record_needs.size(), 6u);
 
   const StabilityAnalysis alone = analyse_stability(db, run, "", std::nullopt);
   const StabilityAnalysis& shared = *r.datasheet.stability;
