@@ -25,9 +25,6 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
   solver::RunNoiseOptions options;
   options.device = device;
   options.step = step;
-  // The averaging times of `calstand noise` and the report's Allan plot, so that the figures
-  // here, there and on the report's page come from one curve.
-  options.allan.taus = solver::TauSet::parse("dense");
   return stability_of(solver::analyse_run_noise(db, run, options), options.min_tau_samples);
 }
 

@@ -60,9 +60,12 @@ StepGrouping grouping_by(const std::vector<solver::StepConditions>& conditions,
 
 // The noise of the static capture the stability analysis reads (so that the curve and its
 // figures agree), made from the samples the fit has read already: a long capture is read from
-// the database once, not again for the Allan plot and again for the stability figures.
-void analyse_noise(store::Database& db, ReportData& r, const solver::RunData& data,
-                   const std::vector<DatasheetApplicability>& applicability) {
+// the database once, not again for the Allan plot and again for the stability figures. Returns
+// that capture's noise at the octave averaging times the stability's rules are made for
+// (stability_of()), for run_datasheet_analyses(); none when the capture is not held.
+std::optional<solver::RunNoise> analyse_noise(
+    store::Database& db, ReportData& r, const solver::RunData& data,
+    const std::vector<DatasheetApplicability>& applicability) {
   for (const auto& s : r.steps) {
     if (s.is_static) r.longest_static_s = std::max(r.longest_static_s, s.duration_s);
   }
@@ -78,7 +81,7 @@ void analyse_noise(store::Database& db, ReportData& r, const solver::RunData& da
                   "is shown for runs with a static record of {:.0f} s or more (e.g. the "
                   "static-allan procedure)",
                   r.longest_static_s, kMinNoiseRecordS);
-    return;
+    return std::nullopt;
   }
   solver::RunNoiseOptions options;
   options.device = r.device;
@@ -108,9 +111,19 @@ void analyse_noise(store::Database& db, ReportData& r, const solver::RunData& da
       r.noise->step = step;
       r.noise->step_label = held->step.label;
     }
+    if (held == data.steps.end() || !stability->applies) return std::nullopt;
+    solver::RunNoiseOptions octave;
+    octave.device = r.device;
+    solver::RunNoise at_octaves = solver::analyse_noise_samples(held->samples, octave);
+    at_octaves.run = r.request.run;
+    at_octaves.device = r.device;
+    at_octaves.step = step;
+    at_octaves.step_label = held->step.label;
+    return at_octaves;
   } catch (const core::InputError& e) {
     r.noise_note = fmt::format("no Allan deviation: {}", e.what());
   }
+  return std::nullopt;
 }
 
 // The warm-up capture in bins of the analysis's own width, less the settled values, and the fit.
@@ -325,9 +338,9 @@ ReportData gather_report(store::Database& db, const ReportRequest& request) {
     r.history_labels = history_labels(r.history);
     r.grouping = choose_grouping(r.diagnosis, r.steps);
   }
-  analyse_noise(db, r, data, applicability);
+  const std::optional<solver::RunNoise> stability_noise = analyse_noise(db, r, data, applicability);
   DatasheetOptions datasheet;
-  if (r.noise) datasheet.stability_noise = &*r.noise;
+  if (stability_noise) datasheet.stability_noise = &*stability_noise;
   r.datasheet = run_datasheet_analyses(db, request.run, r.device, datasheet);
   if (r.datasheet.warmup) r.warmup_series = warmup_series(db, r, *r.datasheet.warmup);
   return r;

@@ -79,7 +79,16 @@ StaticRecordNoise analyse_static_record(std::span<const core::ImuSample> samples
   out.noise.step_label = step_label;
   out.record_needs = solver::record_length_needs(out.noise);
   try {
-    out.stability = stability_of(out.noise, options.min_tau_samples);
+    // At the octave averaging times the stability's floor rules are made for, as `calstand
+    // analyze stability` reads them: the same samples, analysed again, not read again.
+    solver::RunNoiseOptions octave;
+    octave.device = device;
+    solver::RunNoise at_octaves = solver::analyse_noise_samples(samples, octave);
+    at_octaves.run = run;
+    at_octaves.device = device;
+    at_octaves.step = step;
+    at_octaves.step_label = step_label;
+    out.stability = stability_of(at_octaves, octave.min_tau_samples);
   } catch (const core::InputError& e) {
     out.stability_note = e.what();
   }

@@ -65,10 +65,10 @@ std::vector<DatasheetApplicability> datasheet_applicability(
 struct DatasheetOptions {
   double warmup_band_deg_per_h = 1.0;  ///< a gyro bias this close to its settled value is settled
   double warmup_band_ug = 50.0;        ///< ... an accelerometer bias
-  /// The noise analysis of the stability capture when the caller has made it already (the
-  /// report: one read of a long capture for its Allan plot and the stability figures); used
-  /// when it is of the capture the applicability names, else the analysis reads the capture.
-  /// Not owned; must outlive the call.
+  /// The noise analysis of the stability capture when the caller has made it already, at the
+  /// default (octave) averaging times (stability_of()): the report reads a long capture once
+  /// for its Allan plot and the stability figures. Used when it is of the capture the
+  /// applicability names, else the analysis reads the capture. Not owned; must outlive the call.
   const solver::RunNoise* stability_noise = nullptr;
 };
 

@@ -68,11 +68,13 @@ struct StabilityAnalysis {
 StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
                                     const std::string& device, std::optional<std::size_t> step);
 
-/// The stability from a noise analysis already made (its curve, at whatever averaging times it
-/// has), for a caller that holds one: the report analyses a long capture once for its Allan
-/// plot and its stability figures. `min_tau_samples` as solver::RunNoiseOptions (the bias model
-/// fit leaves out the shorter averaging times). Throws core::InputError naming the run and step
-/// when the record is shorter than kMinNoiseRecordS.
+/// The stability from a noise analysis already made, for a caller that holds the samples: the
+/// report reads a long capture once for its Allan plot and its stability figures. The floor's
+/// rules (the minimum among points of 10 edf or more, a later point wholly above it) are made
+/// for octave averaging times (solver::RunNoiseOptions' default, as analyse_stability() reads
+/// the capture): a denser curve finds floors that are not there. `min_tau_samples` as
+/// solver::RunNoiseOptions (the bias model fit leaves out the shorter averaging times). Throws
+/// core::InputError naming the run and step when the record is shorter than kMinNoiseRecordS.
 StabilityAnalysis stability_of(const solver::RunNoise& noise,
                                double min_tau_samples = solver::RunNoiseOptions{}.min_tau_samples);
 

@@ -37,9 +37,11 @@ struct StaticRecordNoise {
   /// Allan curves at `calstand noise`'s averaging times (dense), noise terms, datasheet figures.
   solver::RunNoise noise;
   std::vector<solver::FigureRecordNeed> record_needs;  ///< solver::record_length_needs()
-  std::optional<StabilityAnalysis> stability;          ///< stability_of(noise)
-  std::string stability_note;                          ///< why none ("" when there is)
-  std::vector<ChannelNoiseModel> models;               ///< gx .. az
+  /// stability_of() the same samples at octave averaging times (as `calstand analyze
+  /// stability`).
+  std::optional<StabilityAnalysis> stability;
+  std::string stability_note;             ///< why none ("" when there is)
+  std::vector<ChannelNoiseModel> models;  ///< gx .. az
 };
 
 /// Parametric-bootstrap records of the page's composite noise models: the fewest
