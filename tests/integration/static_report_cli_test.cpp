@@ -190,6 +190,19 @@ TEST_F(StaticReportCli, TheStabilityIsAnalyzeStabilitysOnTheSameRecord) {
   }
 }
 
+// As the full report (and `calstand certificate`): --out FILE.pdf prints the page to PDF.
+TEST_F(StaticReportCli, APdfPathPrintsThePage) {
+  if (std::system("command -v chromium >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "chromium is not installed (scripts/setup-deps.sh installs it)";
+  }
+  const std::string pdf = dir_ + "run2.pdf";
+  const Result r = run("report --db " + db_ + " --run 2 --no-noise-model --out " + pdf);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string bytes = read_text(pdf);
+  EXPECT_EQ(bytes.rfind("%PDF-", 0), 0u);
+  EXPECT_GT(bytes.size(), 20000u) << "the plots are in it";
+}
+
 TEST_F(StaticReportCli, ARunWithTooFewPosesSaysSoAndShowsTheNoiseOfItsRest) {
   ASSERT_EQ(reports_[3].exit_code, 0) << reports_[3].out;
   const std::string html = read_text(dir_ + "run3.html");
