@@ -278,3 +278,15 @@ SELECT 1,
              substr(h, 21, 12)),
        strftime('%Y-%m-%dT%H:%M:%fZ', 'now')
 FROM (SELECT hex(randomblob(16)) AS h);
+
+-- migration 7: the step residuals of a calibration, for its certificate
+-- What a certificate draws from the fit that made a record (its residual per step against the
+-- step's noise), stored when the record is: the certificate reads them instead of fitting the
+-- model again. `steps` is {"format": "calstand-step-residuals/1", "steps": [{"index", "label",
+-- "residual": [gx, gy, gz, ax, ay, az], "sigma": [...]}]} in deg/s and m/s^2. A record made
+-- before this migration has no row; its certificate refits as before. A calibration without a
+-- table (no steps to fit) has none either.
+CREATE TABLE calibration_residuals (
+  calibration_id INTEGER PRIMARY KEY REFERENCES calibrations(id) ON DELETE CASCADE,
+  steps          TEXT NOT NULL CHECK (json_valid(steps))
+);

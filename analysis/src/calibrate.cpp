@@ -9,6 +9,7 @@
 #include "analysis/fit_history.hpp"
 #include "analysis/noise_json.hpp"
 #include "analysis/run_model.hpp"
+#include "analysis/step_residuals.hpp"
 #include "analysis/table_free_record.hpp"
 #include "core/error.hpp"
 #include "core/json_schema.hpp"
@@ -84,7 +85,9 @@ std::vector<std::string> units_to_calibrate(store::Database& db, std::int64_t ru
 
 std::int64_t store_calibration(store::Database& db, const CalibrationOutcome& c) {
   const std::string model = c.table_free ? table_free_model_text(c.table_free->terms) : c.fit.model;
-  return store::insert_calibration(db, c.run, c.device, model, c.record);
+  // A table fit's step residuals go with the record: its certificate draws them.
+  return store::insert_calibration(db, c.run, c.device, model, c.record,
+                                   c.table_free ? nlohmann::json() : step_residuals_json(c.fit));
 }
 
 std::string default_calibration_file(std::int64_t run, const std::string& device) {

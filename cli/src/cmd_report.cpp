@@ -4,18 +4,19 @@
 // with its fitted noise lines. A run without an error model gets its summary and figures.
 #include <fmt/format.h>
 
-#include <fstream>
+#include <algorithm>
+#include <filesystem>
 #include <memory>
-#include <optional>
 #include <string>
-#include <typeinfo>
-#include <vector>
 
 #include "commands.hpp"
 #include "core/error.hpp"
+#include "core/file_output.hpp"
 #include "fit_printer.hpp"
+#include "noise/record_length.hpp"
 #include "open_database.hpp"
 #include "render/gnuplot_svg.hpp"
+#include "render/html_to_pdf.hpp"
 #include "report/report_data.hpp"
 #include "report/report_html.hpp"
 #include "report/table_free_report.hpp"
@@ -28,45 +29,46 @@ struct ReportOptions {
   std::string out;
 };
 
+// The page as HTML, or printed to PDF when `path` ends in .pdf (as `calstand certificate`);
+// either file appears whole or not at all.
 void write_page(const std::string& path, const std::string& page) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out || !(out << page) || !out.flush()) {
-    throw core::InputError("--out " + path, "cannot write the report");
-  }
-}
-
-void run_report(const ReportOptions& opt) {
-  analysis::find_gnuplot();  // before the work: a missing plotter is the first thing to say
-  store::Database db = open_existing_database(opt.request.db);
-  if (analysis::needs_table_free_fit(db, opt.request.run)) {
-    std::optional<analysis::TableFreeReportData> gathered;
-    try {
-      gathered = analysis::gather_table_free_report(db, opt.request);
-    } catch (const core::InputError& e) {
-      if (typeid(e) != typeid(core::InputError)) throw;  // RunNotFound and the like as they are
-      // A static recording (an imported bag at rest) has no poses to calibrate from: say what
-      // its record is good for instead of only what the fit lacks.
-      throw core::InputError(
-          "", fmt::format("{}; the report of a run without a table is its table-free "
-                          "calibration. A static record's noise is `calstand noise --run {}` "
-                          "(and `calstand analyze stability`)",
-                          e.what(), opt.request.run));
-    }
-    const analysis::TableFreeReportData& data = *gathered;
-    const std::string page = analysis::render_table_free_report_html(data);
-    write_page(opt.out, page);
-    fmt::print(
-        "{}: run {} ({}) without a table, method {}, model {}: {}; {} fits in the "
-        "history; {} kB\n",
-        opt.out, data.request.run, data.procedure, data.diagnosis.fit.method,
-        analysis::table_free_model_text(data.diagnosis.fit.terms),
-        data.diagnosis.explained ? "explained" : "not explained", data.history.size(),
-        (page.size() + 512) / 1024);
+  if (std::filesystem::path(path).extension() == ".pdf") {
+    analysis::html_to_pdf(page, path);
     return;
   }
-  const analysis::ReportData data = analysis::gather_report(db, opt.request);
-  const std::string page = analysis::render_report_html(data);
-  write_page(opt.out, page);
+  core::write_file_whole(path, page);
+}
+
+void print_static(const ReportOptions& opt, const analysis::StaticReportData& data,
+                  std::size_t bytes) {
+  std::string figures;
+  if (data.record) {
+    const analysis::StaticRecordNoise& r = *data.record;
+    figures = fmt::format("; {} of {} at {:.6g} Hz: Allan deviation, noise figures{}{}",
+                          solver::format_record_length(r.noise.duration_s), data.record_label,
+                          r.noise.sample_rate_hz,
+                          std::any_of(r.models.begin(), r.models.end(),
+                                      [](const auto& m) { return m.model.has_value(); })
+                              ? ", composite noise model"
+                              : "",
+                          r.stability ? ", stability" : "");
+  }
+  fmt::print("{}: run {} ({}), a record at rest, no calibration: {}{}; {} kB\n", opt.out,
+             data.request.run, data.procedure, data.no_fit_reason, figures, (bytes + 512) / 1024);
+}
+
+void print_table_free(const ReportOptions& opt, const analysis::TableFreeReportData& data,
+                      std::size_t bytes) {
+  fmt::print(
+      "{}: run {} ({}) without a table, method {}, model {}: {}; {} fits in the "
+      "history; {} kB\n",
+      opt.out, data.request.run, data.procedure, data.diagnosis.fit.method,
+      analysis::table_free_model_text(data.diagnosis.fit.terms),
+      data.diagnosis.explained ? "explained" : "not explained", data.history.size(),
+      (bytes + 512) / 1024);
+}
+
+void print_table(const ReportOptions& opt, const analysis::ReportData& data, std::size_t bytes) {
   std::string figures;
   for (const auto kind : analysis::kDatasheetKinds) {
     if (data.datasheet.has_result(kind)) {
@@ -80,14 +82,28 @@ void run_report(const ReportOptions& opt) {
   if (!data.fitted()) {
     fmt::print("{}: run {} ({}), no error model fitted: {}{}{}; {} kB\n", opt.out, data.request.run,
                data.procedure, data.no_fit_reason, figures,
-               data.noise ? ", Allan deviation of the static step" : "",
-               (page.size() + 512) / 1024);
+               data.noise ? ", Allan deviation of the static step" : "", (bytes + 512) / 1024);
     return;
   }
   fmt::print("{}: run {} ({}), model {}: chi2/dof {:.3g}, {} fits in the history{}{}; {} kB\n",
              opt.out, data.request.run, data.procedure, data.diagnosis.fit.model,
              data.diagnosis.fit.chi2_dof, data.history.size(), figures,
-             data.noise ? ", Allan deviation of the static step" : "", (page.size() + 512) / 1024);
+             data.noise ? ", Allan deviation of the static step" : "", (bytes + 512) / 1024);
+}
+
+void run_report(const ReportOptions& opt) {
+  analysis::find_gnuplot();  // before the work: a missing plotter is the first thing to say
+  store::Database db = open_existing_database(opt.request.db);
+  const analysis::ReportPage gathered = analysis::gather_report_page(db, opt.request);
+  const std::string page = analysis::render_report_page(gathered);
+  write_page(opt.out, page);
+  if (gathered.static_record) {
+    print_static(opt, *gathered.static_record, page.size());
+  } else if (gathered.table_free) {
+    print_table_free(opt, *gathered.table_free, page.size());
+  } else {
+    print_table(opt, *gathered.table, page.size());
+  }
 }
 
 }  // namespace
@@ -107,7 +123,12 @@ void register_report(CLI::App& app) {
   cmd->add_option("--sensor", opt->request.sensor, "Rows to fit: both, gyro or accel")
       ->check(CLI::IsMember({"both", "gyro", "accel"}))
       ->capture_default_str();
-  cmd->add_option("--out", opt->out, "The HTML file to write")->required();
+  cmd->add_flag("!--no-noise-model", opt->request.noise_model,
+                "A record at rest: leave out the composite noise model (calstand noise-id; "
+                "minutes on a record of hours)");
+  cmd->add_option("--out", opt->out,
+                  "The file to write: HTML, or PDF when it ends in .pdf (headless Chromium)")
+      ->required();
   cmd->footer(catalogue_help());
   cmd->callback([opt] { run_report(*opt); });
 }

@@ -1,6 +1,6 @@
 // `calstand sim-session`: a simulated session without a table (an IMU turned by hand between
-// static poses, or a labelled Ferraris session), written as a calstand-import/2 folder with its
-// truth (sim/hand_session.hpp, sim/session_folder.hpp).
+// static poses, a record at rest, or a labelled Ferraris session), written as a calstand-import/2
+// folder with its truth (sim/hand_session.hpp, sim/session_folder.hpp).
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -49,10 +49,11 @@ sim::SessionImu session_imu(const SimSessionOptions& opt) {
 
 void run_sim_session(const SimSessionOptions& opt) {
   sim::SimSession s;
-  if (opt.kind == "hand") {
+  if (opt.kind == "hand" || opt.kind == "static") {
     sim::HandSessionOptions o;
     o.imu = session_imu(opt);
-    o.poses = opt.poses;
+    // A static record is a hand session that never leaves its initial rest on the bench.
+    o.poses = opt.kind == "static" ? 0 : opt.poses;
     o.initial_rest_s = opt.rest_s;
     s = sim::simulate_hand_session(o, opt.seed);
   } else if (opt.kind == "ferraris") {
@@ -62,7 +63,7 @@ void run_sim_session(const SimSessionOptions& opt) {
     o.turn_angle_deg = opt.turn_angle_deg;
     s = sim::simulate_ferraris_session(o, opt.seed);
   } else {
-    throw core::InputError("--kind", "must be hand or ferraris, not \"" + opt.kind + "\"");
+    throw core::InputError("--kind", "must be hand, static or ferraris, not \"" + opt.kind + "\"");
   }
   sim::SessionFolderOptions fo;
   fo.counts = opt.counts;
@@ -71,7 +72,7 @@ void run_sim_session(const SimSessionOptions& opt) {
   fmt::print(
       "{} session of a simulated {} (seed {}): {} samples at {:g} Hz, {:.1f} s, {} static "
       "holds{}, {} turns\n",
-      s.kind, s.model_name, s.seed, s.samples.size(), s.sample_rate_hz, duration, s.holds.size(),
+      opt.kind, s.model_name, s.seed, s.samples.size(), s.sample_rate_hz, duration, s.holds.size(),
       s.kind == "hand" ? " (the first the initial rest)" : "", s.turns.size());
   fmt::print(
       "wrote {}/meta.json, samples.csv ({}), truth.json (frame: the accelerometer "
@@ -87,7 +88,9 @@ void register_sim_session(CLI::App& app) {
       "sim-session",
       "Simulate a session without a table (hand-held poses, or a labelled Ferraris session) and "
       "write it as a calstand-import/2 folder with its truth");
-  cmd->add_option("--kind", opt->kind, "hand or ferraris")->capture_default_str();
+  cmd->add_option("--kind", opt->kind,
+                  "hand, static (the initial rest alone: a record at rest) or ferraris")
+      ->capture_default_str();
   cmd->add_option("--out", opt->out, "Folder to write (created)")->required();
   cmd->add_option("--seed", opt->seed, "Seed of the IMU draw, the poses and the noise")
       ->capture_default_str();
@@ -95,7 +98,8 @@ void register_sim_session(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--poses", opt->poses, "hand: static poses after the initial rest")
       ->capture_default_str();
-  cmd->add_option("--rest", opt->rest_s, "hand: initial rest [s]")->capture_default_str();
+  cmd->add_option("--rest", opt->rest_s, "hand and static: initial rest [s]")
+      ->capture_default_str();
   cmd->add_option("--rate", opt->rate_hz, "Output rate [Hz] (0: the sheet's)")
       ->capture_default_str();
   cmd->add_option("--tilt", opt->tilt_deg, "ferraris: RMS placement tilt of each hold [deg]")

@@ -260,8 +260,12 @@ DatasheetAnalyses run_datasheet_analyses(store::Database& db, std::int64_t run,
                           options.warmup_band_deg_per_h, options.warmup_band_ug);
   });
   attempt(out, DatasheetKind::kStability, out.stability, [&] {
-    return analyse_stability(db, run, out.device,
-                             out.applicability_of(DatasheetKind::kStability).step);
+    const std::optional<std::size_t> step = out.applicability_of(DatasheetKind::kStability).step;
+    const solver::RunNoise* noise = options.stability_noise;
+    if (noise && noise->run == run && noise->device == out.device && step && noise->step == *step) {
+      return stability_of(*noise);
+    }
+    return analyse_stability(db, run, out.device, step);
   });
   attempt(out, DatasheetKind::kHysteresis, out.hysteresis,
           [&] { return analyse_hysteresis(db, run, out.device); });

@@ -25,16 +25,19 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
   solver::RunNoiseOptions options;
   options.device = device;
   options.step = step;
-  const solver::RunNoise noise = solver::analyse_run_noise(db, run, options);
+  return stability_of(solver::analyse_run_noise(db, run, options), options.min_tau_samples);
+}
+
+StabilityAnalysis stability_of(const solver::RunNoise& noise, double min_tau_samples) {
   if (!long_enough_for_noise(noise.duration_s)) {
     throw core::InputError(
-        fmt::format("run {} step {}", run, noise.step),
+        fmt::format("run {} step {}", noise.run, noise.step),
         fmt::format("the capture lasts {:.0f} s; a bias floor and a correlation time need a "
                     "static record of at least {:.0f} s",
                     noise.duration_s, kMinNoiseRecordS));
   }
   StabilityAnalysis out;
-  out.run = run;
+  out.run = noise.run;
   out.device = noise.device;
   out.step = noise.step;
   out.step_label = noise.step_label;
@@ -72,7 +75,7 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
     // As the noise-term fit: without the shortest averaging times, where the IMU's
     // anti-aliasing filter lowers the curve and a vanishing correlation time would fit it.
     solver::BiasModelOptions model_options;
-    model_options.min_tau_s = options.min_tau_samples / noise.sample_rate_hz;
+    model_options.min_tau_s = min_tau_samples / noise.sample_rate_hz;
     const solver::BiasModelChoice choice = solver::choose_bias_model(ch.allan, model_options);
     s.bias_model = choice.model;
     s.bias_model_reason = choice.reason;

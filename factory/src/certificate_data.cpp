@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include "analysis/run_model.hpp"
+#include "analysis/step_residuals.hpp"
 #include "core/error.hpp"
 #include "factory/certificate.hpp"
 #include "solver/calibration_record.hpp"
@@ -78,8 +79,15 @@ CertificateData certificate_data(store::Database& db, std::int64_t calibration) 
   // The residual plot needs the fit on the table's steps; a record without a table has none.
   const std::string method = row.record.value("method", "table");
   if (method == "table") {
-    const solver::Calibration cal = solver::read_calibration(row.record, d.number);
-    d.fit = solver::fit_run(load_fit_data(db, row.run, row.imu), cal.model);
+    if (const auto stored = store::load_calibration_residuals(db, row.id)) {
+      d.residuals = step_residuals_from_json(*stored, fmt::format("calibration {}", row.id));
+    } else {
+      // A record stored before its residuals were (schema version 7): the same model on the
+      // same data gives the same residuals, at the cost of reading the run again.
+      const solver::Calibration cal = solver::read_calibration(row.record, d.number);
+      d.residuals = solver::fit_run(load_fit_data(db, row.run, row.imu), cal.model).steps;
+      d.residuals_refitted = true;
+    }
   }
   return d;
 }

@@ -200,8 +200,8 @@ std::string certificate_html(const CertificateData& d) {
   body += identity_section(d);
   body += parameter_section(d);
   body += acceptance_section(d);
-  if (d.fit) {
-    body += "<h2>Residuals after calibration</h2>" + certificate_residual_plot(*d.fit);
+  if (d.residuals) {
+    body += "<h2>Residuals after calibration</h2>" + certificate_residual_plot(*d.residuals);
   }
   body += fmt::format(
       "<footer>calstand {} &middot; calibration record {} of run {} &middot; the parameters follow "

@@ -10,7 +10,7 @@ namespace calstand::analysis {
 
 // What a person checks on a certificate: every step's residual within a few step-noise sigmas,
 // i.e. the calibrated model leaves nothing but noise. One panel per sensor, axes by colour.
-std::string certificate_residual_plot(const solver::FitResult& fit) {
+std::string certificate_residual_plot(const std::vector<solver::StepResidual>& steps) {
   constexpr std::array<const char*, 3> kAxisColour = {"#1f77b4", "#2ca02c", "#d62728"};
   constexpr std::array<double, 3> kOffset = {-0.2, 0.0, 0.2};
   std::string s = svg_terminal(900, 250);
@@ -18,7 +18,7 @@ std::string certificate_residual_plot(const solver::FitResult& fit) {
   for (int sensor = 0; sensor < 2; ++sensor) {
     for (int axis = 0; axis < 3; ++axis) {
       std::vector<std::string> rows;
-      for (const solver::StepResidual& st : fit.steps) {
+      for (const solver::StepResidual& st : steps) {
         max_index = std::max(max_index, static_cast<double>(st.index));
         const double z = st.z()[sensor * 3 + axis];
         if (std::isfinite(z)) {

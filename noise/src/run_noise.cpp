@@ -137,6 +137,13 @@ namespace {
 constexpr double kMaxStaticGyroScatterDps = 1.0;
 }  // namespace
 
+bool run_is_at_rest(store::Database& db, std::int64_t run) {
+  const std::vector<store::StepMean> means = store::read_step_means(db, run);
+  return !means.empty() && std::all_of(means.begin(), means.end(), [](const store::StepMean& m) {
+    return m.gyro_std_dps.maxCoeff() <= kMaxStaticGyroScatterDps;
+  });
+}
+
 std::size_t choose_noise_step(store::Database& db, std::int64_t run,
                               std::optional<std::size_t> step) {
   store::RunStore runs(db);
@@ -187,32 +194,14 @@ std::size_t choose_noise_step(store::Database& db, std::int64_t run,
   return *best;
 }
 
-RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoiseOptions& options) {
+RunNoise analyse_noise_samples(std::span<const core::ImuSample> samples,
+                               const RunNoiseOptions& options) {
   if (options.allan.kind != AllanKind::kAllan) {
     throw core::InputError("kind", "the noise terms are fitted to the Allan deviation (adev)");
   }
   options.allan.validate();
   options.fit.validate();
   RunNoise out;
-  out.run = run;
-  out.step = choose_noise_step(db, run, options.step);
-  store::RunStore runs(db);
-  for (const store::StepRecord& s : runs.load_steps(run)) {
-    if (s.index == out.step) out.step_label = s.label;
-  }
-  out.device = options.device;
-  if (out.device.empty()) {
-    const std::vector<std::string> devices = store::sample_devices(db, run);
-    if (devices.empty()) {
-      throw core::InputError("run", fmt::format("run {} holds no IMU samples", run));
-    }
-    out.device = devices.front();
-  }
-  const std::vector<core::ImuSample> samples = store::read_samples(db, run, out.step, out.device);
-  if (samples.empty()) {
-    throw core::InputError("device", fmt::format("step {} of run {} holds no samples of '{}'",
-                                                 out.step, run, out.device));
-  }
   out.samples = samples.size();
   out.sample_rate_hz = sample_rate_of(samples);
   out.duration_s = samples.back().device_time_s - samples.front().device_time_s;
@@ -229,6 +218,39 @@ RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoise
     ch.terms = fit_noise_terms(ch.allan, fit);
     ch.figures = datasheet_figures(ch.terms, is_gyro(c));
     out.channels.push_back(std::move(ch));
+  }
+  return out;
+}
+
+std::string noise_device(store::Database& db, std::int64_t run, const std::string& device) {
+  if (!device.empty()) return device;
+  const std::vector<std::string> devices = store::sample_devices(db, run);
+  if (devices.empty()) {
+    throw core::InputError("run", fmt::format("run {} holds no IMU samples", run));
+  }
+  return devices.front();
+}
+
+RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoiseOptions& options) {
+  if (options.allan.kind != AllanKind::kAllan) {
+    throw core::InputError("kind", "the noise terms are fitted to the Allan deviation (adev)");
+  }
+  options.allan.validate();
+  options.fit.validate();
+  const std::size_t step = choose_noise_step(db, run, options.step);
+  const std::string device = noise_device(db, run, options.device);
+  const std::vector<core::ImuSample> samples = store::read_samples(db, run, step, device);
+  if (samples.empty()) {
+    throw core::InputError(
+        "device", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+  }
+  RunNoise out = analyse_noise_samples(samples, options);
+  out.run = run;
+  out.step = step;
+  out.device = device;
+  store::RunStore runs(db);
+  for (const store::StepRecord& s : runs.load_steps(run)) {
+    if (s.index == out.step) out.step_label = s.label;
   }
   return out;
 }

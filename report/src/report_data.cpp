@@ -12,6 +12,7 @@
 #include "analysis/noise_json.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
+#include "report/static_report.hpp"
 #include "solver/groups.hpp"
 #include "solver/signals.hpp"
 #include "store/run_store.hpp"
@@ -57,32 +58,72 @@ StepGrouping grouping_by(const std::vector<solver::StepConditions>& conditions,
   return g;
 }
 
-void analyse_noise(store::Database& db, ReportData& r) {
+// The noise of the static capture the stability analysis reads (so that the curve and its
+// figures agree), made from the samples the fit has read already: a long capture is read from
+// the database once, not again for the Allan plot and again for the stability figures. Returns
+// that capture's noise at the octave averaging times the stability's rules are made for
+// (stability_of()), for run_datasheet_analyses(); none when the capture is not held.
+std::optional<solver::RunNoise> analyse_noise(
+    store::Database& db, ReportData& r, const solver::RunData& data,
+    const std::vector<DatasheetApplicability>& applicability) {
   for (const auto& s : r.steps) {
     if (s.is_static) r.longest_static_s = std::max(r.longest_static_s, s.duration_s);
   }
-  // The capture the stability analysis reads, so that the curve and its figures agree.
-  const DatasheetApplicability& stability = r.datasheet.applicability_of(DatasheetKind::kStability);
-  if (!stability.applies && r.procedure != "static-allan") {
+  const auto stability =
+      std::find_if(applicability.begin(), applicability.end(),
+                   [](const auto& a) { return a.kind == DatasheetKind::kStability; });
+  if (!stability->applies && r.procedure != "static-allan") {
     r.noise_note =
         long_enough_for_noise(r.longest_static_s)
-            ? fmt::format("no Allan deviation: {}", stability.evidence)
+            ? fmt::format("no Allan deviation: {}", stability->evidence)
             : fmt::format(
                   "not a static run: its longest static step lasts {:.0f} s; the Allan deviation "
                   "is shown for runs with a static record of {:.0f} s or more (e.g. the "
                   "static-allan procedure)",
                   r.longest_static_s, kMinNoiseRecordS);
-    return;
+    return std::nullopt;
   }
   solver::RunNoiseOptions options;
   options.device = r.device;
-  options.step = stability.step;
+  options.step = stability->step;
   options.allan.taus = solver::TauSet::parse("dense");
   try {
-    r.noise = solver::analyse_run_noise(db, r.request.run, options);
+    const std::size_t step = solver::choose_noise_step(db, r.request.run, stability->step);
+    const auto held = std::find_if(data.steps.begin(), data.steps.end(),
+                                   [&](const store::StepData& d) { return d.step.index == step; });
+    if (held == data.steps.end()) {
+      r.noise = solver::analyse_run_noise(db, r.request.run, options);  // says why it has none
+    } else if (!r.fitted()) {
+      // A record at rest and nothing else (a static-allan run): the page of such a record.
+      std::optional<solver::NoiseIdOptions> noise_id;
+      if (r.request.noise_model) {
+        noise_id.emplace();
+        noise_id->bootstrap = kReportNoiseIdBootstrap;
+      }
+      auto record = std::make_shared<StaticRecordNoise>(analyse_static_record(
+          held->samples, r.request.run, r.device, step, held->step.label, noise_id));
+      r.noise = record->noise;
+      r.static_record = std::move(record);
+    } else {
+      r.noise = solver::analyse_noise_samples(held->samples, options);
+      r.noise->run = r.request.run;
+      r.noise->device = r.device;
+      r.noise->step = step;
+      r.noise->step_label = held->step.label;
+    }
+    if (held == data.steps.end() || !stability->applies) return std::nullopt;
+    solver::RunNoiseOptions octave;
+    octave.device = r.device;
+    solver::RunNoise at_octaves = solver::analyse_noise_samples(held->samples, octave);
+    at_octaves.run = r.request.run;
+    at_octaves.device = r.device;
+    at_octaves.step = step;
+    at_octaves.step_label = held->step.label;
+    return at_octaves;
   } catch (const core::InputError& e) {
     r.noise_note = fmt::format("no Allan deviation: {}", e.what());
   }
+  return std::nullopt;
 }
 
 // The warm-up capture in bins of the analysis's own width, less the settled values, and the fit.
@@ -297,9 +338,11 @@ ReportData gather_report(store::Database& db, const ReportRequest& request) {
     r.history_labels = history_labels(r.history);
     r.grouping = choose_grouping(r.diagnosis, r.steps);
   }
-  r.datasheet = run_datasheet_analyses(db, request.run, r.device);
+  const std::optional<solver::RunNoise> stability_noise = analyse_noise(db, r, data, applicability);
+  DatasheetOptions datasheet;
+  if (stability_noise) datasheet.stability_noise = &*stability_noise;
+  r.datasheet = run_datasheet_analyses(db, request.run, r.device, datasheet);
   if (r.datasheet.warmup) r.warmup_series = warmup_series(db, r, *r.datasheet.warmup);
-  analyse_noise(db, r);
   return r;
 }
 

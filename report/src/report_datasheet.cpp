@@ -137,6 +137,8 @@ std::string bias_variation_cells(const ChannelStability& ch) {
          num(n(*ch.correlation_time_s), ch.correlation_resolved ? "" : "dim");
 }
 
+}  // namespace
+
 std::string stability_section(const StabilityAnalysis& s) {
   std::string out = section_start(
       DatasheetKind::kStability,
@@ -158,6 +160,8 @@ std::string stability_section(const StabilityAnalysis& s) {
   }
   return out + kTableEnd + "</section>\n";
 }
+
+namespace {
 
 // --- hysteresis ----------------------------------------------------------------------------
 

@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <typeinfo>
+#include <utility>
 
+#include "core/error.hpp"
+#include "noise/run_noise.hpp"
 #include "render/gnuplot_svg.hpp"
 #include "render/report_style.hpp"
 #include "report/report_datasheet.hpp"
@@ -175,16 +179,54 @@ std::string render_report_html(const ReportData& r) {
   }
   body += datasheet_part(r);
   body += allan_section(r);
+  if (r.static_record) {
+    body += record_length_section(*r.static_record);
+    body += noise_model_section(*r.static_record);
+  }
   return report_page(r.request.run, r.procedure, body,
                      r.history.empty() ? r.run.ended_utc : r.history.back().created_utc);
 }
 
+ReportPage gather_report_page(store::Database& db, const ReportRequest& request) {
+  ReportPage page;
+  if (!needs_table_free_fit(db, request.run)) {
+    page.table = gather_report(db, request);
+    return page;
+  }
+  if (solver::run_is_at_rest(db, request.run)) {
+    page.static_record = gather_static_report(
+        db, request,
+        "the run lies at rest throughout (every step's gyros scatter like a unit at rest): it "
+        "has no poses and no turns to calibrate from; a calibration without a table needs the "
+        "unit turned between static poses (docs/guide-without-a-table.md)");
+    return page;
+  }
+  try {
+    page.table_free = gather_table_free_report(db, request);
+    return page;
+  } catch (const core::InputError& e) {
+    // RunNotFound and the like, and a model such a run cannot fit, are the request's fault.
+    if (typeid(e) != typeid(core::InputError) || e.where() == "model") throw;
+    StaticReportData fallback = gather_static_report(db, request, e.what());
+    if (!fallback.record) {
+      throw core::InputError(
+          e.where(), fmt::format("{}; nor has it a record at rest for a noise page ({})", e.what(),
+                                 fallback.noise_note));
+    }
+    page.static_record = std::move(fallback);
+    return page;
+  }
+}
+
+std::string render_report_page(const ReportPage& page) {
+  if (page.table) return render_report_html(*page.table);
+  if (page.table_free) return render_table_free_report_html(*page.table_free);
+  return render_static_report_html(page.static_record.value());
+}
+
 std::string run_report_html(store::Database& db, const ReportRequest& request) {
   find_gnuplot();  // before the work: a missing plotter is the first thing to say
-  if (needs_table_free_fit(db, request.run)) {
-    return render_table_free_report_html(gather_table_free_report(db, request));
-  }
-  return render_report_html(gather_report(db, request));
+  return render_report_page(gather_report_page(db, request));
 }
 
 }  // namespace calstand::analysis

@@ -188,8 +188,9 @@ std::string candidate_plot(const ReportData& r) {
   return gnuplot_svg(s, "candidates", "chi2/dof after adding each candidate term");
 }
 
-std::string allan_plot(const ReportData& r, bool gyro) {
-  const solver::RunNoise& noise = *r.noise;
+std::string allan_plot(const ReportData& r, bool gyro) { return allan_plot(*r.noise, gyro); }
+
+std::string allan_plot(const solver::RunNoise& noise, bool gyro) {
   std::string s = svg_terminal(1000, 460);
   double ymin = std::numeric_limits<double>::infinity(), ymax = 0.0;
   double tmin = std::numeric_limits<double>::infinity(), tmax = 0.0;

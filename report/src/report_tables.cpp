@@ -162,17 +162,31 @@ std::string candidates_table(const ReportData& r) {
   return out;
 }
 
+std::string noise_figure_estimator(std::string_view name) {
+  if (name == "bias_instability_min") {
+    return "read off the overlapping Allan deviation: its minimum";
+  }
+  if (name == "bias_instability_min_coefficient") {
+    return "read off the overlapping Allan deviation: minimum / 0.664 (IEEE Std 952)";
+  }
+  return "IEEE Std 952 model fitted to the overlapping Allan variance (weighted, non-negative "
+         "least squares; from 20 sample periods)";
+}
+
 std::string noise_figures_table(const ReportData& r, bool gyro) {
-  if (!r.noise) return "";
+  return r.noise ? noise_figures_table(*r.noise, gyro) : std::string();
+}
+
+std::string noise_figures_table(const solver::RunNoise& noise, bool gyro) {
   std::vector<const solver::ChannelNoise*> chans;
-  for (const auto& c : r.noise->channels) {
+  for (const auto& c : noise.channels) {
     if (solver::is_gyro(c.channel) == gyro) chans.push_back(&c);
   }
   if (chans.empty()) return "";
   std::string out =
       fmt::format("<table><thead><tr><th>{}</th><th>unit</th>", gyro ? "gyro" : "accelerometer");
   for (const auto* c : chans) out += "<th>" + html_escape(solver::to_string(c->channel)) + "</th>";
-  out += "</tr></thead><tbody>\n";
+  out += "<th>estimator</th></tr></thead><tbody>\n";
   for (std::size_t i = 0; i < chans.front()->figures.size(); ++i) {
     out += "<tr>" + td(chans.front()->figures[i].label) + td(chans.front()->figures[i].unit);
     for (const auto* c : chans) {
@@ -185,7 +199,7 @@ std::string noise_figures_table(const ReportData& r, bool gyro) {
                       : std::isfinite(f.sigma) ? fmt::format("{:.3g} ± {:.2g}", f.value, f.sigma)
                                                : fmt::format("{:.3g}", f.value));
     }
-    out += "</tr>\n";
+    out += td(noise_figure_estimator(chans.front()->figures[i].name)) + "</tr>\n";
   }
   return out + "</tbody></table>\n";
 }

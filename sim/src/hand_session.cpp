@@ -480,7 +480,7 @@ SimSession hand_new_session(const char* kind, const SessionImu& imu, std::uint64
 }  // namespace
 
 SimSession simulate_hand_session(const HandSessionOptions& o, std::uint64_t seed) {
-  if (o.poses < 1) throw std::invalid_argument("hand session: poses must be at least 1");
+  if (o.poses < 0) throw std::invalid_argument("hand session: poses must not be negative");
   hand_check_range(o.hold_min_s, o.hold_max_s, "hold duration");
   hand_check_range(o.turn_min_s, o.turn_max_s, "turn duration");
   if (!(o.initial_rest_s > 0.0)) {

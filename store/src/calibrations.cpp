@@ -1,6 +1,7 @@
 #include "store/calibrations.hpp"
 
 #include <SQLiteCpp/Statement.h>
+#include <SQLiteCpp/Transaction.h>
 
 #include "core/error.hpp"
 #include "sql_util.hpp"
@@ -27,9 +28,13 @@ constexpr const char* kSelect =
 }  // namespace
 
 std::int64_t insert_calibration(Database& db, std::int64_t run, const std::string& imu,
-                                const std::string& model, const nlohmann::json& record) {
+                                const std::string& model, const nlohmann::json& record,
+                                const nlohmann::json& step_residuals) {
   RunStore(db).load_steps(run);  // InputError for an unknown run
   return detail::guarded("insert calibration", [&] {
+    // The record and its residuals together or not at all: a certificate must not find one
+    // without the other after a crash between them.
+    SQLite::Transaction tx(db.sql(), SQLite::TransactionBehavior::IMMEDIATE);
     SQLite::Statement st(db.sql(),
                          "INSERT INTO calibrations (run_id, imu, model, record, created_utc, "
                          "serial) VALUES (?, ?, ?, ?, ?, ?)");
@@ -41,7 +46,26 @@ std::int64_t insert_calibration(Database& db, std::int64_t run, const std::strin
     const nlohmann::json* device = record.contains("device") ? &record["device"] : nullptr;
     st.bind(6, device && device->is_object() ? device->value("serial", "") : std::string());
     st.exec();
-    return db.sql().getLastInsertRowid();
+    const std::int64_t id = db.sql().getLastInsertRowid();
+    if (!step_residuals.is_null()) {
+      SQLite::Statement residuals(
+          db.sql(), "INSERT INTO calibration_residuals (calibration_id, steps) VALUES (?, ?)");
+      residuals.bind(1, id);
+      residuals.bind(2, step_residuals.dump());
+      residuals.exec();
+    }
+    tx.commit();
+    return id;
+  });
+}
+
+std::optional<nlohmann::json> load_calibration_residuals(Database& db, std::int64_t id) {
+  return detail::guarded("read calibration residuals", [&]() -> std::optional<nlohmann::json> {
+    SQLite::Statement q(db.sql(),
+                        "SELECT steps FROM calibration_residuals WHERE calibration_id = ?");
+    q.bind(1, id);
+    if (!q.executeStep()) return std::nullopt;
+    return nlohmann::json::parse(q.getColumn(0).getString());
   });
 }
 

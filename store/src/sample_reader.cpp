@@ -2,6 +2,7 @@
 
 #include <SQLiteCpp/Statement.h>
 
+#include <atomic>
 #include <limits>
 
 #include "core/error.hpp"
@@ -10,6 +11,13 @@
 namespace calstand::store {
 
 using detail::guarded;
+
+namespace {
+// Relaxed: a tally for tests and benchmarks, ordered with nothing else.
+std::atomic<std::uint64_t> decoded_samples{0};
+}  // namespace
+
+std::uint64_t samples_decoded() { return decoded_samples.load(std::memory_order_relaxed); }
 
 std::optional<int> data_attempt(Database& db, std::int64_t run, std::size_t index) {
   struct Row {
@@ -70,6 +78,7 @@ void for_each_chunk(
       samples.clear();
       decode_chunk(std::span<const std::uint8_t>(bytes, static_cast<std::size_t>(data.getBytes())),
                    samples);
+      decoded_samples.fetch_add(samples.size(), std::memory_order_relaxed);
       fn(info, samples);
     }
   });

@@ -52,6 +52,9 @@ Rendered render(const std::string& procedure, const std::vector<std::string>& ov
   analysis::ReportRequest request;
   request.db = r.db_path;
   request.run = r.run;
+  // The composite noise models of a static run (GMWM, seconds a channel) are the static report
+  // tests' (report_data_test.cpp, static_report_cli_test.cpp); not needed for these figures.
+  request.noise_model = false;
   r.data = analysis::gather_report(db, request);
   r.html = analysis::render_report_html(r.data);
   return r;

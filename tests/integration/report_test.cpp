@@ -103,8 +103,8 @@ class ReportCli : public ::testing::Test {
       ASSERT_EQ(r.exit_code, 0) << r.out;
     }
     report_ = run("report --db " + db_ + " --run 1 --out " + dir_ + "run1.html");
-    static_report_ =
-        run("report --db " + db_ + " --run 2 --model gyro_bias --out " + dir_ + "run2.html");
+    static_report_ = run("report --db " + db_ +
+                         " --run 2 --model gyro_bias --no-noise-model --out " + dir_ + "run2.html");
   }
   static void TearDownTestSuite() { std::filesystem::remove_all(dir_); }
 
@@ -202,6 +202,10 @@ TEST_F(ReportCli, StaticRunShowsTheAllanDeviationWithItsNoiseLines) {
   EXPECT_EQ(count(allan, "<svg"), 2u) << "gyro and accelerometer";
   EXPECT_NE(allan.find("N random walk"), std::string::npos) << "the fitted white-noise line";
   EXPECT_NE(allan.find("angle random walk"), std::string::npos) << "the datasheet figures";
+  // A static run without an error model: what the record is long enough for, as the page of a
+  // record at rest has it; the composite models were left out (--no-noise-model).
+  EXPECT_NE(html.find("<section id=\"record-length\">"), std::string::npos);
+  EXPECT_NE(html.find("not asked for (--no-noise-model)"), std::string::npos);
   // The six-position run is not static: its page says why there is no Allan deviation.
   EXPECT_NE(read_text(dir_ + "run1.html").find("not a static run"), std::string::npos);
 }

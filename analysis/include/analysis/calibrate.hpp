@@ -44,8 +44,8 @@ CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const so
 std::vector<std::string> units_to_calibrate(store::Database& db, std::int64_t run,
                                             const std::string& device);
 
-/// Stores the record in the database's calibrations (with the model text of whichever fit);
-/// returns its id.
+/// Stores the record in the database's calibrations (with the model text of whichever fit) and,
+/// for a table fit, its step residuals (step_residuals.hpp) for the certificate; returns its id.
 std::int64_t store_calibration(store::Database& db, const CalibrationOutcome& calibration);
 
 /// The record file `calstand calibrate` writes when not told: calibration-run<ID>-<device>.json.

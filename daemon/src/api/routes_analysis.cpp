@@ -234,6 +234,7 @@ void register_analysis_routes(httplib::Server& server, const RouteContext& ctx) 
                }
                request.device = text_param(req, "device", "");
                request.sensor = text_param(req, "sensor", "both");
+               request.noise_model = text_param(req, "noise_model", "true") != "false";
                analysis::parse_sensor_rows(request.sensor, "?sensor");
                store::Database db(ctx.db_path);
                std::string page;

@@ -17,6 +17,7 @@
 #include "datasheet/repeatability.hpp"
 #include "datasheet/stability.hpp"
 #include "datasheet/warmup.hpp"
+#include "noise/run_noise.hpp"
 #include "store/database.hpp"
 #include "store/records.hpp"
 
@@ -64,6 +65,11 @@ std::vector<DatasheetApplicability> datasheet_applicability(
 struct DatasheetOptions {
   double warmup_band_deg_per_h = 1.0;  ///< a gyro bias this close to its settled value is settled
   double warmup_band_ug = 50.0;        ///< ... an accelerometer bias
+  /// The noise analysis of the stability capture when the caller has made it already, at the
+  /// default (octave) averaging times (stability_of()): the report reads a long capture once
+  /// for its Allan plot and the stability figures. Used when it is of the capture the
+  /// applicability names, else the analysis reads the capture. Not owned; must outlive the call.
+  const solver::RunNoise* stability_noise = nullptr;
 };
 
 /// The analyses that apply to a run and what each gave.

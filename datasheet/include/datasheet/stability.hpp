@@ -11,6 +11,7 @@
 #include <string>
 
 #include "noise/bias_model.hpp"
+#include "noise/run_noise.hpp"
 #include "store/database.hpp"
 
 namespace calstand::analysis {
@@ -66,6 +67,16 @@ struct StabilityAnalysis {
 /// correlation time need a long record).
 StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
                                     const std::string& device, std::optional<std::size_t> step);
+
+/// The stability from a noise analysis already made, for a caller that holds the samples: the
+/// report reads a long capture once for its Allan plot and its stability figures. The floor's
+/// rules (the minimum among points of 10 edf or more, a later point wholly above it) are made
+/// for octave averaging times (solver::RunNoiseOptions' default, as analyse_stability() reads
+/// the capture): a denser curve finds floors that are not there. `min_tau_samples` as
+/// solver::RunNoiseOptions (the bias model fit leaves out the shorter averaging times). Throws
+/// core::InputError naming the run and step when the record is shorter than kMinNoiseRecordS.
+StabilityAnalysis stability_of(const solver::RunNoise& noise,
+                               double min_tau_samples = solver::RunNoiseOptions{}.min_tau_samples);
 
 /// `{"run", "device", "step", "step_label", "duration_s", "confidence",
 ///   "gyro": {"bias_instability_deg_per_h": [x,y,z], "bias_instability_interval_deg_per_h":

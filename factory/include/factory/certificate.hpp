@@ -46,9 +46,14 @@ struct CertificateData {
   std::string run_started_utc;
   std::string run_ended_utc;
   std::optional<store::AcceptanceRow> acceptance;  ///< the latest judgement; none: not judged
-  /// The record's fit again (the same model on the same data), for the residual plot; none for
-  /// a calibration without a table.
-  std::optional<solver::FitResult> fit;
+  /// The step residuals of the fit that made the record, for the residual plot: as stored with
+  /// it (analysis/step_residuals.hpp); for a record stored without them (made before schema
+  /// version 7), the record's model fitted again to the run. None for a calibration without a
+  /// table.
+  std::optional<std::vector<solver::StepResidual>> residuals;
+  /// The residuals came from a refit, not from the record: for the tests and logs, never shown
+  /// on the certificate (the customer's page is the same either way).
+  bool residuals_refitted = false;
 };
 
 /// The newest calibration of `device` fitted on `run`. Throws core::InputError naming the run
@@ -63,7 +68,7 @@ CertificateData certificate_data(store::Database& db, std::int64_t calibration);
 /// Residual z-scores of the record's fit per step (gyro and accelerometer panels, +-2 band) as
 /// inline SVG, sized for the certificate's page. Throws core::InputError naming gnuplot when it
 /// is missing or fails.
-std::string certificate_residual_plot(const solver::FitResult& fit);
+std::string certificate_residual_plot(const std::vector<solver::StepResidual>& steps);
 
 /// The certificate as a self-contained HTML page (A4, printable on one page).
 std::string certificate_html(const CertificateData& data);

@@ -91,6 +91,24 @@ struct RunNoise {
 std::size_t choose_noise_step(store::Database& db, std::int64_t run,
                               std::optional<std::size_t> step);
 
+/// True when every completed step of `run` with samples lies at rest by the rule
+/// choose_noise_step() applies to a step recorded without a table (its gyros scatter by at most
+/// 1 deg/s): a static recording, such as an imported bag at rest. Reads the step means only, no
+/// sample. False for a run without completed steps with samples.
+bool run_is_at_rest(store::Database& db, std::int64_t run);
+
+/// The IMU whose samples a noise analysis of `run` reads: `device` when given, else the first
+/// with samples (sorted). Throws core::InputError when the run holds no samples.
+std::string noise_device(store::Database& db, std::int64_t run, const std::string& device);
+
+/// The noise analysis of `samples` (one record at rest of one IMU, in time order) as
+/// analyse_run_noise() makes it of a step, for a caller that holds the samples already (the
+/// report reads a run once); run, device, step and step_label are the caller's to set. Throws
+/// core::InputError for fewer than 2 samples, a device clock that does not advance, too few
+/// samples for a curve, or invalid options.
+RunNoise analyse_noise_samples(std::span<const core::ImuSample> samples,
+                               const RunNoiseOptions& options = {});
+
 /// Reads the samples of the chosen step (the store's data attempt) and computes, per channel,
 /// the Allan deviation curve with its intervals and the fitted noise terms. Throws
 /// core::InputError when the run, step or device does not exist, the step holds no samples of

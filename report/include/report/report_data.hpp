@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -18,6 +19,8 @@
 
 namespace calstand::analysis {
 
+struct StaticRecordNoise;  // static_report.hpp
+
 /// The request, as the command line gives it.
 struct ReportRequest {
   std::string db;  ///< the database's name as the page shows it (a file name)
@@ -26,6 +29,9 @@ struct ReportRequest {
   std::vector<std::string> customs;
   std::string device;  ///< "" = the run's only IMU
   std::string sensor = "both";
+  /// The page of a record at rest identifies each channel's composite noise model (GMWM:
+  /// seconds a channel on a 12 min record at 100 Hz, minutes on hours at 400 Hz); false skips it.
+  bool noise_model = true;
 };
 
 /// One condition kind of the steps, used to colour them in the plots.
@@ -64,8 +70,12 @@ struct ReportData {
   solver::Diagnosis diagnosis;
   std::vector<solver::StepSummary> steps;  ///< summaries of the diagnosed model, in fit order
   StepGrouping grouping;
-  double longest_static_s = 0.0;              ///< longest static step [s]
-  std::optional<solver::RunNoise> noise;      ///< Allan curves and noise fit, static runs only
+  double longest_static_s = 0.0;          ///< longest static step [s]
+  std::optional<solver::RunNoise> noise;  ///< Allan curves and noise fit, static runs only
+  /// For a static run without an error model (a static-allan run): the record-length advice and
+  /// the composite noise models of the same record, as the page of a record at rest has them
+  /// (static_report.hpp); `noise` is its noise.
+  std::shared_ptr<const StaticRecordNoise> static_record;
   std::string noise_note;                     ///< why there is no Allan section, or ""
   DatasheetAnalyses datasheet;                ///< the datasheet analyses that apply, and why not
   std::optional<WarmupSeries> warmup_series;  ///< with datasheet.warmup

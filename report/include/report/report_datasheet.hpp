@@ -31,4 +31,8 @@ std::string datasheet_overview_section(const DatasheetAnalyses& a);
 /// with gnuplot: throws core::InputError naming gnuplot when it is missing or fails.
 std::string datasheet_sections(const ReportData& r);
 
+/// Section "datasheet-stability" alone: the Allan floor and the bias model of each channel
+/// (also on the page of a static record).
+std::string stability_section(const StabilityAnalysis& s);
+
 }  // namespace calstand::analysis

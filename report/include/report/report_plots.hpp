@@ -28,5 +28,7 @@ std::string candidate_plot(const ReportData& r);
 /// Allan deviation of the gyro (or accelerometer) channels with their confidence intervals, the
 /// fitted IEEE 952 model and its terms. Requires r.noise.
 std::string allan_plot(const ReportData& r, bool gyro);
+/// The same of a noise analysis held apart from a ReportData (the page of a static record).
+std::string allan_plot(const solver::RunNoise& noise, bool gyro);
 
 }  // namespace calstand::analysis

@@ -152,7 +152,7 @@ struct SessionImu {
 
 struct HandSessionOptions {
   SessionImu imu;
-  int poses = 30;                ///< static poses after the initial rest
+  int poses = 30;                ///< static poses after the initial rest (0: a record at rest)
   double initial_rest_s = 50.0;  ///< at rest before the first turn
   double hold_min_s = 3.0;
   double hold_max_s = 10.0;
@@ -173,8 +173,9 @@ struct HandSessionOptions {
 /// A hand-held session: initial rest, then `poses` poses whose gravity directions are spread
 /// over the sphere (a Fibonacci lattice under a random rotation, visited in a random order with
 /// at least `min_pose_separation_deg` between consecutive ones, random heading), each held for
-/// a random time, joined by hand-like turns. Throws std::invalid_argument on unusable options
-/// (poses < 1, a negative or inverted duration range, an unknown spec).
+/// a random time, joined by hand-like turns; with no poses, the initial rest alone (a static
+/// record, as a noise test records). Throws std::invalid_argument on unusable options (poses
+/// < 0, a negative or inverted duration range, an unknown spec).
 SimSession simulate_hand_session(const HandSessionOptions& options, std::uint64_t seed);
 
 struct FerrarisSessionOptions {

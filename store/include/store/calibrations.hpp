@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,15 @@ struct CalibrationRow {
 /// Stores a calibration record (schemas/calibration.schema.json) of `imu` fitted on `run`;
 /// returns its id. The unit's serial is the record's `device.serial`. Throws core::InputError
 /// for an unknown run, StoreError on SQL failure.
+/// `step_residuals`, when not null, are stored with it in the same transaction (table
+/// calibration_residuals: what the record's certificate draws, so that it need not refit).
 std::int64_t insert_calibration(Database& db, std::int64_t run, const std::string& imu,
-                                const std::string& model, const nlohmann::json& record);
+                                const std::string& model, const nlohmann::json& record,
+                                const nlohmann::json& step_residuals = nullptr);
+
+/// The step residuals stored with calibration `id`; none for a record stored without them (made
+/// before schema version 7, or without a table). Throws StoreError on SQL failure.
+std::optional<nlohmann::json> load_calibration_residuals(Database& db, std::int64_t id);
 
 /// The calibration `id`; throws core::InputError when there is none.
 CalibrationRow load_calibration(Database& db, std::int64_t id);

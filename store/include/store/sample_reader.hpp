@@ -38,6 +38,11 @@ void for_each_chunk(
     Database& db, std::int64_t run, std::size_t index, const std::string& device,
     const std::function<void(const ChunkInfo&, std::span<const core::ImuSample>)>& fn);
 
+/// Samples decoded from sample chunks by this process so far (every database and thread): how
+/// often captures are read, for the tests and benchmarks that check an analysis reads a long
+/// capture once. Only ever grows.
+std::uint64_t samples_decoded();
+
 /// Every sample of `device` in step `index` of `run`, in the order written (empty when none).
 std::vector<core::ImuSample> read_samples(Database& db, std::int64_t run, std::size_t index,
                                           const std::string& device);

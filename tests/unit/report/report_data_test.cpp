@@ -1,6 +1,6 @@
 // Gathering `calstand report` as a library call: the fit is recorded, the history labelled,
-// the steps grouped, the noise section skipped for a run without a long static record; and the
-// page itself when gnuplot is installed.
+// the steps grouped, the noise section skipped for a run without a long static record, a long
+// static capture read once; and the page itself when gnuplot is installed.
 #include "report/report_data.hpp"
 
 #include <fmt/format.h>
@@ -10,7 +10,9 @@
 #include "analysis/noise_json.hpp"
 #include "render/gnuplot_svg.hpp"
 #include "report/report_html.hpp"
+#include "report/static_report.hpp"
 #include "store/fit_history.hpp"
+#include "store/sample_reader.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -94,6 +96,47 @@ TEST_F(ReportDataTest, ThePageIsOneHtmlDocumentWithInlinePlots) {
   EXPECT_NE(page.find("<svg"), std::string::npos);
   EXPECT_NE(page.find("Run " + std::to_string(run_)), std::string::npos);
   EXPECT_EQ(page.find("<script"), std::string::npos);
+}
+
+// Issue 31's debt: the report analysed a long static capture three times (the fit's read of
+// the run, the Allan section, the stability figures). Now the fit's read serves all three: the
+// samples decoded while gathering are the run's samples, once each. The stability figures are
+// those `calstand analyze stability` reads on its own.
+TEST(ReportDataStatic, ALongStaticCaptureIsReadOnceForItsAllanPlotAndItsStability) {
+  testing::TempDatabase file("report-static");
+  const std::int64_t run = testing::record_run(file.path(), "static-allan",
+                                               {"duration_s=600", "soak_s=1", "warmup_s=1"}, 5);
+  store::Database db(file.path());
+  std::int64_t samples = 0;
+  for (const auto& m : store::read_step_means(db, run)) samples += m.count;
+  ReportRequest request;
+  request.db = "test.db";
+  request.run = run;
+  request.noise_model = false;  // GMWM costs seconds a channel; static_report_cli_test has it
+  const std::uint64_t before = store::samples_decoded();
+  const ReportData r = gather_report(db, request);
+  const std::uint64_t decoded = store::samples_decoded() - before;
+  ASSERT_TRUE(r.noise.has_value()) << r.noise_note;
+  ASSERT_TRUE(r.datasheet.stability.has_value())
+      << r.datasheet.failure_of(DatasheetKind::kStability);
+  EXPECT_GT(r.noise->samples, 100000u) << "a long capture";
+  EXPECT_EQ(decoded, static_cast<std::uint64_t>(samples))
+      << "the run holds " << samples << " samples; " << r.noise->samples << " in its capture";
+  // No error model on a static-allan run: its page has the record-length advice of the page of
+  // a record at rest, from the same analysis.
+  EXPECT_FALSE(r.fitted());
+  ASSERT_NE(r.static_record, nullptr);
+  EXPECT_EQ(r.static_record->noise.samples, r.noise->samples);
+  EXPECT_EQ(r.static_record->record_needs.size(), 6u);
+
+  const StabilityAnalysis alone = analyse_stability(db, run, "", std::nullopt);
+  const StabilityAnalysis& shared = *r.datasheet.stability;
+  EXPECT_EQ(shared.step, alone.step);
+  for (std::size_t c = 0; c < 6; ++c) {
+    EXPECT_EQ(shared.channels[c].bias_instability, alone.channels[c].bias_instability) << c;
+    EXPECT_EQ(shared.channels[c].min_tau_s, alone.channels[c].min_tau_s) << c;
+    EXPECT_EQ(shared.channels[c].bias_model, alone.channels[c].bias_model) << c;
+  }
 }
 
 TEST(HistoryLabels, SayWhatEachFitAddedOrRemoved) {

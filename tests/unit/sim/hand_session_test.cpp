@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -176,9 +177,27 @@ TEST(HandSession, FerrarisSessionAndItsFolder) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(HandSession, RefusesUnusableOptions) {
+// No poses: the initial rest alone, a record at rest (`calstand sim-session --kind static`).
+TEST(HandSession, NoPosesIsTheInitialRestAlone) {
   HandSessionOptions o;
   o.poses = 0;
+  o.initial_rest_s = 60.0;
+  o.imu.spec = "adis16488";
+  o.imu.sample_rate_hz = 100.0;
+  const SimSession s = simulate_hand_session(o, 3);
+  EXPECT_EQ(s.holds.size(), 1U);
+  EXPECT_TRUE(s.turns.empty());
+  ASSERT_GT(s.samples.size(), 5000U);
+  EXPECT_NEAR(s.samples.back().receive_time_s - s.samples.front().receive_time_s, 60.0, 0.1);
+  // At rest throughout: the gyros read the Earth rate and their errors, never a turn.
+  double max_rate_dps = 0.0;
+  for (const auto& x : s.samples) max_rate_dps = std::max(max_rate_dps, x.gyro_dps.norm());
+  EXPECT_LT(max_rate_dps, 1.0);
+}
+
+TEST(HandSession, RefusesUnusableOptions) {
+  HandSessionOptions o;
+  o.poses = -1;
   EXPECT_THROW(simulate_hand_session(o, 1), std::invalid_argument);
   o.poses = 5;
   o.hold_min_s = 5.0;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../../support/older_database.hpp"
+#include "store/calibrations.hpp"
 #include "store/database.hpp"
 #include "store/error.hpp"
 #include "temp_dir.hpp"
@@ -59,6 +60,41 @@ TEST(Upgrade, AnOlderDatabaseIsBackedUpBesideItThenMigrated) {
   EXPECT_EQ(stations_named_older(path), 1);
   SQLite::Database backup(up.backup, SQLite::OPEN_READONLY);
   EXPECT_EQ(backup.execAndGet("PRAGMA integrity_check").getString(), "ok");
+}
+
+// Schema version 7 keeps a calibration's step residuals beside it for its certificate: a
+// version-6 database with a record upgrades, its record is kept without residuals (its
+// certificate refits, factory/certificate_data.cpp), and new records store theirs.
+TEST(Upgrade, ARecordOfVersion6IsKeptWithoutResidualsAndNewRecordsStoreThem) {
+  TempDir dir;
+  const std::string path = dir.file("station.db");
+  calstand::testing::make_database_at_version(path, kSchema, 6);
+  {
+    SQLite::Database old(path, SQLite::OPEN_READWRITE);
+    old.exec(
+        "INSERT INTO runs (id, procedure_name, procedure_text, procedure_sha256, parameters, "
+        "station_snapshot, status, created_utc) VALUES (1, 'six-position', '{}', '', '{}', '{}', "
+        "'completed', 'then')");
+    old.exec(
+        "INSERT INTO calibrations (id, run_id, imu, model, record, created_utc, serial) VALUES "
+        "(1, 1, 'imu0', 'gyro_bias', '{\"method\": \"table\"}', 'then', 'SN1')");
+  }
+  const Upgrade up = upgrade_database(path);
+  EXPECT_EQ(up.from_version, 6);
+  EXPECT_EQ(up.to_version, latest_schema_version());
+  Database db(path);
+  EXPECT_EQ(load_calibration(db, 1).serial, "SN1");
+  EXPECT_FALSE(load_calibration_residuals(db, 1).has_value());
+  const nlohmann::json residuals = {{"format", "calstand-step-residuals/1"},
+                                    {"steps", nlohmann::json::array()}};
+  const std::int64_t id =
+      insert_calibration(db, 1, "imu0", "gyro_bias", {{"method", "table"}}, residuals);
+  ASSERT_TRUE(load_calibration_residuals(db, id).has_value());
+  EXPECT_EQ(*load_calibration_residuals(db, id), residuals);
+  // Deleting a record takes its residuals with it.
+  db.sql().exec("DELETE FROM calibrations WHERE id = " + std::to_string(id));
+  EXPECT_FALSE(load_calibration_residuals(db, id).has_value());
+  EXPECT_EQ(db.sql().execAndGet("SELECT COUNT(*) FROM calibration_residuals").getInt(), 0);
 }
 
 TEST(Upgrade, ABackupNameTakenGetsANumber) {
