@@ -98,7 +98,6 @@ std::optional<solver::RunNoise> analyse_noise(
       std::optional<solver::NoiseIdOptions> noise_id;
       if (r.request.noise_model) {
         noise_id.emplace();
-        noise_id->bootstrap = kReportNoiseIdBootstrap;
       }
       auto record = std::make_shared<StaticRecordNoise>(analyse_static_record(
           held->samples, r.request.run, r.device, step, held->step.label, noise_id));

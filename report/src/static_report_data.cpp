@@ -126,7 +126,6 @@ StaticReportData gather_static_report(store::Database& db, const ReportRequest& 
   std::optional<solver::NoiseIdOptions> noise_id;
   if (request.noise_model) {
     noise_id.emplace();
-    noise_id->bootstrap = kReportNoiseIdBootstrap;
   }
   std::optional<std::size_t> step;
   std::string why_no_step;

@@ -132,8 +132,8 @@ std::string noise_model_section(const StaticRecordNoise& s) {
   }
   std::string out =
       "<section id=\"noise-model\"><h2>Composite noise model</h2>\n<p class=\"lead\">The terms "
-      "each channel's record supports, identified together (<code>calstand noise-id</code>: the "
-      "same model and values; its default 100 bootstrap records narrow the intervals' scatter): " +
+      "each channel's record supports, identified together (<code>calstand noise-id</code>, the "
+      "same model, values and intervals): " +
       html_escape(estimator.empty() ? std::string("-") : estimator) + "; selected by " +
       html_escape(selected_by.empty() ? std::string("-") : selected_by) +
       ".</p>\n<table><thead><tr><th>channel</th><th>term</th><th>parameter</th><th>value</th>"

@@ -44,12 +44,6 @@ struct StaticRecordNoise {
   std::vector<ChannelNoiseModel> models;  ///< gx .. az
 };
 
-/// Parametric-bootstrap records of the page's composite noise models: the fewest
-/// solver::identify_noise_model() takes. The model and its values are those of
-/// `calstand noise-id` (its default 100 records only narrow the intervals' scatter), at a fifth
-/// of the time: a 12 min record at 100 Hz takes some 2 s a channel instead of 4.
-inline constexpr std::size_t kReportNoiseIdBootstrap = 20;
-
 /// Analyses `samples` (one record at rest of one IMU, in time order): the noise as
 /// `calstand noise` gives it, the record-length advice, the stability (records of
 /// kMinNoiseRecordS or more) and, when `noise_id` is given, each channel's composite noise model
