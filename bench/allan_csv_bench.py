@@ -4,14 +4,16 @@
 averaging times, side by side in one run. Prints seconds, samples per second and peak resident
 memory of each, and calstand's time as a multiple of numpy's.
 
-    allan_csv_bench.py CALSTAND_BIN [--samples N] [--keep DIR] [--repeat R]
+    allan_csv_bench.py CALSTAND_BIN [--samples N] [--keep DIR] [--repeat R] [--baseline BIN]
 
 numpy: `numpy.loadtxt(usecols=column)`, the mean removed, the phase as the cumulative sum, and
 the overlapping Allan variance at m = 1, 2, 4, ... N/2 (NIST SP 1065 eq. 14) with vectorised
 second differences: the fastest plain numpy way. calstand: `calstand allan --csv FILE --column gx
 --rate 400 --json`, which also computes the degrees of freedom, the intervals and the noise fit.
 Each run is timed as a child process (its wall time, ru_maxrss and CPU time); the best of --repeat runs
-(default 3) is kept, since the machine is shared. Needs Debian's python3-numpy.
+(default 3) is kept, since the machine is shared. `--baseline BIN` times another calstand build
+(e.g. one from before a change) in the same rounds: before and after side by side in one run.
+Needs Debian's python3-numpy.
 """
 
 import os
@@ -68,6 +70,7 @@ def main():
     n = int(args[args.index("--samples") + 1]) if "--samples" in args else 5_400_000
     repeat = int(args[args.index("--repeat") + 1]) if "--repeat" in args else 3
     keep = args[args.index("--keep") + 1] if "--keep" in args else None
+    baseline = args[args.index("--baseline") + 1] if "--baseline" in args else None
     folder = keep or tempfile.mkdtemp(prefix="calstand-allan-bench-")
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, f"imu-{n}.csv")
@@ -78,6 +81,10 @@ def main():
     tools = [("numpy loadtxt + cumsum ADEV", ["/usr/bin/python3", "-c", NUMPY_ALLAN, path, "400"]),
              ("calstand allan --csv", [calstand, "allan", "--csv", path, "--column", "gx",
                                        "--rate", "400", "--json"])]
+    if baseline:
+        tools.append(("calstand allan --csv (baseline)",
+                      [baseline, "allan", "--csv", path, "--column", "gx", "--rate", "400",
+                       "--json"]))
     best = {}
     for _ in range(repeat):
         for name, cmd in tools:  # interleaved, so that both see the same load
@@ -90,6 +97,10 @@ def main():
     numpy, ours = best["numpy loadtxt + cumsum ADEV"], best["calstand allan --csv"]
     print(f"calstand allan --csv: {ours[0] / numpy[0]:.3f} x numpy's time "
           f"({ours[2] / numpy[2]:.3f} x its CPU time)")
+    if baseline:
+        base = best["calstand allan --csv (baseline)"]
+        print(f"baseline:             {base[0] / numpy[0]:.3f} x numpy's time "
+              f"({base[2] / numpy[2]:.3f} x its CPU time)")
     if keep is None:
         shutil.rmtree(folder)
 

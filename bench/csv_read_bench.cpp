@@ -146,6 +146,22 @@ void BM_CsvReaderOneColumn(benchmark::State& state) {
   count(state, rows);
 }
 
+// CsvReader::remaining_numbers, what `calstand allan --csv` calls: one column, the rest of the
+// file on state.range(0) threads (1: one field per row on the calling thread; 2: two byte
+// ranges). Real time is the figure: the threads' CPU time is not in Google Benchmark's CPU time.
+void BM_CsvReaderRemainingNumbers(benchmark::State& state) {
+  const auto& path = bench_file();
+  std::size_t rows = 0;
+  for (auto _ : state) {
+    CsvReader csv(path);
+    const std::vector<double> values =
+        csv.remaining_numbers(1, static_cast<unsigned>(state.range(0)));
+    rows = values.size();
+    benchmark::DoNotOptimize(values.data());
+  }
+  count(state, rows);
+}
+
 // The fields of the first 500,000 rows, in memory, for the number parsers alone.
 struct Fields {
   std::string text;
@@ -189,6 +205,11 @@ void BM_ParseNumbersFromChars(benchmark::State& state) {
 BENCHMARK(BM_CsvBaselineGetlineStringstream)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CsvReader)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_CsvReaderOneColumn)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CsvReaderRemainingNumbers)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_ParseNumbersFromChars)->Unit(benchmark::kMillisecond);
 
 #ifdef CALSTAND_HAVE_FAST_FLOAT

@@ -312,3 +312,11 @@ BEGIN
   END LOOP;
 END
 $$;
+
+-- migration 3: sample chunks stored as they are, without compression
+-- A chunk's samples are float32 noise (store/sample_codec.hpp), which does not compress: on a
+-- 4 h station PostgreSQL's default compression (pglz) gave up on every chunk (0 % saved; lz4
+-- would save 3 %), and trying took the server about 8 ms per 144 kB chunk, most of a sync's
+-- time (docs/fleet.md, "Speed"). EXTERNAL keeps the chunks out of line in the TOAST table, as
+-- before, without the attempt. Chunks stored before keep their form; reads are unchanged.
+ALTER TABLE sample_chunks ALTER COLUMN data SET STORAGE EXTERNAL;

@@ -39,8 +39,9 @@ if [ "${1:-}" = "import" ]; then
   rm -rf "$tmp"
   exit 0
 fi
-# `run-bench.sh allan-csv [--samples N] [--keep DIR] [--repeat R]`: calstand allan --csv on
-# 5.4 M rows (default) against numpy.loadtxt plus its Allan deviation (bench/allan_csv_bench.py).
+# `run-bench.sh allan-csv [--samples N] [--keep DIR] [--repeat R] [--baseline BIN]`: calstand
+# allan --csv on 5.4 M rows (default) against numpy.loadtxt plus its Allan deviation
+# (bench/allan_csv_bench.py); --baseline times another calstand build in the same rounds.
 if [ "${1:-}" = "allan-csv" ]; then
   shift
   exec /usr/bin/python3 "$root/bench/allan_csv_bench.py" \

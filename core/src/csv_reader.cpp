@@ -3,13 +3,19 @@
 #include <fast_float/fast_float.h>
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <exception>
+#include <memory>
 #include <set>
+#include <thread>
 
 #include "core/error.hpp"
 
@@ -76,11 +82,57 @@ void CsvReader::require_unique_columns() const {
   }
 }
 
-std::string CsvReader::where() const { return fmt::format("{}:{}", file_, line_); }
+CsvReader::CsvReader(const CsvReader& whole, std::uint64_t from, std::uint64_t to)
+    : file_(whole.file_),
+      options_(whole.options_),
+      header_(whole.header_),
+      columns_(whole.columns_) {
+  fd_ = ::open(file_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) throw InputError(file_, "cannot open the file");
+  buffer_.resize(options_.block_bytes);
+  // Start one byte early and drop through the first line end: the line that starts at `from`
+  // is this reader's when the byte before it ends a line, else it is the previous reader's.
+  start_ = from - 1;
+  if (::lseek(fd_, static_cast<off_t>(start_), SEEK_SET) < 0) {
+    throw InputError(file_, fmt::format("cannot read the file: {}", std::strerror(errno)));
+  }
+  std::string_view partial;
+  read_line(partial);
+  line_ = 0;
+  first_line_at_ = position();
+  stop_ = to;
+}
+
+std::size_t CsvReader::lines_before() const {
+  if (first_line_at_ == 0) return 0;
+  if (!lines_before_) {
+    // The line ends before this reader's first line (which starts just after one).
+    std::vector<char> block(std::size_t{1} << 20);
+    std::size_t lines = 0;
+    for (std::uint64_t at = 0; at < first_line_at_;) {
+      const auto want =
+          static_cast<std::size_t>(std::min<std::uint64_t>(block.size(), first_line_at_ - at));
+      const ssize_t got = ::pread(fd_, block.data(), want, static_cast<off_t>(at));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) break;  // the file shrank under us: count what is there
+      lines += static_cast<std::size_t>(std::count(block.data(), block.data() + got, '\n'));
+      at += static_cast<std::uint64_t>(got);
+    }
+    lines_before_ = lines;
+  }
+  return *lines_before_;
+}
+
+std::string CsvReader::where_at(std::size_t line) const {
+  return fmt::format("{}:{}", file_, lines_before() + line);
+}
+
+std::string CsvReader::where() const { return where_at(line_); }
 
 // The next line without its line end (LF or CR LF), or false at the end of the file. The view
 // points into buffer_ and lives until the next call.
 bool CsvReader::read_line(std::string_view& line) {
+  if (position() >= stop_) return false;
   for (;;) {
     const char* start = buffer_.data() + begin_;
     const auto* nl = static_cast<const char*>(std::memchr(start, '\n', end_ - begin_));
@@ -116,6 +168,14 @@ bool CsvReader::read_line(std::string_view& line) {
 
 // A field is trimmed only when it starts or ends with a blank (what most writers never write),
 // so that a row costs little more than finding its commas (memchr: a byte loop is slower).
+std::string_view CsvReader::clean(std::string_view f) const {
+  if (!f.empty() && (blank(f.front()) || blank(f.back()))) f = trim(f);
+  if (options_.unquote && f.size() >= 2 && f.front() == '"' && f.back() == '"') {
+    f = trim(f.substr(1, f.size() - 2));
+  }
+  return f;
+}
+
 void CsvReader::split(std::string_view line) {
   fields_.clear();
   const char* p = line.data();
@@ -125,40 +185,88 @@ void CsvReader::split(std::string_view line) {
     const auto* comma =
         static_cast<const char*>(std::memchr(p, ',', static_cast<std::size_t>(end - p)));
     p = comma != nullptr ? comma : end;
-    std::string_view f(start, static_cast<std::size_t>(p - start));
-    if (!f.empty() && (blank(f.front()) || blank(f.back()))) f = trim(f);
-    if (options_.unquote && f.size() >= 2 && f.front() == '"' && f.back() == '"') {
-      f = trim(f.substr(1, f.size() - 2));
-    }
-    fields_.push_back(f);
+    fields_.push_back(clean(std::string_view(start, static_cast<std::size_t>(p - start))));
     if (p == end) break;
     ++p;
   }
 }
 
-bool CsvReader::next() {
-  std::string_view line;
+bool CsvReader::next_data_line(std::string_view& line) {
   while (read_line(line)) {
     if (line.empty() || (blank(line.front()) && trim(line).empty())) {
       if (!options_.blank_lines_anywhere && blank_line_ == 0) blank_line_ = line_;
       continue;
     }
-    if (blank_line_ != 0) {
-      throw InputError(fmt::format("{}:{}", file_, blank_line_), "empty line before more data");
-    }
-    split(line);
-    if (fields_.size() != columns_.size()) {
-      throw InputError(where(),
-                       fmt::format("expected {} columns, got {}", columns_.size(), fields_.size()));
-    }
+    saw_data_ = true;
+    if (blank_line_ != 0) throw InputError(where_at(blank_line_), "empty line before more data");
     return true;
   }
   return false;
 }
 
+bool CsvReader::next() {
+  std::string_view line;
+  if (!next_data_line(line)) return false;
+  split(line);
+  if (fields_.size() != columns_.size()) {
+    throw InputError(where(),
+                     fmt::format("expected {} columns, got {}", columns_.size(), fields_.size()));
+  }
+  return true;
+}
+
+bool CsvReader::next_number(std::size_t i, double& value) {
+  std::string_view line;
+  if (!next_data_line(line)) return false;
+  // Field i's bounds, then the commas after it: the field count without the other fields.
+  const char* p = line.data();
+  const char* const end = p + line.size();
+  std::size_t fields = 1;
+  for (; fields <= i; ++fields) {
+    const auto* comma =
+        static_cast<const char*>(std::memchr(p, ',', static_cast<std::size_t>(end - p)));
+    if (comma == nullptr) break;
+    p = comma + 1;
+  }
+  const char* field_end = end;
+  if (fields == i + 1) {
+    const auto* comma =
+        static_cast<const char*>(std::memchr(p, ',', static_cast<std::size_t>(end - p)));
+    if (comma != nullptr) field_end = comma;
+    // The rest of the commas eight bytes at a time (a byte loop or a memchr per comma costs
+    // more than the rest of the row): a byte of x is zero where the text has a comma, and t's
+    // top bit of a byte is clear exactly where that byte of x is zero.
+    const char* q = field_end;
+    constexpr std::uint64_t kOnes = 0x0101010101010101ULL;
+    constexpr std::uint64_t kLow7 = 0x7f7f7f7f7f7f7f7fULL;
+    for (; end - q >= 8; q += 8) {
+      std::uint64_t w = 0;
+      std::memcpy(&w, q, 8);
+      const std::uint64_t x = w ^ (kOnes * ',');
+      const std::uint64_t t = ((x & kLow7) + kLow7) | x;
+      // One bit per comma at the bottom of its byte, summed into the top byte by the multiply
+      // (std::popcount is a library call without -mpopcnt).
+      fields += static_cast<std::size_t>((((~t & ~kLow7) >> 7) * kOnes) >> 56);
+    }
+    for (; q < end; ++q) fields += *q == ',' ? 1 : 0;
+  }
+  if (fields != columns_.size()) {
+    throw InputError(where(), fmt::format("expected {} columns, got {}", columns_.size(), fields));
+  }
+  const std::string_view f = clean(std::string_view(p, static_cast<std::size_t>(field_end - p)));
+  const auto v = parse_csv_number(f);
+  if (!v) refuse_number(i, f);
+  value = *v;
+  return true;
+}
+
 double CsvReader::number(std::size_t i) const {
   const std::string_view t = fields_[i];
   if (const auto v = parse_csv_number(t)) return *v;
+  refuse_number(i, t);
+}
+
+void CsvReader::refuse_number(std::size_t i, std::string_view t) const {
   // Say why: a value that parses but is not finite (nan, inf) reads differently from junk and
   // from a value beyond a double's range (std::from_chars tells these apart; fast_float gives
   // an infinity for the last).
@@ -179,6 +287,90 @@ std::int64_t CsvReader::integer(std::size_t i) const {
                      fmt::format("column {}: '{}' is not an integer", columns_[i], fields_[i]));
   }
   return v;
+}
+
+std::vector<double> CsvReader::remaining_numbers(std::size_t i, unsigned threads) {
+  std::vector<double> values;
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) {
+    throw InputError(file_, fmt::format("cannot read the file: {}", std::strerror(errno)));
+  }
+  const std::uint64_t from = position();
+  const auto size = static_cast<std::uint64_t>(st.st_size);
+  const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
+  const unsigned parts = std::min(threads, cores);
+  if (parts < 2 || eof_ || size <= from || size - from < options_.parallel_min_bytes) {
+    double v = 0.0;
+    while (next_number(i, v)) values.push_back(v);
+    return values;
+  }
+  // Part k reads the lines that start in [bounds[k], bounds[k + 1]); part 0 is this reader.
+  std::vector<std::uint64_t> bounds;
+  for (unsigned k = 0; k <= parts; ++k) bounds.push_back(from + (size - from) * k / parts);
+  struct Part {
+    std::unique_ptr<CsvReader> reader;
+    std::vector<double> values;
+    std::exception_ptr error;
+  };
+  std::vector<Part> rest(parts - 1);
+  // Once part k has failed, parts after it need not finish: the first error in the file wins.
+  std::atomic<unsigned> first_failed{parts};
+  const auto read_part = [&](CsvReader& csv, std::vector<double>& out, unsigned k) {
+    double v = 0.0;
+    for (std::size_t row = 0; csv.next_number(i, v); ++row) {
+      out.push_back(v);
+      if (row % 4096 == 0 && first_failed.load(std::memory_order_relaxed) < k) return;
+    }
+  };
+  const auto failed = [&](unsigned k) {
+    unsigned seen = first_failed.load();
+    while (k < seen && !first_failed.compare_exchange_weak(seen, k)) {
+    }
+  };
+  std::vector<std::thread> workers;
+  for (unsigned k = 1; k < parts; ++k) {
+    workers.emplace_back([&, k] {
+      Part& p = rest[k - 1];
+      try {
+        p.reader.reset(new CsvReader(*this, bounds[k], bounds[k + 1]));
+        read_part(*p.reader, p.values, k);
+      } catch (...) {
+        p.error = std::current_exception();
+        failed(k);
+      }
+    });
+  }
+  std::exception_ptr error;
+  stop_ = bounds[1];
+  try {
+    read_part(*this, values, 0);
+  } catch (...) {
+    error = std::current_exception();
+    failed(0);
+  }
+  for (std::thread& w : workers) w.join();
+  stop_ = UINT64_MAX;
+  begin_ = end_;
+  eof_ = true;
+  if (error) std::rethrow_exception(error);
+  // A blank line that ends one part is an error once a later part has data (as next() finds
+  // when it reads on), and before any error of that part: it comes first in the file.
+  std::string blank;
+  if (!options_.blank_lines_anywhere && blank_line_ != 0) blank = where_at(blank_line_);
+  std::size_t total = values.size();
+  for (const Part& p : rest) total += p.values.size();
+  values.reserve(total);
+  for (Part& p : rest) {
+    if (!blank.empty() && p.reader && p.reader->saw_data_) {
+      throw InputError(blank, "empty line before more data");
+    }
+    if (p.error) std::rethrow_exception(p.error);
+    if (blank.empty() && !options_.blank_lines_anywhere && p.reader->blank_line_ != 0) {
+      blank = p.reader->where_at(p.reader->blank_line_);
+    }
+    values.insert(values.end(), p.values.begin(), p.values.end());
+  }
+  return values;
 }
 
 }  // namespace calstand::core

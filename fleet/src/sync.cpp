@@ -10,7 +10,10 @@
 #include <optional>
 #include <pqxx/pqxx>
 #include <set>
+#include <stdexcept>
+#include <string_view>
 
+#include "binary_copy.hpp"
 #include "core/error.hpp"
 #include "fleet/central_error.hpp"
 #include "fleet/central_schema.hpp"
@@ -19,101 +22,117 @@
 #include "store/stamp.hpp"
 #include "store/station_identity.hpp"
 
-namespace calstand::fleet::copy_text {
-
-/// One field of a COPY row in PostgreSQL's text format, or NULL (std::nullopt): what
-/// pqxx::stream_to writes for it (escaping tabs, newlines and backslashes itself).
-struct Field {
-  std::optional<std::string> text;
-};
-
-}  // namespace calstand::fleet::copy_text
-
-namespace pqxx {
-template <>
-struct string_traits<calstand::fleet::copy_text::Field> {
-  using Field = calstand::fleet::copy_text::Field;
-  static constexpr const char* name() noexcept { return "calstand COPY field"; }
-  static constexpr bool has_null() noexcept { return true; }
-  static bool is_null(const Field& f) { return !f.text.has_value(); }
-  static Field null() { return {}; }
-  static void from_string(const char* text, Field& f) { f.text = text; }
-  static std::string to_string(const Field& f) { return f.text.value_or(""); }
-};
-}  // namespace pqxx
-
 namespace calstand::fleet {
 namespace {
 
-using copy_text::Field;
+using detail::BinaryCopy;
+using detail::BinaryCopyRows;
+using detail::CopyType;
 
-/// A SQLite value as PostgreSQL reads it in COPY's text format: integers and reals exactly
-/// (the shortest text that reads back to the same double), blobs as bytea's hex form.
-Field field_of(const SQLite::Column& c) {
-  const int type = c.getType();
-  if (type == SQLite::Null) return {};
-  if (type == SQLite::INTEGER) return {std::to_string(c.getInt64())};
-  if (type == SQLite::FLOAT) return {fmt::format("{}", c.getDouble())};
-  if (type == SQLite::BLOB) {
-    static constexpr char kHex[] = "0123456789abcdef";
-    const auto* data = static_cast<const unsigned char*>(c.getBlob());
-    const auto bytes = static_cast<std::size_t>(c.getBytes());
-    std::string hex(2 + 2 * bytes, '\\');
-    hex[1] = 'x';
-    for (std::size_t i = 0; i < bytes; ++i) {
-      hex[2 + 2 * i] = kHex[data[i] >> 4];
-      hex[3 + 2 * i] = kHex[data[i] & 0x0f];
-    }
-    return {std::move(hex)};
-  }
-  return {c.getString()};
-}
+/// A central table's staging table (copy_rows): its name and the types of its columns.
+struct Staging {
+  std::string name;
+  std::map<std::string, CopyType> types;
+};
 
-/// Copies the rows of `q` into central `table` by COPY (one stream, not a round trip per row)
-/// into the session's staging table of it, then one INSERT ... SELECT from there that skips
-/// rows already central. PostgreSQL refuses COPY into a table under row-level security, and
-/// COPY has no ON CONFLICT: the staging table (temporary, so without either, emptied at
-/// commit or rollback) gives both. Each row is `fixed` (the same for every row, e.g. the
-/// station and the central run) then the query's columns, in the order of `columns` (N of
-/// them). `each(q)` is called per row before it is sent. Returns the rows read from `q`.
-template <std::size_t N, class Each>
-std::int64_t copy_rows(pqxx::transaction_base& tx, std::set<std::string>& staged,
-                       const std::string& table, const std::array<const char*, N>& columns,
-                       const std::vector<Field>& fixed, SQLite::Statement& q, Each each) {
-  const std::string staging = "calstand_staging_" + table;
-  if (staged.insert(table).second &&
-      tx.exec("SELECT to_regclass('pg_temp." + staging + "') IS NULL")[0][0].as<bool>()) {
+/// The session's staging table of central `table`, made when missing; `staged` keeps the ones
+/// this sync has made sure of. PostgreSQL refuses COPY into a table under row-level security,
+/// and COPY has no ON CONFLICT: the staging table (temporary, so without either, emptied at
+/// commit or rollback) gives both.
+const Staging& staging_of(pqxx::dbtransaction& tx, std::map<std::string, Staging>& staged,
+                          const std::string& table) {
+  if (const auto found = staged.find(table); found != staged.end()) return found->second;
+  Staging s;
+  s.name = "calstand_staging_" + table;
+  if (tx.exec("SELECT to_regclass('pg_temp." + s.name + "') IS NULL")[0][0].as<bool>()) {
     // The session's temporary tables live in its temp_buffers: room for a batch of sample
     // chunks (64 of ~150 kB) so that staging does not spill to disk. Settable only before the
     // session's first temporary table, which this is.
-    if (staged.size() == 1) tx.exec("SET temp_buffers = '32MB'");
-    tx.exec("CREATE TEMPORARY TABLE " + staging + " (LIKE " + table +
-            " INCLUDING DEFAULTS) ON COMMIT DELETE ROWS");
-    // Staged blobs are read once and dropped at commit: not worth compressing (the central
-    // table still compresses them as it stores them).
-    if (table == "sample_chunks") {
-      tx.exec("ALTER TABLE " + staging + " ALTER COLUMN data SET STORAGE EXTERNAL");
+    if (staged.empty()) tx.exec("SET temp_buffers = '32MB'");
+    // INCLUDING STORAGE: the sample chunks' EXTERNAL (central migration 3), so that staging
+    // does not try to compress them either.
+    tx.exec("CREATE TEMPORARY TABLE " + s.name + " (LIKE " + table +
+            " INCLUDING DEFAULTS INCLUDING STORAGE) ON COMMIT DELETE ROWS");
+  }
+  // The types binary COPY writes each column in, from the staging table itself (LIKE the
+  // central table), so that they cannot drift from central_schema.sql.
+  const pqxx::result columns = tx.exec(
+      "SELECT attname, format_type(atttypid, atttypmod) FROM pg_attribute WHERE attrelid = "
+      "'pg_temp." +
+      s.name + "'::regclass AND attnum > 0 AND NOT attisdropped");
+  for (const auto& row : columns) {
+    const auto name = row[0].as<std::string>();
+    s.types[name] = detail::copy_type_of(table + "." + name, row[1].as<std::string>());
+  }
+  return staged.emplace(table, std::move(s)).first->second;
+}
+
+/// Appends SQLite value `c` to `rows` as column `column` of type `type`.
+void put_value(BinaryCopyRows& rows, CopyType type, const char* column, const SQLite::Column& c) {
+  // SQLiteCpp's type codes are extern constants, not case labels.
+  const int t = c.getType();
+  if (t == SQLite::Null) {
+    rows.null();
+  } else if (t == SQLite::INTEGER) {
+    rows.integer(type, column, c.getInt64());
+  } else if (t == SQLite::FLOAT) {
+    rows.real(type, column, c.getDouble());
+  } else if (t == SQLite::BLOB) {
+    rows.bytes(type, column, c.getBlob(), static_cast<std::size_t>(c.getBytes()));
+  } else {
+    rows.text(type, column, std::string_view(c.getText(), static_cast<std::size_t>(c.getBytes())));
+  }
+}
+
+/// Copies the rows of `q` into central `table` by binary COPY (one stream, not a round trip
+/// per row; binary_copy.hpp says why binary) into the session's staging table of it, then one
+/// INSERT ... SELECT from there that skips rows already central, all in `tx`. Each row is
+/// `fixed` (the same for every row, e.g. the station and the central run, as PostgreSQL's text
+/// input reads them) then the query's columns, in the order of `columns` (N of them). `each(q)`
+/// is called per row before it is sent. Returns the rows read from `q`.
+template <std::size_t N, class Each>
+std::int64_t copy_rows(pqxx::dbtransaction& tx, std::map<std::string, Staging>& staged,
+                       const std::string& table, const std::array<const char*, N>& columns,
+                       const std::vector<std::string>& fixed, SQLite::Statement& q, Each each) {
+  // Rows are sent in pieces of about this many bytes: few calls into libpq, little memory.
+  constexpr std::size_t kSendBytes = std::size_t{1} << 20;
+  const Staging& staging = staging_of(tx, staged, table);
+  std::array<CopyType, N> types{};
+  for (std::size_t i = 0; i < N; ++i) {
+    const auto t = staging.types.find(columns[i]);
+    if (t == staging.types.end()) {
+      throw std::invalid_argument(fmt::format("{} has no column {}", table, columns[i]));
     }
+    types[i] = t->second;
   }
   std::int64_t rows = 0;
-  {
-    pqxx::stream_to copy(tx, staging, std::vector<std::string>(columns.begin(), columns.end()));
-    std::array<Field, N> row;
-    for (std::size_t i = 0; i < fixed.size(); ++i) row[i] = fixed[i];
+  try {
+    BinaryCopyRows prefix;  // the fixed fields, encoded once
+    for (std::size_t i = 0; i < fixed.size(); ++i) prefix.text(types[i], columns[i], fixed[i]);
+    BinaryCopy copy(tx, staging.name, std::vector<std::string>(columns.begin(), columns.end()));
+    BinaryCopyRows out;
     while (q.executeStep()) {
       each(q);
+      out.begin_row(N);
+      out.append(prefix);
       for (std::size_t i = fixed.size(); i < N; ++i) {
-        row[i] = field_of(q.getColumn(static_cast<int>(i - fixed.size())));
+        put_value(out, types[i], columns[i], q.getColumn(static_cast<int>(i - fixed.size())));
       }
-      copy << row;
       ++rows;
+      if (out.data().size() >= kSendBytes) {
+        copy.write(out.data());
+        out.clear();
+      }
     }
-    copy.complete();
+    copy.write(out.data());
+    copy.finish();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format("{} row {}: {}", table, rows + 1, e.what()));
   }
   if (rows > 0) {
     std::string list;
     for (const char* c : columns) list += (list.empty() ? "" : ", ") + std::string(c);
-    tx.exec("INSERT INTO " + table + " (" + list + ") SELECT " + list + " FROM " + staging +
+    tx.exec("INSERT INTO " + table + " (" + list + ") SELECT " + list + " FROM " + staging.name +
             " ON CONFLICT DO NOTHING");
   }
   return rows;
@@ -456,7 +475,7 @@ class StationSync {
 
   std::int64_t insert_run_details(pqxx::work& tx, std::int64_t local_run,
                                   std::int64_t central_run) {
-    const std::vector<Field> fixed = {{report_.station_uuid}, {std::to_string(central_run)}};
+    const std::vector<std::string> fixed = {report_.station_uuid, std::to_string(central_run)};
     const auto nothing = [](const SQLite::Statement&) {};
     SQLite::Statement means(station_.sql(),
                             "SELECT step_id, attempt, device, count, first_receive_time_s, "
@@ -658,7 +677,7 @@ class StationSync {
               tx, staged_, "sample_chunks",
               {"station", "run_id", "local_id", "step_idx", "attempt", "device",
                "first_receive_time_s", "last_receive_time_s", "count", "encoding", "data"},
-              {{report_.station_uuid}, {std::to_string(central_run)}}, q,
+              {report_.station_uuid, std::to_string(central_run)}, q,
               [&](const SQLite::Statement& row) {
                 cursor = row.getColumn(0).getInt64();
                 ++batch.sample_chunks;
@@ -688,7 +707,7 @@ class StationSync {
   const SyncOptions& options_;
   SyncReport report_;
   /// Central tables whose staging table this sync has made sure of (copy_rows).
-  std::set<std::string> staged_;
+  std::map<std::string, Staging> staged_;
 };
 
 }  // namespace

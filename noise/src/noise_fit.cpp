@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -21,6 +22,9 @@ namespace {
 
 constexpr std::size_t kTerms = 5;  // Q, N, B, K, R
 constexpr double kMinEdfForMinimum = 10.0;
+// Bits of ln(tau_c) Brent's method resolves in the Gauss-Markov fit: 2^-25 relative, the
+// 1e-7 the fit has always been resolved to.
+constexpr int kLogTauBits = 26;
 
 // Allan variance of each term per unit squared coefficient at tau.
 double basis(std::size_t term, double tau) {
@@ -315,7 +319,9 @@ GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise,
     const auto cost = [&](double log_tau) {
       return nnls(design(std::exp(log_tau)), b, w, allowed).cost;
     };
-    // Grid over two decades beyond the curve at each end, then golden section on the best cell.
+    // Grid over two decades beyond the curve at each end (the cost may dip more than once: the
+    // grid finds the deepest), then Brent's method (Boost.Math) between the best point's
+    // neighbours.
     const double lo = std::log(d.tau.front() / 100.0);
     const double hi = std::log(d.tau.back() * 100.0);
     constexpr int kGrid = 200;
@@ -329,27 +335,10 @@ GaussMarkovFit fit_gauss_markov(const AllanResult& curve, bool with_white_noise,
         best_k = k;
       }
     }
-    double a = lo + std::max(best_k - 1, 0) * step;
-    double c = lo + std::min(best_k + 1, kGrid) * step;
-    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-    double x1 = c - g * (c - a), x2 = a + g * (c - a);
-    double f1 = cost(x1), f2 = cost(x2);
-    for (int it = 0; it < 60 && c - a > 1e-7; ++it) {
-      if (f1 < f2) {
-        c = x2;
-        x2 = x1;
-        f2 = f1;
-        x1 = c - g * (c - a);
-        f1 = cost(x1);
-      } else {
-        a = x1;
-        x1 = x2;
-        f1 = f2;
-        x2 = a + g * (c - a);
-        f2 = cost(x2);
-      }
-    }
-    best_log_tau = 0.5 * (a + c);
+    const auto refined =
+        boost::math::tools::brent_find_minima(cost, lo + std::max(best_k - 1, 0) * step,
+                                              lo + std::min(best_k + 1, kGrid) * step, kLogTauBits);
+    best_log_tau = refined.second <= best_cost ? refined.first : lo + best_k * step;
     best = nnls(design(std::exp(best_log_tau)), b, w, allowed);
   }
   GaussMarkovFit fit;

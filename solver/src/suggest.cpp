@@ -51,9 +51,11 @@ constexpr double kWarmUpWindowOfRun = 1.0 / 3.0;
 // but 1e-4 of its variance there) is that catalogue effect, which the user should add by name.
 constexpr double kCatalogueSine = 1e-2;
 // Transient time constants per decade on the grid: the chi-square is smooth in log tau at this
-// resolution (a factor 1.5), and golden section refines the best point.
+// resolution (a factor 1.5), and Brent's method refines the best point.
 constexpr double kTausPerDecade = 6.0;
-constexpr int kGoldenIterations = 24;
+// Bits of log10(tau) Brent's method resolves: 2^-19 (a factor 1 + 1e-6 in tau) is far below
+// the three significant digits the term writes.
+constexpr int kTauBrentBits = 20;
 // Folds of interleaved steps when the run has fewer than three temperature plateaus.
 constexpr std::size_t kStepFolds = 5;
 // Significant digits of a searched time constant in the term's text.
@@ -471,8 +473,31 @@ Screened make_screened(const Form& f, const Screen& s) {
   return out;
 }
 
+/// The smallest `f(x)` over [lo, hi], x the decimal log of a time constant: a grid of
+/// kTausPerDecade points per decade (the curve may have more than one dip: the grid finds the
+/// deepest), then Brent's method (Boost.Math) between the best point's neighbours. Returns
+/// {x, f(x)}; f(x) is infinite when no grid point is finite.
+template <class F>
+std::pair<double, double> tau_minimum(F f, double lo, double hi) {
+  const int count = std::max(2, static_cast<int>(std::ceil(kTausPerDecade * (hi - lo))) + 1);
+  const double step = (hi - lo) / (count - 1);
+  double best_x = lo, best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < count; ++i) {
+    const double v = f(lo + step * i);
+    if (v < best) {
+      best = v;
+      best_x = lo + step * i;
+    }
+  }
+  if (!std::isfinite(best)) return {best_x, best};
+  const auto refined = boost::math::tools::brent_find_minima(
+      f, std::max(lo, best_x - step), std::min(hi, best_x + step), kTauBrentBits);
+  if (refined.second < best) return refined;
+  return {best_x, best};
+}
+
 /// The transient form of `sensor` with the best time constant: a log grid from a step's length
-/// to beyond the run, then golden section between the best point's neighbours.
+/// to beyond the run, then Brent's method between the best point's neighbours (tau_minimum).
 std::pair<Form, Screen> best_transient(const Whitened& w, const std::vector<StepSummary>& steps,
                                        core::TermSensor sensor) {
   std::vector<double> durations;
@@ -499,44 +524,8 @@ std::pair<Form, Screen> best_transient(const Whitened& w, const std::vector<Step
     }
     return best_axes(w, ptr);
   };
-  const int count = std::max(2, static_cast<int>(std::ceil(kTausPerDecade * (hi - lo))) + 1);
-  const double step = (hi - lo) / (count - 1);
-  double best_x = lo;
-  Screen best;
-  for (int i = 0; i < count; ++i) {
-    const Screen s = evaluate(lo + step * i);
-    if (s.delta_bic < best.delta_bic) {
-      best = s;
-      best_x = lo + step * i;
-    }
-  }
-  if (std::isfinite(best.delta_bic)) {
-    double a = std::max(lo, best_x - step), b = std::min(hi, best_x + step);
-    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-    double x1 = b - g * (b - a), x2 = a + g * (b - a);
-    Screen s1 = evaluate(x1), s2 = evaluate(x2);
-    for (int it = 0; it < kGoldenIterations; ++it) {
-      if (s1.delta_bic < s2.delta_bic) {
-        b = x2;
-        x2 = x1;
-        s2 = s1;
-        x1 = b - g * (b - a);
-        s1 = evaluate(x1);
-      } else {
-        a = x1;
-        x1 = x2;
-        s1 = s2;
-        x2 = a + g * (b - a);
-        s2 = evaluate(x2);
-      }
-    }
-    for (const auto& [x, s] : {std::pair{x1, s1}, std::pair{x2, s2}}) {
-      if (s.delta_bic < best.delta_bic) {
-        best = s;
-        best_x = x;
-      }
-    }
-  }
+  const double best_x = tau_minimum([&](double x) { return evaluate(x).delta_bic; }, lo, hi).first;
+  const Screen best = evaluate(best_x);
   Form f;
   f.sensor = sensor;
   // The time constant as the term will write it, so that the term is the one screened.
@@ -834,24 +823,8 @@ std::optional<Screened> transient_on_noise_rows(const SuggestInput& in, core::Te
   }
   const double lo = std::log10(std::max(1.0, shortest));
   const double hi = std::log10(std::max(10.0 * std::pow(10.0, lo), 3.0 * span));
-  const int count = std::max(2, static_cast<int>(std::ceil(kTausPerDecade * (hi - lo))) + 1);
-  const double step = (hi - lo) / (count - 1);
-  double best_x = lo, best = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < count; ++i) {
-    const double v = evaluate(lo + step * i, nullptr);
-    if (v < best) {
-      best = v;
-      best_x = lo + step * i;
-    }
-  }
+  const auto [best_x, best] = tau_minimum([&](double x) { return evaluate(x, nullptr); }, lo, hi);
   if (!std::isfinite(best)) return std::nullopt;
-  const auto refined = boost::math::tools::brent_find_minima(
-      [&](double x) { return evaluate(x, nullptr); }, std::max(lo, best_x - step),
-      std::min(hi, best_x + step), 20);
-  if (refined.second < best) {
-    best = refined.second;
-    best_x = refined.first;
-  }
   Form f;
   f.sensor = sensor;
   f.tau_s = std::stod(format_tau(std::pow(10.0, best_x)));

@@ -237,8 +237,17 @@ TEST_F(FleetSync, ThreeStationsSyncingAtOnceCopyEveryRowOnceAndASecondSyncChange
     EXPECT_GT(local.at("fits"), 0);
     EXPECT_EQ(central_counts(s), local) << s.name;
   }
-  // Every station-wide event arrived without a run; telemetry arrived value for value (the
-  // COPY text of a double reads back to the same double).
+  // Central migration 3: chunks are stored as they are, without a compression attempt.
+  {
+    pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, kDbName));
+    pqxx::read_transaction tx(owner);
+    EXPECT_EQ(tx.exec("SELECT attstorage FROM pg_attribute WHERE attrelid = "
+                      "'sample_chunks'::regclass AND attname = 'data'")[0][0]
+                  .as<std::string>(),
+              "e");
+  }
+  // Every station-wide event arrived without a run; telemetry arrived value for value (binary
+  // COPY sends a double's eight bytes).
   for (const Station& s : stations_) {
     pqxx::connection owner(server_->conninfo(PostgresServer::kOwner, kDbName));
     pqxx::read_transaction tx(owner);

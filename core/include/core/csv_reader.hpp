@@ -23,6 +23,9 @@ struct CsvOptions {
   bool unquote = false;
   /// Bytes read from the file at a time; a longer line grows the buffer to hold it.
   std::size_t block_bytes = std::size_t{1} << 22;
+  /// CsvReader::remaining_numbers reads a rest of the file shorter than this on one thread
+  /// (starting a thread and splitting pays from a few megabytes on).
+  std::uint64_t parallel_min_bytes = std::uint64_t{8} << 20;
 };
 
 /// A CSV file with a header line, read front to back in large blocks (read(2) into one
@@ -71,11 +74,11 @@ class CsvReader {
   bool next();
 
   /// 1-based line number of the current row (the header is line 1).
-  std::size_t line() const { return line_; }
+  std::size_t line() const { return lines_before() + line_; }
   /// `FILE:LINE` of the current row.
   std::string where() const;
   /// Bytes of the file consumed so far (through the current row), for a progress display.
-  std::uint64_t offset() const { return read_bytes_ - (end_ - begin_); }
+  std::uint64_t offset() const { return position(); }
   /// Field `i` of the current row, trimmed. Precondition: i < columns().size().
   std::string_view field(std::size_t i) const { return fields_[i]; }
   /// Field `i` as a finite number. Throws InputError naming the line and column otherwise.
@@ -84,9 +87,35 @@ class CsvReader {
   /// column otherwise.
   std::int64_t integer(std::size_t i) const;
 
+  /// Field `i` of every remaining row as number() reads it, in file order, the rest of the file
+  /// read by up to `threads` threads (at most one per core): byte ranges split at line
+  /// boundaries, each read by a reader of its own (its own file descriptor and buffer), the
+  /// first on the calling thread. The same values and the same error (the first in the file:
+  /// `FILE:LINE: column gx: ...`, a field count, a misplaced blank line) as next() and
+  /// number(i) to the end of the file would give; next() returns false afterwards. Why: reading
+  /// is most of `calstand allan --csv` on a long record (issue 32), and lines split cleanly.
+  std::vector<double> remaining_numbers(std::size_t i, unsigned threads = 2);
+
  private:
+  /// A reader of the data rows of `whole`'s file whose line starts at a byte in [from, to),
+  /// with `whole`'s header and options; its line numbers are counted when a message needs them.
+  CsvReader(const CsvReader& whole, std::uint64_t from, std::uint64_t to);
   bool read_line(std::string_view& line);
+  /// The next line that is not blank (blank ones handled as next() says), false at the end.
+  bool next_data_line(std::string_view& line);
   void split(std::string_view line);
+  /// A raw field as split() keeps it: trimmed when it starts or ends with a blank, unquoted.
+  std::string_view clean(std::string_view field) const;
+  /// The next row's field `i` as number(i) reads it, its field count checked as next() does,
+  /// without splitting the other fields (remaining_numbers); false at the end of the file.
+  bool next_number(std::size_t i, double& value);
+  [[noreturn]] void refuse_number(std::size_t i, std::string_view text) const;
+  /// Lines of the file before this reader's first line (0 for a reader from the start): counted
+  /// once, when a message needs a line number.
+  std::size_t lines_before() const;
+  std::string where_at(std::size_t line) const;
+  /// File offset of buffer_[begin_]: where the next line starts.
+  std::uint64_t position() const { return start_ + read_bytes_ - (end_ - begin_); }
 
   std::string file_;
   CsvOptions options_;
@@ -98,6 +127,11 @@ class CsvReader {
   std::uint64_t read_bytes_ = 0;  // bytes read from the file so far
   std::size_t line_ = 0;          // line number of the line read last
   std::size_t blank_line_ = 0;    // first blank line seen while blank lines are only allowed last
+  bool saw_data_ = false;         // a line that is not blank was read (remaining_numbers)
+  std::uint64_t start_ = 0;       // file offset of the first byte read
+  std::uint64_t stop_ = UINT64_MAX;  // lines starting at or after this offset are not read
+  std::uint64_t first_line_at_ = 0;  // file offset of this reader's first line
+  mutable std::optional<std::size_t> lines_before_;  // see lines_before()
   std::string header_;
   std::vector<std::string> columns_;
   std::vector<std::string_view> fields_;

@@ -72,11 +72,12 @@ struct SyncReport {
 /// Copies what the central database lacks of station file `station` (runs that have ended,
 /// with steps, events, units, parameters and procedure text; their step means and table and
 /// chamber telemetry; station-wide events; calibration records; acceptance verdicts; fit
-/// history; sample chunks when asked, by COPY through a staging table), registering the station on
-/// its first sync. Each batch is one central transaction together with the move of its cursor, so a
-/// sync cut anywhere (server gone, process killed) loses nothing and the next one resumes there;
-/// rows already central are never copied twice (a second sync copies nothing). Concurrent
-/// syncs of one station serialise on an advisory lock; of different stations, run side by side.
+/// history; sample chunks when asked, by binary COPY through a staging table), registering the
+/// station on its first sync. Each batch is one central transaction together with the move of its
+/// cursor, so a sync cut anywhere (server gone, process killed) loses nothing and the next one
+/// resumes there; rows already central are never copied twice (a second sync copies nothing).
+/// Concurrent syncs of one station serialise on an advisory lock; of different stations, run side
+/// by side.
 ///
 /// Throws core::InputError for bad options, store::StoreError when the station file fails or
 /// is at another schema version than kSyncedStoreSchemaVersion, CentralError when the central
