@@ -26,12 +26,10 @@
 // must lower BIC by "very strong" evidence (10) more than the best catalogue candidate does,
 // judged the same way (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
 // plateaus as a temperature term does), and by more than very strong evidence plus the
-// look-elsewhere cost of the search (2 ln of the forms tried). A warm-up exp(-elapsed/tau)
-// settling within a third of the run, the one form stated before the search, is judged instead
-// by its likelihood ratio against the wander at a measured false-alarm rate (suggest.cpp,
-// kWarmUpLikelihoodRatio, and why), and a catalogue term is still preferred unless beaten by
-// very strong evidence; each sensor's warm-up is reported with its figures whether kept or not
-// (WarmUpCheck). Then they must hold on data they
+// look-elsewhere cost of the search (2 ln of the forms tried); a warm-up exp(-elapsed/tau), the one
+// form stated before the search, does not (suggest.cpp says why its bar is not lower still).
+// Each sensor's warm-up is reported with its figures whether kept or not (WarmUpCheck). Then
+// they must hold on data they
 // were not fitted on, judged against the noise that remains with the term: leave one
 // temperature plateau out when the run has three or more (a transient in elapsed time
 // extrapolates in time, not temperature: five folds of interleaved steps for it, as for a run
@@ -80,11 +78,8 @@ struct WarmUpCheck {
   /// The wanders' parameters' cost with the term less without (usually 0 or negative: the term
   /// may leave a simpler wander).
   double noise_penalty_change = 0.0;
-  double delta_bic = 0.0;  ///< against the wander (NaN when not reached)
-  double bar = 0.0;        ///< the delta_bic asked of a transient judged by BIC
-  /// The 2 ln LR (less the wanders' cost change) asked of a warm-up within a third of the run;
-  /// NaN for a slower transient, judged by `bar`.
-  double likelihood_ratio_bar = 0.0;
+  double delta_bic = 0.0;     ///< against the wander (NaN when not reached)
+  double bar = 0.0;           ///< the delta_bic asked of a warm-up
   bool beats_wander = false;  ///< passed the bar against the wander
   bool held_out_better = false;
   bool kept = false;    ///< among the suggestions

@@ -119,8 +119,8 @@ std::vector<WarmUpCase> warm_up_cases() {
     out.push_back({noise, seed++, 300.0, 10.0, 0.0});
     out.push_back({noise, seed++, 1800.0, 10.0, 1800.0});
   }
-  // 5x on the wandering classes, where the likelihood-ratio bar (suggest.cpp) is what finds it;
-  // the next seeds, not chosen.
+  // 5x on the wandering classes, the next seeds, not chosen (found here, not in every run: the
+  // rates are the bench's).
   out.push_back({"mems", seed++, 600.0, 5.0, 1800.0});
   out.push_back({"adis16488", seed++, 300.0, 5.0, 0.0});
   return out;
@@ -143,8 +143,8 @@ TEST(WarmUpCheck, IsReportedWithItsFiguresKeptOrNot) {
   EXPECT_EQ(found->custom, warm.suggestions.front().custom);
   EXPECT_TRUE(found->beats_wander);
   EXPECT_TRUE(found->held_out_better);
-  EXPECT_GT(found->two_log_likelihood_ratio - found->noise_penalty_change,
-            found->likelihood_ratio_bar);
+  EXPECT_LT(found->delta_bic, found->bar);
+  EXPECT_GT(found->two_log_likelihood_ratio, 0.0);
   EXPECT_NE(found->verdict.find("beats the wander"), std::string::npos) << found->verdict;
 
   const Diagnosis clean = diagnose(testing::warm_up_run(truth, 0.0, 600.0, 0.0, 57), model);
@@ -154,12 +154,8 @@ TEST(WarmUpCheck, IsReportedWithItsFiguresKeptOrNot) {
   EXPECT_FALSE(judged->kept);
   EXPECT_FALSE(judged->verdict.empty());
   EXPECT_GT(judged->tau_s, 0.0);
-  if (!judged->beats_wander && std::isfinite(judged->likelihood_ratio_bar) &&
-      std::isfinite(judged->two_log_likelihood_ratio) &&
-      judged->verdict.find("catalogue") == std::string::npos) {
-    EXPECT_LE(judged->two_log_likelihood_ratio - judged->noise_penalty_change,
-              judged->likelihood_ratio_bar)
-        << judged->verdict;
+  if (!judged->beats_wander && std::isfinite(judged->delta_bic)) {
+    EXPECT_GE(judged->delta_bic, judged->bar) << judged->verdict;
   }
   // The JSON carries it.
   const nlohmann::json j = diagnosis_to_json(clean);
