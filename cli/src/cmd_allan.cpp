@@ -449,15 +449,15 @@ noise model figures (95 % intervals; estimator gmwm: the identified composite "
     if (!m.model) std::cout << fmt::format("{:<8} (no model: {})
 ", channel, m.note);
     for (const solver::ModelFigure& f : m.figures) {
-      const std::string value = f.resolved ? fmt::format("{:.4g}", f.value) : "-";
-      const std::string interval =
-          f.resolved ? fmt::format("[{:.4g}, {:.4g}]", f.lo, f.hi) : "not resolved";
-      std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}{}
-", channel, f.name,
-                               value, interval, f.unit,
-                               f.resolved ? model_figure_sheet(f, solver::is_gyro(m.channel)) : "",
-                               f.estimator,
-                               f.note.empty() || !m.model ? "" : fmt::format(" ({})", f.note));
+        const std::string value = f.resolved ? fmt::format("{:.4g}", f.value) : "-";
+        const std::string interval =
+            f.resolved ? fmt::format("[{:.4g}, {:.4g}]", f.lo, f.hi) : "not resolved";
+        std::cout << fmt::format(
+            "{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}{}
+            ", channel, f.name,
+            value,
+            interval, f.unit, f.resolved ? model_figure_sheet(f, solver::is_gyro(m.channel)) : "",
+            f.estimator, f.note.empty() || !m.model ? "" : fmt::format(" ({})", f.note));
     }
   }
 }
@@ -477,8 +477,9 @@ void run_noise(const NoiseArgs& a) {
   std::optional<solver::KalibrImu> kalibr;
   if (!a.kalibr.empty()) {
     std::vector<std::string> unresolved;
-    kalibr = a.no_noise_model ? solver::kalibr_from_run_noise(r, a.rostopic, &unresolved)
-                              : solver::kalibr_from_noise_models(r, models, a.rostopic, &unresolved);
+    kalibr = a.no_noise_model
+                 ? solver::kalibr_from_run_noise(r, a.rostopic, &unresolved)
+                 : solver::kalibr_from_noise_models(r, models, a.rostopic, &unresolved);
     const std::string yaml = solver::kalibr_yaml(*kalibr);
     std::ofstream out(a.kalibr);
     if (!out || !(out << yaml) || !out.flush()) {
@@ -524,8 +525,9 @@ void run_noise(const NoiseArgs& a) {
     std::cout << fmt::format(
         "\nKalibr imu.yaml written to {} (estimators: gyroscope_noise_density {}, "
         "gyroscope_random_walk {}, accelerometer_noise_density {}, accelerometer_random_walk {})\n",
-        a.kalibr, kalibr->gyroscope_noise_density_estimator, kalibr->gyroscope_random_walk_estimator,
-        kalibr->accelerometer_noise_density_estimator, kalibr->accelerometer_random_walk_estimator);
+        a.kalibr, kalibr->gyroscope_noise_density_estimator,
+        kalibr->gyroscope_random_walk_estimator, kalibr->accelerometer_noise_density_estimator,
+        kalibr->accelerometer_random_walk_estimator);
   }
 }
 

@@ -35,7 +35,7 @@ struct AnalyzeOptions {
   double band_ug = analysis::DatasheetOptions{}.warmup_band_ug;
   bool as_json = false;
   bool no_noise_model = false;  ///< stability: skip the composite noise model
-  std::string html;  ///< bandwidth: the gain-curve page
+  std::string html;             ///< bandwidth: the gain-curve page
 };
 
 void print_stability(const analysis::StabilityAnalysis& s) {

@@ -171,16 +171,16 @@ nlohmann::json to_json(const StabilityAnalysis& s) {
                                              : nlohmann::json(nullptr));
     }
     nlohmann::json out{{fmt::format("bias_instability_{}", unit), bi},
-                          {fmt::format("bias_instability_interval_{}", unit), interval},
-                          {"floor_tau_s", tau},
-                          {fmt::format("bias_variation_{}", unit), sigma},
-                          {"correlation_time_s", tau_c},
-                          {"correlation_resolved", resolved},
-                          {"floor_resolved", floor_resolved},
-                          {"bias_model", model},
-                          {"bias_model_reason", reason},
-                          {"bias_model_aic_difference", aic},
-                          {fmt::format("bias_instability_fit_{}", unit), flicker_b},
+                       {fmt::format("bias_instability_interval_{}", unit), interval},
+                       {"floor_tau_s", tau},
+                       {fmt::format("bias_variation_{}", unit), sigma},
+                       {"correlation_time_s", tau_c},
+                       {"correlation_resolved", resolved},
+                       {"floor_resolved", floor_resolved},
+                       {"bias_model", model},
+                       {"bias_model_reason", reason},
+                       {"bias_model_aic_difference", aic},
+                       {fmt::format("bias_instability_fit_{}", unit), flicker_b},
                        {fmt::format("bias_instability_fit_sigma_{}", unit), flicker_b_sigma}};
     if (s.models.size() == s.channels.size()) model_keys(out, first, unit);
     return out;

@@ -135,8 +135,8 @@ std::string kalibr_yaml(const KalibrImu& imu) {
       "update_rate: {:.6g}  # [Hz]\n",
       imu.accelerometer_noise_density, imu.accelerometer_noise_density_estimator,
       imu.accelerometer_random_walk, imu.accelerometer_random_walk_estimator,
-      imu.gyroscope_noise_density, imu.gyroscope_noise_density_estimator,
-      imu.gyroscope_random_walk, imu.gyroscope_random_walk_estimator, topic, imu.update_rate_hz);
+      imu.gyroscope_noise_density, imu.gyroscope_noise_density_estimator, imu.gyroscope_random_walk,
+      imu.gyroscope_random_walk_estimator, topic, imu.update_rate_hz);
 }
 
 }  // namespace calstand::solver

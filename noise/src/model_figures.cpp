@@ -58,8 +58,8 @@ std::vector<ModelFigure> model_figures(const std::optional<NoiseModel>& model,
   };
   std::vector<ModelFigure> out;
   if (const NoiseModelTerm* w = term(NoiseKind::kWhite)) {
-    out.push_back(from_model("white_density", w->value, w->value_lo, w->value_hi,
-                             unit + "/sqrt(Hz)"));
+    out.push_back(
+        from_model("white_density", w->value, w->value_lo, w->value_hi, unit + "/sqrt(Hz)"));
   } else {
     out.push_back(
         from_allan_line("white_density", allan.random_walk, unit + "/sqrt(Hz)", why("white")));
@@ -82,8 +82,7 @@ std::vector<ModelFigure> model_figures(const std::optional<NoiseModel>& model,
     }
   }
   if (const NoiseModelTerm* k = term(NoiseKind::kRandomWalk)) {
-    out.push_back(
-        from_model("random_walk", k->value, k->value_lo, k->value_hi, unit + "/sqrt(s)"));
+    out.push_back(from_model("random_walk", k->value, k->value_lo, k->value_hi, unit + "/sqrt(s)"));
   } else {
     out.push_back(from_allan_line("random_walk", allan.rate_random_walk, unit + "/sqrt(s)",
                                   why("random-walk")));

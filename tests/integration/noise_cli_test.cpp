@@ -295,8 +295,7 @@ TEST(NoiseModelCli, AShortRecordFallsBackToTheAllanLineAndSaysSo) {
   const auto j = nlohmann::json::parse(r.out);
   for (const auto& ch : j["channels"]) {
     EXPECT_TRUE(ch["noise_model"].is_null()) << ch;
-    EXPECT_NE(ch["noise_model_note"].get<std::string>().find("the record lasts"),
-              std::string::npos)
+    EXPECT_NE(ch["noise_model_note"].get<std::string>().find("the record lasts"), std::string::npos)
         << ch;
     ASSERT_FALSE(ch["model_figures"].empty());
     for (const auto& f : ch["model_figures"]) {
@@ -336,8 +335,8 @@ TEST_F(NoiseCli, AnalyzeStabilityGivesTheModelsFiguresBesideTheAllanFloor) {
     EXPECT_EQ(s["noise_models"][c]["model_figures"], noise["channels"][c]["model_figures"]) << c;
     const auto flicker = model_figure(noise, c, "bias_instability");
     const auto& sensor = c < 3 ? s["gyro"] : s["accel"];
-    const auto& b = sensor[c < 3 ? "bias_instability_model_deg_per_h" : "bias_instability_model_ug"]
-                          [c % 3];
+    const auto& b =
+        sensor[c < 3 ? "bias_instability_model_deg_per_h" : "bias_instability_model_ug"][c % 3];
     if (flicker["estimator"] == "gmwm") {
       const double k = c < 3 ? 3600.0 : 1e6 / 9.80665;
       EXPECT_NEAR(b.get<double>(), k * flicker["value"].get<double>(), 1e-9 * b.get<double>());

@@ -4,7 +4,6 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
-
 #include <vector>
 
 #include "noise/composite_noise.hpp"

@@ -76,8 +76,8 @@ TEST(ModelFigures, TheModelsTermsWhereSelectedTheAllanLineElsewhere) {
 }
 
 TEST(ModelFigures, WithoutAModelEveryFigureIsTheAllanLinesWithTheReason) {
-  const auto figures = model_figures(std::nullopt, allan_terms(0.01, 0.0, 0.0), "m/s^2",
-                                     "the record lasts 300 s");
+  const auto figures =
+      model_figures(std::nullopt, allan_terms(0.01, 0.0, 0.0), "m/s^2", "the record lasts 300 s");
   ASSERT_EQ(figures.size(), 3u);  // white density, bias instability, random walk
   for (const auto& f : figures) {
     EXPECT_EQ(f.estimator, "allan-line") << f.name;
