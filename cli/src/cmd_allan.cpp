@@ -437,27 +437,21 @@ std::string model_figure_sheet(const solver::ModelFigure& f, bool gyro) {
 // Per channel the figures of its identified model, or the Allan line's where the record does
 // not support the model, each with its estimator.
 void print_model_figures(const std::vector<solver::ChannelModelFigures>& models) {
-  std::cout << "
-noise model figures (95 % intervals; estimator gmwm: the identified composite "
-               "model, as calstand noise-id gives it; allan-line: the fit above, +- 1.96 sigma)
-";
-  std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}
-", "channel", "figure",
+  std::cout << "\nnoise model figures (95 % intervals; estimator gmwm: the identified composite "
+               "model, as calstand noise-id gives it; allan-line: the fit above, +- 1.96 sigma)\n";
+  std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}\n", "channel", "figure",
                            "value", "95 % interval", "unit", "datasheet", "estimator");
   for (const solver::ChannelModelFigures& m : models) {
     const std::string channel(solver::to_string(m.channel));
-    if (!m.model) std::cout << fmt::format("{:<8} (no model: {})
-", channel, m.note);
+    if (!m.model) std::cout << fmt::format("{:<8} (no model: {})\n", channel, m.note);
     for (const solver::ModelFigure& f : m.figures) {
-        const std::string value = f.resolved ? fmt::format("{:.4g}", f.value) : "-";
-        const std::string interval =
-            f.resolved ? fmt::format("[{:.4g}, {:.4g}]", f.lo, f.hi) : "not resolved";
-        std::cout << fmt::format(
-            "{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}{}
-            ", channel, f.name,
-            value,
-            interval, f.unit, f.resolved ? model_figure_sheet(f, solver::is_gyro(m.channel)) : "",
-            f.estimator, f.note.empty() || !m.model ? "" : fmt::format(" ({})", f.note));
+      const std::string value = f.resolved ? fmt::format("{:.4g}", f.value) : "-";
+      const std::string interval =
+          f.resolved ? fmt::format("[{:.4g}, {:.4g}]", f.lo, f.hi) : "not resolved";
+      const std::string sheet = f.resolved ? model_figure_sheet(f, solver::is_gyro(m.channel)) : "";
+      const std::string why = f.note.empty() || !m.model ? "" : fmt::format(" ({})", f.note);
+      std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}{}\n", channel, f.name,
+                               value, interval, f.unit, sheet, f.estimator, why);
     }
   }
 }
