@@ -110,8 +110,10 @@ Json channel_model_figures_json(const solver::ChannelModelFigures& m) {
   if (m.model) {
     Json kinds = Json::array();
     for (const auto& t : m.model->terms) kinds.push_back(std::string(solver::to_string(t.kind)));
-    out["noise_model"] = {
-        {"estimator", m.model->estimator}, {"selected_by", m.model->selected_by}, {"terms", kinds}};
+    out["noise_model"] = {{"estimator", m.model->estimator},
+                          {"min_tau_s", m.min_tau_s},
+                          {"selected_by", m.model->selected_by},
+                          {"terms", kinds}};
   } else {
     out["noise_model"] = nullptr;
     out["noise_model_note"] = m.note;

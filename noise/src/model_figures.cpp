@@ -93,11 +93,16 @@ std::vector<ModelFigure> model_figures(const std::optional<NoiseModel>& model,
 std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuSample> samples,
                                                       const RunNoise& noise,
                                                       const ModelFigureOptions& options) {
-  options.id.validate();
+  NoiseIdOptions id = options.id;
+  if (id.min_tau_s <= 0.0 && noise.sample_rate_hz > 0.0) {
+    id.min_tau_s = options.min_tau_samples / noise.sample_rate_hz;
+  }
+  id.validate();
   std::vector<ChannelModelFigures> out;
   for (const ChannelNoise& c : noise.channels) {
     ChannelModelFigures m;
     m.channel = c.channel;
+    m.min_tau_s = id.min_tau_s;
     if (noise.duration_s < options.min_record_s) {
       m.note = fmt::format(
           "the record lasts {:.0f} s; the identified model is used from {:.0f} s (too few long "
@@ -105,8 +110,8 @@ std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuS
           noise.duration_s, options.min_record_s);
     } else {
       try {
-        m.model = identify_noise_model(channel_series(samples, c.channel), noise.sample_rate_hz,
-                                       options.id);
+        m.model =
+            identify_noise_model(channel_series(samples, c.channel), noise.sample_rate_hz, id);
       } catch (const core::InputError& e) {
         m.note = fmt::format("no model identified: {}", e.what());
       }

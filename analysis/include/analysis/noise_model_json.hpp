@@ -25,9 +25,10 @@ nlohmann::ordered_json noise_model_json(const solver::NoiseModel& model, const s
                                         const std::string& unit);
 
 /// One channel's figures from its identified model or the Allan line (solver::model_figures()):
-/// {"noise_model": {"estimator", "selected_by", "terms": [kind...]} or null, "noise_model_note":
-/// why there is none (absent when there is one), "model_figures": [{"name", "value", "ci95":
-/// [lo, hi], "unit", "estimator": "gmwm"|"allan-line", "resolved", "note" (allan-line only)}]}.
+/// {"noise_model": {"estimator", "min_tau_s", "selected_by", "terms": [kind...]} or null,
+/// "noise_model_note": why there is none (absent when there is one), "model_figures": [{"name",
+/// "value", "ci95": [lo, hi], "unit", "estimator": "gmwm"|"allan-line", "resolved", "note"
+/// (allan-line only)}]}.
 nlohmann::ordered_json channel_model_figures_json(const solver::ChannelModelFigures& m);
 
 }  // namespace calstand::analysis

@@ -22,9 +22,14 @@ inline constexpr std::string_view kAllanLineEstimator = "allan-line";
 
 /// Options of channel_noise_models().
 struct ModelFigureOptions {
-  /// As `calstand noise-id` by default (asymptotic intervals, every scale), so that the figures
-  /// equal its output on the same record.
+  /// As `calstand noise-id` by default (asymptotic intervals), so that the figures equal its
+  /// output on the same record with `--min-tau` min_tau_samples sample periods.
   NoiseIdOptions id;
+  /// When id.min_tau_s is 0: the scales below this many sample periods are left out, as the
+  /// Allan-line fit leaves them out (RunNoiseOptions::min_tau_samples): an IMU's output low-pass
+  /// lowers them (the simulated LN200-class accelerometer, 100 Hz at 400 Hz, gives half its
+  /// white density and a flicker of 400 ug with every scale in; its sheet's figures from 20).
+  double min_tau_samples = RunNoiseOptions{}.min_tau_samples;
   /// The model is used for records at least this long [s]: the project's "worth a noise
   /// analysis" length (analysis::kMinNoiseRecordS, 600 s) less 1 % (a capture commanded as 600 s
   /// spans a sample period less). Shorter records select terms by too few long scales (at 2^18
@@ -54,6 +59,7 @@ struct ChannelModelFigures {
   ImuChannel channel = ImuChannel::kGx;
   std::optional<NoiseModel> model;  ///< none: the record does not support one (see note)
   std::string note;                 ///< why there is no model
+  double min_tau_s = 0.0;           ///< the identification's first averaging time [s]
   std::vector<ModelFigure> figures;
 };
 
