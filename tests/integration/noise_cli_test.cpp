@@ -204,6 +204,11 @@ TEST_F(NoiseCli, NoiseUsesTheIdentifiedModelAndNamesEachFiguresEstimator) {
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["channels"].size(), 6u);
+  // The simulated IMU's white noise (ARW, VRW per sqrt(h): / 60 per sqrt(Hz)).
+  const auto truth =
+      nlohmann::json::parse(run("station --json").out)["derived"]["imus"][0]["truth"]["noise"];
+  const double gyro_n = truth["gyro"]["arw_deg_per_sqrt_h"].get<double>() / 60.0;
+  const double accel_n = truth["accel"]["vrw_mps_per_sqrt_h"].get<double>() / 60.0;
   double worst_gyro_white = 0.0;
   for (std::size_t c = 0; c < 6; ++c) {
     const auto& ch = j["channels"][c];
@@ -220,6 +225,8 @@ TEST_F(NoiseCli, NoiseUsesTheIdentifiedModelAndNamesEachFiguresEstimator) {
     const auto white = model_figure(j, c, "white_density");
     ASSERT_FALSE(white.is_null());
     EXPECT_EQ(white["estimator"], "gmwm");  // white noise is in every candidate
+    const double n = c < 3 ? gyro_n : accel_n;
+    EXPECT_NEAR(white["value"].get<double>(), n, 0.03 * n) << "channel " << c;
     if (c < 3) worst_gyro_white = std::max(worst_gyro_white, white["value"].get<double>());
   }
   // The same figures as noise-id on the same record (a gyro and an accelerometer axis).
