@@ -68,9 +68,14 @@ Json run_noise_json(const solver::RunNoise& r) {
   Json chans = Json::array();
   for (const auto& c : r.channels) {
     const std::string unit(solver::channel_unit(c.channel));
+    // Every figure here is the Allan curve's: fitted lines, or read off its minimum.
+    Json figures = datasheet_figures_json(c.figures);
+    for (std::size_t i = 0; i < figures.size() && i < c.figures.size(); ++i) {
+      figures[i]["estimator"] = std::isfinite(c.figures[i].sigma) ? "allan-line" : "allan-minimum";
+    }
     chans.push_back({{"channel", std::string(solver::to_string(c.channel))},
                      {"unit", unit},
-                     {"figures", datasheet_figures_json(c.figures)},
+                     {"figures", figures},
                      {"terms", noise_terms_json(c.terms, unit)}});
   }
   out["channels"] = chans;

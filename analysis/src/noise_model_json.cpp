@@ -105,4 +105,33 @@ Json noise_model_json(const solver::NoiseModel& model, const std::string& source
   return out;
 }
 
+Json channel_model_figures_json(const solver::ChannelModelFigures& m) {
+  Json out;
+  if (m.model) {
+    Json kinds = Json::array();
+    for (const auto& t : m.model->terms) kinds.push_back(std::string(solver::to_string(t.kind)));
+    out["noise_model"] = {{"estimator", m.model->estimator},
+                          {"min_tau_s", m.min_tau_s},
+                          {"selected_by", m.model->selected_by},
+                          {"terms", kinds}};
+  } else {
+    out["noise_model"] = nullptr;
+    out["noise_model_note"] = m.note;
+  }
+  Json figures = Json::array();
+  for (const solver::ModelFigure& f : m.figures) {
+    Json j;
+    j["name"] = f.name;
+    j["value"] = number(f.value);
+    j["ci95"] = Json::array({number(f.lo), number(f.hi)});
+    j["unit"] = f.unit;
+    j["estimator"] = f.estimator;
+    j["resolved"] = f.resolved;
+    if (!f.note.empty()) j["note"] = f.note;
+    figures.push_back(j);
+  }
+  out["model_figures"] = figures;
+  return out;
+}
+
 }  // namespace calstand::analysis

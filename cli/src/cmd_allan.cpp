@@ -24,6 +24,7 @@
 #include "noise/allan.hpp"
 #include "noise/composite_noise.hpp"
 #include "noise/kalibr.hpp"
+#include "noise/model_figures.hpp"
 #include "noise/noise_fit.hpp"
 #include "noise/record_length.hpp"
 #include "noise/run_noise.hpp"
@@ -54,6 +55,7 @@ struct NoiseArgs {
   std::string taus = "dense";
   std::string rostopic = "/imu0";
   bool json = false;
+  bool no_noise_model = false;
 };
 
 std::int64_t parse_int(const std::string& text, const char* option, std::int64_t min) {
@@ -419,6 +421,40 @@ void print_record_length(const solver::RunNoise& r) {
   }
 }
 
+// A model figure in its datasheet unit (ARW, bias instability, RRW; deg/h or ug for a
+// Gauss-Markov sigma), for the human output; the correlation time as it is.
+std::string model_figure_sheet(const solver::ModelFigure& f, bool gyro) {
+  const analysis::DatasheetUnit d{gyro, 1.0};
+  if (f.name == "white_density") return datasheet_cell(solver::NoiseKind::kWhite, f.value, d);
+  if (f.name == "random_walk") return datasheet_cell(solver::NoiseKind::kRandomWalk, f.value, d);
+  if (f.name == "bias_instability") return datasheet_cell(solver::NoiseKind::kFlicker, f.value, d);
+  if (f.name == "gauss_markov_sigma")
+    return datasheet_cell(solver::NoiseKind::kGaussMarkov, f.value, d);
+  return "";
+}
+
+// Per channel the figures of its identified model, or the Allan line's where the record does
+// not support the model, each with its estimator.
+void print_model_figures(const std::vector<solver::ChannelModelFigures>& models) {
+  std::cout << "\nnoise model figures (95 % intervals; estimator gmwm: the identified composite "
+               "model, as calstand noise-id gives it; allan-line: the fit above, +- 1.96 sigma)\n";
+  std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}\n", "channel", "figure",
+                           "value", "95 % interval", "unit", "datasheet", "estimator");
+  for (const solver::ChannelModelFigures& m : models) {
+    const std::string channel(solver::to_string(m.channel));
+    if (!m.model) std::cout << fmt::format("{:<8} (no model: {})\n", channel, m.note);
+    for (const solver::ModelFigure& f : m.figures) {
+      const std::string value = f.resolved ? fmt::format("{:.4g}", f.value) : "-";
+      const std::string interval =
+          f.resolved ? fmt::format("[{:.4g}, {:.4g}]", f.lo, f.hi) : "not resolved";
+      const std::string sheet = f.resolved ? model_figure_sheet(f, solver::is_gyro(m.channel)) : "";
+      const std::string why = f.note.empty() || !m.model ? "" : fmt::format(" ({})", f.note);
+      std::cout << fmt::format("{:<8} {:<20} {:>11} {:>25} {:<22} {:<22} {}{}\n", channel, f.name,
+                               value, interval, f.unit, sheet, f.estimator, why);
+    }
+  }
+}
+
 void run_noise(const NoiseArgs& a) {
   if (a.db.empty() || a.run.empty()) throw core::InputError("noise", "needs --db FILE --run ID");
   solver::RunNoiseOptions options;
@@ -428,11 +464,16 @@ void run_noise(const NoiseArgs& a) {
   const std::int64_t run = parse_int(a.run, "--run", 1);
   store::Database db = open_existing_database(a.db);
   const solver::RunNoise r = solver::analyse_run_noise(db, run, options);
+  std::vector<solver::ChannelModelFigures> models;
+  if (!a.no_noise_model) models = solver::channel_noise_models(db, r);
 
+  std::optional<solver::KalibrImu> kalibr;
   if (!a.kalibr.empty()) {
     std::vector<std::string> unresolved;
-    const std::string yaml =
-        solver::kalibr_yaml(solver::kalibr_from_run_noise(r, a.rostopic, &unresolved));
+    kalibr = a.no_noise_model
+                 ? solver::kalibr_from_run_noise(r, a.rostopic, &unresolved)
+                 : solver::kalibr_from_noise_models(r, models, a.rostopic, &unresolved);
+    const std::string yaml = solver::kalibr_yaml(*kalibr);
     std::ofstream out(a.kalibr);
     if (!out || !(out << yaml) || !out.flush()) {
       throw std::runtime_error(fmt::format("{}: cannot write the Kalibr file", a.kalibr));
@@ -446,8 +487,19 @@ void run_noise(const NoiseArgs& a) {
   }
   if (a.json) {
     Json out = analysis::run_noise_json(r);
+    for (std::size_t i = 0; i < models.size() && i < out["channels"].size(); ++i) {
+      out["channels"][i].update(analysis::channel_model_figures_json(models[i]));
+    }
+    if (a.no_noise_model) out["noise_model_note"] = "not asked for (--no-noise-model)";
     out["record_length"] = analysis::record_length_json(r);
     if (!a.kalibr.empty()) out["kalibr"] = a.kalibr;
+    if (kalibr) {
+      out["kalibr_estimators"] = {
+          {"gyroscope_noise_density", kalibr->gyroscope_noise_density_estimator},
+          {"gyroscope_random_walk", kalibr->gyroscope_random_walk_estimator},
+          {"accelerometer_noise_density", kalibr->accelerometer_noise_density_estimator},
+          {"accelerometer_random_walk", kalibr->accelerometer_random_walk_estimator}};
+    }
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -460,8 +512,16 @@ void run_noise(const NoiseArgs& a) {
                "B = minimum / 0.664 is the IEEE coefficient.\n";
   print_noise_table(r, true);
   print_noise_table(r, false);
+  if (!models.empty()) print_model_figures(models);
   print_record_length(r);
-  if (!a.kalibr.empty()) std::cout << fmt::format("\nKalibr imu.yaml written to {}\n", a.kalibr);
+  if (kalibr) {
+    std::cout << fmt::format(
+        "\nKalibr imu.yaml written to {} (estimators: gyroscope_noise_density {}, "
+        "gyroscope_random_walk {}, accelerometer_noise_density {}, accelerometer_random_walk {})\n",
+        a.kalibr, kalibr->gyroscope_noise_density_estimator,
+        kalibr->gyroscope_random_walk_estimator, kalibr->accelerometer_noise_density_estimator,
+        kalibr->accelerometer_random_walk_estimator);
+  }
 }
 
 }  // namespace
@@ -562,6 +622,9 @@ void register_allan(CLI::App& app) {
       ->type_name("FILE");
   noise->add_option("--rostopic", n->rostopic, "rostopic of the Kalibr file")
       ->capture_default_str();
+  noise->add_flag("--no-noise-model", n->no_noise_model,
+                  "skip the composite noise model (GMWM, about 1 s per channel and 2^19 "
+                  "samples): Allan-line figures only");
   noise->add_flag("--json", n->json, "print the result as JSON");
   noise->callback([n] { run_noise(*n); });
 }

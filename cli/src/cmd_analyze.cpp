@@ -34,7 +34,8 @@ struct AnalyzeOptions {
   /// warmup: ... and of the final accelerometer bias
   double band_ug = analysis::DatasheetOptions{}.warmup_band_ug;
   bool as_json = false;
-  std::string html;  ///< bandwidth: the gain-curve page
+  bool no_noise_model = false;  ///< stability: skip the composite noise model
+  std::string html;             ///< bandwidth: the gain-curve page
 };
 
 void print_stability(const analysis::StabilityAnalysis& s) {
@@ -67,6 +68,35 @@ void print_stability(const analysis::StabilityAnalysis& s) {
                                    : "";
     fmt::print("  {:<4} {}:{} {}\n", ch.channel, solver::to_string(ch.bias_model), fitted,
                ch.bias_model_reason);
+  }
+  if (s.models.empty()) return;
+  fmt::print(
+      "the identified composite noise model (estimator gmwm, as calstand noise-id; 95 % "
+      "intervals) beside the Allan floor and the Allan-line bias model above:\n");
+  for (std::size_t c = 0; c < s.models.size(); ++c) {
+    const solver::ChannelModelFigures& m = s.models[c];
+    const char* unit = c < 3 ? "deg/h" : "ug";
+    const double k = c < 3 ? 3600.0 : 1e6 / 9.80665;  // deg/s -> deg/h; m/s^2 -> ug (g0)
+    if (!m.model) {
+      fmt::print("  {:<4} no model: {}\n", solver::to_string(m.channel), m.note);
+      continue;
+    }
+    std::string line;
+    for (std::size_t i = 0; i < m.figures.size(); ++i) {
+      const solver::ModelFigure& f = m.figures[i];
+      if (f.estimator != solver::kGmwmEstimator) continue;
+      if (f.name == "bias_instability") {
+        line += fmt::format(" flicker B {:.4g} [{:.4g}, {:.4g}] {};", k * f.value, k * f.lo,
+                            k * f.hi, unit);
+      } else if (f.name == "gauss_markov_sigma" && i + 1 < m.figures.size()) {
+        const solver::ModelFigure& t = m.figures[i + 1];
+        line += fmt::format(
+            " Gauss-Markov sigma {:.4g} [{:.4g}, {:.4g}] {}, tau {:.3g} [{:.3g}, {:.3g}] s;",
+            k * f.value, k * f.lo, k * f.hi, unit, t.value, t.lo, t.hi);
+      }
+    }
+    fmt::print("  {:<4}{}\n", solver::to_string(m.channel),
+               line.empty() ? " no bias instability or Gauss-Markov term selected" : line);
   }
 }
 
@@ -252,7 +282,7 @@ void run_analyze(const AnalyzeOptions& opt) {
     return;
   }
   const analysis::StabilityAnalysis s =
-      analysis::analyse_stability(db, opt.run, opt.device, opt.step);
+      analysis::analyse_stability(db, opt.run, opt.device, opt.step, !opt.no_noise_model);
   if (opt.as_json) {
     fmt::print("{}\n", analysis::to_json(s).dump(2));
   } else {
@@ -285,6 +315,9 @@ void register_analyze(CLI::App& app) {
   cmd->add_option("--band-ug", opt->band_ug,
                   "warmup: an accelerometer bias within this of its settled value is settled")
       ->capture_default_str();
+  cmd->add_flag("--no-noise-model", opt->no_noise_model,
+                "stability: skip the composite noise model (GMWM, about 1 s per channel and "
+                "2^19 samples)");
   cmd->add_flag("--json", opt->as_json, "Print the analysis as JSON");
   cmd->add_option("--html", opt->html, "bandwidth: write the gain curves to this HTML file");
   cmd->callback([opt] { run_analyze(*opt); });

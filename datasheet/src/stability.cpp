@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "analysis/noise_json.hpp"
+#include "analysis/noise_model_json.hpp"
 #include "core/error.hpp"
 #include "datasheet_units.hpp"
 #include "noise/run_noise.hpp"
@@ -21,11 +22,15 @@ constexpr double kMinFloorEdf = 10.0;
 }  // namespace
 
 StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
-                                    const std::string& device, std::optional<std::size_t> step) {
+                                    const std::string& device, std::optional<std::size_t> step,
+                                    bool noise_model) {
   solver::RunNoiseOptions options;
   options.device = device;
   options.step = step;
-  return stability_of(solver::analyse_run_noise(db, run, options), options.min_tau_samples);
+  const solver::RunNoise noise = solver::analyse_run_noise(db, run, options);
+  StabilityAnalysis out = stability_of(noise, options.min_tau_samples);
+  if (noise_model) out.models = solver::channel_noise_models(db, noise);
+  return out;
 }
 
 StabilityAnalysis stability_of(const solver::RunNoise& noise, double min_tau_samples) {
@@ -95,6 +100,44 @@ StabilityAnalysis stability_of(const solver::RunNoise& noise, double min_tau_sam
 }
 
 nlohmann::json to_json(const StabilityAnalysis& s) {
+  // The model's figures of channels first .. first + 2 in datasheet units: a flicker term's B,
+  // the Gauss-Markov term of longest correlation time; null where the model has none.
+  const auto model_keys = [&](nlohmann::json& out, std::size_t first, const char* unit) {
+    nlohmann::json b = nlohmann::json::array(), b_ci = nlohmann::json::array();
+    nlohmann::json gm = nlohmann::json::array(), gm_ci = nlohmann::json::array();
+    nlohmann::json tau = nlohmann::json::array(), tau_ci = nlohmann::json::array();
+    nlohmann::json note = nlohmann::json::array();
+    for (std::size_t c = first; c < first + 3; ++c) {
+      const solver::ChannelModelFigures& m = s.models[c];
+      const double k = c < 3 ? kDegPerSToDegPerH : kMps2ToUg;
+      const solver::ModelFigure* flicker = nullptr;
+      const solver::ModelFigure* sigma = nullptr;
+      const solver::ModelFigure* tau_c = nullptr;
+      for (const solver::ModelFigure& f : m.figures) {
+        if (f.estimator != solver::kGmwmEstimator) continue;
+        if (f.name == "bias_instability") flicker = &f;
+        if (f.name == "gauss_markov_sigma") sigma = &f;  // sorted by tau: the last is the longest
+        if (f.name == "gauss_markov_tau") tau_c = &f;
+      }
+      const auto put = [&](nlohmann::json& v, nlohmann::json& ci, const solver::ModelFigure* f,
+                           double scale) {
+        v.push_back(f ? nlohmann::json(scale * f->value) : nlohmann::json(nullptr));
+        ci.push_back(f ? nlohmann::json::array({scale * f->lo, scale * f->hi})
+                       : nlohmann::json(nullptr));
+      };
+      put(b, b_ci, flicker, k);
+      put(gm, gm_ci, sigma, k);
+      put(tau, tau_ci, tau_c, 1.0);
+      note.push_back(m.model ? nlohmann::json(nullptr) : nlohmann::json(m.note));
+    }
+    out[fmt::format("bias_instability_model_{}", unit)] = b;
+    out[fmt::format("bias_instability_model_interval_{}", unit)] = b_ci;
+    out[fmt::format("bias_variation_model_{}", unit)] = gm;
+    out[fmt::format("bias_variation_model_interval_{}", unit)] = gm_ci;
+    out["correlation_time_model_s"] = tau;
+    out["correlation_time_model_interval_s"] = tau_ci;
+    out["model_note"] = note;
+  };
   const auto optional = [](const std::optional<double>& v) {
     return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
   };
@@ -127,27 +170,52 @@ nlohmann::json to_json(const StabilityAnalysis& s) {
       flicker_b_sigma.push_back(ch.flicker_b ? nlohmann::json(ch.flicker_b_sigma)
                                              : nlohmann::json(nullptr));
     }
-    return nlohmann::json{{fmt::format("bias_instability_{}", unit), bi},
-                          {fmt::format("bias_instability_interval_{}", unit), interval},
-                          {"floor_tau_s", tau},
-                          {fmt::format("bias_variation_{}", unit), sigma},
-                          {"correlation_time_s", tau_c},
-                          {"correlation_resolved", resolved},
-                          {"floor_resolved", floor_resolved},
-                          {"bias_model", model},
-                          {"bias_model_reason", reason},
-                          {"bias_model_aic_difference", aic},
-                          {fmt::format("bias_instability_fit_{}", unit), flicker_b},
-                          {fmt::format("bias_instability_fit_sigma_{}", unit), flicker_b_sigma}};
+    nlohmann::json out{{fmt::format("bias_instability_{}", unit), bi},
+                       {fmt::format("bias_instability_interval_{}", unit), interval},
+                       {"floor_tau_s", tau},
+                       {fmt::format("bias_variation_{}", unit), sigma},
+                       {"correlation_time_s", tau_c},
+                       {"correlation_resolved", resolved},
+                       {"floor_resolved", floor_resolved},
+                       {"bias_model", model},
+                       {"bias_model_reason", reason},
+                       {"bias_model_aic_difference", aic},
+                       {fmt::format("bias_instability_fit_{}", unit), flicker_b},
+                       {fmt::format("bias_instability_fit_sigma_{}", unit), flicker_b_sigma}};
+    if (s.models.size() == s.channels.size()) model_keys(out, first, unit);
+    return out;
   };
-  return {{"run", s.run},
-          {"device", s.device},
-          {"step", s.step},
-          {"step_label", s.step_label},
-          {"duration_s", s.duration_s},
-          {"confidence", s.confidence},
-          {"gyro", sensor(0, "deg_per_h")},
-          {"accel", sensor(3, "ug")}};
+  nlohmann::json out{{"run", s.run},
+                     {"device", s.device},
+                     {"step", s.step},
+                     {"step_label", s.step_label},
+                     {"duration_s", s.duration_s},
+                     {"confidence", s.confidence},
+                     {"gyro", sensor(0, "deg_per_h")},
+                     {"accel", sensor(3, "ug")}};
+  if (s.models.empty()) {
+    out["noise_models"] = nullptr;
+    return out;
+  }
+  nlohmann::json estimators;
+  for (const char* unit : {"deg_per_h", "ug"}) {
+    estimators[fmt::format("bias_instability_{}", unit)] = "allan-floor";
+    estimators[fmt::format("bias_variation_{}", unit)] = "allan-line";
+    estimators[fmt::format("bias_instability_fit_{}", unit)] = "allan-line";
+    estimators[fmt::format("bias_instability_model_{}", unit)] = "gmwm";
+    estimators[fmt::format("bias_variation_model_{}", unit)] = "gmwm";
+  }
+  estimators["correlation_time_s"] = "allan-line";
+  estimators["correlation_time_model_s"] = "gmwm";
+  out["estimators"] = estimators;
+  nlohmann::json models = nlohmann::json::array();
+  for (const auto& m : s.models) {
+    nlohmann::json j = nlohmann::json(channel_model_figures_json(m));
+    j["channel"] = std::string(solver::to_string(m.channel));
+    models.push_back(j);
+  }
+  out["noise_models"] = models;
+  return out;
 }
 
 }  // namespace calstand::analysis

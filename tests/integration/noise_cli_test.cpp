@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -11,8 +12,11 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "cli_runner.hpp"
 
@@ -172,6 +176,204 @@ TEST_F(NoiseCli, NoiseGivesDatasheetFiguresAndAKalibrFile) {
   EXPECT_NE(human.out.find("bias instability          needs "), std::string::npos) << human.out;
 }
 
+// The figure `name` of channel `c` in `calstand noise --json`'s model_figures (the first, for a
+// name a model may carry twice).
+nlohmann::json model_figure(const nlohmann::json& noise, std::size_t c, const std::string& name) {
+  for (const auto& f : noise["channels"][c]["model_figures"]) {
+    if (f["name"] == name) return f;
+  }
+  return nullptr;
+}
+
+// A parameter of `calstand noise-id --json`: the term of `kind`'s parameter `name`, or null.
+nlohmann::json noise_id_parameter(const nlohmann::json& id, const std::string& kind,
+                                  const std::string& name) {
+  for (const auto& t : id["terms"]) {
+    if (t["kind"] == kind) return t["parameters"][name];
+  }
+  return nullptr;
+}
+
+// 20 minutes at 400 Hz: the identified model is used; every figure names its estimator, the
+// gmwm figures are calstand noise-id's on the same record, and the Kalibr file takes its
+// densities from the model and says so.
+TEST_F(NoiseCli, NoiseUsesTheIdentifiedModelAndNamesEachFiguresEstimator) {
+  const std::string yaml = dir_ + "/imu-model.yaml";
+  const Result r =
+      run("noise --db " + db_ + " --run 1 --json --kalibr " + yaml, dir_ + "/model.err");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["channels"].size(), 6u);
+  // The simulated IMU's white noise (ARW, VRW per sqrt(h): / 60 per sqrt(Hz)).
+  const auto truth =
+      nlohmann::json::parse(run("station --json").out)["derived"]["imus"][0]["truth"]["noise"];
+  const double gyro_n = truth["gyro"]["arw_deg_per_sqrt_h"].get<double>() / 60.0;
+  const double accel_n = truth["accel"]["vrw_mps_per_sqrt_h"].get<double>() / 60.0;
+  double worst_gyro_white = 0.0;
+  for (std::size_t c = 0; c < 6; ++c) {
+    const auto& ch = j["channels"][c];
+    // The Allan curve's figures stay, now with their estimator.
+    for (const auto& f : ch["figures"]) {
+      EXPECT_TRUE(f["estimator"] == "allan-line" || f["estimator"] == "allan-minimum") << f;
+    }
+    ASSERT_TRUE(ch["noise_model"].is_object()) << ch;
+    ASSERT_FALSE(ch["model_figures"].empty());
+    for (const auto& f : ch["model_figures"]) {
+      EXPECT_TRUE(f["estimator"] == "gmwm" || f["estimator"] == "allan-line") << f;
+      if (f["estimator"] == "allan-line") EXPECT_FALSE(f["note"].get<std::string>().empty()) << f;
+    }
+    const auto white = model_figure(j, c, "white_density");
+    ASSERT_FALSE(white.is_null());
+    EXPECT_EQ(white["estimator"], "gmwm");  // white noise is in every candidate
+    const double n = c < 3 ? gyro_n : accel_n;
+    EXPECT_NEAR(white["value"].get<double>(), n, 0.03 * n) << "channel " << c;
+    if (c < 3) worst_gyro_white = std::max(worst_gyro_white, white["value"].get<double>());
+  }
+  // The same figures as noise-id on the same record (a gyro and an accelerometer axis).
+  const std::vector<std::pair<std::size_t, std::string>> axes = {{2, "gz"}, {3, "ax"}};
+  for (const auto& [c, channel] : axes) {
+    // The model leaves out the scales below 20 sample periods, as the Allan-line fit does.
+    const double min_tau = j["channels"][c]["noise_model"]["min_tau_s"].get<double>();
+    EXPECT_NEAR(min_tau, 20.0 / 400.0, 1e-6);
+    const Result id = run("noise-id --db " + db_ + " --run 1 --channel " + channel +
+                          " --json --min-tau " + fmt_double(min_tau));
+    ASSERT_EQ(id.exit_code, 0) << id.out;
+    const auto model = nlohmann::json::parse(id.out);
+    const auto white = noise_id_parameter(model, "white", "density");
+    ASSERT_FALSE(white.is_null()) << model;
+    const auto ours = model_figure(j, c, "white_density");
+    EXPECT_EQ(ours["value"], white["value"]) << channel;
+    EXPECT_EQ(ours["ci95"], white["ci95"]) << channel;
+    EXPECT_EQ(ours["unit"], white["unit"]) << channel;
+    const auto k = noise_id_parameter(model, "random_walk", "density");
+    const auto our_k = model_figure(j, c, "random_walk");
+    if (k.is_null()) {
+      EXPECT_EQ(our_k["estimator"], "allan-line") << channel;
+    } else {
+      EXPECT_EQ(our_k["estimator"], "gmwm") << channel;
+      EXPECT_EQ(our_k["value"], k["value"]) << channel;
+      EXPECT_EQ(our_k["ci95"], k["ci95"]) << channel;
+    }
+    std::size_t gm_terms = 0;
+    for (const auto& t : model["terms"]) gm_terms += t["kind"] == "gauss_markov";
+    std::size_t gm_figures = 0;
+    for (const auto& f : j["channels"][c]["model_figures"]) {
+      gm_figures += f["name"] == "gauss_markov_sigma" && f["estimator"] == "gmwm";
+    }
+    EXPECT_EQ(gm_figures, gm_terms) << channel;
+  }
+  // Kalibr: the gyro density from the model (the worst axis, in rad/s/sqrt(Hz)), and said so.
+  EXPECT_EQ(j["kalibr_estimators"]["gyroscope_noise_density"], "gmwm");
+  EXPECT_EQ(j["kalibr_estimators"]["accelerometer_noise_density"], "gmwm");
+  const std::string text = read_text(yaml);
+  EXPECT_NE(text.find("# [rad/s/sqrt(Hz)] estimator: gmwm"), std::string::npos) << text;
+  const auto at = text.find("gyroscope_noise_density: ");
+  ASSERT_NE(at, std::string::npos);
+  const double density = std::stod(text.substr(at + 25));
+  EXPECT_NEAR(density, worst_gyro_white * std::numbers::pi / 180.0, 1e-5 * density) << text;
+
+  const Result human = run("noise --db " + db_ + " --run 1");
+  ASSERT_EQ(human.exit_code, 0) << human.out;
+  EXPECT_NE(human.out.find("noise model figures"), std::string::npos) << human.out;
+  EXPECT_NE(human.out.find("white_density"), std::string::npos) << human.out;
+  EXPECT_NE(human.out.find(" gmwm"), std::string::npos) << human.out;
+}
+
+// --no-noise-model: the Allan-line figures only, and the JSON says the model was not asked for.
+TEST_F(NoiseCli, NoNoiseModelSkipsTheModel) {
+  const std::string yaml = dir_ + "/imu-allan.yaml";
+  const Result r = run("noise --db " + db_ + " --run 1 --json --no-noise-model --kalibr " + yaml,
+                       dir_ + "/allan.err");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["channels"][0].contains("model_figures"));
+  EXPECT_EQ(j["noise_model_note"], "not asked for (--no-noise-model)");
+  EXPECT_EQ(j["kalibr_estimators"]["gyroscope_noise_density"], "allan-line");
+  EXPECT_NE(read_text(yaml).find("# [rad/s/sqrt(Hz)] estimator: allan-line"), std::string::npos);
+}
+
+// A five-minute record is too short for the model: every figure falls back to the Allan line
+// and says why, in the JSON, the human output and the Kalibr file.
+TEST(NoiseModelCli, AShortRecordFallsBackToTheAllanLineAndSaysSo) {
+  const std::string dir = ::testing::TempDir() + "noise_short-" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string db = dir + "/short.db";
+  Result r = run("run static-allan --quiet --db " + db +
+                 " --set duration_s=300 --set soak_s=1 --set warmup_s=1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const std::string yaml = dir + "/imu.yaml";
+  r = run("noise --db " + db + " --run 1 --json --kalibr " + yaml, dir + "/noise.err");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const auto& ch : j["channels"]) {
+    EXPECT_TRUE(ch["noise_model"].is_null()) << ch;
+    EXPECT_NE(ch["noise_model_note"].get<std::string>().find("the record lasts"), std::string::npos)
+        << ch;
+    ASSERT_FALSE(ch["model_figures"].empty());
+    for (const auto& f : ch["model_figures"]) {
+      EXPECT_EQ(f["estimator"], "allan-line") << f;
+      EXPECT_EQ(f["note"], ch["noise_model_note"]) << f;
+      EXPECT_NE(f["name"], "gauss_markov_sigma");
+    }
+  }
+  // The Allan-line density is the fit's N (the "terms" the JSON has always carried).
+  const auto& gx = j["channels"][0];
+  EXPECT_EQ(model_figure(j, 0, "white_density")["value"], gx["terms"]["random_walk"]["value"]);
+  for (const char* field : {"gyroscope_noise_density", "gyroscope_random_walk",
+                            "accelerometer_noise_density", "accelerometer_random_walk"}) {
+    EXPECT_EQ(j["kalibr_estimators"][field], "allan-line") << field;
+  }
+  EXPECT_EQ(read_text(yaml).find("estimator: gmwm"), std::string::npos);
+  const Result human = run("noise --db " + db + " --run 1");
+  EXPECT_NE(human.out.find("(no model: the record lasts"), std::string::npos) << human.out;
+  std::filesystem::remove_all(dir);
+}
+
+// analyze stability: the model's figures beside the Allan floor, the estimators named, the same
+// figures as calstand noise's.
+TEST_F(NoiseCli, AnalyzeStabilityGivesTheModelsFiguresBesideTheAllanFloor) {
+  const Result r = run("analyze stability --json --db " + db_ + " --run 1");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s["estimators"]["bias_instability_deg_per_h"], "allan-floor");
+  EXPECT_EQ(s["estimators"]["bias_instability_model_deg_per_h"], "gmwm");
+  EXPECT_EQ(s["gyro"]["bias_instability_deg_per_h"].size(), 3u);  // the existing keys stay
+  ASSERT_EQ(s["gyro"]["bias_instability_model_deg_per_h"].size(), 3u);
+  ASSERT_EQ(s["noise_models"].size(), 6u);
+  const Result n = run("noise --db " + db_ + " --run 1 --json");
+  ASSERT_EQ(n.exit_code, 0) << n.out;
+  const auto noise = nlohmann::json::parse(n.out);
+  for (std::size_t c = 0; c < 6; ++c) {
+    // The model's figures are noise's (the Allan-line ones differ: stability reads the curve at
+    // octave averaging times, noise at dense ones).
+    const auto gmwm = [](const nlohmann::json& figures) {
+      nlohmann::json out = nlohmann::json::array();
+      for (const auto& f : figures) {
+        if (f["estimator"] == "gmwm") out.push_back(f);
+      }
+      return out;
+    };
+    EXPECT_FALSE(gmwm(noise["channels"][c]["model_figures"]).empty());
+    EXPECT_EQ(gmwm(s["noise_models"][c]["model_figures"]),
+              gmwm(noise["channels"][c]["model_figures"]))
+        << c;
+    const auto flicker = model_figure(noise, c, "bias_instability");
+    const auto& sensor = c < 3 ? s["gyro"] : s["accel"];
+    const auto& b =
+        sensor[c < 3 ? "bias_instability_model_deg_per_h" : "bias_instability_model_ug"][c % 3];
+    if (flicker["estimator"] == "gmwm") {
+      const double k = c < 3 ? 3600.0 : 1e6 / 9.80665;
+      EXPECT_NEAR(b.get<double>(), k * flicker["value"].get<double>(), 1e-9 * b.get<double>());
+    } else {
+      EXPECT_TRUE(b.is_null()) << b;
+    }
+  }
+  const Result none = run("analyze stability --json --no-noise-model --db " + db_ + " --run 1");
+  ASSERT_EQ(none.exit_code, 0) << none.out;
+  EXPECT_TRUE(nlohmann::json::parse(none.out)["noise_models"].is_null());
+}
+
 TEST_F(NoiseCli, CsvSource) {
   // White noise of known sigma from a fixed LCG: ADEV at m samples is sigma / sqrt(m).
   const std::string csv = dir_ + "/data.csv";
@@ -319,7 +521,7 @@ TEST(AnalyzeStabilityCli, RecoversTheSheetsBiasVariationAndCorrelationTimeAndFin
   const std::string db = dir + "/stability.db";
   Result r = run("run static-allan --quiet --db " + db + " --set soak_s=1 --set warmup_s=1");
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  r = run("analyze stability --json --db " + db + " --run 1");
+  r = run("analyze stability --json --no-noise-model --db " + db + " --run 1");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json s = nlohmann::json::parse(r.out);
   const nlohmann::json truth =
@@ -389,7 +591,7 @@ TEST(AnalyzeStabilityCli, NineHoursTellTheLn200GyrosGaussMarkovBiasFromAFlickerF
     Result r = run("run static-allan --quiet --station " + station + " --db " + db +
                    " --set duration_s=32400 --set soak_s=1 --set warmup_s=1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    r = run("analyze stability --json --db " + db + " --run 1");
+    r = run("analyze stability --json --no-noise-model --db " + db + " --run 1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const nlohmann::json gyro = nlohmann::json::parse(r.out)["gyro"];
     const double sigma_truth = truth["gauss_markov_sigma_deg_per_h"];
@@ -437,7 +639,7 @@ TEST(AnalyzeStabilityCli, AFlickerUnitGetsFlickerAndNoBiasVariation) {
     Result r = run("run static-allan --quiet --station " + station + " --db " + db +
                    " --set duration_s=3600");
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    r = run("analyze stability --json --db " + db + " --run 1");
+    r = run("analyze stability --json --no-noise-model --db " + db + " --run 1");
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const nlohmann::json s = nlohmann::json::parse(r.out);
     for (const auto& [sensor, unit, b_key] :

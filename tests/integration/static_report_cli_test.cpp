@@ -94,7 +94,7 @@ class StaticReportCli : public ::testing::Test {
     const std::string html = read_text(fmt::format("{}run{}.html", dir_, run_id));
     const std::string allan = section(html, "allan");
     ASSERT_FALSE(allan.empty()) << "no Allan section on the page of run " << run_id;
-    const nlohmann::json noise = json_of(fmt::format("noise --run {}", run_id));
+    const nlohmann::json noise = json_of(fmt::format("noise --run {} --no-noise-model", run_id));
     ASSERT_EQ(noise.at("channels").size(), 6u);
     int checked = 0;
     for (const auto& ch : noise.at("channels")) {
@@ -174,7 +174,7 @@ TEST_F(StaticReportCli, TheCompositeModelIsNoiseIdsOnTheSameRecord) {
 TEST_F(StaticReportCli, TheStabilityIsAnalyzeStabilitysOnTheSameRecord) {
   ASSERT_EQ(reports_[1].exit_code, 0) << reports_[1].out;
   const std::string stability = section(read_text(dir_ + "run1.html"), "datasheet-stability");
-  const nlohmann::json a = json_of("analyze stability --run 1");
+  const nlohmann::json a = json_of("analyze stability --no-noise-model --run 1");
   const nlohmann::json& s = a.contains("analyses") ? a.at("analyses").at("stability") : a;
   ASSERT_TRUE(s.contains("gyro")) << a.dump();
   for (const char* sensor : {"gyro", "accel"}) {

@@ -4,8 +4,10 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "noise/composite_noise.hpp"
+#include "noise/model_figures.hpp"
 
 namespace calstand::analysis {
 
@@ -21,5 +23,12 @@ std::string noise_parameter_unit(solver::NoiseKind kind, const std::string& unit
 /// "wavelet_variance": {"tau_s", "measured", "fitted", "unit"}}.
 nlohmann::ordered_json noise_model_json(const solver::NoiseModel& model, const std::string& source,
                                         const std::string& unit);
+
+/// One channel's figures from its identified model or the Allan line (solver::model_figures()):
+/// {"noise_model": {"estimator", "min_tau_s", "selected_by", "terms": [kind...]} or null,
+/// "noise_model_note": why there is none (absent when there is one), "model_figures": [{"name",
+/// "value", "ci95": [lo, hi], "unit", "estimator": "gmwm"|"allan-line", "resolved", "note"
+/// (allan-line only)}]}.
+nlohmann::ordered_json channel_model_figures_json(const solver::ChannelModelFigures& m);
 
 }  // namespace calstand::analysis

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "noise/bias_model.hpp"
+#include "noise/model_figures.hpp"
 #include "noise/run_noise.hpp"
 #include "store/database.hpp"
 
@@ -59,14 +60,20 @@ struct StabilityAnalysis {
   double duration_s = 0.0;
   double confidence = 0.0;  ///< of the bias instability intervals
   std::array<ChannelStability, 6> channels;
+  /// Per channel gx ... az, the identified composite model's figures (solver::
+  /// channel_noise_models(), "gmwm") where the record supports it; empty when not asked for.
+  std::vector<solver::ChannelModelFigures> models;
 };
 
 /// The stability of `device` ("" = the run's first IMU) in `run` from static capture `step`
 /// (none: the longest), as solver::analyse_run_noise() reads it. Throws core::InputError as it
 /// does, and naming the step when it is shorter than kMinNoiseRecordS (the floor and a
 /// correlation time need a long record).
+/// With `noise_model`, also the identified composite model of each channel (about 1 s of CPU per
+/// channel and 2^19 samples), in `models`.
 StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
-                                    const std::string& device, std::optional<std::size_t> step);
+                                    const std::string& device, std::optional<std::size_t> step,
+                                    bool noise_model = false);
 
 /// The stability from a noise analysis already made, for a caller that holds the samples: the
 /// report reads a long capture once for its Allan plot and its stability figures. The floor's
@@ -86,7 +93,13 @@ StabilityAnalysis stability_of(const solver::RunNoise& noise,
 ///            "bias_model_aic_difference": [...], "bias_instability_fit_deg_per_h": [...],
 ///            "bias_instability_fit_sigma_deg_per_h": [...]},
 ///   "accel": the same in ug}`; the bias variation and correlation time are null unless the
-/// bias model is gauss_markov, the fitted B and its sigma null unless it is flicker.
+/// bias model is gauss_markov, the fitted B and its sigma null unless it is flicker. With the
+/// models: per sensor also "bias_instability_model_<unit>" (a flicker term's B) with its
+/// "..._interval_<unit>", "bias_variation_model_<unit>" and "correlation_time_model_s" (the
+/// Gauss-Markov term of longest correlation time) with their intervals, null where the model
+/// has no such term or there is no model, "model_note" (why not); top level "estimators" (which
+/// estimator gives each key: allan-floor, allan-line, gmwm) and "noise_models" (per channel as
+/// analysis::channel_model_figures_json()). Without them, "noise_models" is null.
 
 nlohmann::json to_json(const StabilityAnalysis& s);
 
