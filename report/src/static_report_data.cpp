@@ -99,8 +99,15 @@ StaticRecordNoise analyse_static_record(std::span<const core::ImuSample> samples
       m.note = "not asked for (--no-noise-model)";
     } else {
       try {
+        // The scales under the shortest averaging time of `calstand noise` are left out, as
+        // there: a sensor's output low-pass shapes them (on an LN200-class accelerometer at
+        // 400 Hz, every scale halves the white density and invents a flicker floor).
+        solver::NoiseIdOptions id = *noise_id;
+        if (id.min_tau_s <= 0.0 && out.noise.sample_rate_hz > 0.0) {
+          id.min_tau_s = static_cast<double>(options.min_tau_samples) / out.noise.sample_rate_hz;
+        }
         m.model = solver::identify_noise_model(solver::channel_series(samples, c),
-                                               out.noise.sample_rate_hz, *noise_id);
+                                               out.noise.sample_rate_hz, id);
       } catch (const core::InputError& e) {
         m.note = e.what();
       }
