@@ -15,8 +15,11 @@ namespace calstand::fleet {
 
 /// The SQLite schema version this sync reads (store/schema.sql). A station file at another
 /// version is refused by name rather than copied half understood: a new store migration is
-/// mapped to the central schema (a new central migration) before stations sync it.
-inline constexpr int kSyncedStoreSchemaVersion = 6;
+/// mapped to the central schema (a new central migration) before stations sync it. Version 7
+/// added only `calibration_residuals` (the step residuals a certificate is printed from), which
+/// stays at the station: certificates are printed where the unit was calibrated, and the
+/// central database answers lots and trends from the records themselves.
+inline constexpr int kSyncedStoreSchemaVersion = 7;
 
 struct SyncOptions {
   /// The name the station registers with on its first sync (later syncs keep the registered
