@@ -53,9 +53,10 @@ Binned bin_samples(const std::vector<core::ImuSample>& samples, double bin_s) {
       b.t_s.push_back(std::numeric_limits<double>::quiet_NaN());
       continue;
     }
-    b.t_s.push_back(t / n);
-    b.temperature_c.push_back(temp / n);
-    for (int c = 0; c < 6; ++c) b.y[c].push_back(sum[c] / n);
+    const auto count = static_cast<double>(n);
+    b.t_s.push_back(t / count);
+    b.temperature_c.push_back(temp / count);
+    for (int c = 0; c < 6; ++c) b.y[c].push_back(sum[c] / count);
   }
   // Drop the NaN placeholders of empty bins (they only kept the bin grid).
   b.t_s.erase(std::remove_if(b.t_s.begin(), b.t_s.end(), [](double v) { return std::isnan(v); }),

@@ -220,7 +220,9 @@ TEST_F(NoiseCli, NoiseUsesTheIdentifiedModelAndNamesEachFiguresEstimator) {
     ASSERT_FALSE(ch["model_figures"].empty());
     for (const auto& f : ch["model_figures"]) {
       EXPECT_TRUE(f["estimator"] == "gmwm" || f["estimator"] == "allan-line") << f;
-      if (f["estimator"] == "allan-line") EXPECT_FALSE(f["note"].get<std::string>().empty()) << f;
+      if (f["estimator"] == "allan-line") {
+        EXPECT_FALSE(f["note"].get<std::string>().empty()) << f;
+      }
     }
     const auto white = model_figure(j, c, "white_density");
     ASSERT_FALSE(white.is_null());
@@ -541,7 +543,9 @@ TEST(AnalyzeStabilityCli, RecoversTheSheetsBiasVariationAndCorrelationTimeAndFin
     for (int axis = 0; axis < 3; ++axis) {
       const std::string model = got["bias_model"][axis];
       EXPECT_NE(model, "flicker") << t.sensor << " axis " << axis;
-      if (t.decidable) EXPECT_EQ(model, "gauss_markov") << t.sensor << " axis " << axis;
+      if (t.decidable) {
+        EXPECT_EQ(model, "gauss_markov") << t.sensor << " axis " << axis;
+      }
       EXPECT_FALSE(got["bias_model_reason"][axis].get<std::string>().empty());
       if (model == "gauss_markov") {
         const double sigma = got[t.sigma_key][axis];
@@ -661,7 +665,9 @@ TEST(AnalyzeStabilityCli, AFlickerUnitGetsFlickerAndNoBiasVariation) {
         EXPECT_TRUE(got["correlation_time_s"][axis].is_null()) << where;
         EXPECT_FALSE(got["correlation_resolved"][axis].get<bool>()) << where;
         EXPECT_FALSE(got["bias_model_reason"][axis].get<std::string>().empty()) << where;
-        if (std::string(sensor) == "accel") EXPECT_EQ(model, "flicker") << where;
+        if (std::string(sensor) == "accel") {
+          EXPECT_EQ(model, "flicker") << where;
+        }
         if (model != "flicker") continue;
         if (std::string(sensor) == "gyro") ++gyro_flicker;
         const double b = got[std::string("bias_instability_fit_") + unit][axis];

@@ -18,7 +18,8 @@ solver::FitResult two_steps() {
     solver::StepResidual s;
     s.index = 3 + 2 * k;
     s.label = k == 0 ? "z up" : "z down";
-    s.residual << 1.0e-4 / 3.0, -2.5e-5, 7.0e-6 * (k + 1), 1.0e-3 / 7.0, -3.0e-4, 0.1 / 3.0;
+    s.residual << 1.0e-4 / 3.0, -2.5e-5, 7.0e-6 * static_cast<double>(k + 1), 1.0e-3 / 7.0, -3.0e-4,
+        0.1 / 3.0;
     s.sigma << 1.1e-5, 1.2e-5, 1.3e-5, 2.1e-4, 2.2e-4, 2.3e-4;
     fit.steps.push_back(s);
   }

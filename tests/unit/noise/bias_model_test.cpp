@@ -100,7 +100,7 @@ TEST(BiasModel, NamesAndBadInput) {
   AllanOptions no_intervals;
   no_intervals.intervals = false;
   std::vector<double> y(1000, 0.0);
-  for (std::size_t i = 0; i < y.size(); ++i) y[i] = (i % 7) * 1e-3;
+  for (std::size_t i = 0; i < y.size(); ++i) y[i] = static_cast<double>(i % 7) * 1e-3;
   EXPECT_THROW(choose_bias_model(allan(y, kRateHz, no_intervals), {}), core::InputError);
 }
 

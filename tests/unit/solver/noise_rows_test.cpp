@@ -35,7 +35,9 @@ TEST(NoiseRows, ALongStaticCaptureEntersByItsSegmentsInTimeOrder) {
   ASSERT_EQ(rows.size(), steps.size() - 1 + kMaxSegmentsPerCapture);
   std::int64_t segment_samples = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (i > 0) EXPECT_GE(rows[i].start_s, rows[i - 1].end_s);
+    if (i > 0) {
+      EXPECT_GE(rows[i].start_s, rows[i - 1].end_s);
+    }
     if (sources[i].segment) segment_samples += rows[i].count;
   }
   // Every sample of the capture is in one segment, and the segments are the capture's time.
