@@ -8,6 +8,7 @@
 #include "analysis/run_model.hpp"
 #include "analysis/table_free_fit.hpp"
 #include "core/error.hpp"
+#include "noise/model_figures.hpp"
 #include "report/static_report.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
@@ -92,27 +93,18 @@ StaticRecordNoise analyse_static_record(std::span<const core::ImuSample> samples
   } catch (const core::InputError& e) {
     out.stability_note = e.what();
   }
-  for (const solver::ImuChannel c : solver::kAllChannels) {
-    ChannelNoiseModel m;
-    m.channel = c;
-    if (!noise_id) {
-      m.note = "not asked for (--no-noise-model)";
-    } else {
-      try {
-        // The scales under the shortest averaging time of `calstand noise` are left out, as
-        // there: a sensor's output low-pass shapes them (on an LN200-class accelerometer at
-        // 400 Hz, every scale halves the white density and invents a flicker floor).
-        solver::NoiseIdOptions id = *noise_id;
-        if (id.min_tau_s <= 0.0 && out.noise.sample_rate_hz > 0.0) {
-          id.min_tau_s = static_cast<double>(options.min_tau_samples) / out.noise.sample_rate_hz;
-        }
-        m.model = solver::identify_noise_model(solver::channel_series(samples, c),
-                                               out.noise.sample_rate_hz, id);
-      } catch (const core::InputError& e) {
-        m.note = e.what();
-      }
+  if (!noise_id) {
+    for (const solver::ImuChannel c : solver::kAllChannels) {
+      out.models.push_back({c, std::nullopt, "not asked for (--no-noise-model)"});
     }
-    out.models.push_back(std::move(m));
+  } else {
+    // The models `calstand noise` gives (the same shortest scale and record length).
+    solver::ModelFigureOptions model_options;
+    model_options.id = *noise_id;
+    for (solver::ChannelModelFigures& m :
+         solver::channel_noise_models(samples, out.noise, model_options)) {
+      out.models.push_back({m.channel, std::move(m.model), std::move(m.note)});
+    }
   }
   return out;
 }
