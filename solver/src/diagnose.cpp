@@ -461,7 +461,7 @@ nlohmann::json diagnosis_to_json(const Diagnosis& d) {
                         {"noise_penalty_change", w.noise_penalty_change},
                         {"delta_bic", number(w.delta_bic)},
                         {"bar", w.bar},
-                        {"beats_wander", w.beats_wander},
+                        {"beats_wander", w.beats_wander()},
                         {"held_out_better", w.held_out_better},
                         {"kept", w.kept},
                         {"verdict", w.verdict}});

@@ -859,7 +859,7 @@ std::vector<WarmUpCheck> best_warm_ups(std::vector<std::pair<core::TermSensor, W
   const auto rank = [](const WarmUpCheck& c) {
     const double bic =
         std::isnan(c.delta_bic) ? std::numeric_limits<double>::infinity() : c.delta_bic;
-    return std::tuple{!c.kept, !(c.beats_wander && c.held_out_better), !c.beats_wander, bic};
+    return std::tuple{!c.kept, !(c.beats_wander() && c.held_out_better), !c.beats_wander(), bic};
   };
   std::map<core::TermSensor, WarmUpCheck> best;
   for (auto& [sensor, check] : checks) {
@@ -1070,9 +1070,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       check.noise_penalty_change = with_term.noise_penalty - found->second.noise_penalty;
       check.delta_bic = s.delta_bic;
     }
-    const bool beats_wander = s.delta_bic < form_bar;
-    check.beats_wander = beats_wander;
-    if (!beats_wander) {
+    if (!(s.delta_bic < form_bar)) {
       if (transient) {
         check.verdict = fmt::format(
             "within what the wander makes: BIC {:+.1f} against it (2 ln LR {:.1f}, the wanders' "

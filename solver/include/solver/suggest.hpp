@@ -78,12 +78,13 @@ struct WarmUpCheck {
   /// The wanders' parameters' cost with the term less without (usually 0 or negative: the term
   /// may leave a simpler wander).
   double noise_penalty_change = 0.0;
-  double delta_bic = 0.0;     ///< against the wander (NaN when not reached)
-  double bar = 0.0;           ///< the delta_bic asked of a warm-up
-  bool beats_wander = false;  ///< passed the bar against the wander
+  double delta_bic = 0.0;  ///< against the wander (NaN when not reached)
+  double bar = 0.0;        ///< the delta_bic asked of a warm-up
   bool held_out_better = false;
   bool kept = false;    ///< among the suggestions
   std::string verdict;  ///< in words: why it was kept or not
+  /// Passed the bar against the wander (false when the screening rejected it: delta_bic NaN).
+  bool beats_wander() const { return delta_bic < bar; }
 };
 
 /// The outcome of the search.

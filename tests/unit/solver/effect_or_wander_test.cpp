@@ -141,7 +141,7 @@ TEST(WarmUpCheck, IsReportedWithItsFiguresKeptOrNot) {
   EXPECT_TRUE(found->kept) << found->verdict;
   ASSERT_FALSE(warm.suggestions.empty());
   EXPECT_EQ(found->custom, warm.suggestions.front().custom);
-  EXPECT_TRUE(found->beats_wander);
+  EXPECT_TRUE(found->beats_wander());
   EXPECT_TRUE(found->held_out_better);
   EXPECT_LT(found->delta_bic, found->bar);
   EXPECT_GT(found->two_log_likelihood_ratio, 0.0);
@@ -154,7 +154,7 @@ TEST(WarmUpCheck, IsReportedWithItsFiguresKeptOrNot) {
   EXPECT_FALSE(judged->kept);
   EXPECT_FALSE(judged->verdict.empty());
   EXPECT_GT(judged->tau_s, 0.0);
-  if (!judged->beats_wander && std::isfinite(judged->delta_bic)) {
+  if (!judged->beats_wander() && std::isfinite(judged->delta_bic)) {
     EXPECT_GE(judged->delta_bic, judged->bar) << judged->verdict;
   }
   // The JSON carries it.
