@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/units.hpp"
+#include "analysis/noise_model_json.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -171,6 +172,14 @@ nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
     }
     j["channels"][std::string(solver::to_string(c.channel))] = figures;
   }
+  // The identified models' figures beside the Allan line's: the Kalibr and OpenVINS exports
+  // prefer them (issue 33), acceptance keeps reading "channels".
+  nlohmann::json models = nlohmann::json::object();
+  for (const solver::ChannelModelFigures& m : solver::channel_noise_models(db, noise)) {
+    models[std::string(solver::to_string(m.channel))] =
+        nlohmann::json(channel_model_figures_json(m).at("model_figures"));
+  }
+  j["model_figures"] = models;
   return j;
 }
 
@@ -215,6 +224,40 @@ std::optional<solver::RunNoise> calibration_noise_terms(const nlohmann::json& no
       ch.terms.*w.term = {value, 0.0, f->value("resolved", true)};
     }
     out.channels.push_back(std::move(ch));
+  }
+  return out;
+}
+
+std::optional<std::vector<solver::ChannelModelFigures>> calibration_noise_models(
+    const nlohmann::json& noise) {
+  if (!noise.is_object() || !noise.contains("model_figures")) return std::nullopt;
+  const nlohmann::json& channels = noise["model_figures"];
+  if (!channels.is_object()) throw core::InputError("noise.model_figures", "must be an object");
+  std::vector<solver::ChannelModelFigures> out;
+  for (const solver::ImuChannel c : solver::kAllChannels) {
+    const std::string name(solver::to_string(c));
+    const std::string where = "noise.model_figures." + name;
+    if (!channels.contains(name)) throw core::InputError(where, "missing");
+    solver::ChannelModelFigures m;
+    m.channel = c;
+    m.figures = model_figures_from_json(channels[name], where);
+    // The export takes N and K in the data's unit; a record states each figure's unit.
+    const std::string u(solver::channel_unit(c));
+    for (solver::ModelFigure& f : m.figures) {
+      std::string unit;
+      if (f.name == "white_density") unit = u + "/sqrt(Hz)";
+      if (f.name == "random_walk") unit = u + "/sqrt(s)";
+      if (unit.empty() || f.unit == unit) continue;
+      try {
+        for (double* v : {&f.value, &f.lo, &f.hi}) {
+          if (std::isfinite(*v)) *v = core::convert(*v, f.unit, unit);
+        }
+      } catch (const core::InputError& e) {
+        throw core::InputError(where + ": " + f.name, e.what());
+      }
+      f.unit = unit;
+    }
+    out.push_back(std::move(m));
   }
   return out;
 }

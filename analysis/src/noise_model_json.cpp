@@ -2,6 +2,9 @@
 #include "analysis/noise_model_json.hpp"
 
 #include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -131,6 +134,51 @@ Json channel_model_figures_json(const solver::ChannelModelFigures& m) {
     figures.push_back(j);
   }
   out["model_figures"] = figures;
+  return out;
+}
+
+std::vector<solver::ModelFigure> model_figures_from_json(const nlohmann::json& figures,
+                                                         const std::string& where) {
+  if (!figures.is_array()) throw core::InputError(where, "must be an array of figures");
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  // A number, or null for one the model could not give (NaN as the writer's number() makes).
+  const auto number_or_null = [](const nlohmann::json& j, const std::string& at) {
+    if (j.is_null()) return kNaN;
+    if (!j.is_number()) throw core::InputError(at, "must be a number or null");
+    return j.get<double>();
+  };
+  std::vector<solver::ModelFigure> out;
+  for (std::size_t i = 0; i < figures.size(); ++i) {
+    const nlohmann::json& f = figures[i];
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    if (!f.is_object()) throw core::InputError(at, "must be an object");
+    for (const char* key : {"name", "unit", "estimator"}) {
+      if (!f.contains(key) || !f[key].is_string()) {
+        throw core::InputError(at + "." + key, "missing or not a string");
+      }
+    }
+    if (!f.contains("value")) throw core::InputError(at + ".value", "missing");
+    solver::ModelFigure m;
+    m.name = f["name"].get<std::string>();
+    m.unit = f["unit"].get<std::string>();
+    m.estimator = f["estimator"].get<std::string>();
+    m.value = number_or_null(f["value"], at + ".value");
+    m.lo = m.hi = kNaN;
+    if (f.contains("ci95")) {
+      const nlohmann::json& ci = f["ci95"];
+      if (!ci.is_array() || ci.size() != 2) {
+        throw core::InputError(at + ".ci95", "must be [lo, hi]");
+      }
+      m.lo = number_or_null(ci[0], at + ".ci95[0]");
+      m.hi = number_or_null(ci[1], at + ".ci95[1]");
+    }
+    if (f.contains("resolved") && !f["resolved"].is_boolean()) {
+      throw core::InputError(at + ".resolved", "must be true or false");
+    }
+    m.resolved = f.value("resolved", true);
+    m.note = f.value("note", std::string());
+    out.push_back(std::move(m));
+  }
   return out;
 }
 

@@ -47,13 +47,16 @@ ExportResult export_openvins(const solver::Calibration& calibration, const Expor
   const RecordTerms t = record_terms(calibration);
   ExportResult out;
 
-  // The noise densities as `calstand noise --kalibr` writes them (solver/kalibr.cpp), from the
-  // figures the record keeps.
-  const std::optional<solver::RunNoise> noise =
-      calibration_noise_terms(calibration.record.value("noise", nlohmann::json()));
+  // The noise densities as `calstand noise --kalibr` writes them (noise/kalibr.cpp), from the
+  // figures the record keeps: its identified models' where it has them, else the Allan line's.
+  const nlohmann::json record_noise = calibration.record.value("noise", nlohmann::json());
+  const std::optional<solver::RunNoise> noise = calibration_noise_terms(record_noise);
+  const auto models = calibration_noise_models(record_noise);
   solver::KalibrImu imu;
   std::vector<std::string> unresolved;
-  if (noise) {
+  if (noise && models) {
+    imu = solver::kalibr_from_noise_models(*noise, *models, options.rostopic, &unresolved);
+  } else if (noise) {
     imu = solver::kalibr_from_run_noise(*noise, options.rostopic, &unresolved);
   } else {
     imu.rostopic = options.rostopic;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "noise/allan.hpp"
+#include "noise/model_figures.hpp"
 #include "noise/noise_fit.hpp"
 #include "noise/record_length.hpp"
 #include "noise/run_noise.hpp"
@@ -74,7 +75,11 @@ nlohmann::ordered_json allan_json(const solver::AllanResult& result, const std::
 
 /// The run's noise figures in datasheet units from its longest static capture, for a
 /// calibration record: {"step", "duration_s", "sample_rate_hz", "channels": {"gx": [figures...],
-/// ...}}, or null when the run has no static capture at least kMinNoiseRecordS long.
+/// ...}, "model_figures": {"gx": [...], ...}}, or null when the run has no static capture at
+/// least kMinNoiseRecordS long. "channels" holds the Allan-line figures (what factory acceptance
+/// reads); "model_figures" each channel's figures from its identified composite model where the
+/// record supports it, else the Allan line's, each naming its estimator
+/// (solver::channel_noise_models(), channel_model_figures_json()'s "model_figures").
 nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
                                          const std::string& device);
 
@@ -86,5 +91,14 @@ nlohmann::json calibration_noise_figures(store::Database& db, std::int64_t run,
 /// absent. Throws core::InputError naming the channel and figure when one is missing or its unit
 /// does not convert.
 std::optional<solver::RunNoise> calibration_noise_terms(const nlohmann::json& noise);
+
+/// A calibration record's "noise.model_figures" read back per channel gx..az (figures only, no
+/// model), the white density and random walk converted to the data's unit (deg/s/sqrt(Hz),
+/// deg/s/sqrt(s); m/s^2 likewise) for solver::kalibr_from_noise_models(). None when `noise` is
+/// null or has no "model_figures" (records written before they were kept). Throws
+/// core::InputError naming the channel and figure when one is malformed or its unit does not
+/// convert.
+std::optional<std::vector<solver::ChannelModelFigures>> calibration_noise_models(
+    const nlohmann::json& noise);
 
 }  // namespace calstand::analysis

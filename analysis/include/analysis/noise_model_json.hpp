@@ -31,4 +31,11 @@ nlohmann::ordered_json noise_model_json(const solver::NoiseModel& model, const s
 /// (allan-line only)}]}.
 nlohmann::ordered_json channel_model_figures_json(const solver::ChannelModelFigures& m);
 
+/// The "model_figures" array of channel_model_figures_json() read back (a calibration record
+/// keeps it, analysis::calibration_noise_figures()): null values and interval ends as NaN.
+/// Throws core::InputError naming `where`[i] and the field when an entry is not an object, or
+/// its name, value, unit or estimator is missing or of the wrong type.
+std::vector<solver::ModelFigure> model_figures_from_json(const nlohmann::json& figures,
+                                                         const std::string& where);
+
 }  // namespace calstand::analysis

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.hpp"
@@ -55,6 +56,26 @@ TEST(CalibrationNoiseFigures, ALongStaticRecordGivesTheTrueRandomWalk) {
   ASSERT_EQ(terms->channels.size(), 6u);
   EXPECT_NEAR(terms->channels[0].terms.random_walk.value, kTrueArwDegRtH / 60.0,
               0.15 * kTrueArwDegRtH / 60.0);
+
+  // Beside them, each channel's identified model's figures (the Kalibr export's): on this white
+  // record the GMWM's white density, N in deg/s/sqrt(Hz), with an interval holding the truth.
+  const auto models = calibration_noise_models(j);
+  ASSERT_TRUE(models.has_value()) << j.dump();
+  ASSERT_EQ(models->size(), 6u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto& figures = (*models)[i].figures;
+    const auto n = std::find_if(figures.begin(), figures.end(),
+                                [](const solver::ModelFigure& f) { return f.name == "white_density"; });
+    ASSERT_NE(n, figures.end()) << i;
+    EXPECT_EQ(n->estimator, "gmwm") << i;
+    EXPECT_EQ(n->unit, "deg/s/sqrt(Hz)") << i;
+    EXPECT_NEAR(n->value, kTrueArwDegRtH / 60.0, 0.05 * kTrueArwDegRtH / 60.0) << i;
+    EXPECT_LT(n->lo, kTrueArwDegRtH / 60.0) << i;
+    EXPECT_GT(n->hi, kTrueArwDegRtH / 60.0) << i;
+  }
+  nlohmann::json old_record = j;
+  old_record.erase("model_figures");
+  EXPECT_FALSE(calibration_noise_models(old_record).has_value());
 }
 
 TEST(CalibrationNoiseTerms, ReadTheFiguresBackInTheDataUnit) {

@@ -241,6 +241,66 @@ TEST(ExportOpenVins, EveryIntrinsicReadsBackThroughOpenVinsCorrection) {
   }
 }
 
+// A record's identified-model figures (analysis::calibration_noise_figures' "model_figures"):
+// per channel the white density and random walk in the data's unit, from the GMWM or not.
+nlohmann::json model_figures(double n, double k, const char* u, const char* n_estimator) {
+  return nlohmann::json::array({{{"name", "white_density"},
+                                 {"value", n},
+                                 {"ci95", {0.9 * n, 1.1 * n}},
+                                 {"unit", std::string(u) + "/sqrt(Hz)"},
+                                 {"estimator", n_estimator},
+                                 {"resolved", true}},
+                                {{"name", "random_walk"},
+                                 {"value", k},
+                                 {"ci95", {0.5 * k, 2.0 * k}},
+                                 {"unit", std::string(u) + "/sqrt(s)"},
+                                 {"estimator", "gmwm"},
+                                 {"resolved", true}}});
+}
+
+TEST(ExportOpenVins, TheIdentifiedModelsFiguresAreUsedWhereEveryAxisHasThem) {
+  HandRecord h;
+  h.model = "gyro_bias,accel_bias";
+  h.values = {{"gyro_bias.x", 0.0},  {"gyro_bias.y", 0.0},  {"gyro_bias.z", 0.0},
+              {"accel_bias.x", 0.0}, {"accel_bias.y", 0.0}, {"accel_bias.z", 0.0}};
+  h.noise = hand_noise_figures();
+  nlohmann::json& m = h.noise["model_figures"];
+  // Gyro: every axis from its model; the worst white density is gy's, written in rad/s, so that
+  // the record's stated unit is converted and not assumed.
+  m["gx"] = model_figures(0.0030, 2e-5, "deg/s", "gmwm");
+  m["gy"] = model_figures(0.0041 * kExportRadPerDeg, 1e-5 * kExportRadPerDeg, "rad/s", "gmwm");
+  m["gz"] = model_figures(0.0020, 4e-5, "deg/s", "gmwm");
+  // Accel: az's white density is the Allan line's, so the sensor's density stays the Allan line's
+  // (one number per sensor from one estimator); its random walk is every axis's model.
+  m["ax"] = model_figures(4e-4, 3e-6, "m/s^2", "gmwm");
+  m["ay"] = model_figures(5e-4, 7e-6, "m/s^2", "gmwm");
+  m["az"] = model_figures(9e-4, 2e-6, "m/s^2", "allan-line");
+  const solver::Calibration c = testing::hand_calibration(h);
+  const ExportResult r = export_calibration(c, ExportFormat::kOpenVins, {});
+  const OpenVinsImu imu = read_openvins_yaml(r.text);
+  EXPECT_NEAR(yaml_scalar(imu, "gyroscope_noise_density"), 0.0041 * kExportRadPerDeg, 1e-9);
+  EXPECT_NEAR(yaml_scalar(imu, "gyroscope_random_walk"), 4e-5 * kExportRadPerDeg, 1e-11);
+  EXPECT_NEAR(yaml_scalar(imu, "accelerometer_noise_density"), 0.05 / 60.0, 1e-9);  // Allan
+  EXPECT_NEAR(yaml_scalar(imu, "accelerometer_random_walk"), 7e-6, 1e-11);
+  for (const char* line :
+       {"gyroscope_noise_density: 7.15585e-05  # [rad/s/sqrt(Hz)] estimator: gmwm",
+        "accelerometer_noise_density: 0.000833333  # [m/s^2/sqrt(Hz)] estimator: allan-line",
+        "accelerometer_random_walk: 7e-06  # [m/s^3/sqrt(Hz)] estimator: gmwm"}) {
+    EXPECT_NE(r.text.find(line), std::string::npos) << line << " not in:\n" << r.text;
+  }
+
+  // A malformed figure is named.
+  h.noise["model_figures"]["ay"][1]["unit"] = "m/s";  // not a random walk's dimension
+  try {
+    export_calibration(testing::hand_calibration(h), ExportFormat::kOpenVins, {});
+    ADD_FAILURE() << "accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("noise.model_figures.ay: random_walk"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(ExportOpenVins, ARecordFittedOnTheSimulatorReadsBack) {
   testing::TempDatabase file("export-openvins");
   const std::int64_t run = testing::record_run(file.path(), "six-position", {"capture_s=10"}, 5);
