@@ -447,8 +447,8 @@ Fit fit_efficient(const std::vector<NoiseKind>& kinds, const WaveletMoments& w,
 }
 
 // The wavelet variances of `rate` from the first scale whose averaging time reaches min_tau_s.
-WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz, double min_tau_s) {
-  WaveletMoments wm = wavelet_moments(rate, sample_rate_hz);
+WaveletMoments trimmed_moments(WaveletMoments wm, double min_tau_s) {
+  const double sample_rate_hz = wm.sample_rate_hz;
   std::size_t skip = 0;
   while (skip < wm.m.size() && static_cast<double>(wm.m[skip]) / sample_rate_hz < min_tau_s) {
     ++skip;
@@ -463,6 +463,11 @@ WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz,
   wm.variance.erase(wm.variance.begin(), wm.variance.begin() + d);
   wm.dof.erase(wm.dof.begin(), wm.dof.begin() + d);
   return wm;
+}
+
+// The wavelet variances of `rate` from the first scale whose averaging time reaches min_tau_s.
+WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz, double min_tau_s) {
+  return trimmed_moments(wavelet_moments(rate, sample_rate_hz), min_tau_s);
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -512,8 +517,23 @@ double term_wavelet_variance(NoiseKind kind, double value, double tau_s, std::si
 NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate_hz,
                                 const NoiseIdOptions& options) {
   options.validate();
+  return identify_noise_model(wavelet_moments(rate, sample_rate_hz), options);
+}
+
+NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOptions& options) {
+  options.validate();
+  if (moments.m.empty() || moments.variance.size() != moments.m.size() ||
+      moments.dof.size() != moments.m.size() || moments.m.front() != 1) {
+    throw core::InputError("moments", "expected the wavelet variances from m = 1 on");
+  }
+  const double sample_rate_hz = moments.sample_rate_hz;
+  // The record's length: the bootstrap simulates records as long (it needs no data).
+  struct {
+    std::size_t n;
+    std::size_t size() const { return n; }
+  } const rate{moments.samples};
   NoiseModel out;
-  out.moments = moments_from(rate, sample_rate_hz, options.min_tau_s);
+  out.moments = trimmed_moments(moments, options.min_tau_s);
   out.sample_rate_hz = sample_rate_hz;
   out.samples = rate.size();
   const WaveletMoments& w = out.moments;
