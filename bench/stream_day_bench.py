@@ -6,14 +6,15 @@ baseline build) paths on a tenth of it (8.64 M samples), so that the per-sample 
 compared like for like where the in-memory path still fits.
 
     stream_day_bench.py CALSTAND_BIN --baseline BIN [--samples N] [--small N] [--keep DIR]
-                        [--repeat R]
+                        [--repeat R] [--stored N]
 
 The record: one column `gx` [deg/s] at 1 kHz, a tactical gyro's white noise (0.005
 deg/s/sqrt(Hz)), rate random walk (5e-4 deg/s/sqrt(s)) and a 0.3 deg/s bias, written with 9
 significant digits (about 16 bytes a row: 1.4 GB for the day). The free space of the folder is
 checked first; the files are deleted afterwards unless --keep. Each command is timed as a child
 process (wall time, ru_maxrss, CPU time); the best of --repeat (default 1) is kept, the machine
-being shared.
+being shared. --stored N also times `allan --db` and `noise-id --db` on a stored run of one
+static step of N samples at 1 kHz (`calstand sim-session --kind static`, imported), both builds.
 """
 
 import os
@@ -91,6 +92,20 @@ def main():
             ("allan, streamed", small, [calstand, "allan", "--csv", part] + common),
             ("noise-id, streamed", small, [calstand, "noise-id", "--csv", part] + common),
         ]
+        stored = int(args[args.index("--stored") + 1]) if "--stored" in args else 0
+        if stored:
+            session, db = os.path.join(folder, "session"), os.path.join(folder, "stored.db")
+            subprocess.run([calstand, "sim-session", "--kind", "static", "--rest",
+                            str(stored / RATE_HZ), "--rate", str(RATE_HZ), "--out", session],
+                           check=True, stdout=subprocess.DEVNULL)
+            subprocess.run([calstand, "import", session, "--db", db], check=True,
+                           stdout=subprocess.DEVNULL)
+            shutil.rmtree(session)
+            on_db = ["--db", db, "--run", "1", "--channel", "gx", "--json"]
+            for name, binary in [("streamed", calstand), ("in memory (baseline)", baseline)]:
+                if binary:
+                    runs += [(f"allan --db, {name}", stored, [binary, "allan"] + on_db),
+                             (f"noise-id --db, {name}", stored, [binary, "noise-id"] + on_db)]
         if baseline:
             runs += [
                 ("allan, in memory (baseline)", small,
