@@ -99,20 +99,30 @@ struct PhaseSeries {
   void process() {
     const std::size_t base = count - filled;  // index of buf[0] in the series
     const double* x = buf.data();
+    // The Allan and Hadamard sums in slices of 2048 ends, every lag per slice: the slice's
+    // newest points stay in L1 across the lags (as allan.cpp's blocked pass).
+    constexpr std::size_t kSlice = 2048;
+    for (std::size_t begin = processed; begin < filled; begin += kSlice) {
+      const std::size_t end = std::min(begin + kSlice, filled);
+      for (std::size_t k = 0; k < lags.size(); ++k) {
+        const std::size_t m = lags[k];
+        // First buffer index whose point ends a difference of span 2m (3m): base >= 2m (3m)
+        // once the buffer has shifted, as the history holds that many points.
+        const std::size_t lo2 = std::max(begin, base >= 2 * m ? 0 : 2 * m - base);
+        const std::size_t lo3 = std::max(begin, base >= 3 * m ? 0 : 3 * m - base);
+        if (allan && lo2 < end) {
+          allan_sum[k] += stream_second_sum(x, m, lo2 - 2 * m, end - 2 * m);
+          allan_terms[k] += end - lo2;
+        }
+        if (hadamard && lo3 < end) {
+          hadamard_sum[k] += stream_third_sum(x, m, lo3 - 3 * m, end - 3 * m);
+          hadamard_terms[k] += end - lo3;
+        }
+      }
+    }
     for (std::size_t k = 0; k < lags.size(); ++k) {
       const std::size_t m = lags[k];
-      // First buffer index whose point ends a difference of span 2m (3m): base >= 2m (3m) once
-      // the buffer has shifted, as the history holds that many points.
       const std::size_t lo2 = std::max(processed, base >= 2 * m ? 0 : 2 * m - base);
-      const std::size_t lo3 = std::max(processed, base >= 3 * m ? 0 : 3 * m - base);
-      if (allan && lo2 < filled) {
-        allan_sum[k] += stream_second_sum(x, m, lo2 - 2 * m, filled - 2 * m);
-        allan_terms[k] += filled - lo2;
-      }
-      if (hadamard && lo3 < filled) {
-        hadamard_sum[k] += stream_third_sum(x, m, lo3 - 3 * m, filled - 3 * m);
-        hadamard_terms[k] += filled - lo3;
-      }
       if (modified) {
         // As allan.cpp's modified_sum: a window of m second differences, moved by one.
         const auto d = [&](std::size_t e) { return x[e] - 2.0 * x[e - m] + x[e - 2 * m]; };
@@ -161,19 +171,20 @@ struct PhaseSeries {
 
   // The child's points made of this series' points [from, to) (series indices) `v`.
   void feed_children(const long double* v, std::size_t from, std::size_t to) {
+    if (to <= from) return;
+    // The first index of [from, to) of each parity, relative to `from`.
+    const std::size_t first_even = from % 2;
+    const std::size_t first_odd = 1 - from % 2;
+    const std::size_t n = to - from;
     if (sampled_child) {
-      child_scratch.clear();
-      for (std::size_t j = from; j < to; ++j) {
-        if (j % 2 == 0) child_scratch.push_back(v[j - from]);
-      }
+      child_scratch.resize((n - first_even + 1) / 2);
+      for (std::size_t j = first_even, c = 0; j < n; j += 2, ++c) child_scratch[c] = v[j];
       sampled_child->push(child_scratch.data(), child_scratch.size());
     }
     if (averaged_child) {
-      child_scratch.clear();
-      long double prev = previous;
-      for (std::size_t j = from; j < to; ++j) {
-        if (j % 2 == 1) child_scratch.push_back(0.5L * (prev + v[j - from]));
-        prev = v[j - from];
+      child_scratch.resize(n > first_odd ? (n - first_odd + 1) / 2 : 0);
+      for (std::size_t j = first_odd, c = 0; j < n; j += 2, ++c) {
+        child_scratch[c] = 0.5L * ((j == 0 ? previous : v[j - 1]) + v[j]);
       }
       averaged_child->push(child_scratch.data(), child_scratch.size());
     }
@@ -233,12 +244,15 @@ struct DeviationStream::State {
   bool has(AllanKind k) const { return std::find(kinds.begin(), kinds.end(), k) != kinds.end(); }
 
   void feed(std::span<const double> rate) {
-    scratch.clear();
-    if (root->count == 0) scratch.push_back(0.0L);  // phase[0] = 0, as phase_from_rate()
-    for (const double r : rate) {
-      phase += static_cast<long double>(r - mean);
-      scratch.push_back(phase);
+    const std::size_t first = root->count == 0 ? 1 : 0;  // phase[0] = 0, as phase_from_rate()
+    scratch.resize(first + rate.size());
+    if (first) scratch[0] = 0.0L;
+    long double p = phase;
+    for (std::size_t i = 0; i < rate.size(); ++i) {
+      p += static_cast<long double>(rate[i] - mean);
+      scratch[first + i] = p;
     }
+    phase = p;
     root->push(scratch.data(), scratch.size());
   }
 
