@@ -446,12 +446,16 @@ TEST(CsvReader, NumberBlocksNameTheFirstBadLineAndBlankLines) {
       }
       CsvFile f(text);
       const std::string expected = sequential_error(f, options);
-      if (!(bad.empty() && at == rows - 1)) ASSERT_FALSE(expected.empty()) << bad << " " << at;
+      if (!(bad.empty() && at == rows - 1)) {
+        ASSERT_FALSE(expected.empty()) << bad << " " << at;
+      }
       for (const unsigned threads : {1U, 2U}) {
         std::size_t given = 0;
         EXPECT_EQ(blocked_error(f, options, threads, &given), expected)
             << "row " << at << " '" << bad << "' threads " << threads;
-        if (!expected.empty()) EXPECT_EQ(given, static_cast<std::size_t>(at));
+        if (!expected.empty()) {
+          EXPECT_EQ(given, static_cast<std::size_t>(at));
+        }
       }
     }
   }

@@ -102,7 +102,9 @@ TEST(DeviationStream, StridedAgreesWithTheExactEstimator) {
         EXPECT_NEAR(rel, 0.0, 1e-12) << "m " << e.m;
         continue;
       }
-      if (e.terms > 1) EXPECT_LT(g.terms, e.terms) << "m " << e.m;  // strided indeed
+      if (e.terms > 1) {
+        EXPECT_LT(g.terms, e.terms) << "m " << e.m;  // strided indeed
+      }
       EXPECT_LT(std::abs(rel), 0.1 * se) << "m " << e.m << " edf " << e.edf;
       worst = std::max(worst, std::abs(rel) / se);
     }
