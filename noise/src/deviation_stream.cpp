@@ -61,12 +61,14 @@ struct PhaseSeries {
   std::size_t processed = 0;  // buf[0, processed) have had their sums taken
   std::size_t count = 0;      // points pushed in all
   long double anchor = 0.0L;
-  long double previous = 0.0L;  // the last point pushed (for the averaged child's pairs)
+  // The last point pushed, previous_origin + previous_rel (the averaged child's pairs).
+  double previous_rel = 0.0;
+  long double previous_origin = 0.0L;
   // Per lag: sums of squared differences and their counts; the modified estimator's window.
   std::vector<double> allan_sum, hadamard_sum, modified_sum, window;
   std::vector<std::size_t> allan_terms, hadamard_terms, modified_terms;
   std::unique_ptr<PhaseSeries> sampled_child, averaged_child;
-  std::vector<long double> child_scratch;
+  std::vector<double> child_scratch;
 
   PhaseSeries(std::size_t level_, std::size_t exact_max_m_, bool a, bool h, bool mod, bool fs,
               bool fa)
@@ -169,8 +171,11 @@ struct PhaseSeries {
                                          !sampled);
   }
 
-  // The child's points made of this series' points [from, to) (series indices) `v`.
-  void feed_children(const long double* v, std::size_t from, std::size_t to) {
+  // The child's points made of this series' points [from, to) (series indices), each
+  // origin + rel[j - from]. A pair split between two pushes of the same origin gives the same
+  // double as within one; one whose points have different origins (only where the root's
+  // origin moves, at fixed indices) is re-based on the new origin.
+  void feed_children(const double* rel, std::size_t from, std::size_t to, long double origin) {
     if (to <= from) return;
     // The first index of [from, to) of each parity, relative to `from`.
     const std::size_t first_even = from % 2;
@@ -178,19 +183,26 @@ struct PhaseSeries {
     const std::size_t n = to - from;
     if (sampled_child) {
       child_scratch.resize((n - first_even + 1) / 2);
-      for (std::size_t j = first_even, c = 0; j < n; j += 2, ++c) child_scratch[c] = v[j];
-      sampled_child->push(child_scratch.data(), child_scratch.size());
+      for (std::size_t j = first_even, c = 0; j < n; j += 2, ++c) child_scratch[c] = rel[j];
+      sampled_child->push(child_scratch.data(), child_scratch.size(), origin);
     }
     if (averaged_child) {
       child_scratch.resize(n > first_odd ? (n - first_odd + 1) / 2 : 0);
-      for (std::size_t j = first_odd, c = 0; j < n; j += 2, ++c) {
-        child_scratch[c] = 0.5L * ((j == 0 ? previous : v[j - 1]) + v[j]);
+      std::size_t c = 0, j = first_odd;
+      if (j == 0 && n > 0) {
+        const double before = previous_origin == origin
+                                  ? previous_rel
+                                  : static_cast<double>(previous_origin - origin) + previous_rel;
+        child_scratch[c++] = 0.5 * (before + rel[0]);
+        j += 2;
       }
-      averaged_child->push(child_scratch.data(), child_scratch.size());
+      for (; j < n; j += 2, ++c) child_scratch[c] = 0.5 * (rel[j - 1] + rel[j]);
+      averaged_child->push(child_scratch.data(), child_scratch.size(), origin);
     }
   }
 
-  void push(const long double* v, std::size_t n) {
+  // Appends points origin + rel[0 .. n).
+  void push(const double* rel, std::size_t n, long double origin) {
     std::size_t i = 0;
     while (i < n) {
       if (filled == buf.size()) {
@@ -198,11 +210,11 @@ struct PhaseSeries {
         shift();
       }
       const std::size_t take = std::min(n - i, buf.size() - filled);
-      for (std::size_t k = 0; k < take; ++k) {
-        buf[filled + k] = static_cast<double>(v[i + k] - anchor);
-      }
-      feed_children(v + i, count, count + take);
-      previous = v[i + take - 1];
+      const double offset = static_cast<double>(origin - anchor);
+      for (std::size_t k = 0; k < take; ++k) buf[filled + k] = rel[i + k] + offset;
+      feed_children(rel + i, count, count + take, origin);
+      previous_rel = rel[i + take - 1];
+      previous_origin = origin;
       filled += take;
       count += take;
       // A child is made once this series has 2 exact_max_m points (its scale needs 2
@@ -210,14 +222,10 @@ struct PhaseSeries {
       // (it holds more), so its first points are made from the buffer.
       if (count >= 2 * exact_max_m && count == filled &&
           ((feeds_sampled && !sampled_child) || (feeds_averaged && !averaged_child))) {
-        std::vector<long double> all(filled);
-        for (std::size_t k = 0; k < filled; ++k) all[k] = anchor + buf[k];
-        const long double keep_previous = previous;
-        previous = 0.0L;
         if (feeds_sampled) sampled_child = make_child(Feed::kSampled);
         if (feeds_averaged) averaged_child = make_child(Feed::kAveraged);
-        feed_children(all.data(), 0, filled);
-        previous = keep_previous;
+        const std::vector<double> all(buf.begin(), buf.begin() + static_cast<long>(filled));
+        feed_children(all.data(), 0, filled, anchor);
       }
       i += take;
     }
@@ -237,23 +245,41 @@ struct DeviationStream::State {
   std::vector<double> pending;  // the first samples, until their mean is known
   bool mean_known = false;
   double mean = 0.0;
-  long double phase = 0.0L;
-  std::vector<long double> scratch;
+  long double phase_origin = 0.0L;  // the phase is phase_origin + phase_rel
+  double phase_rel = 0.0;
+  std::vector<double> scratch;
   std::unique_ptr<PhaseSeries> root;
 
   bool has(AllanKind k) const { return std::find(kinds.begin(), kinds.end(), k) != kinds.end(); }
 
+  // The phase is summed in double from an origin that moves (in long double) every
+  // kOriginPoints points of the record, at fixed indices: the sums stay as small as the phase's
+  // excursion over those points, and the values do not depend on the blocks pushed.
   void feed(std::span<const double> rate) {
-    const std::size_t first = root->count == 0 ? 1 : 0;  // phase[0] = 0, as phase_from_rate()
-    scratch.resize(first + rate.size());
-    if (first) scratch[0] = 0.0L;
-    long double p = phase;
-    for (std::size_t i = 0; i < rate.size(); ++i) {
-      p += static_cast<long double>(rate[i] - mean);
-      scratch[first + i] = p;
+    constexpr std::size_t kOriginPoints = 4096;
+    std::size_t i = 0;
+    if (root->count == 0) {
+      const double zero = 0.0;  // phase[0] = 0, as phase_from_rate()
+      root->push(&zero, 1, 0.0L);
     }
-    phase = p;
-    root->push(scratch.data(), scratch.size());
+    while (i < rate.size()) {
+      // Point root->count is the next; its segment ends at the next multiple of kOriginPoints.
+      const std::size_t next = root->count;
+      const std::size_t take = std::min(rate.size() - i, kOriginPoints - next % kOriginPoints);
+      if (next % kOriginPoints == 0) {
+        phase_origin += static_cast<long double>(phase_rel);
+        phase_rel = 0.0;
+      }
+      scratch.resize(take);
+      double p = phase_rel;
+      for (std::size_t k = 0; k < take; ++k) {
+        p += rate[i + k] - mean;
+        scratch[k] = p;
+      }
+      phase_rel = p;
+      root->push(scratch.data(), take, phase_origin);
+      i += take;
+    }
   }
 
   void fix_mean() {
