@@ -28,10 +28,11 @@ namespace calstand::solver {
 ///
 /// Numerics: there is no pass for the mean, so the mean of the first 65,536 samples (or of all,
 /// if fewer) is subtracted before the phase is summed (the second and third differences ignore
-/// a constant rate exactly); the phase is summed in long double and stored per scale level
-/// relative to an anchor moved to the newest point at each buffer shift, so the stored values
-/// stay bounded by the phase excursion over a buffer whatever the bias and the length. The
-/// results do not depend on how the record is split into blocks.
+/// a constant rate exactly); the phase is summed in double from an origin (long double) moved
+/// every 4096 samples, and each scale level stores it relative to an anchor (long double)
+/// moved to its newest point at each buffer shift, so the sums and the stored values stay
+/// bounded by the phase's excursion over 4096 samples or a buffer, whatever the bias and the
+/// length. The results do not depend on how the record is split into blocks.
 class DeviationStream {
  public:
   /// Default exact range: every start sample up to m = 2^15 (32.8 s at 1 kHz).
