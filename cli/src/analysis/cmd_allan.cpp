@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -255,18 +256,41 @@ void run_allan(const AllanArgs& a) {
                         options.taus.spacing == solver::TauSpacing::kOctave;
   std::optional<solver::DeviationStream> stream;
   if (streamed) stream.emplace(std::vector<solver::AllanKind>{options.kind});
-  Series series = load_series(a, stream ? &*stream : nullptr);
+  const auto too_long = [&] {
+    return core::InputError(
+        total_kind ? "--kind" : "--taus",
+        "the record does not fit in memory; only the octave taus of adev, ohdev and mdev are "
+        "streamed in constant memory (hdev, decade, dense and listed taus, and the total and "
+        "Theo kinds hold the whole record)");
+  };
+  Series series;
+  try {
+    series = load_series(a, stream ? &*stream : nullptr);
+  } catch (const std::bad_alloc&) {
+    throw too_long();
+  }
   std::vector<double>& data = series.data;
   const double rate_hz = series.rate_hz;
   const std::string& unit = series.unit;
   const std::string& source = series.source;
   const std::optional<solver::ImuChannel>& channel = series.channel;
   if (total_kind) {
-    print_total(solver::total_deviation(data, rate_hz, total), source, unit, rate_hz, a.json);
+    std::optional<solver::TotalResult> t;
+    try {
+      t = solver::total_deviation(data, rate_hz, total);
+    } catch (const std::bad_alloc&) {
+      throw too_long();
+    }
+    print_total(*t, source, unit, rate_hz, a.json);
     return;
   }
-  const solver::AllanResult r =
-      stream ? stream->result(rate_hz, options) : solver::allan(data, rate_hz, options);
+  std::optional<solver::AllanResult> computed;
+  try {
+    computed = stream ? stream->result(rate_hz, options) : solver::allan(data, rate_hz, options);
+  } catch (const std::bad_alloc&) {
+    throw too_long();
+  }
+  const solver::AllanResult& r = *computed;
   std::optional<solver::NoiseTerms> terms;
   if (options.kind == solver::AllanKind::kAllan) {
     // As `calstand noise`: an IMU's anti-aliasing filter shapes the first samples of tau.
