@@ -43,8 +43,6 @@ double stream_third_sum(const double* x, std::size_t m, std::size_t begin, std::
   return (d - 3.0 * c + 3.0 * b - a).square().sum();
 }
 
-}  // namespace
-
 // One phase series: every phase point (level 0), or every D-th point, or the means of blocks of
 // D points (D = 2^level), with the difference sums of its lags. Points are kept in a buffer of
 // the last `history` points plus a block of new ones, relative to `anchor`.
@@ -237,6 +235,8 @@ struct PhaseSeries {
     if (averaged_child) averaged_child->process_all();
   }
 };
+
+}  // namespace
 
 struct DeviationStream::State {
   std::vector<AllanKind> kinds;
