@@ -528,14 +528,11 @@ NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOpti
   }
   const double sample_rate_hz = moments.sample_rate_hz;
   // The record's length: the bootstrap simulates records as long (it needs no data).
-  struct {
-    std::size_t n;
-    std::size_t size() const { return n; }
-  } const rate{moments.samples};
+  const std::size_t samples = moments.samples;
   NoiseModel out;
   out.moments = trimmed_moments(moments, options.min_tau_s);
   out.sample_rate_hz = sample_rate_hz;
-  out.samples = rate.size();
+  out.samples = samples;
   const WaveletMoments& w = out.moments;
   // The Hannan-Quinn penalty 2 ln ln n per parameter (Andrews 1999, "Consistent moment
   // selection procedures for GMM estimation", MSC-HQIC): under the efficient weights the
@@ -545,7 +542,7 @@ NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOpti
   // parameter is informed by all n samples; a random walk or a long Gauss-Markov time is
   // informed by the few long scales only, and BIC dropped them (white + GM + RW was taken
   // for white + flicker in 4 of 6 records).
-  const double penalty = 2.0 * std::log(std::log(static_cast<double>(rate.size())));
+  const double penalty = 2.0 * std::log(std::log(static_cast<double>(samples)));
 
   std::vector<std::vector<NoiseKind>> all_kinds;
   for (int q = 0; q < 2; ++q) {
@@ -616,7 +613,7 @@ NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOpti
       "lowest J + 2 p ln ln n (Hannan-Quinn; J: the efficient GMWM objective, chi-square with "
       "{} - p degrees of freedom for a right model; p parameters; n = {} samples) among the "
       "candidates whose every term is resolved",
-      w.m.size(), rate.size());
+      w.m.size(), samples);
   const std::vector<NoiseKind>& kinds = out.candidates[best].kinds;
   // The selected model's estimate with the weights of its own spectrum (efficient under it).
   const Eigen::MatrixXd own = covariance_factor(unpack(kinds, fits[best].p), w);
@@ -662,7 +659,7 @@ NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOpti
     std::mt19937_64 rng(options.seed);
     std::vector<std::vector<double>> draws(static_cast<std::size_t>(np));
     for (std::size_t b = 0; b < options.bootstrap; ++b) {
-      const std::vector<double> y = simulate(terms, rate.size(), sample_rate_hz, rng);
+      const std::vector<double> y = simulate(terms, samples, sample_rate_hz, rng);
       const WaveletMoments wb = moments_from(y, sample_rate_hz, options.min_tau_s);
       const Fit f = fit_efficient(kinds, wb, chol, {p_hat});
       if (!std::isfinite(f.objective)) continue;
