@@ -6,11 +6,16 @@
 // OverlappingAllanOctave is the whole allan() call as the CLI makes it: mean removal, the
 // compensated cumulative sum, 22 taus and their degrees of freedom and chi-square intervals.
 // The Curve variant leaves the intervals out, to show what the sums alone cost.
+// DeviationStreamOctave is the same curve from solver::DeviationStream, the record pushed in
+// blocks of 65,536 (the constant-memory path of a day at 1 kHz, docs/noise-id.md).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <span>
 #include <vector>
 
 #include "noise/allan.hpp"
+#include "noise/deviation_stream.hpp"
 #include "sim/noise.hpp"
 
 namespace calstand::solver {
@@ -47,6 +52,21 @@ void BM_OverlappingAllanOctave(benchmark::State& state) { run(state, true); }
 void BM_OverlappingAllanOctaveCurve(benchmark::State& state) { run(state, false); }
 BENCHMARK(BM_OverlappingAllanOctave)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OverlappingAllanOctaveCurve)->Unit(benchmark::kMillisecond);
+
+void BM_DeviationStreamOctave(benchmark::State& state) {
+  const std::vector<double>& y = data();
+  const std::span<const double> all(y);
+  for (auto _ : state) {
+    DeviationStream stream({AllanKind::kAllan});
+    for (std::size_t i = 0; i < y.size(); i += 65536) {
+      stream.push(all.subspan(i, std::min<std::size_t>(65536, y.size() - i)));
+    }
+    AllanResult r = stream.result(kRateHz, {});
+    benchmark::DoNotOptimize(r.points.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(y.size()));
+}
+BENCHMARK(BM_DeviationStreamOctave)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace calstand::solver

@@ -4,7 +4,8 @@
 # `fleet-sync [--hours H]` the sync to the fleet's central database, `imu-capture [SECONDS]` 8 IMUs
 # of mixed wire formats at their top rates through sim-station and the serial driver, `import
 # [--samples N]` the import of recordings against numpy.loadtxt, `allan-csv [--samples N]`
-# calstand allan --csv against numpy (loadtxt and the cumulative-sum Allan deviation).
+# calstand allan --csv against numpy (loadtxt and the cumulative-sum Allan deviation), `stream-day`
+# a day at 1 kHz through the streamed allan and noise-id (bench/stream_day_bench.py).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Explicit: the test command configures the same build folder without benchmarks.
@@ -45,6 +46,14 @@ fi
 if [ "${1:-}" = "allan-csv" ]; then
   shift
   exec /usr/bin/python3 "$root/bench/allan_csv_bench.py" \
+    "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" "$@"
+fi
+# `run-bench.sh stream-day [--samples N] [--small N] [--stored N] [--baseline BIN] [--keep DIR]`:
+# a day at 1 kHz (86.4 M rows) through the streamed allan --csv and noise-id --csv, seconds and
+# peak memory, against a baseline build's in-memory path on a tenth (bench/stream_day_bench.py).
+if [ "${1:-}" = "stream-day" ]; then
+  shift
+  exec /usr/bin/python3 "$root/bench/stream_day_bench.py" \
     "${CALSTAND_BUILD_DIR:-$root/build}/cli/calstand" "$@"
 fi
 exec "$bench/calstand_bench" "$@"

@@ -11,9 +11,11 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <thread>
 
@@ -371,6 +373,123 @@ std::vector<double> CsvReader::remaining_numbers(std::size_t i, unsigned threads
     values.insert(values.end(), p.values.begin(), p.values.end());
   }
   return values;
+}
+
+void CsvReader::for_each_number_block(std::size_t i,
+                                      const std::function<void(std::span<const double>)>& block,
+                                      std::size_t block_rows, unsigned threads) {
+  block_rows = std::max<std::size_t>(block_rows, 1);
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) {
+    throw InputError(file_, fmt::format("cannot read the file: {}", std::strerror(errno)));
+  }
+  const std::uint64_t from = position();
+  const auto size = static_cast<std::uint64_t>(st.st_size);
+  const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
+  const unsigned parts = std::min(threads, cores);
+  if (parts < 2 || eof_ || size <= from || size - from < options_.parallel_min_bytes) {
+    std::vector<double> values;
+    values.reserve(block_rows);
+    double v = 0.0;
+    bool more = true;
+    while (more) {
+      try {
+        more = next_number(i, v);
+      } catch (const InputError&) {
+        if (!values.empty()) block(values);  // the values before the error first
+        throw;
+      }
+      if (more) values.push_back(v);
+      if (values.size() == block_rows || (!more && !values.empty())) {
+        block(values);
+        values.clear();
+      }
+    }
+    return;
+  }
+  // Range k is [from + k range, from + (k + 1) range), thread t parses k = t, t + parts, ...
+  // into slot k % window once range k - window has been given out.
+  const std::uint64_t range = std::max<std::uint64_t>(options_.range_bytes, 1);
+  const std::uint64_t ranges = (size - from + range - 1) / range;
+  const std::size_t window = 2 * static_cast<std::size_t>(parts);
+  struct Range {
+    std::uint64_t index = UINT64_MAX;  // the range in this slot; UINT64_MAX: none
+    std::vector<double> values;
+    std::exception_ptr error;
+    std::string blank;  // `FILE:LINE` of its first blank line, when they may only end the file
+    bool saw_data = false;
+  };
+  std::vector<Range> slots(window);
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::uint64_t consumed = 0;  // ranges given out
+  bool stop = false;
+  const auto parse = [&](unsigned t) {
+    for (std::uint64_t k = t; k < ranges; k += parts) {
+      {
+        std::unique_lock lock(mutex);
+        changed.wait(lock, [&] { return stop || k < consumed + window; });
+        if (stop) return;
+      }
+      Range r;
+      r.index = k;
+      std::unique_ptr<CsvReader> csv;
+      try {
+        csv.reset(new CsvReader(*this, from + k * range, std::min(size, from + (k + 1) * range)));
+        double v = 0.0;
+        while (csv->next_number(i, v)) r.values.push_back(v);
+        if (!options_.blank_lines_anywhere && csv->blank_line_ != 0) {
+          r.blank = csv->where_at(csv->blank_line_);
+        }
+      } catch (...) {
+        r.error = std::current_exception();
+      }
+      r.saw_data = csv && csv->saw_data_;
+      std::lock_guard lock(mutex);
+      slots[k % window] = std::move(r);
+      changed.notify_all();
+    }
+  };
+  std::vector<std::thread> workers;
+  const auto finish = [&] {
+    {
+      std::lock_guard lock(mutex);
+      stop = true;
+    }
+    changed.notify_all();
+    for (std::thread& w : workers) w.join();
+    begin_ = end_;
+    eof_ = true;
+  };
+  // A blank line is an error once more data follow (as next() finds when it reads on); this
+  // reader's own comes first in the file.
+  std::string blank;
+  if (!options_.blank_lines_anywhere && blank_line_ != 0) blank = where_at(blank_line_);
+  try {
+    for (unsigned t = 0; t < parts; ++t) workers.emplace_back(parse, t);
+    for (std::uint64_t k = 0; k < ranges; ++k) {
+      Range r;
+      {
+        std::unique_lock lock(mutex);
+        changed.wait(lock, [&] { return slots[k % window].index == k; });
+        r = std::move(slots[k % window]);
+        slots[k % window].index = UINT64_MAX;
+        consumed = k + 1;
+      }
+      changed.notify_all();
+      if (!blank.empty() && r.saw_data) throw InputError(blank, "empty line before more data");
+      for (std::size_t at = 0; at < r.values.size(); at += block_rows) {
+        block(std::span<const double>(r.values).subspan(
+            at, std::min(block_rows, r.values.size() - at)));
+      }
+      if (r.error) std::rethrow_exception(r.error);
+      if (blank.empty()) blank = r.blank;
+    }
+  } catch (...) {
+    finish();
+    throw;
+  }
+  finish();
 }
 
 }  // namespace calstand::core

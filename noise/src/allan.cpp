@@ -415,21 +415,34 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
   fill_phase(rate, buffer.data());
   const std::span<const double> x = buffer.span();
 
-  AllanResult result;
-  result.kind = options.kind;
-  result.sample_rate_hz = sample_rate_hz;
-  result.samples = rate.size();
-  result.confidence = options.confidence;
   std::vector<double> var(ms.size());
+  std::vector<std::size_t> terms(ms.size());
   if (options.kind == AllanKind::kAllan) var = allan_sums_blocked(x, ms);
   for (std::size_t k = 0; k < ms.size(); ++k) {
     if (options.kind != AllanKind::kAllan)
       var[k] = allan_variance_from_phase(x, ms[k], options.kind);
+    terms[k] = term_count(options.kind, x.size(), ms[k]);
+  }
+  return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options);
+}
+
+AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
+                                        std::span<const double> var,
+                                        std::span<const std::size_t> terms, std::size_t samples,
+                                        double sample_rate_hz, const AllanOptions& options) {
+  AllanResult result;
+  result.kind = options.kind;
+  result.sample_rate_hz = sample_rate_hz;
+  result.samples = samples;
+  result.confidence = options.confidence;
+  const std::vector<std::size_t> msv(ms.begin(), ms.end());
+  const std::vector<double> varv(var.begin(), var.end());
+  for (std::size_t k = 0; k < ms.size(); ++k) {
     AllanPoint p;
     p.m = ms[k];
     p.tau_s = static_cast<double>(ms[k]) / sample_rate_hz;
     p.deviation = std::sqrt(var[k]);
-    p.terms = term_count(options.kind, x.size(), ms[k]);
+    p.terms = terms[k];
     result.points.push_back(p);
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -443,7 +456,7 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
     if (options.alpha) {
       p.alpha = *options.alpha;
     } else {
-      slopes[k] = local_slope(ms, var, k);
+      slopes[k] = local_slope(msv, varv, k);
       p.alpha = alpha_from_slope(slopes[k], options.kind);
       // White PM gives by far the most degrees of freedom, so a noisy slope mistaken for it
       // would give absurdly narrow intervals. In inertial data it can only dominate at the
@@ -453,12 +466,12 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
   }
   for (std::size_t k = 0; k < ms.size() && options.intervals; ++k) {
     AllanPoint& p = result.points[k];
-    p.edf = equivalent_dof(options.kind, p.alpha, p.m, rate.size());
+    p.edf = equivalent_dof(options.kind, p.alpha, p.m, samples);
     if (!options.alpha && p.alpha >= 1) {
       // Phase noise: bounded by the data length and the frequency-noise share (see above).
       const double q = frequency_noise_share(result.points, slopes, k, options.kind);
       if (q > 0.0) {
-        p.edf = std::min(p.edf, equivalent_dof(options.kind, 0, p.m, rate.size()) / (q * q));
+        p.edf = std::min(p.edf, equivalent_dof(options.kind, 0, p.m, samples) / (q * q));
       }
     }
     const DeviationInterval ci = deviation_interval(p.deviation, p.edf, options.confidence);

@@ -447,8 +447,8 @@ Fit fit_efficient(const std::vector<NoiseKind>& kinds, const WaveletMoments& w,
 }
 
 // The wavelet variances of `rate` from the first scale whose averaging time reaches min_tau_s.
-WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz, double min_tau_s) {
-  WaveletMoments wm = wavelet_moments(rate, sample_rate_hz);
+WaveletMoments trimmed_moments(WaveletMoments wm, double min_tau_s) {
+  const double sample_rate_hz = wm.sample_rate_hz;
   std::size_t skip = 0;
   while (skip < wm.m.size() && static_cast<double>(wm.m[skip]) / sample_rate_hz < min_tau_s) {
     ++skip;
@@ -463,6 +463,11 @@ WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz,
   wm.variance.erase(wm.variance.begin(), wm.variance.begin() + d);
   wm.dof.erase(wm.dof.begin(), wm.dof.begin() + d);
   return wm;
+}
+
+// The wavelet variances of `rate` from the first scale whose averaging time reaches min_tau_s.
+WaveletMoments moments_from(std::span<const double> rate, double sample_rate_hz, double min_tau_s) {
+  return trimmed_moments(wavelet_moments(rate, sample_rate_hz), min_tau_s);
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -512,10 +517,22 @@ double term_wavelet_variance(NoiseKind kind, double value, double tau_s, std::si
 NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate_hz,
                                 const NoiseIdOptions& options) {
   options.validate();
+  return identify_noise_model(wavelet_moments(rate, sample_rate_hz), options);
+}
+
+NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOptions& options) {
+  options.validate();
+  if (moments.m.empty() || moments.variance.size() != moments.m.size() ||
+      moments.dof.size() != moments.m.size() || moments.m.front() != 1) {
+    throw core::InputError("moments", "expected the wavelet variances from m = 1 on");
+  }
+  const double sample_rate_hz = moments.sample_rate_hz;
+  // The record's length: the bootstrap simulates records as long (it needs no data).
+  const std::size_t samples = moments.samples;
   NoiseModel out;
-  out.moments = moments_from(rate, sample_rate_hz, options.min_tau_s);
+  out.moments = trimmed_moments(moments, options.min_tau_s);
   out.sample_rate_hz = sample_rate_hz;
-  out.samples = rate.size();
+  out.samples = samples;
   const WaveletMoments& w = out.moments;
   // The Hannan-Quinn penalty 2 ln ln n per parameter (Andrews 1999, "Consistent moment
   // selection procedures for GMM estimation", MSC-HQIC): under the efficient weights the
@@ -525,7 +542,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
   // parameter is informed by all n samples; a random walk or a long Gauss-Markov time is
   // informed by the few long scales only, and BIC dropped them (white + GM + RW was taken
   // for white + flicker in 4 of 6 records).
-  const double penalty = 2.0 * std::log(std::log(static_cast<double>(rate.size())));
+  const double penalty = 2.0 * std::log(std::log(static_cast<double>(samples)));
 
   std::vector<std::vector<NoiseKind>> all_kinds;
   for (int q = 0; q < 2; ++q) {
@@ -596,7 +613,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
       "lowest J + 2 p ln ln n (Hannan-Quinn; J: the efficient GMWM objective, chi-square with "
       "{} - p degrees of freedom for a right model; p parameters; n = {} samples) among the "
       "candidates whose every term is resolved",
-      w.m.size(), rate.size());
+      w.m.size(), samples);
   const std::vector<NoiseKind>& kinds = out.candidates[best].kinds;
   // The selected model's estimate with the weights of its own spectrum (efficient under it).
   const Eigen::MatrixXd own = covariance_factor(unpack(kinds, fits[best].p), w);
@@ -642,7 +659,7 @@ NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate
     std::mt19937_64 rng(options.seed);
     std::vector<std::vector<double>> draws(static_cast<std::size_t>(np));
     for (std::size_t b = 0; b < options.bootstrap; ++b) {
-      const std::vector<double> y = simulate(terms, rate.size(), sample_rate_hz, rng);
+      const std::vector<double> y = simulate(terms, samples, sample_rate_hz, rng);
       const WaveletMoments wb = moments_from(y, sample_rate_hz, options.min_tau_s);
       const Fit f = fit_efficient(kinds, wb, chol, {p_hat});
       if (!std::isfinite(f.objective)) continue;

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <new>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -23,10 +24,12 @@
 #include "core/error.hpp"
 #include "noise/allan.hpp"
 #include "noise/composite_noise.hpp"
+#include "noise/deviation_stream.hpp"
 #include "noise/kalibr.hpp"
 #include "noise/model_figures.hpp"
 #include "noise/noise_fit.hpp"
 #include "noise/record_length.hpp"
+#include "noise/record_stream.hpp"
 #include "noise/run_noise.hpp"
 #include "noise/total_deviation.hpp"
 #include "open_database.hpp"
@@ -151,7 +154,8 @@ struct Series {
   std::optional<solver::ImuChannel> channel;
 };
 
-Series load_series(const AllanArgs& a) {
+// With `stream`, the record is fed to it (constant memory) and out.data stays empty.
+Series load_series(const AllanArgs& a, solver::DeviationStream* stream = nullptr) {
   Series out;
   std::vector<double>& data = out.data;
   double& rate_hz = out.rate_hz;
@@ -168,7 +172,11 @@ Series load_series(const AllanArgs& a) {
     rate_hz = parse_double(a.rate, "--rate");
     if (rate_hz <= 0.0)
       throw core::InputError("--rate", fmt::format("must be positive, got {}", rate_hz));
-    data = read_csv_column(a.csv, a.column);
+    if (stream) {
+      solver::stream_csv_column(a.csv, a.column, *stream);
+    } else {
+      data = read_csv_column(a.csv, a.column);
+    }
     source = fmt::format("{} column {}", a.csv, a.column);
     if (!a.units.empty()) unit = a.units;
   } else {
@@ -191,13 +199,18 @@ Series load_series(const AllanArgs& a) {
         throw core::InputError("--run", fmt::format("run {} holds no samples", run));
       device = devices.front();
     }
-    const auto samples = store::read_samples(db, run, step, device);
-    if (samples.empty()) {
-      throw core::InputError(
-          "--step", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+    if (stream) {
+      rate_hz =
+          solver::stream_stored_channel(db, run, step, device, *channel, *stream).sample_rate_hz;
+    } else {
+      const auto samples = store::read_samples(db, run, step, device);
+      if (samples.empty()) {
+        throw core::InputError(
+            "--step", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+      }
+      rate_hz = solver::sample_rate_of(samples);
+      data = solver::channel_series(samples, *channel);
     }
-    rate_hz = solver::sample_rate_of(samples);
-    data = solver::channel_series(samples, *channel);
     unit = std::string(solver::channel_unit(*channel));
     source = fmt::format("run {} step {} {} {}", run, step, device, a.channel);
   }
@@ -236,17 +249,48 @@ void run_allan(const AllanArgs& a) {
     options.validate();
   }
 
-  Series series = load_series(a);
+  // The octave curves of adev, ohdev and mdev are streamed (constant memory: a day at 1 kHz
+  // fits); hdev, the other tau sets and the total and Theo kinds, which reflect or resample the
+  // whole record, hold it in memory.
+  const bool streamed = !total_kind && options.kind != solver::AllanKind::kHadamardNonOverlapping &&
+                        options.taus.spacing == solver::TauSpacing::kOctave;
+  std::optional<solver::DeviationStream> stream;
+  if (streamed) stream.emplace(std::vector<solver::AllanKind>{options.kind});
+  const auto too_long = [&] {
+    return core::InputError(
+        total_kind ? "--kind" : "--taus",
+        "the record does not fit in memory; only the octave taus of adev, ohdev and mdev are "
+        "streamed in constant memory (hdev, decade, dense and listed taus, and the total and "
+        "Theo kinds hold the whole record)");
+  };
+  Series series;
+  try {
+    series = load_series(a, stream ? &*stream : nullptr);
+  } catch (const std::bad_alloc&) {
+    throw too_long();
+  }
   std::vector<double>& data = series.data;
   const double rate_hz = series.rate_hz;
   const std::string& unit = series.unit;
   const std::string& source = series.source;
   const std::optional<solver::ImuChannel>& channel = series.channel;
   if (total_kind) {
-    print_total(solver::total_deviation(data, rate_hz, total), source, unit, rate_hz, a.json);
+    std::optional<solver::TotalResult> t;
+    try {
+      t = solver::total_deviation(data, rate_hz, total);
+    } catch (const std::bad_alloc&) {
+      throw too_long();
+    }
+    print_total(*t, source, unit, rate_hz, a.json);
     return;
   }
-  const solver::AllanResult r = solver::allan(data, rate_hz, options);
+  std::optional<solver::AllanResult> computed;
+  try {
+    computed = stream ? stream->result(rate_hz, options) : solver::allan(data, rate_hz, options);
+  } catch (const std::bad_alloc&) {
+    throw too_long();
+  }
+  const solver::AllanResult& r = *computed;
   std::optional<solver::NoiseTerms> terms;
   if (options.kind == solver::AllanKind::kAllan) {
     // As `calstand noise`: an IMU's anti-aliasing filter shapes the first samples of tau.
@@ -337,9 +381,15 @@ void run_noise_id(const NoiseIdArgs& a) {
   solver::NoiseIdOptions options;
   options.bootstrap = static_cast<std::size_t>(parse_int(a.bootstrap, "--bootstrap", 0));
   options.min_tau_s = parse_double(a.min_tau, "--min-tau");
-  const Series series = load_series(a);
+  // The GMWM needs only the wavelet variances, streamed in constant memory; the bootstrap's
+  // replicates are whole simulated records, so with it the record is held in memory too.
+  std::optional<solver::DeviationStream> stream;
+  if (options.bootstrap == 0)
+    stream.emplace(std::vector<solver::AllanKind>{solver::AllanKind::kAllan});
+  const Series series = load_series(a, stream ? &*stream : nullptr);
   const solver::NoiseModel model =
-      solver::identify_noise_model(series.data, series.rate_hz, options);
+      stream ? solver::identify_noise_model(stream->moments(series.rate_hz), options)
+             : solver::identify_noise_model(series.data, series.rate_hz, options);
   if (a.json) {
     std::cout << analysis::noise_model_json(model, series.source, series.unit).dump(2) << "\n";
     return;
@@ -549,12 +599,16 @@ void register_allan(CLI::App& app) {
                   "or g (accelerometer) also give the datasheet figures (ARW, bias instability, "
                   "...)")
       ->type_name("UNIT");
-  cmd->add_option("--taus", a->taus, "octave, decade, dense or a list of seconds (1,10,100)")
+  cmd->add_option("--taus", a->taus,
+                  "octave, decade, dense or a list of seconds (1,10,100); octave adev, ohdev "
+                  "and mdev are streamed in constant memory (a day at 1 kHz), the rest hold "
+                  "the record in memory")
       ->capture_default_str();
   cmd->add_option("--kind", a->kind,
                   "adev (overlapping), mdev, ohdev (overlapping Hadamard), hdev (Hadamard); "
                   "totdev, mtotdev, ttotdev, htotdev (total); theo1, theobr, theoh (Theo taus "
-                  "are 0.75 m tau0)")
+                  "are 0.75 m tau0); the total and Theo kinds reflect the whole record, so "
+                  "they hold it in memory")
       ->capture_default_str();
   cmd->add_option("--alpha", a->alpha,
                   "power-law noise exponent for the intervals and bias corrections (2 white PM "
@@ -593,7 +647,8 @@ void register_allan(CLI::App& app) {
   noise_id
       ->add_option("--bootstrap", id->bootstrap,
                    "parametric-bootstrap records for the intervals (0: the asymptotic "
-                   "intervals; else at least 20)")
+                   "intervals, the record streamed in constant memory; else at least 20, "
+                   "simulated whole, the record held in memory)")
       ->capture_default_str();
   noise_id
       ->add_option("--min-tau", id->min_tau,

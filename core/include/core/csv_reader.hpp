@@ -5,7 +5,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +28,9 @@ struct CsvOptions {
   /// CsvReader::remaining_numbers reads a rest of the file shorter than this on one thread
   /// (starting a thread and splitting pays from a few megabytes on).
   std::uint64_t parallel_min_bytes = std::uint64_t{8} << 20;
+  /// CsvReader::for_each_number_block parses the file in byte ranges of this size, one per
+  /// thread at a time (the memory it holds is a few of them, whatever the file's length).
+  std::uint64_t range_bytes = std::uint64_t{4} << 20;
 };
 
 /// A CSV file with a header line, read front to back in large blocks (read(2) into one
@@ -95,6 +100,19 @@ class CsvReader {
   /// number(i) to the end of the file would give; next() returns false afterwards. Why: reading
   /// is most of `calstand allan --csv` on a long record (issue 32), and lines split cleanly.
   std::vector<double> remaining_numbers(std::size_t i, unsigned threads = 2);
+
+  /// remaining_numbers() in constant memory: field `i` of every remaining row, the same values
+  /// in file order, given to `block` (on the calling thread) in spans of at most `block_rows`
+  /// values while up to `threads` threads (at most one per core) parse ahead. The rest of the
+  /// file is cut into byte ranges (CsvOptions::range_bytes, 4 MB) split at line boundaries, parsed
+  /// in turn by the threads (each range by a reader of its own), at most two ranges per thread
+  /// ahead of `block`: memory does not grow with the file. The same error as remaining_numbers()
+  /// (the first in the file), thrown once the values before it have been given to `block`; an
+  /// exception from `block` stops the reading and is rethrown. next() returns false afterwards.
+  /// Why: a day at 1 kHz (86 million rows) read for a streamed deviation (solver::DeviationStream).
+  void for_each_number_block(std::size_t i,
+                             const std::function<void(std::span<const double>)>& block,
+                             std::size_t block_rows = std::size_t{1} << 16U, unsigned threads = 2);
 
  private:
   /// A reader of the data rows of `whole`'s file whose line starts at a byte in [from, to),

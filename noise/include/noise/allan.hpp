@@ -122,6 +122,16 @@ struct AllanResult {
 AllanResult allan(std::span<const double> rate, double sample_rate_hz,
                   const AllanOptions& options = {});
 
+/// The deviation curve allan() gives once the variances are known: `var[k]` is the variance at
+/// averaging factor ms[k] (increasing), summed over terms[k] difference terms, of a record of
+/// `samples` rate samples. The noise type, EDF and intervals are chosen exactly as allan()
+/// chooses them (options.taus is not used). For an estimator that computes the variances
+/// another way (solver::DeviationStream, a streamed record).
+AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
+                                        std::span<const double> var,
+                                        std::span<const std::size_t> terms, std::size_t samples,
+                                        double sample_rate_hz, const AllanOptions& options);
+
 /// The variance of `kind` at averaging factor m of the rate samples whose phase (cumulative sum
 /// in sample units, phase[0] = 0, phase.size() = samples + 1) is given; the building block of
 /// allan(), exposed for the benchmark and tests. `m` must be in [1, max_averaging_factor()].

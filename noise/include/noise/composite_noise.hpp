@@ -93,6 +93,14 @@ struct NoiseModel {
 NoiseModel identify_noise_model(std::span<const double> rate, double sample_rate_hz,
                                 const NoiseIdOptions& options = {});
 
+/// The same identification from the record's wavelet variances (wavelet_moments(), or
+/// DeviationStream::moments() for a streamed record: the GMWM's weights come from a model
+/// spectrum, so the moments are all it needs of the data). The same result as the overload
+/// above for the moments of the same record. The bootstrap simulates whole records of
+/// moments.samples samples (memory grows with the length). Throws core::InputError as the
+/// overload above, and for moments that do not start at m = 1.
+NoiseModel identify_noise_model(const WaveletMoments& moments, const NoiseIdOptions& options = {});
+
 /// The Haar wavelet variance of one term at half-scale m (samples) for a record at
 /// sample_rate_hz; `value` and `tau_s` as NoiseModelTerm. Exposed for the tests.
 double term_wavelet_variance(NoiseKind kind, double value, double tau_s, std::size_t m,

@@ -25,4 +25,10 @@ struct WaveletMoments {
 /// Allan variance (SP 1065 Table 5), at least 1.
 WaveletMoments wavelet_moments(std::span<const double> rate, double sample_rate_hz);
 
+/// The moments wavelet_moments() gives from the overlapping Allan variances avar[j] at
+/// m = 2^j (as many as given, up to samples / 4) of a record of `samples` samples; for a
+/// streamed record (solver::DeviationStream). Does not check its input.
+WaveletMoments wavelet_moments_from_allan(std::span<const double> avar, std::size_t samples,
+                                          double sample_rate_hz);
+
 }  // namespace calstand::solver

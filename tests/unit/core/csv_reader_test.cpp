@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -369,6 +370,94 @@ TEST(CsvReader, RemainingNumbersFindABlankLineBeforeMoreDataAcrossTheSplit) {
     anywhere.blank_lines_anywhere = true;
     CsvReader csv(f.path(), anywhere);
     EXPECT_EQ(csv.remaining_numbers(1, 2), column_by_rows(f, 1, anywhere));
+  }
+}
+
+// for_each_number_block's values, concatenated.
+std::vector<double> blocked(const CsvFile& f, std::size_t column, CsvOptions options,
+                            std::size_t rows, unsigned threads) {
+  CsvReader csv(f.path(), options);
+  std::vector<double> out;
+  csv.for_each_number_block(
+      column,
+      [&](std::span<const double> b) {
+        EXPECT_LE(b.size(), rows);
+        EXPECT_FALSE(b.empty());
+        out.insert(out.end(), b.begin(), b.end());
+      },
+      rows, threads);
+  EXPECT_FALSE(csv.next());
+  return out;
+}
+
+// The InputError text of for_each_number_block (FILE for the file name), "" when none, and
+// the values it gave before the error.
+std::string blocked_error(const CsvFile& f, CsvOptions options, unsigned threads,
+                          std::size_t* given = nullptr) {
+  std::size_t n = 0;
+  try {
+    CsvReader csv(f.path(), options);
+    csv.for_each_number_block(
+        1, [&](std::span<const double> b) { n += b.size(); }, 3, threads);
+  } catch (const InputError& e) {
+    if (given) *given = n;
+    return std::string(e.what()).replace(0, f.name().size(), "FILE");
+  }
+  if (given) *given = n;
+  return "";
+}
+
+TEST(CsvReader, NumberBlocksEqualReadingRowByRow) {
+  CsvFile f(imu_csv(20000, 13));
+  for (const std::uint64_t range :
+       {std::uint64_t{37}, std::uint64_t{5000}, std::uint64_t{4} << 20}) {
+    CsvOptions options;
+    options.block_bytes = 4096;
+    options.parallel_min_bytes = 0;
+    options.range_bytes = range;
+    const std::vector<double> expected = column_by_rows(f, 1, options);
+    ASSERT_EQ(expected.size(), 20000u);
+    for (const std::size_t rows : {std::size_t{1}, std::size_t{7}, std::size_t{65536}}) {
+      for (const unsigned threads : {1U, 2U, 3U}) {
+        EXPECT_EQ(blocked(f, 1, options, rows, threads), expected)
+            << "range " << range << " rows " << rows << " threads " << threads;
+      }
+    }
+  }
+  CsvFile header_only("t,gx\n");
+  CsvOptions options;
+  options.parallel_min_bytes = 0;
+  EXPECT_TRUE(blocked(header_only, 1, options, 10, 2).empty());
+}
+
+// The same message as reading row by row, wherever the bad row falls against the ranges, with
+// every value before it given first.
+TEST(CsvReader, NumberBlocksNameTheFirstBadLineAndBlankLines) {
+  const int rows = 120;
+  CsvOptions options;
+  options.parallel_min_bytes = 0;
+  options.block_bytes = 256;
+  options.range_bytes = 61;
+  for (int at = 0; at < rows; ++at) {
+    for (const std::string bad : {"1,abc", "1,2,3", "1,nan", "7", "1,1e999", ""}) {
+      std::string text = "t,gx\n";
+      for (int i = 0; i < rows; ++i) {
+        text += (i == at ? bad : fmt::format("{},{:.6f}", i, 0.001 * i * i)) + "\n";
+      }
+      CsvFile f(text);
+      const std::string expected = sequential_error(f, options);
+      if (!(bad.empty() && at == rows - 1)) {
+        ASSERT_FALSE(expected.empty()) << bad << " " << at;
+      }
+      for (const unsigned threads : {1U, 2U}) {
+        std::size_t given = 0;
+        EXPECT_EQ(blocked_error(f, options, threads, &given), expected)
+            << "row " << at << " '" << bad << "' threads " << threads;
+        if (!expected.empty()) {
+          EXPECT_EQ(given, static_cast<std::size_t>(at));
+        }
+      }
+    }
   }
 }
 
