@@ -127,7 +127,9 @@ BinaryFields parse_binary_payload(std::span<const std::uint8_t> message,
       } else if (g == 2 && mask == kImuUncompGyro) {
         f.uncomp_gyro_rps = vectornav_get_vec3(p);
       } else if (g == 2 && mask == kImuTemp) {
-        f.temperature_c = vectornav_get_vec3(p)[0];
+        // One float (4 bytes): a vec3 read here ran 8 bytes past the field, and past the
+        // message when Temp is its last field (found by AddressSanitizer).
+        f.temperature_c = std::bit_cast<float>(static_cast<std::uint32_t>(vectornav_get_le(p, 4)));
       } else if (g == 2 && mask == kImuAccel) {
         f.accel_mps2 = vectornav_get_vec3(p);
       } else if (g == 2 && mask == kImuAngularRate) {
