@@ -257,8 +257,8 @@ struct StreamedStep {
   bool candidates_complete = true;     // false: too many; count the gaps in a second pass
 };
 
-void stream_step(store::Database& db, std::int64_t run, std::size_t step,
-                 const std::string& device, StreamedStep& st) {
+void stream_step(store::Database& db, std::int64_t run, std::size_t step, const std::string& device,
+                 StreamedStep& st) {
   for (std::size_t i = 0; i < std::size(kAllChannels); ++i) {
     st.streams.emplace_back(std::vector<AllanKind>{AllanKind::kAllan});
   }
@@ -284,8 +284,8 @@ void stream_step(store::Database& db, std::int64_t run, std::size_t step,
         st.last_s = chunk.back().device_time_s;
         if (st.candidate_threshold_s == 0.0 && st.samples >= 2 && st.last_s > st.first_s) {
           // The first chunks' period: intervals kept so far below the threshold are dropped.
-          st.candidate_threshold_s = kCandidatePeriods * (st.last_s - st.first_s) /
-                                     static_cast<double>(st.samples - 1);
+          st.candidate_threshold_s =
+              kCandidatePeriods * (st.last_s - st.first_s) / static_cast<double>(st.samples - 1);
           std::erase_if(st.candidates, [&](double dt) { return !(dt > st.candidate_threshold_s); });
         }
         for (std::size_t c = 0; c < st.streams.size(); ++c) {
@@ -344,8 +344,9 @@ RunNoise stream_run_noise(store::Database& db, std::int64_t run, std::size_t ste
   const double period = 1.0 / out.sample_rate_hz;
   const double gap_threshold_s = kGapPeriods * period;
   if (st.candidates_complete && gap_threshold_s >= st.candidate_threshold_s) {
-    out.gaps = static_cast<std::size_t>(std::count_if(
-        st.candidates.begin(), st.candidates.end(), [&](double dt) { return dt > gap_threshold_s; }));
+    out.gaps =
+        static_cast<std::size_t>(std::count_if(st.candidates.begin(), st.candidates.end(),
+                                               [&](double dt) { return dt > gap_threshold_s; }));
   } else {
     out.gaps = count_gaps(db, run, step, device, period);
   }
