@@ -14,7 +14,8 @@ significant digits (about 16 bytes a row: 1.4 GB for the day). The free space of
 checked first; the files are deleted afterwards unless --keep. Each command is timed as a child
 process (wall time, ru_maxrss, CPU time); the best of --repeat (default 1) is kept, the machine
 being shared. --stored N also times `allan --db` and `noise-id --db` on a stored run of one
-static step of N samples at 1 kHz (`calstand sim-session --kind static`, imported), both builds.
+static step of N samples at 1 kHz (`calstand sim-session --kind static`, imported), both builds,
+and `noise --db` on it (six channels' curves, terms and identified models).
 """
 
 import os
@@ -105,7 +106,9 @@ def main():
             for name, binary in [("streamed", calstand), ("in memory (baseline)", baseline)]:
                 if binary:
                     runs += [(f"allan --db, {name}", stored, [binary, "allan"] + on_db),
-                             (f"noise-id --db, {name}", stored, [binary, "noise-id"] + on_db)]
+                             (f"noise-id --db, {name}", stored, [binary, "noise-id"] + on_db),
+                             (f"noise --db, {name}", stored,
+                              [binary, "noise", "--db", db, "--run", "1", "--json"])]
         if baseline:
             runs += [
                 ("allan, in memory (baseline)", small,

@@ -384,6 +384,12 @@ RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoise
           "device", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
     }
     out = analyse_noise_samples(samples, options);
+    // The moments too, so that channel_noise_models(db, ...) need not read the step again.
+    if (samples.size() >= 32) {
+      for (ChannelNoise& c : out.channels) {
+        c.moments = wavelet_moments(channel_series(samples, c.channel), out.sample_rate_hz);
+      }
+    }
   }
   out.run = run;
   out.step = step;

@@ -57,9 +57,9 @@ struct ChannelNoise {
   AllanResult allan;
   NoiseTerms terms;  ///< in the channel's unit (deg/s or m/s^2 based, see NoiseTerms)
   std::vector<DatasheetFigure> figures;
-  /// The record's Haar wavelet variances when analyse_run_noise() streamed the step (none
-  /// otherwise, or for fewer than 32 samples): channel_noise_models(db, ...) identifies the
-  /// model from them instead of reading the step a second time.
+  /// The record's Haar wavelet variances, set by analyse_run_noise() (none from
+  /// analyse_noise_samples(), or for fewer than 32 samples): channel_noise_models(db, ...)
+  /// identifies the model from them instead of reading the step a second time.
   std::optional<WaveletMoments> moments;
 };
 
@@ -120,7 +120,8 @@ RunNoise analyse_noise_samples(std::span<const core::ImuSample> samples,
 /// per channel in memory that does not grow with the step (a day at 1 kHz fits); the result
 /// equals analyse_noise_samples() on the same samples to rounding up to 2^17 samples and
 /// within about 1e-6 beyond (docs/noise-id.md, "Long records"), and each channel keeps its
-/// wavelet moments. Other tau sets read the whole step into memory. Throws
+/// wavelet moments. Other tau sets read the whole step into memory (once: the moments are
+/// kept as well). Throws
 /// core::InputError when the run, step or device does not exist, the step holds no samples of
 /// the device, too few for a curve, or the options are invalid; store::StoreError on a
 /// database failure.

@@ -212,6 +212,37 @@ TEST(RunNoiseStream, AShortStoredStepGivesTheInMemoryAnalysisAndModels) {
   }
 }
 
+// Taus other than octave (`calstand noise` fits dense ones) read the step into memory, once:
+// the analysis keeps the moments, and the models from them are those from the samples.
+TEST(RunNoiseStream, ADenseStepIsReadOnceForCurvesAndModels) {
+  StoreFile file("dense");
+  const std::size_t n = 30000;
+  const std::int64_t run = store_step(file.path(), simulate_static_imu(n, 13u, {}));
+  store::Database db(file.path());
+  RunNoiseOptions options;
+  options.step = 0;
+  options.allan.taus = TauSet::parse("dense");
+  ModelFigureOptions model_options;
+  model_options.min_record_s = 0.0;
+  const std::uint64_t before = store::samples_decoded();
+  const RunNoise got = analyse_run_noise(db, run, options);
+  const std::vector<ChannelModelFigures> models = channel_noise_models(db, got, model_options);
+  EXPECT_EQ(store::samples_decoded() - before, static_cast<std::uint64_t>(n));
+  const std::vector<core::ImuSample> samples = store::read_samples(db, run, 0, "imu0");
+  expect_same_noise(got, analyse_noise_samples(samples, options), 0.0, 0.0, 0.0);
+  const std::vector<ChannelModelFigures> want = channel_noise_models(samples, got, model_options);
+  ASSERT_EQ(models.size(), want.size());
+  for (std::size_t c = 0; c < want.size(); ++c) {
+    ASSERT_TRUE(want[c].model.has_value()) << c << " " << want[c].note;
+    ASSERT_TRUE(models[c].model.has_value()) << c << " " << models[c].note;
+    ASSERT_EQ(models[c].figures.size(), want[c].figures.size()) << c;
+    for (std::size_t f = 0; f < want[c].figures.size(); ++f) {
+      EXPECT_EQ(models[c].figures[f].value, want[c].figures[f].value)
+          << c << " " << want[c].figures[f].name;
+    }
+  }
+}
+
 // 2^18 samples (22 min at 200 Hz): the averaging factors beyond 2^15 are streamed on the
 // decimated phase (DeviationStream), close to the in-memory curve, not equal. Analysis and
 // models together decode the step once.
