@@ -14,7 +14,9 @@ significant digits (about 16 bytes a row: 1.4 GB for the day). The free space of
 checked first; the files are deleted afterwards unless --keep. Each command is timed as a child
 process (wall time, ru_maxrss, CPU time); the best of --repeat (default 1) is kept, the machine
 being shared. --stored N also times `allan --db` and `noise-id --db` on a stored run of one
-static step of N samples at 1 kHz (`calstand sim-session --kind static`, imported), both builds.
+static step of N samples at 1 kHz (`calstand sim-session --kind static`, imported), both builds,
+and `noise --db` on it (six channels' curves, terms and identified models; its default dense
+taus read the step into memory, `--taus octave` streams it).
 """
 
 import os
@@ -105,7 +107,12 @@ def main():
             for name, binary in [("streamed", calstand), ("in memory (baseline)", baseline)]:
                 if binary:
                     runs += [(f"allan --db, {name}", stored, [binary, "allan"] + on_db),
-                             (f"noise-id --db, {name}", stored, [binary, "noise-id"] + on_db)]
+                             (f"noise-id --db, {name}", stored, [binary, "noise-id"] + on_db),
+                             (f"noise --db, {name}", stored,
+                              [binary, "noise", "--db", db, "--run", "1", "--json"]),
+                             (f"noise --db --taus octave, {name}", stored,
+                              [binary, "noise", "--db", db, "--run", "1", "--taus", "octave",
+                               "--json"])]
         if baseline:
             runs += [
                 ("allan, in memory (baseline)", small,
@@ -121,7 +128,7 @@ def main():
                 if key not in best or s < best[key][0]:
                     best[key] = (s, rss, cpu)
         for (name, rows), (s, rss, cpu) in best.items():
-            print(f"{name:32s} {rows:>11,d} samples {s:8.2f} s  {rows / s / 1e6:6.2f} M samples/s"
+            print(f"{name:40s} {rows:>11,d} samples {s:8.2f} s  {rows / s / 1e6:6.2f} M samples/s"
                   f"  peak {rss:8.1f} MB  CPU {cpu:7.2f} s")
     finally:
         if keep is None:

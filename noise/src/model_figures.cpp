@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -94,9 +95,15 @@ std::vector<ModelFigure> model_figures(const std::optional<NoiseModel>& model,
   return out;
 }
 
-std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuSample> samples,
-                                                      const RunNoise& noise,
-                                                      const ModelFigureOptions& options) {
+namespace {
+
+/// channel_noise_models() with the identification of one channel given: from its samples or
+/// from its wavelet moments.
+using IdentifyChannel = std::function<NoiseModel(const ChannelNoise&, const NoiseIdOptions&)>;
+
+std::vector<ChannelModelFigures> noise_models_by(const RunNoise& noise,
+                                                 const ModelFigureOptions& options,
+                                                 const IdentifyChannel& identify_channel) {
   NoiseIdOptions id = options.id;
   if (id.min_tau_s <= 0.0 && noise.sample_rate_hz > 0.0) {
     id.min_tau_s = options.min_tau_samples / noise.sample_rate_hz;
@@ -117,8 +124,7 @@ std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuS
           noise.duration_s, options.min_record_s);
     } else {
       try {
-        m.model =
-            identify_noise_model(channel_series(samples, c.channel), noise.sample_rate_hz, id);
+        m.model = identify_channel(c, id);
       } catch (const core::InputError& e) {
         m.note = fmt::format("no model identified: {}", e.what());
       }
@@ -150,8 +156,29 @@ std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuS
   return out;
 }
 
+}  // namespace
+
+std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuSample> samples,
+                                                      const RunNoise& noise,
+                                                      const ModelFigureOptions& options) {
+  return noise_models_by(noise, options, [&](const ChannelNoise& c, const NoiseIdOptions& id) {
+    return identify_noise_model(channel_series(samples, c.channel), noise.sample_rate_hz, id);
+  });
+}
+
 std::vector<ChannelModelFigures> channel_noise_models(store::Database& db, const RunNoise& noise,
                                                       const ModelFigureOptions& options) {
+  // A streamed analysis kept each channel's wavelet moments: the model needs no second read of
+  // the step. The bootstrap simulates whole records, so it keeps the path over the samples.
+  const bool have_moments =
+      !noise.channels.empty() && options.id.bootstrap == 0 &&
+      std::all_of(noise.channels.begin(), noise.channels.end(),
+                  [](const ChannelNoise& c) { return c.moments.has_value(); });
+  if (have_moments) {
+    return noise_models_by(noise, options, [](const ChannelNoise& c, const NoiseIdOptions& id) {
+      return identify_noise_model(*c.moments, id);
+    });
+  }
   if (noise.duration_s < options.min_record_s) {
     // The model is not used: no need to read the record again.
     return channel_noise_models(std::span<const core::ImuSample>(), noise, options);

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "noise/deviation_stream.hpp"
 #include "store/records.hpp"
 #include "store/run_store.hpp"
 #include "store/sample_reader.hpp"
@@ -231,6 +232,140 @@ std::string noise_device(store::Database& db, std::int64_t run, const std::strin
   return devices.front();
 }
 
+namespace {
+
+/// Intervals of the device clock longer than this many sample periods count as gaps (as
+/// analyse_noise_samples() counts them).
+constexpr double kGapPeriods = 1.5;
+/// While streaming, the rate (hence the gap threshold) is not known until the last sample: the
+/// intervals longer than this many periods of the first chunk are kept as candidates (a lost
+/// sample doubles one), and counted against the final threshold at the end.
+constexpr double kCandidatePeriods = 1.25;
+/// More candidates than this (a clock that is not regular) are not kept; the gaps are then
+/// counted in a second pass over the step once its rate is known.
+constexpr std::size_t kMaxGapCandidates = std::size_t{1} << 20U;
+
+/// One pass over a stored step: the six channels fed to their streams, the clock's span and
+/// the intervals that may be gaps.
+struct StreamedStep {
+  std::vector<DeviationStream> streams;  // gx gy gz ax ay az
+  std::size_t samples = 0;
+  double first_s = 0.0;
+  double last_s = 0.0;
+  double candidate_threshold_s = 0.0;  // 0: not yet known (every interval is kept)
+  std::vector<double> candidates;      // intervals longer than candidate_threshold_s [s]
+  bool candidates_complete = true;     // false: too many; count the gaps in a second pass
+};
+
+void stream_step(store::Database& db, std::int64_t run, std::size_t step, const std::string& device,
+                 StreamedStep& st) {
+  for (std::size_t i = 0; i < std::size(kAllChannels); ++i) {
+    st.streams.emplace_back(std::vector<AllanKind>{AllanKind::kAllan});
+  }
+  std::vector<double> values;
+  store::for_each_chunk(
+      db, run, step, device, [&](const store::ChunkInfo&, std::span<const core::ImuSample> chunk) {
+        if (chunk.empty()) return;
+        double previous_s = st.samples == 0 ? chunk.front().device_time_s : st.last_s;
+        if (st.samples == 0) st.first_s = previous_s;
+        const std::size_t first = st.samples == 0 ? 1 : 0;
+        for (std::size_t i = first; i < chunk.size(); ++i) {
+          const double dt = chunk[i].device_time_s - previous_s;
+          previous_s = chunk[i].device_time_s;
+          if (st.candidates_complete && dt > st.candidate_threshold_s) {
+            st.candidates.push_back(dt);
+            if (st.candidates.size() > kMaxGapCandidates) {
+              st.candidates_complete = false;
+              st.candidates = {};
+            }
+          }
+        }
+        st.samples += chunk.size();
+        st.last_s = chunk.back().device_time_s;
+        if (st.candidate_threshold_s == 0.0 && st.samples >= 2 && st.last_s > st.first_s) {
+          // The first chunks' period: intervals kept so far below the threshold are dropped.
+          st.candidate_threshold_s =
+              kCandidatePeriods * (st.last_s - st.first_s) / static_cast<double>(st.samples - 1);
+          std::erase_if(st.candidates, [&](double dt) { return !(dt > st.candidate_threshold_s); });
+        }
+        for (std::size_t c = 0; c < st.streams.size(); ++c) {
+          const auto axis = static_cast<Eigen::Index>(c % 3);
+          const bool gyro = c < 3;
+          values.clear();
+          for (const core::ImuSample& s : chunk) {
+            values.push_back(gyro ? s.gyro_dps(axis) : s.accel_mps2(axis));
+          }
+          st.streams[c].push(values);
+        }
+      });
+}
+
+/// The gaps of a step whose rate is known, counted in a pass of their own (the fallback for an
+/// irregular clock).
+std::size_t count_gaps(store::Database& db, std::int64_t run, std::size_t step,
+                       const std::string& device, double period_s) {
+  std::size_t gaps = 0;
+  bool started = false;
+  double previous_s = 0.0;
+  store::for_each_chunk(db, run, step, device,
+                        [&](const store::ChunkInfo&, std::span<const core::ImuSample> chunk) {
+                          for (const core::ImuSample& s : chunk) {
+                            if (started && s.device_time_s - previous_s > kGapPeriods * period_s) {
+                              ++gaps;
+                            }
+                            previous_s = s.device_time_s;
+                            started = true;
+                          }
+                        });
+  return gaps;
+}
+
+/// analyse_run_noise() for octave taus: one pass over the stored chunks.
+RunNoise stream_run_noise(store::Database& db, std::int64_t run, std::size_t step,
+                          const std::string& device, const RunNoiseOptions& options) {
+  StreamedStep st;
+  stream_step(db, run, step, device, st);
+  if (st.samples == 0) {
+    throw core::InputError(
+        "device", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+  }
+  // As sample_rate_of(): (n - 1) over the time the device clock spans.
+  if (st.samples < 2) {
+    throw core::InputError("samples", fmt::format("{} samples; a sample rate needs 2", st.samples));
+  }
+  const double span = st.last_s - st.first_s;
+  if (!(span > 0.0) || !std::isfinite(span)) {
+    throw core::InputError("samples", "the device clock does not advance over the samples");
+  }
+  RunNoise out;
+  out.samples = st.samples;
+  out.sample_rate_hz = static_cast<double>(st.samples - 1) / span;
+  out.duration_s = span;
+  const double period = 1.0 / out.sample_rate_hz;
+  const double gap_threshold_s = kGapPeriods * period;
+  if (st.candidates_complete && gap_threshold_s >= st.candidate_threshold_s) {
+    out.gaps =
+        static_cast<std::size_t>(std::count_if(st.candidates.begin(), st.candidates.end(),
+                                               [&](double dt) { return dt > gap_threshold_s; }));
+  } else {
+    out.gaps = count_gaps(db, run, step, device, period);
+  }
+  NoiseFitOptions fit = options.fit;
+  fit.min_tau_s = std::max(fit.min_tau_s, options.min_tau_samples / out.sample_rate_hz);
+  for (std::size_t i = 0; i < st.streams.size(); ++i) {
+    ChannelNoise ch;
+    ch.channel = kAllChannels[i];
+    ch.allan = st.streams[i].result(out.sample_rate_hz, options.allan);
+    ch.terms = fit_noise_terms(ch.allan, fit);
+    ch.figures = datasheet_figures(ch.terms, is_gyro(ch.channel));
+    if (st.samples >= 32) ch.moments = st.streams[i].moments(out.sample_rate_hz);
+    out.channels.push_back(std::move(ch));
+  }
+  return out;
+}
+
+}  // namespace
+
 RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoiseOptions& options) {
   if (options.allan.kind != AllanKind::kAllan) {
     throw core::InputError("kind", "the noise terms are fitted to the Allan deviation (adev)");
@@ -239,12 +374,23 @@ RunNoise analyse_run_noise(store::Database& db, std::int64_t run, const RunNoise
   options.fit.validate();
   const std::size_t step = choose_noise_step(db, run, options.step);
   const std::string device = noise_device(db, run, options.device);
-  const std::vector<core::ImuSample> samples = store::read_samples(db, run, step, device);
-  if (samples.empty()) {
-    throw core::InputError(
-        "device", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+  RunNoise out;
+  if (options.allan.taus.spacing == TauSpacing::kOctave) {
+    out = stream_run_noise(db, run, step, device, options);
+  } else {
+    const std::vector<core::ImuSample> samples = store::read_samples(db, run, step, device);
+    if (samples.empty()) {
+      throw core::InputError(
+          "device", fmt::format("step {} of run {} holds no samples of '{}'", step, run, device));
+    }
+    out = analyse_noise_samples(samples, options);
+    // The moments too, so that channel_noise_models(db, ...) need not read the step again.
+    if (samples.size() >= 32) {
+      for (ChannelNoise& c : out.channels) {
+        c.moments = wavelet_moments(channel_series(samples, c.channel), out.sample_rate_hz);
+      }
+    }
   }
-  RunNoise out = analyse_noise_samples(samples, options);
   out.run = run;
   out.step = step;
   out.device = device;

@@ -78,8 +78,10 @@ std::vector<ChannelModelFigures> channel_noise_models(std::span<const core::ImuS
                                                       const RunNoise& noise,
                                                       const ModelFigureOptions& options = {});
 
-/// As above, reading the samples of noise.step of noise.device in noise.run from `db` (the
-/// record analyse_run_noise() read).
+/// As above for the record analyse_run_noise() analysed: from the channels' wavelet moments
+/// it kept (no second read; the same models as from the samples, to rounding up to 2^17
+/// samples when the step was streamed), else (options.id.bootstrap, or a RunNoise without
+/// moments) reading the samples of noise.step of noise.device in noise.run from `db`.
 std::vector<ChannelModelFigures> channel_noise_models(store::Database& db, const RunNoise& noise,
                                                       const ModelFigureOptions& options = {});
 

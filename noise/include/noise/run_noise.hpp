@@ -11,6 +11,7 @@
 #include "core/imu_sample.hpp"
 #include "noise/allan.hpp"
 #include "noise/noise_fit.hpp"
+#include "noise/wavelet_moments.hpp"
 #include "store/database.hpp"
 
 namespace calstand::solver {
@@ -56,6 +57,10 @@ struct ChannelNoise {
   AllanResult allan;
   NoiseTerms terms;  ///< in the channel's unit (deg/s or m/s^2 based, see NoiseTerms)
   std::vector<DatasheetFigure> figures;
+  /// The record's Haar wavelet variances, set by analyse_run_noise() (none from
+  /// analyse_noise_samples(), or for fewer than 32 samples): channel_noise_models(db, ...)
+  /// identifies the model from them instead of reading the step a second time.
+  std::optional<WaveletMoments> moments;
 };
 
 /// Options of analyse_run_noise().
@@ -110,7 +115,13 @@ RunNoise analyse_noise_samples(std::span<const core::ImuSample> samples,
                                const RunNoiseOptions& options = {});
 
 /// Reads the samples of the chosen step (the store's data attempt) and computes, per channel,
-/// the Allan deviation curve with its intervals and the fitted noise terms. Throws
+/// the Allan deviation curve with its intervals and the fitted noise terms. With octave taus
+/// (the default) the step streams chunk by chunk, decoded once, through one DeviationStream
+/// per channel in memory that does not grow with the step (a day at 1 kHz fits); the result
+/// equals analyse_noise_samples() on the same samples to rounding up to 2^17 samples and
+/// within about 1e-6 beyond (docs/noise-id.md, "Long records"), and each channel keeps its
+/// wavelet moments. Other tau sets read the whole step into memory (once: the moments are
+/// kept as well). Throws
 /// core::InputError when the run, step or device does not exist, the step holds no samples of
 /// the device, too few for a curve, or the options are invalid; store::StoreError on a
 /// database failure.
