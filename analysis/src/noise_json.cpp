@@ -6,9 +6,9 @@
 #include <cmath>
 #include <span>
 
+#include "analysis/noise_model_json.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
-#include "analysis/noise_model_json.hpp"
 
 namespace calstand::analysis {
 namespace {

@@ -64,8 +64,9 @@ TEST(CalibrationNoiseFigures, ALongStaticRecordGivesTheTrueRandomWalk) {
   ASSERT_EQ(models->size(), 6u);
   for (std::size_t i = 0; i < 3; ++i) {
     const auto& figures = (*models)[i].figures;
-    const auto n = std::find_if(figures.begin(), figures.end(),
-                                [](const solver::ModelFigure& f) { return f.name == "white_density"; });
+    const auto n = std::find_if(figures.begin(), figures.end(), [](const solver::ModelFigure& f) {
+      return f.name == "white_density";
+    });
     ASSERT_NE(n, figures.end()) << i;
     EXPECT_EQ(n->estimator, "gmwm") << i;
     EXPECT_EQ(n->unit, "deg/s/sqrt(Hz)") << i;

@@ -295,8 +295,7 @@ TEST(ExportOpenVins, TheIdentifiedModelsFiguresAreUsedWhereEveryAxisHasThem) {
     export_calibration(testing::hand_calibration(h), ExportFormat::kOpenVins, {});
     ADD_FAILURE() << "accepted";
   } catch (const core::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("noise.model_figures.ay: random_walk"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("noise.model_figures.ay: random_walk"), std::string::npos)
         << e.what();
   }
 }
