@@ -13,8 +13,12 @@
 
 namespace calstand::solver {
 
-void stream_csv_column(const std::string& path, const std::string& column,
-                       DeviationStream& stream) {
+namespace {
+
+// Opens the CSV file `path` as `calstand allan --csv` reads it (a header line; blank lines
+// anywhere and quotes dropped) and calls fn(reader, index of `column`).
+template <class Fn>
+auto with_csv_column(const std::string& path, const std::string& column, Fn fn) {
   core::CsvOptions options;
   options.blank_lines_anywhere = true;
   options.unquote = true;
@@ -25,7 +29,22 @@ void stream_csv_column(const std::string& path, const std::string& column,
                            fmt::format("no column '{}' in the header ({})", column, csv.header()));
   }
   csv.require_unique_columns();
-  csv.for_each_number_block(*index, [&](std::span<const double> block) { stream.push(block); });
+  return fn(csv, *index);
+}
+
+}  // namespace
+
+void stream_csv_column(const std::string& path, const std::string& column,
+                       DeviationStream& stream) {
+  with_csv_column(path, column, [&](core::CsvReader& csv, std::size_t index) {
+    csv.for_each_number_block(index, [&](std::span<const double> block) { stream.push(block); });
+  });
+}
+
+std::vector<double> read_csv_column(const std::string& path, const std::string& column) {
+  return with_csv_column(path, column, [](core::CsvReader& csv, std::size_t index) {
+    return csv.remaining_numbers(index, 2);
+  });
 }
 
 StoredStream stream_stored_channel(store::Database& db, std::int64_t run, std::size_t step,

@@ -20,7 +20,6 @@
 #include "analysis/noise_json.hpp"
 #include "analysis/noise_model_json.hpp"
 #include "commands.hpp"
-#include "core/csv_reader.hpp"
 #include "core/error.hpp"
 #include "noise/allan.hpp"
 #include "noise/composite_noise.hpp"
@@ -82,23 +81,6 @@ double parse_double(const std::string& text, const char* option) {
 std::optional<std::size_t> parse_step(const std::string& text) {
   if (text.empty()) return std::nullopt;
   return static_cast<std::size_t>(parse_int(text, "--step", 0));
-}
-
-// Column `column` of a CSV file with a header line (core::CsvReader: blank lines skipped,
-// quotes dropped, every row as many fields as the header, errors naming FILE:LINE and column),
-// read on two threads: reading is most of the command's time on a long record.
-std::vector<double> read_csv_column(const std::string& path, const std::string& column) {
-  core::CsvOptions options;
-  options.blank_lines_anywhere = true;
-  options.unquote = true;
-  core::CsvReader csv(path, options);
-  const auto index = csv.column(column);
-  if (!index) {
-    throw core::InputError(path,
-                           fmt::format("no column '{}' in the header ({})", column, csv.header()));
-  }
-  csv.require_unique_columns();
-  return csv.remaining_numbers(*index, 2);
 }
 
 std::string term_line(const char* label, const solver::NoiseTerm& t, const std::string& unit) {
@@ -175,7 +157,7 @@ Series load_series(const AllanArgs& a, solver::DeviationStream* stream = nullptr
     if (stream) {
       solver::stream_csv_column(a.csv, a.column, *stream);
     } else {
-      data = read_csv_column(a.csv, a.column);
+      data = solver::read_csv_column(a.csv, a.column);
     }
     source = fmt::format("{} column {}", a.csv, a.column);
     if (!a.units.empty()) unit = a.units;

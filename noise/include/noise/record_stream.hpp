@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "noise/deviation_stream.hpp"
 #include "noise/run_noise.hpp"
@@ -16,6 +17,11 @@ namespace calstand::solver {
 /// Throws core::InputError naming the file for a column the header lacks or names twice, and
 /// `FILE:LINE: column C: ...` for a bad row (the values before it have been pushed).
 void stream_csv_column(const std::string& path, const std::string& column, DeviationStream& stream);
+
+/// Column `column` of the CSV file `path` whole, read as stream_csv_column() reads it (two
+/// threads, core::CsvReader::remaining_numbers), for the kinds that need the whole record in
+/// memory. Throws as stream_csv_column().
+std::vector<double> read_csv_column(const std::string& path, const std::string& column);
 
 /// What stream_stored_channel() fed.
 struct StoredStream {
