@@ -61,7 +61,10 @@ class CommandSetStations : public ::testing::TestWithParam<SetPair> {
     const auto r = run("show --db " + db + " --run 1 --json", dir_ + "stderr.txt");
     EXPECT_EQ(r.exit_code, 0) << read_text(dir_ + "stderr.txt");
     std::string text;
-    for (const auto& e : json::parse(r.out)["events"]) text += e.dump() + "\n";
+    // Parsed into a name first: a range over a temporary's member dangles (before C++23 the
+    // temporary dies before the loop; AddressSanitizer: heap-use-after-free).
+    const json shown = json::parse(r.out);
+    for (const auto& e : shown.at("events")) text += e.dump() + "\n";
     return text;
   }
 
