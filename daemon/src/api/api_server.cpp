@@ -4,6 +4,8 @@
 #include <spdlog/spdlog.h>
 #include <sys/socket.h>
 
+#include <atomic>
+#include <chrono>
 #include <fstream>
 #include <thread>
 
@@ -108,7 +110,8 @@ struct ApiServer::Impl {
   std::unique_ptr<httplib::Server> server_ptr;  // an httplib::SSLServer with TLS
   httplib::Server& server;
   std::thread listener;
-  socket_t listen_socket = -1;  // set while binding (set_socket_options)
+  std::atomic<bool> listener_done{false};  // listen_after_bind() has returned
+  socket_t listen_socket = -1;             // set while binding (set_socket_options)
 };
 
 ApiServer::ApiServer(service::RunService& service, service::EventHub& hub, ApiOptions options) {
@@ -212,7 +215,11 @@ int ApiServer::start() {
         "cannot listen on {}:{} (in use, or not an address of this machine)", o.host, port));
   }
   if (impl_->listen_socket >= 0) ::listen(impl_->listen_socket, kListenBacklog);  // best effort
-  impl_->listener = std::thread([&server] { server.listen_after_bind(); });
+  impl_->listener_done = false;
+  impl_->listener = std::thread([&server, &done = impl_->listener_done] {
+    server.listen_after_bind();
+    done = true;
+  });
   spdlog::info("control API on {}://{}:{} ({})", o.uses_tls() ? "https" : "http", o.host, port,
                impl_->ctx.access.tokens.empty()     ? "no token: loopback only"
                : impl_->ctx.access.reads_need_token ? "bearer token required for every request"
@@ -223,8 +230,19 @@ int ApiServer::start() {
 void ApiServer::stop() {
   if (!impl_) return;
   impl_->ctx.hub.close();  // ends live streams, whose threads the server joins
-  impl_->server.stop();
-  if (impl_->listener.joinable()) impl_->listener.join();
+  if (impl_->listener.joinable()) {
+    // cpp-httplib's stop() does nothing until the listening thread has marked the server
+    // running, and that thread would then accept forever: a SIGTERM in the first moments after
+    // start hung calstandd in join (found under AddressSanitizer, which slows the thread's
+    // start). So wait until it runs, or has already returned, before stopping it.
+    while (!impl_->server.is_running() && !impl_->listener_done) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    impl_->server.stop();
+    impl_->listener.join();
+  } else {
+    impl_->server.stop();
+  }
 }
 
 }  // namespace calstand::daemon::api
