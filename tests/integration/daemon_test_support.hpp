@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "test_time.hpp"
 #include "wire/sse_decoder.hpp"
 
 namespace calstand::testing {
@@ -53,13 +54,13 @@ class ApiClient {
 
   Reply get(const std::string& path) {
     httplib::Client c("127.0.0.1", port_);
-    c.set_read_timeout(10, 0);
+    c.set_read_timeout(scaled(std::chrono::seconds(10)));
     return reply(c.Get(path.c_str()));
   }
   Reply post(const std::string& path, const std::string& body,
              const std::string& token = kTestToken) {
     httplib::Client c("127.0.0.1", port_);
-    c.set_read_timeout(10, 0);
+    c.set_read_timeout(scaled(std::chrono::seconds(10)));
     httplib::Headers headers{{"X-Calstand-Operator", "tester"}};
     if (!token.empty()) headers.emplace("Authorization", "Bearer " + token);
     return reply(c.Post(path.c_str(), headers, body, "application/json"));
@@ -90,7 +91,7 @@ class ApiClient {
 /// Polls `done` every 20 ms until it holds or `timeout` passes; true when it held. The
 /// timeout only bounds a hung test: on two busy cores a run can take ten times its idle time.
 inline bool wait_until(const std::function<bool()>& done,
-                       std::chrono::milliseconds timeout = std::chrono::seconds(120)) {
+                       std::chrono::milliseconds timeout = scaled(std::chrono::seconds(120))) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (std::chrono::steady_clock::now() < deadline) {
     if (done()) return true;
@@ -162,8 +163,10 @@ class DaemonProcess {
     if (pipe(out) != 0) return;
     std::vector<std::string> args{CALSTANDD_BIN, "--db", db, "--listen", listen};
     args.insert(args.end(), extra_args.begin(), extra_args.end());
+    const pid_t parent = getpid();
     pid_ = fork();
     if (pid_ == 0) {
+      die_with_parent(parent);
       dup2(out[1], STDOUT_FILENO);
       const int err = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
       dup2(err, STDERR_FILENO);

@@ -266,10 +266,14 @@ TEST_F(RealDrivers, ModbusControllerFlappingIsRiddenOutAndRecorded) {
   write_text(lab, lab_file.dump(2));
   std::atomic<bool> done{false};
   int flaps = 0;
+  // The flapping is in wall time, like the driver's reconnect: a sanitizer build connects
+  // several times slower, so its up and down times (and the run that must see two outages)
+  // stretch by the same factor.
+  const auto half_period = calstand::testing::scaled(std::chrono::milliseconds(300));
   std::thread flapper([&] {
     bool down = false;
     while (!done) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+      std::this_thread::sleep_for(half_period);
       if (done) break;
       station->command(down ? "modbus start" : "modbus stop");
       down = !down;
@@ -278,9 +282,10 @@ TEST_F(RealDrivers, ModbusControllerFlappingIsRiddenOutAndRecorded) {
     if (down) station->command("modbus start");
   });
   const std::string db = dir_ + "flap.db";
-  const auto r =
-      run("run six-position --set capture_s=4 --station " + lab + " --db " + db + " --quiet",
-          dir_ + "stderr.txt");
+  const auto r = run(
+      "run six-position --set capture_s=" + std::to_string(4 * calstand::testing::kTestTimeFactor) +
+          " --station " + lab + " --db " + db + " --quiet",
+      dir_ + "stderr.txt");
   done = true;
   flapper.join();
   EXPECT_EQ(r.exit_code, 0) << r.out << read_text(dir_ + "stderr.txt");

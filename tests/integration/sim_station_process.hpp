@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "test_time.hpp"
+
 namespace calstand::testing {
 
 class SimStationProcess {
@@ -23,9 +25,11 @@ class SimStationProcess {
     ::signal(SIGPIPE, SIG_IGN);
     int to_child[2], from_child[2];
     if (::pipe(to_child) != 0 || ::pipe(from_child) != 0) throw std::runtime_error("pipe");
+    const pid_t parent = ::getpid();
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork");
     if (pid_ == 0) {
+      die_with_parent(parent);
       ::dup2(to_child[0], STDIN_FILENO);
       ::dup2(from_child[1], STDOUT_FILENO);
       ::close(to_child[1]);
