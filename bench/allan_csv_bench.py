@@ -18,9 +18,10 @@ Needs Debian's python3-numpy.
 
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
+
+from process_timing import timed
 
 NUMPY_ALLAN = r"""
 import sys, numpy as np
@@ -36,12 +37,6 @@ while 2 * m <= n:
 print(len(out), out[0][1], file=sys.stderr)
 """
 
-TIMED = ("import resource, subprocess, sys, time; s = time.perf_counter(); "
-         "subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL); "
-         "e = time.perf_counter() - s; "
-         "r = resource.getrusage(resource.RUSAGE_CHILDREN); "
-         "print(e, r.ru_maxrss, r.ru_utime + r.ru_stime)")
-
 
 def write_csv(path, n):
     import numpy as np
@@ -55,13 +50,6 @@ def write_csv(path, n):
         step = 200_000
         for i in range(0, n, step):
             np.savetxt(f, data[i:i + step], fmt="%.9g", delimiter=",")
-
-
-def timed(cmd):
-    out = subprocess.run(["/usr/bin/python3", "-c", TIMED] + cmd, check=True,
-                         capture_output=True, text=True)
-    seconds, rss_kb, cpu = out.stdout.split()
-    return float(seconds), float(rss_kb) / 1024.0, float(cpu)
 
 
 def main():

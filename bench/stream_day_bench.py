@@ -25,11 +25,7 @@ import subprocess
 import sys
 import tempfile
 
-TIMED = ("import resource, subprocess, sys, time; s = time.perf_counter(); "
-         "subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL); "
-         "e = time.perf_counter() - s; "
-         "r = resource.getrusage(resource.RUSAGE_CHILDREN); "
-         "print(e, r.ru_maxrss, r.ru_utime + r.ru_stime)")
+from process_timing import timed
 
 RATE_HZ = 1000.0
 
@@ -56,13 +52,6 @@ def write_csv(day, n, part, small):
                        check=True)
     with open(part, "w") as f:
         subprocess.run(["head", "-n", str(small + 1), day], stdout=f, check=True)
-
-
-def timed(cmd):
-    out = subprocess.run(["/usr/bin/python3", "-c", TIMED] + cmd, check=True,
-                         capture_output=True, text=True)
-    seconds, rss_kb, cpu = out.stdout.split()
-    return float(seconds), float(rss_kb) / 1024.0, float(cpu)
 
 
 def main():
