@@ -26,8 +26,9 @@
 // must lower BIC by "very strong" evidence (10) more than the best catalogue candidate does,
 // judged the same way (a tie goes to the catalogue: in a thermal campaign `elapsed` follows the
 // plateaus as a temperature term does), and by more than very strong evidence plus the
-// look-elsewhere cost of the search (2 ln of the forms tried); a warm-up exp(-elapsed/tau), the one
-// form stated before the search, does not (suggest.cpp says why its bar is not lower still).
+// look-elsewhere cost of the search (2 ln of the forms tried); a warm-up exp(-elapsed/tau) that
+// settles within the run (tau up to a third of its span), the one form stated before the search,
+// does not (suggest.cpp says why its bar is not lower still, and why a slower decay is not one).
 // Each sensor's warm-up is reported with its figures whether kept or not (WarmUpCheck). Then
 // they must hold on data they
 // were not fitted on, judged against the noise that remains with the term: leave one
