@@ -291,17 +291,28 @@ std::int64_t CsvReader::integer(std::size_t i) const {
   return v;
 }
 
-std::vector<double> CsvReader::remaining_numbers(std::size_t i, unsigned threads) {
-  std::vector<double> values;
+CsvReader::Rest CsvReader::rest_of_file(unsigned threads) const {
   struct stat st {};
   if (::fstat(fd_, &st) != 0) {
     throw InputError(file_, fmt::format("cannot read the file: {}", std::strerror(errno)));
   }
-  const std::uint64_t from = position();
-  const auto size = static_cast<std::uint64_t>(st.st_size);
+  Rest rest;
+  rest.from = position();
+  rest.size = static_cast<std::uint64_t>(st.st_size);
   const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
-  const unsigned parts = std::min(threads, cores);
-  if (parts < 2 || eof_ || size <= from || size - from < options_.parallel_min_bytes) {
+  rest.parts = std::max(1U, std::min(threads, cores));
+  if (eof_ || rest.size <= rest.from || rest.size - rest.from < options_.parallel_min_bytes) {
+    rest.parts = 1;
+  }
+  return rest;
+}
+
+std::vector<double> CsvReader::remaining_numbers(std::size_t i, unsigned threads) {
+  std::vector<double> values;
+  const Rest unread = rest_of_file(threads);
+  const std::uint64_t from = unread.from, size = unread.size;
+  const unsigned parts = unread.parts;
+  if (parts == 1) {
     double v = 0.0;
     while (next_number(i, v)) values.push_back(v);
     return values;
@@ -379,15 +390,10 @@ void CsvReader::for_each_number_block(std::size_t i,
                                       const std::function<void(std::span<const double>)>& block,
                                       std::size_t block_rows, unsigned threads) {
   block_rows = std::max<std::size_t>(block_rows, 1);
-  struct stat st {};
-  if (::fstat(fd_, &st) != 0) {
-    throw InputError(file_, fmt::format("cannot read the file: {}", std::strerror(errno)));
-  }
-  const std::uint64_t from = position();
-  const auto size = static_cast<std::uint64_t>(st.st_size);
-  const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
-  const unsigned parts = std::min(threads, cores);
-  if (parts < 2 || eof_ || size <= from || size - from < options_.parallel_min_bytes) {
+  const Rest unread = rest_of_file(threads);
+  const std::uint64_t from = unread.from, size = unread.size;
+  const unsigned parts = unread.parts;
+  if (parts == 1) {
     std::vector<double> values;
     values.reserve(block_rows);
     double v = 0.0;

@@ -119,6 +119,15 @@ class CsvReader {
   /// with `whole`'s header and options; its line numbers are counted when a message needs them.
   CsvReader(const CsvReader& whole, std::uint64_t from, std::uint64_t to);
   bool read_line(std::string_view& line);
+  /// The rest of the file from the next line on, as the parallel readers split it.
+  struct Rest {
+    std::uint64_t from = 0;  ///< file offset of the next line
+    std::uint64_t size = 0;  ///< the file's size [bytes]
+    unsigned parts = 1;      ///< threads to read it on; 1: read it here, serially
+  };
+  /// The rest, in at most `threads` parts (the cores permitting): one part when the rest is
+  /// smaller than options.parallel_min_bytes or this reader is at the end.
+  Rest rest_of_file(unsigned threads) const;
   /// The next line that is not blank (blank ones handled as next() says), false at the end.
   bool next_data_line(std::string_view& line);
   void split(std::string_view line);
