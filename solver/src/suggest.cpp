@@ -955,6 +955,13 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       std::min(in.best_catalogue_delta_bic + kStrongDeltaBic, kStrongDeltaBic);
   double run_span_s = 0.0;
   for (const StepSummary& s : steps) run_span_s = std::max(run_span_s, s.end_s);
+  // The bar a form is judged by: a warm-up that settles within the run is the one form stated
+  // before the search, tested on its own without the search's look-elsewhere cost (the seed's
+  // power-on and warm-up tests: the commonest effect a real IMU has); every other form, a
+  // slower decay included, pays it.
+  const auto bar_of = [&](const Form& f) {
+    return f.tau_s > 0.0 && f.tau_s <= kWarmUpSettlesWithinRun * run_span_s ? transient_bar : bar;
+  };
   std::string folds_used;
   std::set<std::string> keys, names;
   for (const auto& c : in.model->customs()) names.insert(c.name);
@@ -970,7 +977,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   std::vector<std::pair<core::TermSensor, WarmUpCheck>> warm_ups;
   const auto note_warm_up = [&](const Screened& c, WarmUpCheck check) {
     check.tau_s = c.form.tau_s;
-    check.bar = c.form.tau_s <= kWarmUpSettlesWithinRun * run_span_s ? transient_bar : bar;
+    check.bar = bar_of(c.form);
     warm_ups.emplace_back(c.form.sensor, std::move(check));
   };
   // The wander alone, per set of channels a term acts on (the hypothesis without the term).
@@ -1067,11 +1074,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       const boost::math::fisher_f_distribution<double> dist(linear, exact_remaining.dof);
       s.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
     }
-    // A warm-up transient is the one form stated before the search (the seed's power-on and
-    // warm-up tests: the commonest effect a real IMU has), so it is tested on its own, without
-    // the search's look-elsewhere cost.
-    const bool warm_up = transient && c.form.tau_s <= kWarmUpSettlesWithinRun * run_span_s;
-    const double form_bar = warm_up ? transient_bar : bar;
+    const double form_bar = bar_of(c.form);
     WarmUpCheck check;
     if (transient) {
       check.custom = text;
