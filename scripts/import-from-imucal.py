@@ -117,4 +117,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OSError as e:  # an input that cannot be read, or an output that cannot be written
+        sys.exit(f"{e.filename}: {e.strerror}")
