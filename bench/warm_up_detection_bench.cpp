@@ -5,7 +5,8 @@
 // white, ln200, adis16488, mems or all; all by default) prints one line per cell and a JSON line
 // per cell; with `clean`, only runs without a warm-up, SEEDS per class and capture; with
 // `evidence [TIMES=5]`, the warm-up each diagnosis judged, one JSON line per run and sensor
-// (TIMES 0: the clean runs; a fifth argument: the first seed's index). A
+// (TIMES 0: the clean runs; a fifth argument: the first seed's index); with `floor`, the white
+// noise floor diagnose measures on SEEDS clean runs of CLASS beside the simulated truth's. A
 // run "finds" the warm-up when diagnose says NOT explained and its first suggestion is
 // exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
 #include <fmt/format.h>
@@ -15,6 +16,8 @@
 
 #include "../tests/unit/solver/warm_up_campaign.hpp"
 #include "solver/diagnose.hpp"
+#include "solver/noise_rows.hpp"
+#include "solver/step_summary.hpp"
 
 namespace {
 
@@ -100,9 +103,38 @@ int evidence(int seeds, const std::string& only, double times, int first) {
   return 0;
 }
 
+/// The white noise floor measured on the noise rows of `seeds` clean runs of `noise` (per
+/// sample, per channel) beside the simulated truth's white noise per sample.
+int floor_probe(int seeds, const std::string& noise) {
+  for (double capture_s : {0.0, 1800.0}) {
+    for (int k = 0; k < seeds; ++k) {
+      const auto seed = static_cast<std::uint64_t>(90000 + 131 * k);
+      const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
+      const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+      const solver::RunData clean =
+          solver::testing::warm_up_run(truth, capture_s, 900.0, 0.0, seed + 2);
+      const auto rows =
+          solver::summarize_noise_rows(clean, model, solver::summarize_steps(clean, model));
+      const Eigen::Matrix<double, 6, 1> sigma =
+          solver::measure_noise_floor(rows).density.cwiseSqrt();
+      // The truth's white noise is a density [unit/sqrt(Hz)]: per sample, times sqrt(rate).
+      const double root_rate = std::sqrt(truth.sample_rate_hz);
+      fmt::print(
+          "{:10} capture {:4.0f} s seed {}: white per sample gyro {:.3g} {:.3g} {:.3g} deg/s "
+          "(truth {:.3g}), accel {:.3g} {:.3g} {:.3g} m/s^2 (truth {:.3g})\n",
+          noise, capture_s, seed, sigma[0], sigma[1], sigma[2],
+          truth.gyro_noise.white[0] * root_rate, sigma[3], sigma[4], sigma[5],
+          truth.accel_noise.white[0] * root_rate);
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
   const std::string only = argc > 2 && std::string(argv[2]) != "all" ? argv[2] : "";
+  if (argc > 3 && std::string(argv[3]) == "floor")
+    return floor_probe(seeds, only.empty() ? "adis16488" : only);
   if (argc > 3 && std::string(argv[3]) == "clean") return false_alarms(seeds, only);
   if (argc > 3 && std::string(argv[3]) == "evidence") {
     return evidence(seeds, only, argc > 4 ? std::atof(argv[4]) : 5.0,

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "solver/groups.hpp"
 #include "wander_kernels.hpp"
 
 namespace calstand::solver {
