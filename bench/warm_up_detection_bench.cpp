@@ -32,6 +32,23 @@ bool found(const solver::Diagnosis& d, double tau_s) {
   return tau > tau_s / 2.0 && tau < 2.0 * tau_s;
 }
 
+/// A run without a warm-up on the false-alarm seeds (distinct from the sweep's): the unit, its
+/// true model and the campaign, with or without the capture.
+struct CleanRun {
+  std::uint64_t seed = 0;
+  sim::ImuTruth truth;
+  solver::Model model;
+  solver::RunData data;
+};
+CleanRun clean_run(const char* noise, int k, double capture_s) {
+  CleanRun r;
+  r.seed = static_cast<std::uint64_t>(90000 + 131 * k);
+  r.truth = solver::testing::unit_of(noise, r.seed);
+  r.model = solver::Model::parse(solver::testing::true_terms(r.truth));
+  r.data = solver::testing::warm_up_run(r.truth, capture_s, 900.0, 0.0, r.seed + 2);
+  return r;
+}
+
 }  // namespace
 
 /// The false-alarm rate alone: `seeds` clean runs (no warm-up) per class and capture, seeds
@@ -42,16 +59,13 @@ int false_alarms(int seeds, const std::string& only) {
     for (double capture_s : {0.0, 1800.0}) {
       int alarms = 0;
       for (int k = 0; k < seeds; ++k) {
-        const auto seed = static_cast<std::uint64_t>(90000 + 131 * k);
-        const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
-        const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
-        const solver::RunData clean =
-            solver::testing::warm_up_run(truth, capture_s, 900.0, 0.0, seed + 2);
-        const solver::Diagnosis d = solver::diagnose(clean, model);
+        const CleanRun run = clean_run(noise, k, capture_s);
+        const solver::Diagnosis d = solver::diagnose(run.data, run.model);
         if (d.suggestions.empty()) continue;
         ++alarms;
         fmt::print("  false alarm: {} seed {} capture {:.0f} s: {} (delta BIC {:.1f})\n", noise,
-                   seed, capture_s, d.suggestions.front().custom, d.suggestions.front().delta_bic);
+                   run.seed, capture_s, d.suggestions.front().custom,
+                   d.suggestions.front().delta_bic);
       }
       fmt::print("{:10} capture {:5.0f} s: false alarms {}/{}\n", noise, capture_s, alarms, seeds);
       fmt::print("{{\"noise\": \"{}\", \"capture_s\": {}, \"false_alarms\": {}, \"runs\": {}}}\n",
@@ -108,13 +122,10 @@ int evidence(int seeds, const std::string& only, double times, int first) {
 int floor_probe(int seeds, const std::string& noise) {
   for (double capture_s : {0.0, 1800.0}) {
     for (int k = 0; k < seeds; ++k) {
-      const auto seed = static_cast<std::uint64_t>(90000 + 131 * k);
-      const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
-      const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
-      const solver::RunData clean =
-          solver::testing::warm_up_run(truth, capture_s, 900.0, 0.0, seed + 2);
-      const auto rows =
-          solver::summarize_noise_rows(clean, model, solver::summarize_steps(clean, model));
+      const CleanRun run = clean_run(noise.c_str(), k, capture_s);
+      const sim::ImuTruth& truth = run.truth;
+      const auto rows = solver::summarize_noise_rows(run.data, run.model,
+                                                     solver::summarize_steps(run.data, run.model));
       const Eigen::Matrix<double, 6, 1> sigma =
           solver::measure_noise_floor(rows).density.cwiseSqrt();
       // The truth's white noise is a density [unit/sqrt(Hz)]: per sample, times sqrt(rate).
@@ -122,7 +133,7 @@ int floor_probe(int seeds, const std::string& noise) {
       fmt::print(
           "{:10} capture {:4.0f} s seed {}: white per sample gyro {:.3g} {:.3g} {:.3g} deg/s "
           "(truth {:.3g}), accel {:.3g} {:.3g} {:.3g} m/s^2 (truth {:.3g})\n",
-          noise, capture_s, seed, sigma[0], sigma[1], sigma[2],
+          noise, capture_s, run.seed, sigma[0], sigma[1], sigma[2],
           truth.gyro_noise.white[0] * root_rate, sigma[3], sigma[4], sigma[5],
           truth.accel_noise.white[0] * root_rate);
     }
