@@ -193,6 +193,7 @@ NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps) {
     }
     if (floor.steps_used > 0) {
       floor.density /= static_cast<double>(floor.steps_used);
+      floor.batch_density = floor.density;
       floor.from_static_steps = static_only;
       // The white part of the steps' Allan curve, up to the blocks of a typical step's batch
       // means: the batch means' own figure holds the wander at that block length too (a
@@ -206,15 +207,17 @@ NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps) {
       }
       // A channel with no scatter at all (a constant column in imported data) would get an
       // infinite weight; give it the smallest non-zero floor of its sensor instead.
-      for (int sensor = 0; sensor < 2; ++sensor) {
-        double smallest = std::numeric_limits<double>::infinity();
-        for (int i = 0; i < 3; ++i) {
-          if (floor.density[3 * sensor + i] > 0.0)
-            smallest = std::min(smallest, floor.density[3 * sensor + i]);
-        }
-        for (int i = 0; i < 3; ++i) {
-          if (!(floor.density[3 * sensor + i] > 0.0)) {
-            floor.density[3 * sensor + i] = std::isfinite(smallest) ? smallest : 1e-30;
+      for (Vector6d* figure : {&floor.density, &floor.batch_density}) {
+        for (int sensor = 0; sensor < 2; ++sensor) {
+          double smallest = std::numeric_limits<double>::infinity();
+          for (int i = 0; i < 3; ++i) {
+            if ((*figure)[3 * sensor + i] > 0.0)
+              smallest = std::min(smallest, (*figure)[3 * sensor + i]);
+          }
+          for (int i = 0; i < 3; ++i) {
+            if (!((*figure)[3 * sensor + i] > 0.0)) {
+              (*figure)[3 * sensor + i] = std::isfinite(smallest) ? smallest : 1e-30;
+            }
           }
         }
       }

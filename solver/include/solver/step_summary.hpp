@@ -66,6 +66,11 @@ std::vector<StepSummary> select_parameters(const std::vector<StepSummary>& steps
 /// (all steps when the run has none).
 struct NoiseFloor {
   Vector6d density = Vector6d::Zero();  ///< [unit^2] per channel
+  /// The steps' scatter at a tenth of a step (batch means), per channel, in the same units: the
+  /// white noise and the wander at that block length. The weights of a channel whose wander
+  /// the run cannot estimate: a step mean moves by its wander too, and this figure holds at
+  /// least the wander's part at a tenth of a step, where the white part holds none of it.
+  Vector6d batch_density = Vector6d::Zero();
   std::size_t steps_used = 0;
   bool from_static_steps = true;
   /// Read from the steps' Allan curve (white part only); false: the batch means' figure at a
