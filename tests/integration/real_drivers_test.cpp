@@ -722,7 +722,14 @@ TEST_P(RealImuFormats, ACampaignThroughTheUnitsProtocolFitsAsWellAsInProcess) {
   const std::string events = events_text(show_json(db));
   EXPECT_NE(events.find("unit " + identity["serial"].get<std::string>()), std::string::npos)
       << events;
-  EXPECT_EQ(events.find("frame errors"), std::string::npos) << events;
+  // The reader's start and its stream are clean. A busy test machine can stall the reader for a
+  // wall second (20 s of world time here): the emulator's write then times out and a cut frame
+  // follows, as on a real line, and the reader says so after the stream stale it reports first.
+  // Frame errors without such a cut before them are the reader's fault.
+  const auto frame_errors = events.find("frame errors");
+  if (frame_errors != std::string::npos) {
+    EXPECT_NE(events.rfind("stream stale", frame_errors), std::string::npos) << events;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, RealImuFormats,
