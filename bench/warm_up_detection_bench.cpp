@@ -5,7 +5,8 @@
 // white, ln200, adis16488, mems or all; all by default) prints one line per cell and a JSON line
 // per cell; with `clean`, only runs without a warm-up, SEEDS per class and capture; with
 // `evidence [TIMES=5]`, the warm-up each diagnosis judged, one JSON line per run and sensor
-// (TIMES 0: the clean runs; a fifth argument: the first seed's index). A
+// (TIMES 0: the clean runs; a fifth argument: the first seed's index); with `floor`, the white
+// noise floor diagnose measures on SEEDS clean runs of CLASS beside the simulated truth's. A
 // run "finds" the warm-up when diagnose says NOT explained and its first suggestion is
 // exp(-elapsed/tau) on the gyros with tau within a factor 2 of the truth.
 #include <fmt/format.h>
@@ -15,6 +16,8 @@
 
 #include "../tests/unit/solver/warm_up_campaign.hpp"
 #include "solver/diagnose.hpp"
+#include "solver/noise_rows.hpp"
+#include "solver/step_summary.hpp"
 
 namespace {
 
@@ -29,6 +32,23 @@ bool found(const solver::Diagnosis& d, double tau_s) {
   return tau > tau_s / 2.0 && tau < 2.0 * tau_s;
 }
 
+/// A run without a warm-up on the false-alarm seeds (distinct from the sweep's): the unit, its
+/// true model and the campaign, with or without the capture.
+struct CleanRun {
+  std::uint64_t seed = 0;
+  sim::ImuTruth truth;
+  solver::Model model;
+  solver::RunData data;
+};
+CleanRun clean_run(const char* noise, int k, double capture_s) {
+  CleanRun r;
+  r.seed = static_cast<std::uint64_t>(90000 + 131 * k);
+  r.truth = solver::testing::unit_of(noise, r.seed);
+  r.model = solver::Model::parse(solver::testing::true_terms(r.truth));
+  r.data = solver::testing::warm_up_run(r.truth, capture_s, 900.0, 0.0, r.seed + 2);
+  return r;
+}
+
 }  // namespace
 
 /// The false-alarm rate alone: `seeds` clean runs (no warm-up) per class and capture, seeds
@@ -39,16 +59,13 @@ int false_alarms(int seeds, const std::string& only) {
     for (double capture_s : {0.0, 1800.0}) {
       int alarms = 0;
       for (int k = 0; k < seeds; ++k) {
-        const auto seed = static_cast<std::uint64_t>(90000 + 131 * k);
-        const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
-        const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
-        const solver::RunData clean =
-            solver::testing::warm_up_run(truth, capture_s, 900.0, 0.0, seed + 2);
-        const solver::Diagnosis d = solver::diagnose(clean, model);
+        const CleanRun run = clean_run(noise, k, capture_s);
+        const solver::Diagnosis d = solver::diagnose(run.data, run.model);
         if (d.suggestions.empty()) continue;
         ++alarms;
         fmt::print("  false alarm: {} seed {} capture {:.0f} s: {} (delta BIC {:.1f})\n", noise,
-                   seed, capture_s, d.suggestions.front().custom, d.suggestions.front().delta_bic);
+                   run.seed, capture_s, d.suggestions.front().custom,
+                   d.suggestions.front().delta_bic);
       }
       fmt::print("{:10} capture {:5.0f} s: false alarms {}/{}\n", noise, capture_s, alarms, seeds);
       fmt::print("{{\"noise\": \"{}\", \"capture_s\": {}, \"false_alarms\": {}, \"runs\": {}}}\n",
@@ -100,9 +117,35 @@ int evidence(int seeds, const std::string& only, double times, int first) {
   return 0;
 }
 
+/// The white noise floor measured on the noise rows of `seeds` clean runs of `noise` (per
+/// sample, per channel) beside the simulated truth's white noise per sample.
+int floor_probe(int seeds, const std::string& noise) {
+  for (double capture_s : {0.0, 1800.0}) {
+    for (int k = 0; k < seeds; ++k) {
+      const CleanRun run = clean_run(noise.c_str(), k, capture_s);
+      const sim::ImuTruth& truth = run.truth;
+      const auto rows = solver::summarize_noise_rows(run.data, run.model,
+                                                     solver::summarize_steps(run.data, run.model));
+      const Eigen::Matrix<double, 6, 1> sigma =
+          solver::measure_noise_floor(rows).density.cwiseSqrt();
+      // The truth's white noise is a density [unit/sqrt(Hz)]: per sample, times sqrt(rate).
+      const double root_rate = std::sqrt(truth.sample_rate_hz);
+      fmt::print(
+          "{:10} capture {:4.0f} s seed {}: white per sample gyro {:.3g} {:.3g} {:.3g} deg/s "
+          "(truth {:.3g}), accel {:.3g} {:.3g} {:.3g} m/s^2 (truth {:.3g})\n",
+          noise, capture_s, run.seed, sigma[0], sigma[1], sigma[2],
+          truth.gyro_noise.white[0] * root_rate, sigma[3], sigma[4], sigma[5],
+          truth.accel_noise.white[0] * root_rate);
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
   const std::string only = argc > 2 && std::string(argv[2]) != "all" ? argv[2] : "";
+  if (argc > 3 && std::string(argv[3]) == "floor")
+    return floor_probe(seeds, only.empty() ? "adis16488" : only);
   if (argc > 3 && std::string(argv[3]) == "clean") return false_alarms(seeds, only);
   if (argc > 3 && std::string(argv[3]) == "evidence") {
     return evidence(seeds, only, argc > 4 ? std::atof(argv[4]) : 5.0,

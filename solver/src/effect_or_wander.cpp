@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "solver/groups.hpp"
 #include "wander_kernels.hpp"
 
 namespace calstand::solver {
@@ -73,6 +74,9 @@ Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
   h.noise.method =
       "white noise from inside the steps; wandering bias re-estimated under the design";
   h.fixed_parameters = nonlinear;
+  double fixed_penalty = 0.0;
+  int channels_scored = 0;
+  const double log_channel_rows = std::log(static_cast<double>(rows_.size()));
   const bool base_design = !extra && columns == columns_;
   for (int c : fit_channels(sensor_rows_)) {
     const auto uc = static_cast<std::size_t>(c);
@@ -88,6 +92,8 @@ Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
       if (base_design) base_scores_[uc] = cs;
     }
     h.fixed_parameters += cs.fixed_parameters;
+    fixed_penalty += cs.fixed_parameters * log_channel_rows;
+    ++channels_scored;
     h.log_likelihood += cs.log_likelihood;
     h.noise_parameters += cs.noise_parameters;
     h.noise_penalty += cs.noise_penalty;
@@ -96,7 +102,11 @@ Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
     ch.wander = cs.wander;
     ch.note = "re-estimated under the design (profile likelihood)";
   }
-  h.bic = -2.0 * h.log_likelihood + h.fixed_parameters * log_rows_ + h.noise_penalty;
+  // A column acts on one channel and is informed by that channel's rows; a shared time constant
+  // by the rows of every channel it spans.
+  fixed_penalty +=
+      nonlinear * std::log(static_cast<double>(rows_.size() * std::max(channels_scored, 1)));
+  h.bic = -2.0 * h.log_likelihood + fixed_penalty + h.noise_penalty;
   return h;
 }
 

@@ -83,9 +83,15 @@ Model noise_superset(const Model& model) {
 StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model& superset,
                               SensorRows rows, const NoiseEstimateOptions& options) {
   const NoiseFloor white = measure_noise_floor(steps);
+  // Without a wander model the weights are the steps' own scatter at a tenth of a step (the
+  // batch means), wander included at that block length: the white part alone would make a
+  // step mean far surer than it is wherever the bias wanders (a flicker floor 15 times the
+  // white noise at 6 s, an ADIS16488-class accelerometer's).
+  NoiseFloor batch = white;
+  batch.density = white.batch_density;
   if (!options.estimate_wander) {
     return StepNoise::white_only(
-        white, "white noise inside the steps only (wander not estimated, as asked)");
+        batch, "white noise inside the steps only (wander not estimated, as asked)");
   }
   FitOptions fo;
   fo.rows = rows;
@@ -97,6 +103,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     fitted = false;  // more catalogue parameters than step means: no room to see a wander
   }
   StepNoise noise = StepNoise::white_only(white, "");
+  // A channel keeps the white part of the floor only where a wander is estimated beside it.
+  const auto without_wander = [&](int c) { noise.white.density[c] = white.batch_density[c]; };
   if (!fitted) {
     noise.method = fmt::format(
         "white noise from the scatter inside {} {} only: the run's {} step means are too few "
@@ -127,7 +135,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     if (!fitted) {
       ch.note =
           "the run has fewer step means than the catalogue has parameters: the wander "
-          "cannot be told from a missing effect; weights from the white noise alone";
+          "cannot be told from a missing effect; weights from the scatter inside the steps";
+      without_wander(c);
       continue;
     }
     const ChannelProblem p = detail::channel_problem(steps, columns, c, white.density[c]);
@@ -136,8 +145,9 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       ch.note = fmt::format(
           "{} step means leave {} degrees of freedom beyond the {} parameters "
           "acting on {} (at least {} needed to see a wandering bias); weights "
-          "from the white noise alone",
+          "from the scatter inside the steps",
           steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
+      without_wander(c);
       continue;
     }
     const double white_ll = detail::white_log_likelihood(p, Likelihood::kRestricted);
@@ -180,10 +190,12 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       ch.note = fmt::format(
           "the step means scatter {:.2g} times more than the white noise inside the steps, but "
           "neighbouring steps do not share the excess as a wandering bias would: an effect the "
-          "model lacks, not noise; weights from the white noise alone",
+          "model lacks, not noise; weights from the scatter inside the steps",
           std::sqrt(1.0 + excess.amplitude / (p.white / kernels.typical_count)));
+      without_wander(c);
       continue;
     }
+    if (best.kind == WanderKind::kNone) without_wander(c);
     ch.determined = true;
     ch.wander = best;
     ch.log_likelihood_gain = best_score - white_ll;

@@ -80,6 +80,7 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       return (b * n + static_cast<std::size_t>(blocks) - 1) / static_cast<std::size_t>(blocks);
     };
     std::size_t next_block_start = blocks > 0 ? block_start(1) : n;
+    OctaveAllanSums octaves(octaves_for(s.count));
     double max_rate = 0.0;
     Signals sig;
     for (std::size_t i = 0; i < n; ++i) {
@@ -106,6 +107,7 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
         s.signals_sq[k] += values[k] * values[k];
         s.signals_abs[k] += std::abs(values[k]);
       }
+      octaves.add(meas - ref);
       if (blocks > 0) {
         while (i >= next_block_start) next_block_start = block_start(++block + 1);
         block_sum[block] += meas - ref;
@@ -122,6 +124,7 @@ std::vector<StepSummary> summarize_steps(const RunData& data, const Model& model
       s.signals_abs[k] *= inv_n;
     }
     s.is_static = max_rate < kStaticRateDps;
+    s.octave_allan = octaves.result();
     if (blocks > 1) {
       // Allan variance of the block means (half the mean squared difference of neighbours)
       // estimates one block mean's variance without being inflated by a slow drift; the step
@@ -175,25 +178,46 @@ NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps) {
   for (const bool static_only : {true, false}) {
     floor.density.setZero();
     floor.steps_used = 0;
+    std::vector<OctaveAllan> pooled;
+    std::vector<std::int64_t> counts;
     for (const StepSummary& s : steps) {
       if ((static_only && !s.is_static) || std::isnan(s.mean_variance[0])) continue;
       floor.density += s.mean_variance * static_cast<double>(s.count);
       ++floor.steps_used;
+      counts.push_back(s.count);
+      if (pooled.size() < s.octave_allan.size()) pooled.resize(s.octave_allan.size());
+      for (std::size_t j = 0; j < s.octave_allan.size(); ++j) {
+        pooled[j].half_squared_differences += s.octave_allan[j].half_squared_differences;
+        pooled[j].differences += s.octave_allan[j].differences;
+      }
     }
     if (floor.steps_used > 0) {
       floor.density /= static_cast<double>(floor.steps_used);
+      floor.batch_density = floor.density;
       floor.from_static_steps = static_only;
+      // The white part of the steps' Allan curve, up to the blocks of a typical step's batch
+      // means: the batch means' own figure holds the wander at that block length too (a
+      // flicker floor, a Gauss-Markov bias), which the wander model then counts again.
+      std::nth_element(counts.begin(), counts.begin() + counts.size() / 2, counts.end());
+      const std::int64_t typical_block = counts[counts.size() / 2] / kBatchBlocks;
+      if (const std::optional<Vector6d> white =
+              white_variance_from_octaves(pooled, typical_block)) {
+        floor.density = *white;
+        floor.from_octave_fit = true;
+      }
       // A channel with no scatter at all (a constant column in imported data) would get an
       // infinite weight; give it the smallest non-zero floor of its sensor instead.
-      for (int sensor = 0; sensor < 2; ++sensor) {
-        double smallest = std::numeric_limits<double>::infinity();
-        for (int i = 0; i < 3; ++i) {
-          if (floor.density[3 * sensor + i] > 0.0)
-            smallest = std::min(smallest, floor.density[3 * sensor + i]);
-        }
-        for (int i = 0; i < 3; ++i) {
-          if (!(floor.density[3 * sensor + i] > 0.0)) {
-            floor.density[3 * sensor + i] = std::isfinite(smallest) ? smallest : 1e-30;
+      for (Vector6d* figure : {&floor.density, &floor.batch_density}) {
+        for (int sensor = 0; sensor < 2; ++sensor) {
+          double smallest = std::numeric_limits<double>::infinity();
+          for (int i = 0; i < 3; ++i) {
+            if ((*figure)[3 * sensor + i] > 0.0)
+              smallest = std::min(smallest, (*figure)[3 * sensor + i]);
+          }
+          for (int i = 0; i < 3; ++i) {
+            if (!((*figure)[3 * sensor + i] > 0.0)) {
+              (*figure)[3 * sensor + i] = std::isfinite(smallest) ? smallest : 1e-30;
+            }
           }
         }
       }

@@ -30,15 +30,14 @@ namespace {
 // catalogue term before recommending it.
 constexpr double kStrongDeltaBic = -10.0;
 // Why a warm-up is not judged by its likelihood ratio against the wander at a lower bar than
-// BIC's (for a triad 4 ln(rows) + 10, about 44, where a 5-sigma warm-up of a MEMS gyro brings
-// 20-45): chi-square with 3 degrees of freedom at 5e-5 (1e-3 after the time constant's search)
-// would ask 22.6, but on clean runs the statistic (2 ln LR less the wanders' cost change,
-// bench/warm_up_detection_bench.cpp `evidence 0`) has a heavier tail: within a third of the
-// run, 23.8 in 100 MEMS-class runs and 33.0 in 160 ADIS16488-class runs (flicker, which one wander
-// kernel describes less well). A bar of 26 found a 5x MEMS warm-up in 1-4 of 6 runs per cell
-// (tau 300-1800 s, with and without a capture) instead of 0-1 of 4, but alarmed on 2 of 80
-// fresh ADIS16488-class runs; the bar that keeps false alarms near 1e-3 on that tail is about
-// BIC's.
+// BIC's (for a triad 3 ln(rows) + ln(3 rows) + 10, about 32, where a 5-sigma warm-up of a MEMS
+// gyro brings 20-45): chi-square with 3 degrees of freedom at 5e-5 (1e-3 after the time
+// constant's search) would ask 22.6. Before the noise floor was the white part of the steps'
+// Allan curve (octave_allan.hpp), the clean-run statistic (2 ln LR less the wanders' cost
+// change, bench/warm_up_detection_bench.cpp `evidence 0`) had a heavy tail on ADIS16488-class
+// accelerometers (up to 44, a floor 28 times their white noise); it is now at most 13 there and
+// 27 on the gyros in 120 runs, but a sample of hundreds cannot show a 1e-3 rate, and BIC's
+// "very strong" bar keeps 0 alarms in 200 ADIS16488- and MEMS-class clean runs.
 // The warm-up form stated before the search is a decay that settles within the run: a time
 // constant of at most this fraction of the run's span (5 % of it left at the end). A slower
 // decay is a drift across the run, which a flicker or a random walk bias makes as readily (an

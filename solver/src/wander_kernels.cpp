@@ -57,10 +57,11 @@ double log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
 }  // namespace
 
 WanderKernels make_wander_kernels(const std::vector<StepSummary>& steps) {
-  std::vector<double> durations, counts;
+  std::vector<double> durations, counts, sample_intervals;
   double span = 0.0;
   for (const StepSummary& s : steps) {
     durations.push_back(std::max(s.duration_s, 1e-3));
+    if (s.count > 1) sample_intervals.push_back(s.duration_s / static_cast<double>(s.count - 1));
     counts.push_back(static_cast<double>(s.count));
     span = std::max(span, s.end_s);
   }
@@ -82,7 +83,11 @@ WanderKernels make_wander_kernels(const std::vector<StepSummary>& steps) {
   WanderModel flicker;
   flicker.kind = WanderKind::kFlicker;
   flicker.flicker_b = 1.0;
-  flicker.tau_min_s = tau_lo;
+  // Flicker reaches down to the shortest blocks the white floor was read at
+  // (measure_noise_floor): its components faster than a step move the step means too, by less
+  // than the slower ones, and the floor holds none of them.
+  flicker.tau_min_s =
+      std::min(tau_lo, std::max(1e-3, kWhiteFitShortestBlockSamples * median(sample_intervals)));
   flicker.tau_max_s = std::max(10.0 * span, 10.0 * tau_lo);
   out.wanders.push_back(make_kernel(flicker, steps, 1));
   WanderModel walk;

@@ -1,6 +1,8 @@
 #pragma once
 // Estimating a run's step-mean noise model from the run itself: the white part from the scatter
-// inside the steps, the wandering bias from the step means' residuals across steps.
+// inside the steps (the white part of their Allan curve, octave_allan.hpp, so that the wander's
+// share of a block's scatter is not counted twice), the wandering bias from the step means'
+// residuals across steps.
 //
 // Why the residuals, and how. A wandering bias (Gauss-Markov, flicker, random walk) moves every
 // step mean, and steps close in time share it; a missing physical effect follows the steps'

@@ -7,13 +7,12 @@
 #include <vector>
 
 #include "solver/model.hpp"
+#include "solver/octave_allan.hpp"
 #include "solver/run_setup.hpp"
 #include "store/database.hpp"
 #include "store/step_data.hpp"
 
 namespace calstand::solver {
-
-using Vector6d = Eigen::Matrix<double, kChannels, 1>;
 
 /// A run's data as the solver reads it once: the setup and every completed step's samples with
 /// the table state per sample.
@@ -43,6 +42,9 @@ struct StepSummary {
   /// Allan variance over the number of blocks, robust to a linear drift); NaN when the step is
   /// too short to tell.
   Vector6d mean_variance = Vector6d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// Allan variance sums of measurement - reference at blocks of 1, 2, 4, ... samples, up to a
+  /// tenth of the step: the curve the white noise floor is read from (octave_allan.hpp).
+  std::vector<OctaveAllan> octave_allan;
   std::array<double, kSignalCount> signals{};      ///< mean of each signal (signal_names())
   std::array<double, kSignalCount> signals_sq{};   ///< mean of each signal squared
   std::array<double, kSignalCount> signals_abs{};  ///< mean of each signal's absolute value
@@ -64,16 +66,25 @@ std::vector<StepSummary> select_parameters(const std::vector<StepSummary>& steps
 /// (all steps when the run has none).
 struct NoiseFloor {
   Vector6d density = Vector6d::Zero();  ///< [unit^2] per channel
+  /// The steps' scatter at a tenth of a step (batch means), per channel, in the same units: the
+  /// white noise and the wander at that block length. The weights of a channel whose wander
+  /// the run cannot estimate: a step mean moves by its wander too, and this figure holds at
+  /// least the wander's part at a tenth of a step, where the white part holds none of it.
+  Vector6d batch_density = Vector6d::Zero();
   std::size_t steps_used = 0;
   bool from_static_steps = true;
+  /// Read from the steps' Allan curve (white part only); false: the batch means' figure at a
+  /// tenth of a step, for runs whose steps are too short for three octaves.
+  bool from_octave_fit = false;
   /// Expected standard deviation of a step mean of `count` samples, per channel.
   Vector6d step_sigma(std::int64_t count) const {
     return (density / static_cast<double>(count)).cwiseSqrt();
   }
 };
 
-/// Pools the steps' own mean variances. Throws core::InputError when no step is long enough to
-/// measure its scatter.
+/// The white noise of the steps' pooled Allan curve (white_variance_from_octaves), or where
+/// the steps are too short for it, their own mean variances pooled. Throws core::InputError when no
+/// step is long enough to measure its scatter.
 NoiseFloor measure_noise_floor(const std::vector<StepSummary>& steps);
 
 }  // namespace calstand::solver
