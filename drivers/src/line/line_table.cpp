@@ -21,6 +21,13 @@ constexpr double kDerivedRateWindowS = 2.0;
 // A derived rate is at its demand within this fraction of it (a measured one, within the
 // axis's rate_tolerance_dps): the window's jitter, not the table, limits it.
 constexpr double kDerivedRateTolerance = 0.01;
+// Once there, a derived rate leaves its demand only beyond this fraction of it: the controller
+// holds its rate to ppm, and a stamp late by a millisecond of wall time (a busy host, a
+// simulator at 20x) moves the window's slope by 1 % at 60 deg/s. Without the hysteresis the
+// samples of a capture at rate took that jitter for their reference rate (a rate ladder's
+// gyro chi2/dof 5 to 27 through a command set without read_rate). A stall or a runaway is
+// far beyond it.
+constexpr double kDerivedRateHoldTolerance = 0.1;
 
 std::string_view line_table_axis_name(std::size_t axis) { return axis == 1 ? "inner" : "outer"; }
 
@@ -491,7 +498,9 @@ bool LineTable::read_axis(std::size_t axis, core::AxisState& out, double& angle_
       within = rate_derived ? t.history.front().first >= t.commanded_at_s &&
                                   std::abs(*rate - t.demand_rate_dps) <=
                                       std::max(limits.rate_tolerance_dps,
-                                               kDerivedRateTolerance * std::abs(t.demand_rate_dps))
+                                               (t.settled_since_s ? kDerivedRateHoldTolerance
+                                                                  : kDerivedRateTolerance) *
+                                                   std::abs(t.demand_rate_dps))
                             : std::abs(*rate - t.demand_rate_dps) <= limits.rate_tolerance_dps;
       break;
     case core::AxisMode::kSine:

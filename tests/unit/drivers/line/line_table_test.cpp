@@ -351,6 +351,54 @@ TEST(LineTable, WithoutAStatusInPositionIsTheAngleHeldWithinToleranceForTheSettl
   EXPECT_FALSE(table.read_state().outer.in_position);
 }
 
+TEST(LineTable, ADerivedRateOnceAtItsDemandRidesOutAStampsJitterButNotAStall) {
+  // Aerosmith's set reads no rate: the rate is the angles' slope over a window of station time,
+  // and a reading stamped late (a busy host) moves that slope. Once at its demand the axis stays
+  // there, and so does the rate the samples are referred to, unless the slope departs far.
+  test::ChildProcess peer({test::kPython, std::string(CALSTAND_SOURCE_DIR) +
+                                              "/tests/unit/drivers/line/peers/aerosmith_peer.py"});
+  const auto first = peer.read_line();
+  ASSERT_TRUE(first.has_value() && first->rfind("port ", 0) == 0);
+  core::TableConfig config;
+  config.outer.settle_time_s = config.inner.settle_time_s = 0.2;
+  config.outer.rate_tolerance_dps = config.inner.rate_tolerance_dps = 0.01;
+  config.connection = {
+      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", std::stoi(first->substr(5))}};
+  core::VirtualClock clock(0.0);
+  LineTable table(config, clock, *line::builtin_command_set("aerosmith"));
+  ASSERT_TRUE(table.configure().ok);
+  ASSERT_TRUE(table.activate().ok);
+  constexpr double kRateDps = 20.0;
+  ASSERT_TRUE(table.set_rate(TableAxis::kOuter, kRateDps).ok);
+  // The station clock follows the wall, plus whatever lateness the test stamps the readings with.
+  auto last = std::chrono::steady_clock::now();
+  auto reading = [&](double late_s) {
+    std::this_thread::sleep_for(50ms);
+    const auto now = std::chrono::steady_clock::now();
+    clock.advance(std::chrono::duration<double>(now - last).count() + late_s);
+    last = now;
+    return table.read_state().outer;
+  };
+  // The peer accelerates at its own rate: give it time to reach the demand and settle.
+  bool settled = false;
+  for (int i = 0; i < 100 && !settled; ++i) settled = reading(0.0).in_position;
+  ASSERT_TRUE(settled) << "the derived rate never reached its demand";
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(reading(0.0).in_position);
+  // One reading 60 ms late: the 2 s window's slope is 3 % low for the next two seconds.
+  auto jittered = reading(0.06);
+  for (int i = 0; i < 20; ++i) {
+    EXPECT_TRUE(jittered.in_position) << "reading " << i << " after the late stamp";
+    EXPECT_EQ(jittered.rate_dps, kRateDps) << "reading " << i << " after the late stamp";
+    jittered = reading(0.0);
+  }
+  // A second of station time with no turn seen (the axis stalled as far as the angles tell): 30
+  // % below the demand, which is no jitter.
+  const auto stalled = reading(1.0);
+  EXPECT_FALSE(stalled.in_position);
+  EXPECT_LT(stalled.rate_dps, 0.8 * kRateDps);
+  table.stop();
+}
+
 TEST(LineTable, BeforeConfigureItReadsNothingAndSaysSo) {
   core::TableConfig config;
   config.connection = {{"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", 9}};
