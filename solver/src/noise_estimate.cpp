@@ -161,7 +161,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           detail::best_amplitude(k, p, kernels.typical_count, Likelihood::kRestricted);
       const double score = t.log_likelihood - penalty_per_parameter * k.parameters;
       const WanderModel w = detail::with_amplitude(k, t.amplitude);
-      if (w.kind == WanderKind::kFlicker) {
+      if (w.kind == WanderKind::kFlicker && score > flicker_score) {
         flicker_score = score;
         flicker_fit = w;
       }

@@ -80,16 +80,25 @@ WanderKernels make_wander_kernels(const std::vector<StepSummary>& steps) {
     gm.tau_s = tau_lo * std::pow(tau_hi / tau_lo, static_cast<double>(i) / (gm_count - 1));
     out.wanders.push_back(make_kernel(gm, steps, 2));
   }
+  // Flicker in two bands, each one parameter, the likelihood choosing: from a step's length up
+  // (a bias wandering between steps, its fast part white enough inside them: an LN200-class
+  // Gauss-Markov bias of 60 s is closer to this than to any other shape the run can tell), and
+  // from the shortest blocks the white floor was read at (measure_noise_floor), whose
+  // components faster than a step move the step means too, by less than the slower ones, while
+  // the floor holds none of them (an ADIS16488-class flicker floor from 1 s: without this band,
+  // 1 clean run in 8 took a warm-up from the wander).
   WanderModel flicker;
   flicker.kind = WanderKind::kFlicker;
   flicker.flicker_b = 1.0;
-  // Flicker reaches down to the shortest blocks the white floor was read at
-  // (measure_noise_floor): its components faster than a step move the step means too, by less
-  // than the slower ones, and the floor holds none of them.
-  flicker.tau_min_s =
-      std::min(tau_lo, std::max(1e-3, kWhiteFitShortestBlockSamples * median(sample_intervals)));
+  flicker.tau_min_s = tau_lo;
   flicker.tau_max_s = std::max(10.0 * span, 10.0 * tau_lo);
   out.wanders.push_back(make_kernel(flicker, steps, 1));
+  const double shortest_block_s =
+      std::max(1e-3, kWhiteFitShortestBlockSamples * median(sample_intervals));
+  if (shortest_block_s < tau_lo) {
+    flicker.tau_min_s = shortest_block_s;
+    out.wanders.push_back(make_kernel(flicker, steps, 1));
+  }
   WanderModel walk;
   walk.kind = WanderKind::kRandomWalk;
   walk.random_walk_k = 1.0;

@@ -22,6 +22,9 @@ struct Candidate {
   double delta_bic_against_wander = std::numeric_limits<double>::quiet_NaN();
   double p_value = 1.0;  ///< F-test of the added parameters
   double chi2_dof_after = 0.0;
+  /// Per sensor after the term (FitResult's: NaN where the sensor is not fitted).
+  double chi2_dof_after_gyro = std::numeric_limits<double>::quiet_NaN();
+  double chi2_dof_after_accel = std::numeric_limits<double>::quiet_NaN();
   int added_parameters = 0;  ///< identified parameters the term adds
   std::string explanation;   ///< the physical effect and which steps it fixes, in words
 };
@@ -76,6 +79,11 @@ inline constexpr double kExplainedChi2Dof = 1.5;
 /// every signal of error-model.md, their squares and absolute values. One pass over the samples
 /// serves every candidate. Then, as `diagnose_options` asks, searches custom terms
 /// (suggest_custom_terms()).
+/// Whether the best candidate explains what it removes though other effects remain: an F-test
+/// p under 1e-6, and more than half of the chi2/dof excess over 1 removed, of the whole fit or
+/// of the sensor that misfits most (a gyro term cannot touch the accelerometers' misfit).
+bool best_candidate_dominates(const FitResult& fit, const Candidate& best);
+
 Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options = {},
                    const DiagnoseOptions& diagnose_options = {});
 
