@@ -21,6 +21,8 @@ constexpr std::size_t kSignalsReported = 20;
 // A candidate that removes more than this share of the chi2/dof excess over 1 is a real effect
 // even when others remain.
 constexpr double kDominantShareOfExcess = 0.5;
+// An F-test p-value below this is strong evidence for a term.
+constexpr double kStrongP = 1e-6;
 // "Very strong" evidence on the Kass-Raftery scale of BIC differences.
 constexpr double kStrongDeltaBic = -10.0;
 
@@ -162,16 +164,16 @@ std::vector<std::string> wander_outweighing_white(const FitResult& fit,
 }  // namespace
 
 bool best_candidate_dominates(const FitResult& fit, const Candidate& best) {
-  if (best.p_value >= 1e-6) return false;
-  if (fit.chi2_dof - best.chi2_dof_after > kDominantShareOfExcess * (fit.chi2_dof - 1.0)) {
-    return true;
-  }
+  if (best.p_value >= kStrongP) return false;
+  const auto removes_most = [](double before, double after) {
+    return before > 1.0 && std::isfinite(after) &&
+           before - after > kDominantShareOfExcess * (before - 1.0);
+  };
+  if (removes_most(fit.chi2_dof, best.chi2_dof_after)) return true;
   if (!std::isfinite(fit.chi2_dof_gyro) || !std::isfinite(fit.chi2_dof_accel)) return false;
-  const bool gyro_worst = fit.chi2_dof_gyro >= fit.chi2_dof_accel;
-  const double before = gyro_worst ? fit.chi2_dof_gyro : fit.chi2_dof_accel;
-  const double after = gyro_worst ? best.chi2_dof_after_gyro : best.chi2_dof_after_accel;
-  return before > 1.0 && std::isfinite(after) &&
-         before - after > kDominantShareOfExcess * (before - 1.0);
+  return fit.chi2_dof_gyro >= fit.chi2_dof_accel
+             ? removes_most(fit.chi2_dof_gyro, best.chi2_dof_after_gyro)
+             : removes_most(fit.chi2_dof_accel, best.chi2_dof_after_accel);
 }
 
 Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options,
@@ -300,7 +302,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
   // and the catalogue's physics is the prior a lab holds. delta_bic_against_wander says how far
   // the run alone tells the two apart.
   const bool strong = !d.candidates.empty() && d.candidates.front().delta_bic < kStrongDeltaBic &&
-                      d.candidates.front().p_value < 1e-6;
+                      d.candidates.front().p_value < kStrongP;
   if (strong && (!model_fits || d.candidates.front().chi2_dof_after < d.fit.chi2_dof)) {
     d.recommended = d.candidates.front().term;
   }

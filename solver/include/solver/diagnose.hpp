@@ -74,16 +74,16 @@ struct DiagnoseOptions {
 /// A fit with chi2/dof at or below this is at the noise floor (the residuals are explained).
 inline constexpr double kExplainedChi2Dof = 1.5;
 
-/// Fits `model`, then each catalogue term it lacks (and the next order of each temperature
-/// polynomial it has) added in turn, ranked by the change in BIC; correlates the residuals with
-/// every signal of error-model.md, their squares and absolute values. One pass over the samples
-/// serves every candidate. Then, as `diagnose_options` asks, searches custom terms
-/// (suggest_custom_terms()).
 /// Whether the best candidate explains what it removes though other effects remain: an F-test
 /// p under 1e-6, and more than half of the chi2/dof excess over 1 removed, of the whole fit or
 /// of the sensor that misfits most (a gyro term cannot touch the accelerometers' misfit).
 bool best_candidate_dominates(const FitResult& fit, const Candidate& best);
 
+/// Fits `model`, then each catalogue term it lacks (and the next order of each temperature
+/// polynomial it has) added in turn, ranked by the change in BIC; correlates the residuals with
+/// every signal of error-model.md, their squares and absolute values. One pass over the samples
+/// serves every candidate. Then, as `diagnose_options` asks, searches custom terms
+/// (suggest_custom_terms()).
 Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& options = {},
                    const DiagnoseOptions& diagnose_options = {});
 

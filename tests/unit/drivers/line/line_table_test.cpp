@@ -317,17 +317,31 @@ INSTANTIATE_TEST_SUITE_P(BuiltInSets, LineTableServed,
                          ::testing::Values("acutrol3000", "aerosmith", "actidyn", "aerotech"),
                          served_case_name);
 
+/// The Python Aerosmith peer (a set without read_status or read_rate), started.
+struct AerosmithPeer {
+  test::ChildProcess process{
+      {test::kPython,
+       std::string(CALSTAND_SOURCE_DIR) + "/tests/unit/drivers/line/peers/aerosmith_peer.py"}};
+  /// A table configuration that reaches the peer on the port it printed; no connection when it
+  /// printed none.
+  core::TableConfig config() {
+    core::TableConfig c;
+    const auto first = process.read_line();
+    if (first && first->rfind("port ", 0) == 0) {
+      c.connection = {
+          {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", std::stoi(first->substr(5))}};
+    }
+    return c;
+  }
+};
+
 TEST(LineTable, WithoutAStatusInPositionIsTheAngleHeldWithinToleranceForTheSettleTime) {
   // Aerosmith's set reads no status: in-position is derived, on the station clock.
-  test::ChildProcess peer({test::kPython, std::string(CALSTAND_SOURCE_DIR) +
-                                              "/tests/unit/drivers/line/peers/aerosmith_peer.py"});
-  const auto first = peer.read_line();
-  ASSERT_TRUE(first.has_value() && first->rfind("port ", 0) == 0);
-  core::TableConfig config;
+  AerosmithPeer peer;
+  core::TableConfig config = peer.config();
+  ASSERT_FALSE(config.connection.empty()) << "the peer printed no port";
   config.outer.settle_time_s = config.inner.settle_time_s = 0.5;
   config.outer.position_tolerance_deg = config.inner.position_tolerance_deg = 1e-3;
-  config.connection = {
-      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", std::stoi(first->substr(5))}};
   core::VirtualClock clock(100.0);
   LineTable table(config, clock, *line::builtin_command_set("aerosmith"));
   ASSERT_TRUE(table.configure().ok);
@@ -355,15 +369,11 @@ TEST(LineTable, ADerivedRateOnceAtItsDemandRidesOutAStampsJitterButNotAStall) {
   // Aerosmith's set reads no rate: the rate is the angles' slope over a window of station time,
   // and a reading stamped late (a busy host) moves that slope. Once at its demand the axis stays
   // there, and so does the rate the samples are referred to, unless the slope departs far.
-  test::ChildProcess peer({test::kPython, std::string(CALSTAND_SOURCE_DIR) +
-                                              "/tests/unit/drivers/line/peers/aerosmith_peer.py"});
-  const auto first = peer.read_line();
-  ASSERT_TRUE(first.has_value() && first->rfind("port ", 0) == 0);
-  core::TableConfig config;
+  AerosmithPeer peer;
+  core::TableConfig config = peer.config();
+  ASSERT_FALSE(config.connection.empty()) << "the peer printed no port";
   config.outer.settle_time_s = config.inner.settle_time_s = 0.2;
   config.outer.rate_tolerance_dps = config.inner.rate_tolerance_dps = 0.01;
-  config.connection = {
-      {"transport", "tcp"}, {"host", "127.0.0.1"}, {"port", std::stoi(first->substr(5))}};
   core::VirtualClock clock(0.0);
   LineTable table(config, clock, *line::builtin_command_set("aerosmith"));
   ASSERT_TRUE(table.configure().ok);
