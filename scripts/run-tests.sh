@@ -20,6 +20,13 @@ export CALSTAND_REQUIRE_POSTGRES=1
 # ... and python3-zstandard, python3-lz4, python3-rosbag: the recordings' independent writers
 # (tests/support/write_recordings.py) must write every format, none skipped.
 export CALSTAND_REQUIRE_RECORDING_WRITERS=1
-ctest --output-on-failure -j "$(nproc)" --timeout 600
+# One CPU slot per core for the tests that compute, and one test more than the cores: the
+# station tests, which hold no slot and mostly wait on the simulator, run beside them
+# (tests/CMakeLists.txt, calstand_on_a_cpu).
+cores="$(nproc)"
+spec="$PWD/ctest-resources.json"
+printf '{"version": {"major": 1, "minor": 0}, "local": [{"cpus": [{"id": "0", "slots": %d}]}]}\n' \
+  "$cores" >"$spec"
+ctest --output-on-failure -j "$((cores + 1))" --resource-spec-file "$spec" --timeout 600
 # Fuzzing itself (clang, libFuzzer, sanitizers: a build of its own) is not part of this command:
 # `bash scripts/run-fuzz.sh [SECONDS]`. ctest above replays every fuzz target's kept seeds.
