@@ -18,13 +18,22 @@
 #include <tuple>
 
 #include "core/error.hpp"
+#include "held_out.hpp"
 #include "solver/custom_term.hpp"
 #include "solver/groups.hpp"
 #include "solver/noise_estimate.hpp"
 #include "solver/signals.hpp"
+#include "suggest_words.hpp"
 
 namespace calstand::solver {
 namespace {
+
+using detail::effect_words;
+using detail::Folds;
+using detail::format_tau;
+using detail::held_out_chi2;
+using detail::make_folds;
+using detail::name_of;
 
 // "Very strong" evidence on the Kass-Raftery scale of BIC differences, as diagnose asks of a
 // catalogue term before recommending it.
@@ -54,10 +63,6 @@ constexpr double kTausPerDecade = 6.0;
 // Bits of log10(tau) Brent's method resolves: 2^-19 (a factor 1 + 1e-6 in tau) is far below
 // the three significant digits the term writes.
 constexpr int kTauBrentBits = 20;
-// Folds of interleaved steps when the run has fewer than three temperature plateaus.
-constexpr std::size_t kStepFolds = 5;
-// Significant digits of a searched time constant in the term's text.
-constexpr int kTauDigits = 3;
 
 // --- Building blocks: the step means of every signal, product of two, and absolute value -----
 
@@ -441,11 +446,6 @@ std::string sensor_text(core::TermSensor sensor, const std::array<bool, 3>& axes
   return text.substr(2, text.size() - 3);
 }
 
-std::string format_tau(double tau_s) {
-  const double scale = std::pow(10.0, std::floor(std::log10(tau_s)) - (kTauDigits - 1));
-  return fmt::format("{:g}", std::round(tau_s / scale) * scale);
-}
-
 Screened make_screened(const Form& f, const Screen& s) {
   Screened out{f, s.axes, s.delta_bic, f.expression, ""};
   int count = 0, only = 0;
@@ -585,129 +585,6 @@ std::vector<StepSummary> with_columns(const std::vector<StepSummary>& steps,
     }
   }
   return out;
-}
-
-/// Parts of the run to hold out in turn: each temperature plateau when there are three or more
-/// (a term that is physics extrapolates to a temperature it was not fitted at), else steps
-/// interleaved into five folds.
-struct Folds {
-  std::vector<std::vector<std::size_t>> parts;
-  std::string how;
-};
-
-Folds make_folds(const std::vector<StepSummary>& steps, bool by_plateau) {
-  Folds f;
-  const std::vector<double> plateaus = temperature_plateaus(steps);
-  if (by_plateau && plateaus.size() >= 3) {
-    f.parts.resize(plateaus.size());
-    for (std::size_t i = 0; i < steps.size(); ++i) {
-      const double temperature_c = steps[i].signals[0];
-      std::size_t nearest = 0;
-      for (std::size_t p = 1; p < plateaus.size(); ++p) {
-        if (std::abs(temperature_c - plateaus[p]) < std::abs(temperature_c - plateaus[nearest])) {
-          nearest = p;
-        }
-      }
-      f.parts[nearest].push_back(i);
-    }
-    f.how = fmt::format("{} temperature plateaus held out in turn", plateaus.size());
-    return f;
-  }
-  const std::size_t k = std::min(kStepFolds, steps.size());
-  f.parts.resize(k);
-  for (std::size_t i = 0; i < steps.size(); ++i) f.parts[i % k].push_back(i);
-  f.how = fmt::format("{} folds of interleaved steps held out in turn", k);
-  return f;
-}
-
-/// Chi-square of each held-out part predicted by `model` fitted to the rest, summed, with the
-/// rows it covers; +infinity when some part leaves too little to fit.
-std::pair<double, int> held_out_chi2(const std::vector<StepSummary>& steps, const Model& model,
-                                     const StepNoise& noise, const FitOptions& options,
-                                     const Folds& folds) {
-  double chi2 = 0.0;
-  int rows = 0;
-  for (const auto& part : folds.parts) {
-    std::vector<bool> held(steps.size(), false);
-    for (std::size_t i : part) held[i] = true;
-    std::vector<StepSummary> train, test;
-    for (std::size_t i = 0; i < steps.size(); ++i) (held[i] ? test : train).push_back(steps[i]);
-    FitResult fit;
-    try {
-      fit = fit_model(train, model, noise, options);
-    } catch (const core::InputError&) {
-      return {std::numeric_limits<double>::infinity(), 0};
-    }
-    for (int c : fit_channels(options.rows)) {
-      Eigen::VectorXd e(static_cast<Eigen::Index>(test.size()));
-      for (std::size_t i = 0; i < test.size(); ++i) {
-        const StepSummary& s = test[i];
-        e[static_cast<Eigen::Index>(i)] =
-            s.measured[c] - s.reference[c] - s.regressors.row(c).dot(fit.values);
-      }
-      const Eigen::LLT<Eigen::MatrixXd> llt(noise.covariance(c, test));
-      chi2 += e.dot(llt.solve(e));
-      rows += static_cast<int>(test.size());
-    }
-  }
-  return {chi2, rows};
-}
-
-// --- Words ---------------------------------------------------------------------------------
-
-/// A term name from its expression: force_z^2 -> force_z_sq, exp(-elapsed/900) -> exp_elapsed_900.
-std::string name_of(const std::string& expression, const std::set<std::string>& taken) {
-  std::string name;
-  for (std::size_t i = 0; i < expression.size(); ++i) {
-    const char c = expression[i];
-    if (expression.compare(i, 6, "{axis}") == 0) {
-      name += "axis";
-      i += 5;
-    } else if (expression.compare(i, 2, "^2") == 0) {
-      name += "_sq";
-      ++i;
-    } else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_') {
-      name += c;
-    } else if (c == '.') {
-      name += 'p';
-    } else if (!name.empty() && name.back() != '_') {
-      name += '_';
-    }
-  }
-  while (!name.empty() && name.back() == '_') name.pop_back();
-  if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) name = "k_" + name;
-  std::string unique = name;
-  for (int n = 2; taken.count(unique) || core::find_error_term(unique); ++n) {
-    unique = fmt::format("{}_{}", name, n);
-  }
-  return unique;
-}
-
-std::string effect_words(const CustomTermSpec& spec, const FitResult& fit, double tau_s) {
-  const bool gyro = spec.sensor == core::TermSensor::kGyro;
-  std::vector<std::string> channels, values;
-  for (int a = 0; a < 3; ++a) {
-    if (!spec.axes[static_cast<std::size_t>(a)]) continue;
-    const std::string channel = fmt::format("{}{}", gyro ? 'g' : 'a', "xyz"[a]);
-    channels.push_back(channel);
-    const std::string parameter = spec.name + "." + "xyz"[a];
-    for (const FittedParameter& p : fit.parameters) {
-      if (p.name == parameter) {
-        values.push_back(fmt::format("{} {:.3g} +- {:.2g}", channel, p.value, p.sigma));
-      }
-    }
-  }
-  const std::string unit = gyro ? "deg/s" : "m/s^2";
-  const std::string what =
-      tau_s > 0.0
-          ? fmt::format("a warm-up transient of the {} bias decaying with a {} s time constant",
-                        gyro ? "gyro" : "accelerometer", format_tau(tau_s))
-      : spec.expression.find("{axis}") != std::string::npos
-          ? fmt::format("each {} axis following its own axis's signal",
-                        gyro ? "gyro" : "accelerometer")
-          : fmt::format("{} following {}", fmt::join(channels, ", "), spec.expression);
-  return fmt::format("{}: {} += c * {}, c = {} [{} per unit of the expression]", what,
-                     fmt::join(channels, ", "), spec.expression, fmt::join(values, ", "), unit);
 }
 
 /// Every form screened against the whitening `w`, best first.
