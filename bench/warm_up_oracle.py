@@ -78,7 +78,7 @@ def gauss_markov_window_cov(a1, l1, a2, l2, tau_c):
 def flicker_components(b_deg_h):
     """A flicker bias of coefficient B [deg/h] (Allan floor 0.664 B, as sim/noise.hpp makes it)
     as a sum of Gauss-Markov processes, two per decade of correlation time from 0.1 s to 1e7 s,
-    of equal variance: flat in Allan deviation within a few per cent from about 10 s to 1e6 s.
+    of equal variance: flat in Allan deviation within 4 % from 1 s to 1e5 s (measured).
     Returns (sigma deg/s, tau_c s) pairs scaled so that the Allan deviation at 1000 s is the
     floor."""
     taus = 10.0 ** (np.arange(-2, 15) / 2.0)
