@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/tools/minima.hpp>
-#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
