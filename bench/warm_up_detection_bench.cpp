@@ -13,7 +13,9 @@
 
 #include <cstdlib>
 #include <string>
+#include <vector>
 
+#include "../tests/unit/analysis/static_run_wander.hpp"
 #include "../tests/unit/solver/warm_up_campaign.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/noise_rows.hpp"
@@ -141,12 +143,68 @@ int floor_probe(int seeds, const std::string& noise) {
   return 0;
 }
 
+/// Found and false alarms with the wander known from a static run of the same unit (`diagnose
+/// --noise-run`): per class, capture and time constant, warm-ups of `times` on the sweep's
+/// seeds and the same runs without it; one line per run with the decision's figures.
+int known_wander(int seeds, const std::string& only, double times, double hours) {
+  for (const char* noise : {"white", "ln200", "adis16488", "mems"}) {
+    if (!only.empty() && only != noise) continue;
+    for (double capture_s : {0.0, 1800.0}) {
+      for (double tau_s : {300.0, 900.0, 1800.0}) {
+        // times 0: clean runs alone, on the false-alarm seeds (one set per capture).
+        if (times == 0.0 && tau_s != 900.0) continue;
+        int hits = 0, alarms = 0;
+        for (int k = 0; k < seeds; ++k) {
+          const auto seed =
+              static_cast<std::uint64_t>(times > 0.0 ? 7000 + 97 * k : 90000 + 131 * k);
+          const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
+          const double amplitude =
+              times > 0.0 ? times * solver::testing::step_mean_noise_dps(truth, seed + 1) : 0.0;
+          const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+          for (double a :
+               times > 0.0 ? std::vector<double>{amplitude, 0.0} : std::vector<double>{0.0}) {
+            const solver::RunData data =
+                solver::testing::warm_up_run(truth, capture_s, tau_s, a, seed + 2);
+            solver::DiagnoseOptions options;
+            options.noise.known_wander =
+                calstand::testing::static_run_wander(truth, hours, seed + 3, data);
+            const solver::Diagnosis d = solver::diagnose(data, model, {}, options);
+            const bool hit = a > 0.0 && found(d, tau_s);
+            const bool alarm = a == 0.0 && !d.suggestions.empty();
+            hits += hit ? 1 : 0;
+            alarms += alarm ? 1 : 0;
+            for (const solver::WarmUpCheck& w : d.warm_ups) {
+              fmt::print(
+                  "{{\"noise\": \"{}\", \"capture_s\": {}, \"true_tau_s\": {}, \"times\": "
+                  "{}, \"seed\": {}, \"custom\": \"{}\", \"two_ln_lr\": {:.2f}, "
+                  "\"delta_bic\": {:.2f}, \"kept\": {}, \"found\": {}, \"alarm\": {}}}\n",
+                  noise, capture_s, tau_s, a > 0.0 ? times : 0.0, seed, w.custom,
+                  w.two_log_likelihood_ratio, w.delta_bic, w.kept, hit, alarm);
+            }
+          }
+          std::fflush(stdout);
+        }
+        fmt::print(
+            "{:10} capture {:5.0f} s tau {:5.0f} s {:4.0f}x, wander from a {} h static "
+            "run: found {}/{}, false alarms without it {}/{}\n",
+            noise, capture_s, tau_s, times, hours, hits, seeds, alarms, seeds);
+        std::fflush(stdout);
+      }
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 4;
   const std::string only = argc > 2 && std::string(argv[2]) != "all" ? argv[2] : "";
   if (argc > 3 && std::string(argv[3]) == "floor")
     return floor_probe(seeds, only.empty() ? "adis16488" : only);
   if (argc > 3 && std::string(argv[3]) == "clean") return false_alarms(seeds, only);
+  if (argc > 3 && std::string(argv[3]) == "known") {
+    return known_wander(seeds, only, argc > 4 ? std::atof(argv[4]) : 5.0,
+                        argc > 5 ? std::atof(argv[5]) : 3.0);
+  }
   if (argc > 3 && std::string(argv[3]) == "evidence") {
     return evidence(seeds, only, argc > 4 ? std::atof(argv[4]) : 5.0,
                     argc > 5 ? std::atoi(argv[5]) : 0);

@@ -206,8 +206,11 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
                  segments.empty() ? std::vector<StepSummary>{}
                                   : summarize_steps(segments.segments, noise_model_terms),
                  &sources);
-  const StepNoise noise = estimate_step_noise(rows, noise_model_terms, options.rows);
-  const EffectOrWander evidence(std::move(rows), noise_model_terms, options.rows);
+  const NoiseEstimateOptions& noise_options = diagnose_options.noise;
+  const StepNoise noise = estimate_step_noise(rows, noise_model_terms, options.rows, noise_options);
+  const EffectOrWander evidence(
+      std::move(rows), noise_model_terms, options.rows,
+      noise_options.known_wander ? &*noise_options.known_wander : nullptr);
   const std::vector<StepSummary> steps = select_parameters(all, superset, model);
 
   Diagnosis d;
@@ -338,6 +341,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     in.evidence = &evidence;
     in.evidence_sources = &sources;
     in.segments = &segments;
+    in.noise_options = &noise_options;
     SuggestionSearch found = suggest_custom_terms(in, options, diagnose_options.suggest);
     d.custom_searched = found.ran;
     d.custom_forms_tried = found.forms_tried;

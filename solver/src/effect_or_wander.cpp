@@ -15,8 +15,11 @@ namespace calstand::solver {
 struct EffectOrWander::Kernels : detail::WanderKernels {};
 
 EffectOrWander::EffectOrWander(std::vector<StepSummary> rows, const Model& superset,
-                               SensorRows sensor_rows)
-    : rows_(std::move(rows)), superset_(superset), sensor_rows_(sensor_rows) {
+                               SensorRows sensor_rows, const KnownWander* known)
+    : rows_(std::move(rows)),
+      superset_(superset),
+      sensor_rows_(sensor_rows),
+      known_wander_(known != nullptr) {
   white_ = measure_noise_floor(rows_);
   FitOptions fo;
   fo.rows = sensor_rows;
@@ -36,7 +39,13 @@ EffectOrWander::EffectOrWander(std::vector<StepSummary> rows, const Model& super
   }
   log_rows_ = std::log(static_cast<double>(rows_.size() * fit_channels(sensor_rows).size()));
   auto kernels = std::make_shared<Kernels>();
-  static_cast<detail::WanderKernels&>(*kernels) = detail::make_wander_kernels(rows_);
+  if (known) {
+    for (const WanderModel& w : known->wander) {
+      kernels->wanders.push_back(detail::known_kernel(w, rows_));
+    }
+  } else {
+    static_cast<detail::WanderKernels&>(*kernels) = detail::make_wander_kernels(rows_);
+  }
   kernels_ = std::move(kernels);
 }
 
@@ -47,6 +56,12 @@ EffectOrWander::ChannelScore EffectOrWander::score_channel(int channel,
       detail::channel_problem(rows_, columns, channel, white_.density[channel], extra);
   ChannelScore out;
   out.fixed_parameters = p.parameters;
+  if (known_wander_) {
+    const detail::Kernel& k = kernels_->wanders[static_cast<std::size_t>(channel)];
+    out.log_likelihood = detail::known_log_likelihood(k, p, detail::Likelihood::kProfile);
+    out.wander = k.unit;
+    return out;
+  }
   out.log_likelihood = detail::white_log_likelihood(p, detail::Likelihood::kProfile);
   // A channel's wander is informed by its own rows: its parameters cost ln(rows of the
   // channel) each, as the noise model's choice of process charges them.
@@ -100,7 +115,8 @@ Hypothesis EffectOrWander::score(const std::array<bool, kChannels>& channels,
     ChannelStepNoise& ch = h.noise.channels[uc];
     ch.determined = true;
     ch.wander = cs.wander;
-    ch.note = "re-estimated under the design (profile likelihood)";
+    ch.note = known_wander_ ? "measured outside the run"
+                            : "re-estimated under the design (profile likelihood)";
   }
   // A column acts on one channel and is informed by that channel's rows; a shared time constant
   // by the rows of every channel it spans.

@@ -53,6 +53,11 @@ std::string describe(const WanderModel& w, int channel) {
     case WanderKind::kRandomWalk:
       return fmt::format("{} random walk {:.3g} {}/sqrt(h)", gyro ? "rate" : "acceleration",
                          w.random_walk_k * to_sheet * 60.0, unit);
+    case WanderKind::kSum: {
+      std::string out;
+      for (const WanderModel& p : w.parts) out += (out.empty() ? "" : " + ") + describe(p, channel);
+      return out.empty() ? "no wandering bias" : out;
+    }
     case WanderKind::kNone:
       return "no wandering bias";
   }
@@ -61,6 +66,35 @@ std::string describe(const WanderModel& w, int channel) {
 
 // Order of the temperature polynomials in the noise superset.
 constexpr int kNoiseSupersetTemperatureOrder = 3;
+
+/// The white part from inside the steps and each channel's wander as measured elsewhere: the
+/// white part alone beside it (the wander holds the rest of a block's scatter).
+StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFloor& white,
+                            SensorRows rows, const KnownWander& known) {
+  StepNoise noise = StepNoise::white_only(white, "");
+  noise.method = fmt::format(
+      "white noise from the scatter inside {} {}; wandering bias per channel from {} (not "
+      "estimated from this run)",
+      white.steps_used, white.from_static_steps ? "static steps" : "steps", known.source);
+  for (int c = 0; c < kChannels; ++c) {
+    const bool used = rows == SensorRows::kBoth || (rows == SensorRows::kGyro) == (c < kAx);
+    ChannelStepNoise& ch = noise.channels[static_cast<std::size_t>(c)];
+    if (!used) {
+      ch.note = "its sensor's rows are not part of this fit";
+      continue;
+    }
+    if (std::all_of(steps.begin(), steps.end(),
+                    [&](const StepSummary& s) { return std::isnan(s.measured[c]); })) {
+      ch.note = "the unit does not measure it (no step has a mean): its terms are not determined";
+      continue;
+    }
+    ch.determined = true;
+    ch.wander = known.wander[static_cast<std::size_t>(c)];
+    ch.source = known.source;
+    ch.note = describe(ch.wander, c);
+  }
+  return noise;
+}
 
 }  // namespace
 
@@ -93,6 +127,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     return StepNoise::white_only(
         batch, "white noise inside the steps only (wander not estimated, as asked)");
   }
+  if (options.known_wander) return with_known_wander(steps, white, rows, *options.known_wander);
   FitOptions fo;
   fo.rows = rows;
   FitResult fit;

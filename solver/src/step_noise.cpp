@@ -56,6 +56,8 @@ std::string_view to_string(WanderKind kind) {
       return "flicker";
     case WanderKind::kRandomWalk:
       return "random_walk";
+    case WanderKind::kSum:
+      return "sum";
   }
   return "none";
 }
@@ -81,6 +83,11 @@ double WanderModel::interval_mean_covariance(double a0, double a1, double b0, do
       for (int k = 0; k < count; ++k) {
         sum += gm_covariance(v, tau_min_s * std::exp(log_ratio * k), a0, a1, b0, b1);
       }
+      return sum;
+    }
+    case WanderKind::kSum: {
+      double sum = 0.0;
+      for (const WanderModel& p : parts) sum += p.interval_mean_covariance(a0, a1, b0, b1);
       return sum;
     }
   }
@@ -122,6 +129,32 @@ bool StepNoise::correlated() const {
                      [](const ChannelStepNoise& c) { return c.wander.kind != WanderKind::kNone; });
 }
 
+nlohmann::json wander_to_json(const WanderModel& wander) {
+  nlohmann::json w{{"kind", to_string(wander.kind)}};
+  switch (wander.kind) {
+    case WanderKind::kGaussMarkov:
+      w["sigma"] = wander.sigma;
+      w["tau_s"] = wander.tau_s;
+      break;
+    case WanderKind::kFlicker:
+      w["b"] = wander.flicker_b;
+      w["allan_floor"] = wander.flicker_b * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
+      w["tau_min_s"] = wander.tau_min_s;
+      w["tau_max_s"] = wander.tau_max_s;
+      break;
+    case WanderKind::kRandomWalk:
+      w["k"] = wander.random_walk_k;
+      break;
+    case WanderKind::kSum:
+      w["parts"] = nlohmann::json::array();
+      for (const WanderModel& p : wander.parts) w["parts"].push_back(wander_to_json(p));
+      break;
+    case WanderKind::kNone:
+      break;
+  }
+  return w;
+}
+
 nlohmann::json step_noise_to_json(const StepNoise& noise, double sample_rate_hz) {
   nlohmann::json j;
   j["method"] = noise.method;
@@ -137,26 +170,7 @@ nlohmann::json step_noise_to_json(const StepNoise& noise, double sample_rate_hz)
     // The white part as a density [u/sqrt(Hz)]: the per-sample variance times the sample period.
     e["white_density"] = sample_rate_hz > 0.0 ? std::sqrt(noise.white.density[c] / sample_rate_hz)
                                               : std::numeric_limits<double>::quiet_NaN();
-    nlohmann::json w{{"kind", to_string(ch.wander.kind)}};
-    switch (ch.wander.kind) {
-      case WanderKind::kGaussMarkov:
-        w["sigma"] = ch.wander.sigma;
-        w["tau_s"] = ch.wander.tau_s;
-        break;
-      case WanderKind::kFlicker:
-        w["b"] = ch.wander.flicker_b;
-        w["allan_floor"] =
-            ch.wander.flicker_b * std::sqrt(2.0 * std::numbers::ln2 / std::numbers::pi);
-        w["tau_min_s"] = ch.wander.tau_min_s;
-        w["tau_max_s"] = ch.wander.tau_max_s;
-        break;
-      case WanderKind::kRandomWalk:
-        w["k"] = ch.wander.random_walk_k;
-        break;
-      case WanderKind::kNone:
-        break;
-    }
-    e["wander"] = w;
+    e["wander"] = wander_to_json(ch.wander);
     e["determined"] = ch.determined;
     e["source"] = ch.source;
     if (!ch.note.empty()) e["note"] = ch.note;

@@ -1048,7 +1048,8 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
     const Model with =
         in.model->with_custom(parse_custom_term(p.s.custom, "--custom " + p.s.custom));
     try {
-      p.s.fit = fit_run(*in.data, with, options);
+      p.s.fit = fit_run(*in.data, with, options,
+                        in.noise_options ? *in.noise_options : NoiseEstimateOptions{});
     } catch (const core::InputError&) {
       continue;
     }

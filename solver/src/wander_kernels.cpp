@@ -208,6 +208,19 @@ double white_log_likelihood(const ChannelProblem& p, Likelihood likelihood) {
   return log_likelihood(Eigen::VectorXd::Zero(p.ys.size()), p.Xs, p.ys, p.white, 0.0, likelihood);
 }
 
+Kernel known_kernel(const WanderModel& wander, const std::vector<StepSummary>& steps) {
+  return make_kernel(wander, steps, 0);
+}
+
+double known_log_likelihood(const Kernel& kernel, const ChannelProblem& p, Likelihood likelihood) {
+  if (kernel.unit.kind == WanderKind::kNone) return white_log_likelihood(p, likelihood);
+  const Eigen::MatrixXd Xh = kernel.U.transpose() * p.Xs;
+  const Eigen::VectorXd yh = kernel.U.transpose() * p.ys;
+  // The covariance of the scaled means is white (I + rho G): the kernel at amplitude 1 is the
+  // known process, rho = 1 / white.
+  return log_likelihood(kernel.lambda, Xh, yh, p.white, 1.0 / p.white, likelihood);
+}
+
 WanderModel with_amplitude(const Kernel& kernel, double amplitude) {
   WanderModel w = kernel.unit;
   const double root = std::sqrt(amplitude);

@@ -69,6 +69,14 @@ Trial best_amplitude(const Kernel& kernel, const ChannelProblem& p, double typic
 /// The log likelihood of the channel with white noise alone.
 double white_log_likelihood(const ChannelProblem& p, Likelihood likelihood);
 
+/// The kernel of a wander known in full (its amplitude given: `wander` as it is), for the
+/// likelihood of a channel under it (known_log_likelihood()).
+Kernel known_kernel(const WanderModel& wander, const std::vector<StepSummary>& steps);
+
+/// The log likelihood of the channel with white noise and `kernel`'s process at its own
+/// amplitude (a known_kernel()).
+double known_log_likelihood(const Kernel& kernel, const ChannelProblem& p, Likelihood likelihood);
+
 /// `kernel`'s process with the fitted amplitude.
 WanderModel with_amplitude(const Kernel& kernel, double amplitude);
 

@@ -109,6 +109,8 @@ std::string describe_pose_noise(const PoseNoise& n, const PoseNoiseOptions& o) {
           "pose means share a wandering bias (Gauss-Markov): sigma {:.3g} {}, correlation time "
           "{:.3g} s, {}",
           n.wander.sigma * s, u, n.wander.tau_s, from);
+    case WanderKind::kSum:
+      return fmt::format("pose means share a wandering bias (a sum of processes), {}", from);
     case WanderKind::kFlicker:
       return fmt::format(
           "pose means share a wandering bias (flicker, bias instability B {:.3g} {}): sigma "
@@ -279,6 +281,9 @@ nlohmann::json pose_noise_to_json(const PoseNoise& n) {
     case WanderKind::kGaussMarkov:
       j["sigma"] = n.wander.sigma;
       j["tau_s"] = n.wander.tau_s;
+      break;
+    case WanderKind::kSum:
+      j["parts"] = wander_to_json(n.wander)["parts"];
       break;
     case WanderKind::kFlicker:
       j["b"] = n.wander.flicker_b;

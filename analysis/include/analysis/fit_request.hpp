@@ -25,6 +25,9 @@ struct FitRequest {
   std::string device;           ///< "" = the run's only IMU
   std::string sensor = "both";  ///< rows to fit: both, gyro or accel
   bool white_noise = false;     ///< weights from the white noise alone (no wandering bias)
+  /// The wander from this static run of the same unit (noise_run.hpp) instead of one
+  /// estimated from the run's own step means; white_noise takes precedence.
+  std::optional<std::int64_t> noise_run;
   /// The command recorded in the fit history ("fit", "diagnose"); empty: not recorded.
   std::string history_command;
 };

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@ struct DiagnoseOptions : RunModelOptions {
   StaticPoseOptions poses;  ///< runs without a table
   bool as_json = false;
   bool suggest = false;
+  std::optional<std::int64_t> noise_run;  ///< the wander from this static run of the unit
 };
 
 // The best few custom terms, each ready to paste, with its figures and effect in words.
@@ -67,9 +69,11 @@ void run_diagnose(const DiagnoseOptions& opt) {
   request.model = solver::Model::parse(opt.model, opt.customs);
   request.device = opt.device;
   request.sensor = opt.sensor;
+  request.noise_run = opt.noise_run;
   request.history_command = opt.suggest ? "" : "diagnose";
   store::Database db = open_existing_database(opt.db);
   if (analysis::needs_table_free_fit(db, opt.run)) {
+    if (opt.noise_run) throw_noise_run_on_table_free(opt.run);
     analysis::TableFreeFitRequest table_free =
         analysis::table_free_request(request.model, static_pose_request(opt.poses, opt.device));
     table_free.history_command = request.history_command;
@@ -172,6 +176,7 @@ void register_diagnose(CLI::App& app) {
   cmd->add_flag("--suggest", opt->suggest,
                 "Print only the term to add (nothing when the model fits or no term explains "
                 "the residual): for scripts");
+  add_noise_run_option(cmd, opt->noise_run);
   cmd->callback([opt] { run_diagnose(*opt); });
 
   auto hopt = std::make_shared<HistoryOptions>();

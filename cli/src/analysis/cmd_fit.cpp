@@ -1,6 +1,7 @@
 // `calstand fit`: fit an error model to a recorded (or imported) run and show how well it fits.
 #include <fmt/format.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct FitCommandOptions : RunModelOptions {
   bool as_json = false;
   int per_plateau_order = 0;  ///< > 0: thermal calibration by per-plateau fits
   bool white_noise = false;   ///< weights from the white noise alone (no wandering bias)
+  std::optional<std::int64_t> noise_run;  ///< the wander from this static run of the unit
 };
 
 analysis::FitRequest fit_request_of(const FitCommandOptions& opt, const char* command) {
@@ -28,6 +30,7 @@ analysis::FitRequest fit_request_of(const FitCommandOptions& opt, const char* co
   request.device = opt.device;
   request.sensor = opt.sensor;
   request.white_noise = opt.white_noise;
+  request.noise_run = opt.noise_run;
   request.history_command = command;
   return request;
 }
@@ -64,6 +67,7 @@ void run_fit(const FitCommandOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   if (analysis::needs_table_free_fit(db, opt.run)) {
     // No orientation is known: the table-free methods, with the optional terms of the model.
+    if (opt.noise_run) throw_noise_run_on_table_free(opt.run);
     if (per_plateau) {
       throw core::InputError("--per-plateau", fmt::format("run {} was recorded without a table: "
                                                           "there are no temperature plateaus "
@@ -109,6 +113,7 @@ void register_fit(CLI::App& app) {
   cmd->add_flag("--white-noise", opt->white_noise,
                 "Weigh the steps by the white noise inside them alone (no wandering bias "
                 "between steps): the plain weighted least squares");
+  add_noise_run_option(cmd, opt->noise_run);
   cmd->add_option("--per-plateau", opt->per_plateau_order,
                   "Thermal calibration the classical way: fit the model on each temperature "
                   "plateau, then a polynomial of this order in temperature per bias")

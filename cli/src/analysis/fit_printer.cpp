@@ -28,6 +28,23 @@ void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor
   cmd->footer(catalogue_help());
 }
 
+void add_noise_run_option(CLI::App* cmd, std::optional<std::int64_t>& noise_run) {
+  cmd->add_option("--noise-run", noise_run,
+                  "A static run of the same unit (hours at rest, warmed up): its wander (the "
+                  "composite noise model of its longest capture) weighs the steps instead of one "
+                  "estimated from this run, so that a slow effect (a warm-up) cannot pass for "
+                  "wander")
+      ->check(CLI::PositiveNumber);
+}
+
+void throw_noise_run_on_table_free(std::int64_t run) {
+  throw core::InputError("--noise-run",
+                         fmt::format("run {} was recorded without a table: its poses are weighed "
+                                     "by their own noise (the pose means' wander), not a static "
+                                     "run's",
+                                     run));
+}
+
 void print_fit(const solver::FitResult& fit) {
   fmt::print("model: {}\n\n", fit.model);
   fmt::print("{:<28} {:>15} {:>12}  {}\n", "parameter", "value", "sigma", "unit");

@@ -76,9 +76,10 @@ analysis::FitRequest fit_request_of(const httplib::Request& req, const std::stri
   if (!body.is_object()) throw BadRequest(400, "body", "must be a JSON object");
   for (const auto& [key, value] : body.items()) {
     if (key != "model" && key != "custom" && key != "device" && key != "sensor" &&
-        key != "white_noise") {
-      throw BadRequest(400, "body." + key,
-                       "unknown field (known: model, custom, device, sensor, white_noise)");
+        key != "white_noise" && key != "noise_run") {
+      throw BadRequest(
+          400, "body." + key,
+          "unknown field (known: model, custom, device, sensor, white_noise, noise_run)");
     }
   }
   analysis::FitRequest request;
@@ -98,14 +99,26 @@ analysis::FitRequest fit_request_of(const httplib::Request& req, const std::stri
       throw BadRequest(400, "body.white_noise", "must be true or false");
     request.white_noise = body["white_noise"].get<bool>();
   }
+  if (body.contains("noise_run") && !body["noise_run"].is_null()) {
+    const nlohmann::json& v = body["noise_run"];
+    if (!v.is_number_integer() || v.get<std::int64_t>() < 1)
+      throw BadRequest(400, "body.noise_run", "must be a run id (a positive integer)");
+    request.noise_run = v.get<std::int64_t>();
+  }
   request.history_command = command;
   return request;
 }
 
 // The request of a run without a table: the model's optional terms (a term such a run cannot
 // fit is a 400 naming it), the static poses as the detector finds them; `sensor` and
-// `white_noise` do not apply (both sensors are fitted, each against its own noise).
+// `white_noise` do not apply (both sensors are fitted, each against its own noise), and a
+// `noise_run` is refused (the poses are weighed by their own pose noise).
 analysis::TableFreeFitRequest table_free_request_of(const analysis::FitRequest& fit) {
+  if (fit.noise_run) {
+    throw BadRequest(400, "body.noise_run",
+                     "the run was recorded without a table: its poses are weighed by their own "
+                     "noise, not a static run's");
+  }
   analysis::TableFreeFitRequest request;
   try {
     request = analysis::table_free_request(fit.model, {});

@@ -69,6 +69,9 @@ enum class CustomSearch {
 struct DiagnoseOptions {
   CustomSearch custom_search = CustomSearch::kWhenUnexplained;
   SuggestOptions suggest;
+  /// How the noise model is had: estimated from the run, or its wander given (known_wander,
+  /// a static run of the same unit), for the diagnosis, its candidates and its suggestions.
+  NoiseEstimateOptions noise;
 };
 
 /// A fit with chi2/dof at or below this is at the noise floor (the residuals are explained).

@@ -66,8 +66,14 @@ struct Hypothesis {
 class EffectOrWander {
  public:
   /// `rows`: the noise rows (noise_rows.hpp) summarised for `superset` (the noise superset of
-  /// the model, which holds the Earth rate for gyro rows).
-  EffectOrWander(std::vector<StepSummary> rows, const Model& superset, SensorRows sensor_rows);
+  /// the model, which holds the Earth rate for gyro rows). `known`: each channel's wander
+  /// measured outside the run; every hypothesis is then scored under it (no wander is
+  /// re-estimated, and none is charged), so the comparison is a likelihood ratio under a known
+  /// noise.
+  EffectOrWander(std::vector<StepSummary> rows, const Model& superset, SensorRows sensor_rows,
+                 const KnownWander* known = nullptr);
+  /// True when the wander is known (not re-estimated under each design).
+  bool wander_known() const { return known_wander_; }
 
   /// The superset alone on `channels` (every fitted channel by default).
   Hypothesis base(const std::array<bool, kChannels>& channels) const;
@@ -109,6 +115,7 @@ class EffectOrWander {
   NoiseFloor white_;
   std::vector<Eigen::Index> columns_;  ///< of the superset's determined parameters
   double log_rows_ = 0.0;
+  bool known_wander_ = false;
   struct Kernels;
   std::shared_ptr<const Kernels> kernels_;
 };

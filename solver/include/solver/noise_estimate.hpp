@@ -20,6 +20,7 @@
 // seeing it as a missing effect.
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ struct NoiseEstimateOptions {
   bool estimate_wander = true;
   /// Step means beyond the fitted parameters a channel needs before its wander is estimated.
   int min_dof = 10;
+  /// Each channel's wander measured outside the run (a static run of the same unit): used as
+  /// it is, not estimated from the step means (white still from inside the steps).
+  std::optional<KnownWander> known_wander;
 };
 
 /// `model` with every catalogue term it lacks, the next order of each temperature polynomial it

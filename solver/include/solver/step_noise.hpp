@@ -18,8 +18,10 @@
 namespace calstand::solver {
 
 /// The process of the wandering bias of one channel.
-enum class WanderKind { kNone, kGaussMarkov, kFlicker, kRandomWalk };
-std::string_view to_string(WanderKind kind);  ///< "none", "gauss_markov", "flicker", "random_walk"
+/// kSum: independent processes added (a composite model identified from a static record).
+enum class WanderKind { kNone, kGaussMarkov, kFlicker, kRandomWalk, kSum };
+/// "none", "gauss_markov", "flicker", "random_walk", "sum"
+std::string_view to_string(WanderKind kind);
 
 /// The correlated part of one channel's noise (beyond the white noise measured in the steps),
 /// in the channel's unit u (deg/s or m/s^2).
@@ -33,6 +35,8 @@ struct WanderModel {
   double tau_min_s = 0.0;
   double tau_max_s = 0.0;
   double random_walk_k = 0.0;  ///< rate (acceleration) random walk K [u/sqrt(s)], from run start
+  /// kSum: the processes added, each of one of the other kinds.
+  std::vector<WanderModel> parts;
 
   /// Covariance [u^2] of the means of this process over the intervals [a0, a1] and [b0, b1]
   /// (seconds since the run's first sample; a0 <= a1, b0 <= b1, the intervals equal or
@@ -69,8 +73,19 @@ struct StepNoise {
   bool correlated() const;
 };
 
+/// Each channel's wander measured outside the run (a static run of the same unit: see
+/// analysis/noise_run.hpp), given to the fit instead of a wander estimated from the run's own
+/// step means: the wander is then no longer a free explanation of what the model lacks.
+struct KnownWander {
+  std::array<WanderModel, kChannels> wander{};
+  std::string source;  ///< where it was measured, e.g. "static run 4 (GMWM of 3.0 h at 50 Hz)"
+};
+
 /// The `"noise_model"` JSON of a fit: the method, and per channel the white density, the
 /// wander and how it was obtained.
 nlohmann::json step_noise_to_json(const StepNoise& noise, double sample_rate_hz);
+/// One wander's JSON: {"kind", and its parameters (sigma, tau_s; b, allan_floor, tau_min_s,
+/// tau_max_s; k; parts)} in the channel's unit.
+nlohmann::json wander_to_json(const WanderModel& wander);
 
 }  // namespace calstand::solver

@@ -45,6 +45,7 @@
 #include "solver/effect_or_wander.hpp"
 #include "solver/fit.hpp"
 #include "solver/model.hpp"
+#include "solver/noise_estimate.hpp"
 #include "solver/noise_rows.hpp"
 #include "solver/step_summary.hpp"
 
@@ -123,6 +124,8 @@ struct SuggestInput {
   const EffectOrWander* evidence = nullptr;
   const std::vector<NoiseRowSource>* evidence_sources = nullptr;
   const CaptureSegments* segments = nullptr;
+  /// How each suggestion's own fit (fit_run) has its noise model: the diagnosis's way.
+  const NoiseEstimateOptions* noise_options = nullptr;
 };
 
 /// Searches the custom terms that explain the residual of `in.fit`. Nothing is suggested when no
