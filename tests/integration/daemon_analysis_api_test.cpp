@@ -126,6 +126,10 @@ TEST_F(AnalysisApi, BadRequestsNameTheFieldAtFault) {
   EXPECT_EQ(where(path("/fits"), {{"custom", "k=gyro:force_z"}}, 400), "body.custom");
   EXPECT_EQ(where(path("/fits"), {{"sensor", "all"}}, 400), "body.sensor");
   EXPECT_EQ(where(path("/fits"), {{"modle", {"gyro_bias"}}}, 400), "body.modle");
+  EXPECT_EQ(where(path("/fits"), {{"noise_run", "1"}}, 400), "body.noise_run");
+  EXPECT_EQ(where(path("/diagnose"), {{"noise_run", 0}}, 400), "body.noise_run");
+  // The run itself as its noise run: its captures at rest are far too short for a noise model.
+  EXPECT_EQ(where(path("/fits"), {{"noise_run", run_}}, 400), "noise run " + std::to_string(run_));
   EXPECT_EQ(where("/runs/999/fits", nlohmann::json::object(), 404), "/runs/999");
   EXPECT_EQ(api_->get("/runs/999/history").status, 404);
 
