@@ -177,9 +177,10 @@ int known_wander(int seeds, const std::string& only, double times, double hours)
               fmt::print(
                   "{{\"noise\": \"{}\", \"capture_s\": {}, \"true_tau_s\": {}, \"times\": "
                   "{}, \"seed\": {}, \"custom\": \"{}\", \"two_ln_lr\": {:.2f}, "
-                  "\"delta_bic\": {:.2f}, \"kept\": {}, \"found\": {}, \"alarm\": {}}}\n",
+                  "\"delta_bic\": {:.2f}, \"kept\": {}, \"found\": {}, \"alarm\": {}, "
+                  "\"verdict\": \"{}\"}}\n",
                   noise, capture_s, tau_s, a > 0.0 ? times : 0.0, seed, w.custom,
-                  w.two_log_likelihood_ratio, w.delta_bic, w.kept, hit, alarm);
+                  w.two_log_likelihood_ratio, w.delta_bic, w.kept, hit, alarm, w.verdict);
             }
           }
           std::fflush(stdout);

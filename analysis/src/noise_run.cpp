@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "core/error.hpp"
 #include "noise/run_noise.hpp"
+#include "solver/noise_estimate.hpp"
 #include "solver/octave_allan.hpp"
 #include "solver/run_setup.hpp"
 #include "store/run_store.hpp"
+#include "store/step_data.hpp"
 
 namespace calstand::analysis {
 namespace {
@@ -17,6 +20,23 @@ namespace {
 // A flicker band reaches this many run spans, as the wander kernels' does: beyond the run, a
 // slower component is a constant the bias absorbs.
 constexpr double kFlickerBandSpans = 10.0;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+/// The run's typical step length [s]: the median first-to-last-sample span of its steps.
+double typical_step_s(const solver::RunData& run) {
+  std::vector<double> durations;
+  for (const store::StepData& step : run.steps) {
+    if (step.samples.size() > 1) {
+      durations.push_back(step.samples.back().receive_time_s - step.samples.front().receive_time_s);
+    }
+  }
+  return median(durations);
+}
 
 }  // namespace
 
@@ -38,89 +58,123 @@ FlickerBand flicker_band_of(const solver::RunData& run) {
   if (intervals.empty()) {
     throw core::InputError("run", "no step has two samples: there is no time scale to weigh it at");
   }
-  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-  const double interval = intervals[intervals.size() / 2];
   FlickerBand band;
-  band.tau_min_s = solver::kWhiteFitShortestBlockSamples * interval;
+  band.tau_min_s = solver::kWhiteFitShortestBlockSamples * median(intervals);
   band.tau_max_s = kFlickerBandSpans * std::max(last - first, band.tau_min_s);
   return band;
 }
 
-solver::KnownWander wander_from_models(std::span<const solver::ChannelModelFigures> channels,
-                                       const FlickerBand& band, const std::string& source) {
-  if (channels.size() != static_cast<std::size_t>(solver::kChannels)) {
-    throw core::InputError(
-        source, fmt::format("{} channels where gx gy gz ax ay az are needed", channels.size()));
+solver::WanderModel spread_for(const solver::WanderModel& wander, const FlickerBand& band) {
+  solver::WanderModel out = wander;
+  if (out.kind == solver::WanderKind::kFlicker) {
+    out.tau_min_s = band.tau_min_s;
+    out.tau_max_s = band.tau_max_s;
   }
+  for (solver::WanderModel& part : out.parts) part = spread_for(part, band);
+  return out;
+}
+
+solver::RunData segment_record(const solver::RunData& record, double segment_s) {
+  if (record.steps.empty()) throw core::InputError("static record", "has no step");
+  const store::StepData& capture = record.steps.front();
+  solver::RunData out;
+  out.setup = record.setup;
+  if (capture.samples.empty() || !(segment_s > 0.0)) return out;
+  const bool with_table = capture.table.size() == capture.samples.size();
+  const double t0 = capture.samples.front().receive_time_s;
+  std::size_t begin = 0;
+  for (std::size_t k = 1; begin < capture.samples.size(); ++k) {
+    const double end_s = t0 + segment_s * static_cast<double>(k);
+    std::size_t end = begin;
+    while (end < capture.samples.size() && capture.samples[end].receive_time_s < end_s) ++end;
+    // A last piece shorter than a segment would weigh as a full one: left out.
+    if (end == capture.samples.size() &&
+        capture.samples.back().receive_time_s - capture.samples[begin].receive_time_s <
+            0.9 * segment_s) {
+      break;
+    }
+    store::StepData segment;
+    segment.step = capture.step;
+    segment.step.index = out.steps.size();
+    segment.step.label = fmt::format("{} segment {}", capture.step.label, out.steps.size() + 1);
+    segment.samples.assign(capture.samples.begin() + static_cast<std::ptrdiff_t>(begin),
+                           capture.samples.begin() + static_cast<std::ptrdiff_t>(end));
+    if (with_table) {
+      segment.table.assign(capture.table.begin() + static_cast<std::ptrdiff_t>(begin),
+                           capture.table.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+    if (segment.samples.size() > 1) out.steps.push_back(std::move(segment));
+    begin = end;
+  }
+  return out;
+}
+
+solver::KnownWander wander_of_static_record(const solver::RunData& record,
+                                            const solver::RunData& run, const std::string& source) {
+  if (record.steps.empty() || record.steps.front().samples.size() < 2) {
+    throw core::InputError(source, "holds no capture to measure a wander on");
+  }
+  const auto& samples = record.steps.front().samples;
+  const double record_s = samples.back().receive_time_s - samples.front().receive_time_s;
+  const double step_s = typical_step_s(run);
+  if (!(step_s > 0.0)) {
+    throw core::InputError("run", "has no step with two samples: no step length to weigh at");
+  }
+  const double segment_s = std::max(step_s, record_s / static_cast<double>(kMaxStaticSegments));
+  const solver::RunData segments = segment_record(record, segment_s);
+  if (segments.steps.size() < kMinStaticSegments) {
+    throw core::InputError(
+        source, fmt::format("its capture of {:.0f} s gives {} segments of the run's {:.0f} s steps "
+                            "where at least {} are needed to tell a wander ({:.0f} s or more)",
+                            record_s, segments.steps.size(), step_s, kMinStaticSegments,
+                            static_cast<double>(kMinStaticSegments) * step_s));
+  }
+  // At rest a bias is all there is to fit: the Earth rate and gravity are constants it takes.
+  const solver::Model biases = solver::Model::parse("gyro_bias,accel_bias");
+  // The best process by the likelihood: no slow effect competes with it at rest.
+  solver::NoiseEstimateOptions options;
+  options.prefer_flicker = false;
+  const solver::StepNoise noise = solver::estimate_step_noise(
+      solver::summarize_steps(segments, biases), biases, solver::SensorRows::kBoth, options);
+  const FlickerBand band = flicker_band_of(run);
   solver::KnownWander out;
-  out.source = source;
-  for (std::size_t c = 0; c < channels.size(); ++c) {
-    const solver::ChannelModelFigures& ch = channels[c];
-    if (!ch.model) {
-      throw core::InputError(source, fmt::format("channel {} has no noise model ({})",
-                                                 solver::to_string(ch.channel), ch.note));
-    }
-    std::vector<solver::WanderModel> parts;
-    for (const solver::NoiseModelTerm& t : ch.model->terms) {
-      solver::WanderModel w;
-      switch (t.kind) {
-        case solver::NoiseKind::kGaussMarkov:
-          w.kind = solver::WanderKind::kGaussMarkov;
-          w.sigma = t.value;
-          w.tau_s = t.tau_s;
-          break;
-        case solver::NoiseKind::kFlicker:
-          w.kind = solver::WanderKind::kFlicker;
-          w.flicker_b = t.value;
-          w.tau_min_s = band.tau_min_s;
-          w.tau_max_s = band.tau_max_s;
-          break;
-        case solver::NoiseKind::kRandomWalk:
-          w.kind = solver::WanderKind::kRandomWalk;
-          w.random_walk_k = t.value;
-          break;
-        case solver::NoiseKind::kWhite:
-        case solver::NoiseKind::kQuantization:
-        case solver::NoiseKind::kDrift:
-          continue;
-      }
-      parts.push_back(w);
-    }
-    solver::WanderModel& w = out.wander[c];
-    if (parts.size() == 1) {
-      w = parts.front();
-    } else if (parts.size() > 1) {
-      w.kind = solver::WanderKind::kSum;
-      w.parts = std::move(parts);
-    }
+  out.source = fmt::format("{}: restricted likelihood of {} means of {:.0f} s over {:.1f} h",
+                           source, segments.steps.size(), segment_s, record_s / 3600.0);
+  for (std::size_t c = 0; c < out.wander.size(); ++c) {
+    const solver::ChannelStepNoise& ch = noise.channels[c];
+    if (ch.determined) out.wander[c] = spread_for(ch.wander, band);
   }
   return out;
 }
 
 solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run,
                                      const std::string& device, const solver::RunData& run) {
-  solver::RunNoiseOptions options;
-  options.device = device;
-  const solver::RunNoise noise = solver::analyse_run_noise(db, noise_run, options);
-  // A wander is the unit's own: where both runs name their unit, they must name the same.
+  const std::string where = fmt::format("noise run {}", noise_run);
+  const std::size_t step = solver::choose_noise_step(db, noise_run, std::nullopt);
+  const std::string chosen = solver::noise_device(db, noise_run, device);
   store::RunStore runs(db);
-  const solver::RunSetup setup =
-      solver::run_setup(runs.load_run(noise_run), noise_run, noise.device);
-  if (!setup.imu_serial.empty() && !run.setup.imu_serial.empty() &&
-      setup.imu_serial != run.setup.imu_serial) {
+  solver::RunData record;
+  record.setup = solver::run_setup(runs.load_run(noise_run), noise_run, chosen);
+  // A wander is the unit's own: where both runs name their unit, they must name the same.
+  if (!record.setup.imu_serial.empty() && !run.setup.imu_serial.empty() &&
+      record.setup.imu_serial != run.setup.imu_serial) {
     throw core::InputError(
-        fmt::format("noise run {}", noise_run),
-        fmt::format("its unit is serial {}, run {}'s is {}: a wander is the unit's own",
-                    setup.imu_serial, run.setup.run, run.setup.imu_serial));
+        where, fmt::format("its unit is serial {}, run {}'s is {}: a wander is the "
+                           "unit's own",
+                           record.setup.imu_serial, run.setup.run, run.setup.imu_serial));
   }
-  const std::vector<solver::ChannelModelFigures> models = solver::channel_noise_models(db, noise);
-  const std::string source =
-      fmt::format("static run {} (the composite noise model of its step {}, {:.1f} h at {:.0f} Hz)",
-                  noise_run, noise.step, noise.duration_s / 3600.0, noise.sample_rate_hz);
+  for (store::StepData& s : store::read_step_data(db, noise_run, chosen)) {
+    if (s.step.index == step) record.steps.push_back(std::move(s));
+  }
+  if (record.steps.empty()) {
+    throw core::InputError(where, fmt::format("step {} holds no samples of {}", step, chosen));
+  }
+  const std::string label = record.steps.front().step.label;
   try {
-    return wander_from_models(models, flicker_band_of(run), source);
+    return wander_of_static_record(
+        record, run, fmt::format("static run {} step {} ({})", noise_run, step, label));
   } catch (const core::InputError& e) {
-    throw core::InputError(fmt::format("noise run {}", noise_run), e.what());
+    throw core::InputError(where, e.what());
   }
 }
 

@@ -318,10 +318,15 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
     }
   }
   // A wander may hold an effect the catalogue lacks (effect_or_wander.hpp): wherever the noise
-  // model has one, the search runs and judges its forms against it.
-  const bool search = diagnose_options.custom_search == CustomSearch::kAlways ||
-                      (diagnose_options.custom_search == CustomSearch::kWhenUnexplained &&
-                       (!d.explained || noise.correlated()));
+  // model has one, the search runs and judges its forms against it. With the wander known (a
+  // static run's), the search always runs: a chi2/dof near 1 is no screen for a warm-up of a few
+  // step means' noise over the first ten steps of hundreds, which the likelihood ratio sees (on
+  // white-noise units none of 24 such warm-ups was searched for when the static run showed no
+  // wander).
+  const bool search =
+      diagnose_options.custom_search == CustomSearch::kAlways ||
+      (diagnose_options.custom_search == CustomSearch::kWhenUnexplained &&
+       (!d.explained || noise.correlated() || noise_options.known_wander.has_value()));
   if (search) {
     SuggestInput in;
     in.data = &data;

@@ -210,8 +210,8 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
     // well as the best wander, take it: it keeps the slow wander that a fast Gauss-Markov fit
     // would deny, so that a slowly varying effect (a temperature polynomial's next order) is
     // not claimed from bias wander between plateaus.
-    if (best.kind != WanderKind::kNone && best.kind != WanderKind::kFlicker &&
-        flicker_score >= best_score - kCautiousFlickerMargin) {
+    if (options.prefer_flicker && best.kind != WanderKind::kNone &&
+        best.kind != WanderKind::kFlicker && flicker_score >= best_score - kCautiousFlickerMargin) {
       best = flicker_fit;
       best_score = flicker_score;
     }

@@ -53,6 +53,17 @@ constexpr double kStrongDeltaBic = -10.0;
 // against the wander, 2 ln LR 44, in a 4 h run, bench/warm_up_detection_bench.cpp `evidence 0`
 // seed 96419): it is judged as every searched form is, with the look-elsewhere cost.
 constexpr double kWarmUpSettlesWithinRun = 1.0 / 3.0;
+// "Strong" evidence on the same scale: the warm-up's bar when the wander is known (measured on a
+// static run of the unit, analysis/noise_run.hpp), not re-estimated from the run. The very
+// strong bar above answers the tail of a statistic whose null holds a wander fitted to the same
+// step means; with the wander given, the comparison is a likelihood ratio under a known noise,
+// and its clean-run tail is light: 2 ln LR at most 18.5 in 80 MEMS-class and 16.8 in 80
+// ADIS16488-class clean runs with the wander a 3 h static run measured, BIC against the wander
+// at least +2.5 and +3.8 (bench/warm_up_detection_bench.cpp `known 0`), so -6 keeps a margin of
+// 8 or more, where the very strong bar would leave a known wander's test weaker than the
+// estimated one's (5x ADIS16488-class warm-ups: 10 of 24 found at -10, against 14 with the
+// run's own wander).
+constexpr double kStrongDeltaBicKnownWander = -6.0;
 // A form whose whitened column lies within this sine of the catalogue's span on a channel (all
 // but 1e-4 of its variance there) is that catalogue effect, which the user should add by name.
 constexpr double kCatalogueSine = 1e-2;
@@ -827,7 +838,8 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   const Folds held_plateau_folds = make_folds(held_rows.empty() ? steps : held_rows, true);
   const Folds held_step_folds = make_folds(held_rows.empty() ? steps : held_rows, false);
   const double transient_bar =
-      std::min(in.best_catalogue_delta_bic + kStrongDeltaBic, kStrongDeltaBic);
+      std::min(in.best_catalogue_delta_bic + kStrongDeltaBic,
+               in.evidence->wander_known() ? kStrongDeltaBicKnownWander : kStrongDeltaBic);
   double run_span_s = 0.0;
   for (const StepSummary& s : steps) run_span_s = std::max(run_span_s, s.end_s);
   // The bar a form is judged by: a warm-up that settles within the run is the one form stated

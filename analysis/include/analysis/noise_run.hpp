@@ -8,15 +8,19 @@
 // share of the warm-up, and its own estimate is uncertain: a warm-up of 5 step means' noise on a
 // MEMS-class gyro is then below what one thermal campaign can tell without false alarms
 // (docs/guide-loop.md). A static run of the same unit (hours at rest, on another day, after it
-// has warmed up) measures the wander at every time scale it covers, by the composite noise
-// model (noise/composite_noise.hpp, the GMWM); with it given, the diagnosis weighs each term
-// against a known noise.
+// has warmed up) holds the wander and nothing else.
+//
+// How: the static record is cut into segments of the run's typical step length, and the wander
+// is estimated from their means exactly as a run's own is (solver/noise_estimate.hpp: the same
+// processes, restricted likelihood, BIC), with nothing but a bias to compete. Not from the
+// record's composite noise model (noise/composite_noise.hpp): its selection answers the whole
+// spectrum, and on 2 h of an LN200-class gyro it kept white noise alone while the Gauss-Markov
+// bias (0.35 deg/h, 100 s) still moves a 20 s step mean by a third of its white scatter; the
+// step means' own likelihood weighs what the step means carry.
 
 #include <cstdint>
-#include <span>
 #include <string>
 
-#include "noise/model_figures.hpp"
 #include "solver/step_noise.hpp"
 #include "solver/step_summary.hpp"
 #include "store/database.hpp"
@@ -34,20 +38,32 @@ struct FlickerBand {
 /// without two samples in a step.
 FlickerBand flicker_band_of(const solver::RunData& run);
 
-/// Each channel's wander from its identified model (`channels`: gx gy gz ax ay az, as
-/// solver::channel_noise_models() gives them): its Gauss-Markov terms, its flicker over `band`
-/// and its random walk, summed. The white and quantization terms are left out (the white part
-/// is measured inside the fitted run's own steps, with its output filter), and so is a drift
-/// (a ramp in a static record is no stationary process: a warm-up not yet settled, or a random
-/// walk's look over one record). Throws core::InputError naming the channel and why when a
-/// channel has no model.
-solver::KnownWander wander_from_models(std::span<const solver::ChannelModelFigures> channels,
-                                       const FlickerBand& band, const std::string& source);
+/// `wander` as it moves the means of a run whose flicker band is `band`: a flicker (or a sum's
+/// flicker part) spread over the band, every other process as it is.
+solver::WanderModel spread_for(const solver::WanderModel& wander, const FlickerBand& band);
+
+/// The segments of `record`'s first step (a capture at rest), each `segment_s` long, as the
+/// steps of a run (the setup kept): the step means whose wander is estimated.
+solver::RunData segment_record(const solver::RunData& record, double segment_s);
+
+/// Fewer segment means than this and a static record cannot tell its wander.
+inline constexpr std::size_t kMinStaticSegments = 20;
+/// A long record is cut into at most this many segments (longer ones then): the wander's
+/// likelihood costs the square of their count, and 400 means of a 3 h record at 27 s already
+/// reach every time scale a campaign's steps share.
+inline constexpr std::size_t kMaxStaticSegments = 400;
+
+/// Each channel's wander from `record` (a run whose first step is a capture at rest of the
+/// unit), estimated from the means of segments of `run`'s typical step length (its median step
+/// duration), for `run`. Throws core::InputError naming `source` when the record gives fewer
+/// than kMinStaticSegments segments.
+solver::KnownWander wander_of_static_record(const solver::RunData& record,
+                                            const solver::RunData& run, const std::string& source);
 
 /// The wander of `device` ("" = the run's only IMU) measured on the static run `noise_run`
-/// (its longest capture at rest, solver::choose_noise_step()), spread for `run` (the run it
-/// will weigh). Throws core::InputError for an unknown run or device, a run without a capture
-/// at rest, or a record too short for a noise model (at least 10 min).
+/// (its longest capture at rest, solver::choose_noise_step()), for `run` (the run it will
+/// weigh). Throws core::InputError for an unknown run or device, a run without a capture at
+/// rest, a record too short, or a unit whose serial is not `run`'s.
 solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run,
                                      const std::string& device, const solver::RunData& run);
 

@@ -36,6 +36,11 @@ struct NoiseEstimateOptions {
   bool estimate_wander = true;
   /// Step means beyond the fitted parameters a channel needs before its wander is estimated.
   int min_dof = 10;
+  /// Take flicker where it explains the step means nearly as well as the best process (a slow
+  /// wander kept, so that a slowly varying effect is not claimed from it; see
+  /// noise_estimate.cpp). False for a static record, where no effect competes with the wander
+  /// and the best process is the measurement (analysis/noise_run.hpp).
+  bool prefer_flicker = true;
   /// Each channel's wander measured outside the run (a static run of the same unit): used as
   /// it is, not estimated from the step means (white still from inside the steps).
   std::optional<KnownWander> known_wander;
