@@ -68,7 +68,7 @@ std::string describe(const WanderModel& w, int channel) {
 constexpr int kNoiseSupersetTemperatureOrder = 3;
 
 /// The white part from inside the steps and each channel's wander as measured elsewhere: the
-/// white part alone beside it (the wander holds the rest of a block's scatter).
+/// white part alone beside a wander (it holds the rest of a block's scatter).
 StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFloor& white,
                             SensorRows rows, const KnownWander& known) {
   StepNoise noise = StepNoise::white_only(white, "");
@@ -91,6 +91,8 @@ StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFl
     ch.determined = true;
     ch.wander = known.wander[static_cast<std::size_t>(c)];
     ch.source = known.source;
+    // No wander beside it: the steps' own scatter at a tenth of a step, as where a run shows none.
+    if (ch.wander.kind == WanderKind::kNone) noise.white.density[c] = white.batch_density[c];
     ch.note = describe(ch.wander, c);
   }
   return noise;
