@@ -56,13 +56,11 @@ constexpr double kWarmUpSettlesWithinRun = 1.0 / 3.0;
 // "Strong" evidence on the same scale: the warm-up's bar when the wander is known (measured on a
 // static run of the unit, analysis/noise_run.hpp), not re-estimated from the run. The very
 // strong bar above answers the tail of a statistic whose null holds a wander fitted to the same
-// step means; with the wander given, the comparison is a likelihood ratio under a known noise,
-// and its clean-run tail is light: 2 ln LR at most 18.5 in 80 MEMS-class and 16.8 in 80
-// ADIS16488-class clean runs with the wander a 3 h static run measured, BIC against the wander
-// at least +2.5 and +3.8 (bench/warm_up_detection_bench.cpp `known 0`), so -6 keeps a margin of
-// 8 or more, where the very strong bar would leave a known wander's test weaker than the
-// estimated one's (5x ADIS16488-class warm-ups: 10 of 24 found at -10, against 14 with the
-// run's own wander).
+// step means; with the wander given, the comparison is a likelihood ratio under a known noise.
+// With the wander a 3 h static run measured (bench/warm_up_detection_bench.cpp `known 0`), 80
+// MEMS-class and 80 ADIS16488-class clean runs reach 2 ln LR 21.5 and 14.4 at most, BIC against
+// the wander -0.5 and +0.8 at least: -6 keeps a margin of 5.5 and none alarms, where -10 found
+// fewer 5x ADIS16488-class warm-ups with the static run's wander than with the run's own.
 constexpr double kStrongDeltaBicKnownWander = -6.0;
 // A form whose whitened column lies within this sine of the catalogue's span on a channel (all
 // but 1e-4 of its variance there) is that catalogue effect, which the user should add by name.

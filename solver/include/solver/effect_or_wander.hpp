@@ -29,6 +29,9 @@
 //   parameter for three channels; independent wanders need their amplitude on each.
 // - Held-out data (suggest.hpp) must be predicted better with the term, judged against the
 //   noise that remains with it.
+// Where the wander is known (measured on a static run of the unit, analysis/noise_run.hpp:
+// `--noise-run`), every design is scored under it instead: nothing is re-estimated or charged,
+// and the comparison is a likelihood ratio under a known noise.
 // The cases that drove it (tests/unit/solver/effect_or_wander_test.cpp): a gyro warm-up of
 // 5-20 static step means' noise with time constants 300-1800 s on white, LN200-, ADIS16488- and
 // MEMS-class noise, with and without a 30 min static capture at the start. Against the wander
