@@ -51,6 +51,24 @@ CleanRun clean_run(const char* noise, int k, double capture_s) {
   return r;
 }
 
+/// The k-th unit of a sweep of `noise`: on the sweep's seeds with a warm-up of `times` step
+/// means' noise, or on the false-alarm seeds (distinct) for a clean run when `times` is 0.
+struct SweepUnit {
+  std::uint64_t seed = 0;
+  sim::ImuTruth truth;
+  double amplitude_dps = 0.0;
+  solver::Model model;
+};
+SweepUnit sweep_unit(const char* noise, int k, double times) {
+  SweepUnit u;
+  u.seed = static_cast<std::uint64_t>(times > 0.0 ? 7000 + 97 * k : 90000 + 131 * k);
+  u.truth = solver::testing::unit_of(noise, u.seed);
+  u.amplitude_dps =
+      times > 0.0 ? times * solver::testing::step_mean_noise_dps(u.truth, u.seed + 1) : 0.0;
+  u.model = solver::Model::parse(solver::testing::true_terms(u.truth));
+  return u;
+}
+
 }  // namespace
 
 /// The false-alarm rate alone: `seeds` clean runs (no warm-up) per class and capture, seeds
@@ -89,13 +107,8 @@ int evidence(int seeds, const std::string& only, double times, int first) {
       for (double tau_s : {0.0, 300.0, 900.0, 1800.0}) {
         if ((tau_s > 0.0) != (times > 0.0)) continue;
         for (int k = first; k < first + seeds; ++k) {
-          // Clean runs on the false-alarm seeds, warm-ups on the sweep's.
-          const auto seed =
-              static_cast<std::uint64_t>(tau_s > 0.0 ? 7000 + 97 * k : 90000 + 131 * k);
-          const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
-          const double amplitude =
-              tau_s > 0.0 ? times * solver::testing::step_mean_noise_dps(truth, seed + 1) : 0.0;
-          const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+          const SweepUnit unit = sweep_unit(noise, k, tau_s > 0.0 ? times : 0.0);
+          const auto& [seed, truth, amplitude, model] = unit;
           const solver::RunData data = solver::testing::warm_up_run(
               truth, capture_s, tau_s > 0.0 ? tau_s : 900.0, amplitude, seed + 2);
           const solver::Diagnosis d = solver::diagnose(data, model);
@@ -155,12 +168,8 @@ int known_wander(int seeds, const std::string& only, double times, double hours)
         if (times == 0.0 && tau_s != 900.0) continue;
         int hits = 0, alarms = 0;
         for (int k = 0; k < seeds; ++k) {
-          const auto seed =
-              static_cast<std::uint64_t>(times > 0.0 ? 7000 + 97 * k : 90000 + 131 * k);
-          const sim::ImuTruth truth = solver::testing::unit_of(noise, seed);
-          const double amplitude =
-              times > 0.0 ? times * solver::testing::step_mean_noise_dps(truth, seed + 1) : 0.0;
-          const solver::Model model = solver::Model::parse(solver::testing::true_terms(truth));
+          const SweepUnit unit = sweep_unit(noise, k, times);
+          const auto& [seed, truth, amplitude, model] = unit;
           for (double a :
                times > 0.0 ? std::vector<double>{amplitude, 0.0} : std::vector<double>{0.0}) {
             const solver::RunData data =

@@ -67,6 +67,18 @@ std::string describe(const WanderModel& w, int channel) {
 // Order of the temperature polynomials in the noise superset.
 constexpr int kNoiseSupersetTemperatureOrder = 3;
 
+/// Why channel `c` gets no noise model in a fit of `rows` over `steps` ("" when it gets one).
+std::string why_no_noise_model(const std::vector<StepSummary>& steps, SensorRows rows, int c) {
+  if (rows != SensorRows::kBoth && (rows == SensorRows::kGyro) != (c < kAx)) {
+    return "its sensor's rows are not part of this fit";
+  }
+  if (std::all_of(steps.begin(), steps.end(),
+                  [&](const StepSummary& s) { return std::isnan(s.measured[c]); })) {
+    return "the unit does not measure it (no step has a mean): its terms are not determined";
+  }
+  return "";
+}
+
 /// The white part from inside the steps and each channel's wander as measured elsewhere: the
 /// white part alone beside a wander (it holds the rest of a block's scatter).
 StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFloor& white,
@@ -77,17 +89,9 @@ StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFl
       "estimated from this run)",
       white.steps_used, white.from_static_steps ? "static steps" : "steps", known.source);
   for (int c = 0; c < kChannels; ++c) {
-    const bool used = rows == SensorRows::kBoth || (rows == SensorRows::kGyro) == (c < kAx);
     ChannelStepNoise& ch = noise.channels[static_cast<std::size_t>(c)];
-    if (!used) {
-      ch.note = "its sensor's rows are not part of this fit";
-      continue;
-    }
-    if (std::all_of(steps.begin(), steps.end(),
-                    [&](const StepSummary& s) { return std::isnan(s.measured[c]); })) {
-      ch.note = "the unit does not measure it (no step has a mean): its terms are not determined";
-      continue;
-    }
+    ch.note = why_no_noise_model(steps, rows, c);
+    if (!ch.note.empty()) continue;
     ch.determined = true;
     ch.wander = known.wander[static_cast<std::size_t>(c)];
     ch.source = known.source;
@@ -158,17 +162,9 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
   const std::vector<Eigen::Index> columns = determined_columns(superset, fit);
 
   for (int c = 0; c < kChannels; ++c) {
-    const bool used = rows == SensorRows::kBoth || (rows == SensorRows::kGyro) == (c < kAx);
     ChannelStepNoise& ch = noise.channels[static_cast<std::size_t>(c)];
-    if (!used) {
-      ch.note = "its sensor's rows are not part of this fit";
-      continue;
-    }
-    if (std::all_of(steps.begin(), steps.end(),
-                    [&](const StepSummary& s) { return std::isnan(s.measured[c]); })) {
-      ch.note = "the unit does not measure it (no step has a mean): its terms are not determined";
-      continue;
-    }
+    ch.note = why_no_noise_model(steps, rows, c);
+    if (!ch.note.empty()) continue;
     if (!fitted) {
       ch.note =
           "the run has fewer step means than the catalogue has parameters: the wander "
