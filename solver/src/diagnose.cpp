@@ -218,6 +218,8 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
   d.groups = group_quality(d.fit, steps);
   d.signals = correlate_signals(d.fit, steps);
   const double n_rows = static_cast<double>(d.fit.dof + static_cast<int>(d.fit.parameters.size()));
+  // The parameters of each catalogue term that lowers BIC against the wander.
+  std::vector<std::vector<std::string>> catalogue_terms;
   for (const auto& c : candidates) {
     const std::vector<StepSummary> cs = c.info->name == "earth_rate"
                                             ? summarize_steps(data, c.model)
@@ -269,6 +271,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       if (std::find(acting.begin(), acting.end(), true) != acting.end()) {
         k.delta_bic_against_wander =
             delta_bic(evidence.base(acting), evidence.without(added_names));
+        if (k.delta_bic_against_wander < 0.0) catalogue_terms.push_back(added_names);
       }
     }
     if (added > 0 && after.dof > 0 && after.chi2 > 0.0) {
@@ -343,6 +346,7 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
             std::min(in.best_catalogue_delta_bic, c.delta_bic_against_wander);
       }
     }
+    if (evidence.wander_known()) in.catalogue_terms = catalogue_terms;
     in.evidence = &evidence;
     in.evidence_sources = &sources;
     in.segments = &segments;
@@ -368,8 +372,11 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
                                   : std::isfinite(d.candidates.front().delta_bic_against_wander)
                                       ? d.candidates.front().delta_bic_against_wander
                                       : d.candidates.front().delta_bic;
+    // With the wander known, the catalogue's best is what it adds once the suggestion is there.
+    const double given = d.suggestions.front().catalogue_delta_bic_given;
     if (!d.recommended.empty() &&
-        d.suggestions.front().delta_bic < catalogue_best + kStrongDeltaBic) {
+        d.suggestions.front().delta_bic <
+            (std::isnan(given) ? catalogue_best : given) + kStrongDeltaBic) {
       d.recommended.clear();
     }
   }

@@ -157,15 +157,39 @@ std::array<bool, kChannels> EffectOrWander::channels_of(
   return out;
 }
 
-Hypothesis EffectOrWander::without(const std::vector<std::string>& parameters) const {
+namespace {
+
+std::vector<Eigen::Index> columns_without(const std::vector<Eigen::Index>& columns,
+                                          const Model& superset,
+                                          const std::vector<std::string>& parameters) {
   std::vector<Eigen::Index> kept;
-  for (Eigen::Index col : columns_) {
-    const std::string& name = superset_.parameters()[static_cast<std::size_t>(col)].name;
+  for (Eigen::Index col : columns) {
+    const std::string& name = superset.parameters()[static_cast<std::size_t>(col)].name;
     if (std::find(parameters.begin(), parameters.end(), name) == parameters.end()) {
       kept.push_back(col);
     }
   }
-  return score(channels_of(parameters), kept, nullptr, 0);
+  return kept;
+}
+
+}  // namespace
+
+Hypothesis EffectOrWander::without(const std::vector<std::string>& parameters,
+                                   const std::array<Eigen::MatrixXd, kChannels>& extra,
+                                   int nonlinear) const {
+  return score(channels_of(parameters), columns_without(columns_, superset_, parameters), &extra,
+               nonlinear);
+}
+
+Hypothesis EffectOrWander::with_columns_on(const std::array<bool, kChannels>& channels,
+                                           const std::array<Eigen::MatrixXd, kChannels>& extra,
+                                           int nonlinear) const {
+  return score(channels, columns_, &extra, nonlinear);
+}
+
+Hypothesis EffectOrWander::without(const std::vector<std::string>& parameters) const {
+  return score(channels_of(parameters), columns_without(columns_, superset_, parameters), nullptr,
+               0);
 }
 
 }  // namespace calstand::solver

@@ -860,9 +860,11 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
   std::vector<Passed> passed;
   // Every warm-up transient judged, with its sensor: the best per sensor is reported.
   std::vector<std::pair<core::TermSensor, WarmUpCheck>> warm_ups;
+  // The bar a check names: its own where it was weighed (a known wander's may be the catalogue's
+  // given the term), else its form's.
   const auto note_warm_up = [&](const Screened& c, WarmUpCheck check) {
     check.tau_s = c.form.tau_s;
-    check.bar = bar_of(c.form);
+    if (check.bar == 0.0) check.bar = bar_of(c.form);
     warm_ups.emplace_back(c.form.sensor, std::move(check));
   };
   // The wander alone, per set of channels a term acts on (the hypothesis without the term).
@@ -959,7 +961,22 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
       const boost::math::fisher_f_distribution<double> dist(linear, exact_remaining.dof);
       s.p_value = F > 0.0 ? boost::math::cdf(boost::math::complement(dist, F)) : 1.0;
     }
-    const double form_bar = bar_of(c.form);
+    double form_bar = bar_of(c.form);
+    // With the wander known, a catalogue term is weighed by what it adds once the warm-up is
+    // there: alone, a temperature order takes the plateau offset a warm-up leaves (a white-noise
+    // unit's 10x warm-up of 1800 s: -1394 against the wander alone, where the decay itself gave
+    // -228 beyond every catalogue term).
+    if (transient && in.evidence->wander_known() && form_bar == transient_bar) {
+      double given = std::numeric_limits<double>::infinity();
+      const int nonlinear = c.form.tau_s > 0.0 ? 1 : 0;
+      for (const std::vector<std::string>& term : in.catalogue_terms) {
+        const std::array<bool, kChannels> on = in.evidence->channels_of(term);
+        given = std::min(given, delta_bic(in.evidence->with_columns_on(on, extra, nonlinear),
+                                          in.evidence->without(term, extra, nonlinear)));
+      }
+      s.catalogue_delta_bic_given = given;
+      form_bar = std::min(given + kStrongDeltaBic, kStrongDeltaBicKnownWander);
+    }
     WarmUpCheck check;
     if (transient) {
       check.custom = text;
@@ -967,6 +984,7 @@ SuggestionSearch suggest_custom_terms(const SuggestInput& in, const FitOptions& 
           2.0 * (with_term.log_likelihood - found->second.log_likelihood);
       check.noise_penalty_change = with_term.noise_penalty - found->second.noise_penalty;
       check.delta_bic = s.delta_bic;
+      check.bar = form_bar;
     }
     if (!(s.delta_bic < form_bar)) {
       if (transient) {

@@ -87,6 +87,15 @@ class EffectOrWander {
                           int nonlinear = 0) const;
   /// The superset without `parameters` (by name), scored on the channels they act on.
   Hypothesis without(const std::vector<std::string>& parameters) const;
+  /// The same with `extra` columns and `nonlinear` parameters more (a term present): compare with
+  /// with_columns_on() on channels_of(parameters), to ask what the catalogue term adds once the
+  /// term is there.
+  Hypothesis without(const std::vector<std::string>& parameters,
+                     const std::array<Eigen::MatrixXd, kChannels>& extra, int nonlinear) const;
+  /// The superset with `extra` columns, scored on `channels` (those without a column too).
+  Hypothesis with_columns_on(const std::array<bool, kChannels>& channels,
+                             const std::array<Eigen::MatrixXd, kChannels>& extra,
+                             int nonlinear) const;
   /// The channels `parameters` act on.
   std::array<bool, kChannels> channels_of(const std::vector<std::string>& parameters) const;
 

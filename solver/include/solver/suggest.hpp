@@ -39,6 +39,7 @@
 // --custom` takes (its noise model re-estimated with the term).
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,10 @@ struct Suggestion {
   std::string effect;                     ///< in words, with the fitted coefficients
   std::string explanation;  ///< the effect and which steps it fixes (filled by diagnose)
   FitResult fit;            ///< fit_run with the term
+  /// With the wander known: the best catalogue term's delta_bic against it with this term
+  /// present (+infinity when none lowers BIC then); otherwise NaN (the catalogue's own figure
+  /// stands).
+  double catalogue_delta_bic_given = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The warm-up transient of one sensor as the search judged it, kept or not: a lab asking "is
@@ -119,6 +124,11 @@ struct SuggestInput {
   /// delta_bic of the best catalogue candidate (+infinity when there is none), on the same
   /// footing as the suggestions' (effect_or_wander.hpp).
   double best_catalogue_delta_bic = 0.0;
+  /// With the wander known (evidence->wander_known()): the parameters of each catalogue term
+  /// that lowered BIC against it, so that a warm-up is weighed against what each adds once the
+  /// warm-up is there, not against what it adds alone (a temperature order takes a warm-up's
+  /// plateau offset when nothing else can).
+  std::vector<std::vector<std::string>> catalogue_terms;
   /// The term against the wander on the noise rows (summaries for `catalogue`), where each row
   /// came from, and the long captures' segments (the rows that are not whole steps).
   const EffectOrWander* evidence = nullptr;
