@@ -12,6 +12,7 @@
 #include "solver/octave_allan.hpp"
 #include "solver/run_setup.hpp"
 #include "store/run_store.hpp"
+#include "store/sample_reader.hpp"
 #include "store/step_data.hpp"
 
 namespace calstand::analysis {
@@ -36,6 +37,56 @@ double typical_step_s(const solver::RunData& run) {
     }
   }
   return median(durations);
+}
+
+/// The capture `step` of `device` in `run` as it streams from the store, block-averaged to at
+/// most kMaxStaticSamples samples: a day at rest at 1 kHz (86 M samples, 10 GB as samples and
+/// table rows) would not fit in memory whole, and the segment means the wander is measured on
+/// are the same from block means (their white part then per block, consistently). The table
+/// state is a constant at rest, and any constant serves a model of biases alone (the reference
+/// it sets is a constant the biases take): zero.
+store::StepData averaged_capture(store::Database& db, std::int64_t run, std::size_t step,
+                                 const std::string& device) {
+  std::int64_t count = 0;
+  for (const store::StepMean& m : store::read_step_means(db, run)) {
+    if (m.step_index == step && m.device == device) count = m.count;
+  }
+  const auto block = static_cast<std::size_t>(
+      std::max<std::int64_t>(1, (count + kMaxStaticSamples - 1) / kMaxStaticSamples));
+  store::StepData out;
+  for (const store::StepRecord& r : store::RunStore(db).load_steps(run)) {
+    if (r.index == step) out.step = r;
+  }
+  core::ImuSample sum;
+  std::size_t in_block = 0;
+  const auto flush = [&] {
+    if (in_block == 0) return;
+    const double n = static_cast<double>(in_block);
+    core::ImuSample mean = sum;
+    mean.device_time_s /= n;
+    mean.receive_time_s /= n;
+    mean.gyro_dps /= n;
+    mean.accel_mps2 /= n;
+    mean.temperature_c /= n;
+    out.samples.push_back(mean);
+    out.table.push_back(store::TableSample{0.0, 0.0, 0.0, 0.0});
+    sum = core::ImuSample{};
+    in_block = 0;
+  };
+  store::for_each_chunk(db, run, step, device,
+                        [&](const store::ChunkInfo&, std::span<const core::ImuSample> chunk) {
+                          for (const core::ImuSample& x : chunk) {
+                            if (in_block == 0) sum.sequence = x.sequence;
+                            sum.device_time_s += x.device_time_s;
+                            sum.receive_time_s += x.receive_time_s;
+                            sum.gyro_dps += x.gyro_dps;
+                            sum.accel_mps2 += x.accel_mps2;
+                            sum.temperature_c += x.temperature_c;
+                            if (++in_block == block) flush();
+                          }
+                        });
+  flush();
+  return out;
 }
 
 }  // namespace
@@ -163,10 +214,8 @@ solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run
                            "unit's own",
                            record.setup.imu_serial, run.setup.run, run.setup.imu_serial));
   }
-  for (store::StepData& s : store::read_step_data(db, noise_run, chosen)) {
-    if (s.step.index == step) record.steps.push_back(std::move(s));
-  }
-  if (record.steps.empty()) {
+  record.steps.push_back(averaged_capture(db, noise_run, step, chosen));
+  if (record.steps.front().samples.empty()) {
     throw core::InputError(where, fmt::format("step {} holds no samples of {}", step, chosen));
   }
   const std::string label = record.steps.front().step.label;

@@ -46,6 +46,9 @@ solver::WanderModel spread_for(const solver::WanderModel& wander, const FlickerB
 /// steps of a run (the setup kept): the step means whose wander is estimated.
 solver::RunData segment_record(const solver::RunData& record, double segment_s);
 
+/// A stored static record is read as at most this many samples (block means beyond): memory
+/// stays about 100 MB whatever the record's length.
+inline constexpr std::int64_t kMaxStaticSamples = std::int64_t{1} << 20;
 /// Fewer segment means than this and a static record cannot tell its wander.
 inline constexpr std::size_t kMinStaticSegments = 20;
 /// A long record is cut into at most this many segments (longer ones then): the wander's
