@@ -30,10 +30,10 @@ void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor
 
 void add_noise_run_option(CLI::App* cmd, std::optional<std::int64_t>& noise_run) {
   cmd->add_option("--noise-run", noise_run,
-                  "A static run of the same unit (hours at rest, warmed up): its wander (the "
-                  "composite noise model of its longest capture) weighs the steps instead of one "
-                  "estimated from this run, so that a slow effect (a warm-up) cannot pass for "
-                  "wander")
+                  "A static run of the same unit (hours at rest, warmed up): its wander (estimated "
+                  "from the means of its longest capture cut into this run's step length) weighs "
+                  "the steps instead of one estimated from this run, so that a slow effect (a "
+                  "warm-up) cannot pass for wander")
       ->check(CLI::PositiveNumber);
 }
 
