@@ -209,6 +209,12 @@ double white_log_likelihood(const ChannelProblem& p, Likelihood likelihood) {
 }
 
 Kernel known_kernel(const WanderModel& wander, const std::vector<StepSummary>& steps) {
+  // No wander: white noise alone, which known_log_likelihood() scores without a basis.
+  if (wander.kind == WanderKind::kNone) {
+    Kernel none;
+    none.parameters = 0;
+    return none;
+  }
   return make_kernel(wander, steps, 0);
 }
 
