@@ -19,6 +19,8 @@
 #include "../tests/unit/solver/warm_up_campaign.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/noise_rows.hpp"
+#include "sim/imu_truth.hpp"
+#include "solver/step_noise.hpp"
 #include "solver/step_summary.hpp"
 
 namespace {
@@ -156,6 +158,47 @@ int floor_probe(int seeds, const std::string& noise) {
   return 0;
 }
 
+/// The simulated truth's own wander per channel (Gauss-Markov and rate random walk; a flicker
+/// over the campaign's span): the noise an oracle knows, for `known TIMES 0`.
+solver::KnownWander truth_wander(const sim::ImuTruth& truth, const solver::RunData& campaign) {
+  solver::KnownWander known;
+  known.source = "the simulated truth";
+  const double span_s = campaign.steps.back().samples.back().device_time_s -
+                        campaign.steps.front().samples.front().device_time_s;
+  for (int c = 0; c < solver::kChannels; ++c) {
+    const sim::TriadNoise& n = c < 3 ? truth.gyro_noise : truth.accel_noise;
+    const int axis = c % 3;
+    std::vector<solver::WanderModel> parts;
+    if (n.gauss_markov_sigma[axis] > 0.0) {
+      solver::WanderModel gm;
+      gm.kind = solver::WanderKind::kGaussMarkov;
+      gm.sigma = n.gauss_markov_sigma[axis];
+      gm.tau_s = n.gauss_markov_tau_s;
+      parts.push_back(gm);
+    }
+    if (n.bias_instability[axis] > 0.0) {
+      solver::WanderModel f;
+      f.kind = solver::WanderKind::kFlicker;
+      f.flicker_b = n.bias_instability[axis];
+      f.tau_min_s = 4.0 / truth.sample_rate_hz;
+      f.tau_max_s = 10.0 * span_s;
+      parts.push_back(f);
+    }
+    if (n.random_walk[axis] > 0.0) {
+      solver::WanderModel rw;
+      rw.kind = solver::WanderKind::kRandomWalk;
+      rw.random_walk_k = n.random_walk[axis];
+      parts.push_back(rw);
+    }
+    if (parts.size() == 1) known.wander[static_cast<std::size_t>(c)] = parts.front();
+    if (parts.size() > 1) {
+      known.wander[static_cast<std::size_t>(c)].kind = solver::WanderKind::kSum;
+      known.wander[static_cast<std::size_t>(c)].parts = parts;
+    }
+  }
+  return known;
+}
+
 /// Found and false alarms with the wander known from a static run of the same unit (`diagnose
 /// --noise-run`): per class, capture and time constant, warm-ups of `times` on the sweep's
 /// seeds and the same runs without it; one line per run with the decision's figures.
@@ -176,7 +219,8 @@ int known_wander(int seeds, const std::string& only, double times, double hours)
                 solver::testing::warm_up_run(truth, capture_s, tau_s, a, seed + 2);
             solver::DiagnoseOptions options;
             options.noise.known_wander =
-                calstand::testing::static_run_wander(truth, hours, seed + 3, data);
+                hours > 0.0 ? calstand::testing::static_run_wander(truth, hours, seed + 3, data)
+                            : truth_wander(truth, data);
             const solver::Diagnosis d = solver::diagnose(data, model, {}, options);
             const bool hit = a > 0.0 && found(d, tau_s);
             const bool alarm = a == 0.0 && !d.suggestions.empty();
