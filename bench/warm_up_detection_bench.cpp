@@ -159,7 +159,7 @@ int floor_probe(int seeds, const std::string& noise) {
 }
 
 /// The simulated truth's own wander per channel (Gauss-Markov and rate random walk; a flicker
-/// over the campaign's span): the noise an oracle knows, for `known TIMES 0`.
+/// over the campaign's span): the noise an oracle knows, for `known TIMES 0` (HOURS 0).
 solver::KnownWander truth_wander(const sim::ImuTruth& truth, const solver::RunData& campaign) {
   solver::KnownWander known;
   known.source = "the simulated truth";
