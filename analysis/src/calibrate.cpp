@@ -8,6 +8,7 @@
 
 #include "analysis/fit_history.hpp"
 #include "analysis/noise_json.hpp"
+#include "analysis/noise_run.hpp"
 #include "analysis/run_model.hpp"
 #include "analysis/step_residuals.hpp"
 #include "analysis/table_free_record.hpp"
@@ -55,15 +56,21 @@ CalibrationOutcome calibrate_table_free_run(store::Database& db, std::int64_t ru
 }  // namespace
 
 CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const solver::Model& model,
-                                 const std::string& device, const TableFreeFitRequest& poses) {
-  if (needs_table_free_fit(db, run)) return calibrate_table_free_run(db, run, model, device, poses);
+                                 const std::string& device, const TableFreeFitRequest& poses,
+                                 std::optional<std::int64_t> noise_run) {
+  if (needs_table_free_fit(db, run)) {
+    if (noise_run) throw_noise_run_on_table_free(run);
+    return calibrate_table_free_run(db, run, model, device, poses);
+  }
   const solver::RunData data = load_fit_data(db, run, device);
+  solver::NoiseEstimateOptions noise;
+  if (noise_run) noise.known_wander = noise_run_wander(db, *noise_run, device, data);
   std::vector<solver::StepSummary> steps;
   CalibrationOutcome out;
   out.run = run;
   out.procedure = data.setup.procedure_name;
   out.device = data.setup.device;
-  out.fit = solver::fit_run(data, model, {}, {}, &steps);
+  out.fit = solver::fit_run(data, model, {}, noise, &steps);
   out.steps = steps.size();
   out.history_id = record_history(db, run, out.device, "calibrate", model, out.fit, "both");
   out.record = solver::make_calibration_record(data.setup, model, out.fit, steps,

@@ -203,9 +203,15 @@ solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run
   const std::string where = fmt::format("noise run {}", noise_run);
   const std::size_t step = solver::choose_noise_step(db, noise_run, std::nullopt);
   const std::string chosen = solver::noise_device(db, noise_run, device);
-  store::RunStore runs(db);
+  const store::RunRecord stored = store::RunStore(db).load_run(noise_run);
+  // A record at rest needs no site or table (one imported without them serves as well): the
+  // biases its segments are fitted with take gravity and the Earth rate whatever they are.
   solver::RunData record;
-  record.setup = solver::run_setup(runs.load_run(noise_run), noise_run, chosen);
+  record.setup.run = noise_run;
+  record.setup.device = chosen;
+  const solver::UnitIdentity unit = solver::unit_identity(stored, chosen);
+  record.setup.imu_model = unit.model;
+  record.setup.imu_serial = unit.serial;
   // A wander is the unit's own: where both runs name their unit, they must name the same.
   if (!record.setup.imu_serial.empty() && !run.setup.imu_serial.empty() &&
       record.setup.imu_serial != run.setup.imu_serial) {
@@ -225,6 +231,14 @@ solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run
   } catch (const core::InputError& e) {
     throw core::InputError(where, e.what());
   }
+}
+
+void throw_noise_run_on_table_free(std::int64_t run) {
+  throw core::InputError("--noise-run",
+                         fmt::format("run {} was recorded without a table: its poses are weighed "
+                                     "by their own noise (the pose means' wander), not a static "
+                                     "run's",
+                                     run));
 }
 
 }  // namespace calstand::analysis

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "solver/calibration_record.hpp"
+#include "solver/run_setup.hpp"
 #include "store/run_store.hpp"
 #include "store/stamp.hpp"
 
@@ -14,28 +15,16 @@ nlohmann::json number_or_null(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
 }
 
-// The IMU's model and serial as the run's snapshot gives them (an import's meta.json may name
-// them under "imu"; a station snapshot under "imus").
-std::pair<std::string, std::string> imu_identity(const nlohmann::json& snapshot,
-                                                 const std::string& device) {
-  for (const auto& imu : snapshot.value("imus", nlohmann::json::array())) {
-    if (imu.value("name", "") == device) return {imu.value("model", ""), imu.value("serial", "")};
-  }
-  const nlohmann::json imu = snapshot.value("imu", nlohmann::json::object());
-  if (imu.is_object()) return {imu.value("model", ""), imu.value("serial", "")};
-  return {"", ""};
-}
-
 }  // namespace
 
 nlohmann::json table_free_calibration_record(store::Database& db, const TableFreeFit& fit) {
   const store::RunRecord run = store::RunStore(db).load_run(fit.run);
-  const auto [model, serial] = imu_identity(run.station_snapshot, fit.device);
+  const solver::UnitIdentity unit = solver::unit_identity(run, fit.device);
   const TableFreeQuality q = table_free_quality(fit);
 
   nlohmann::ordered_json r;
   r["format"] = solver::kCalibrationFormat;
-  r["device"] = {{"name", fit.device}, {"model", model}, {"serial", serial}};
+  r["device"] = {{"name", fit.device}, {"model", unit.model}, {"serial", unit.serial}};
   r["station"] = run.station_snapshot.value("name", "");
   r["runs"] = {fit.run};
   r["procedure"] = {{"name", run.summary.procedure_name}, {"sha256", run.procedure_sha256}};

@@ -30,8 +30,6 @@ void add_run_model_options(CLI::App* cmd, RunModelOptions& opt, bool with_sensor
 /// Adds --noise-run ID: the wander measured on a static run of the same unit
 /// (analysis/noise_run.hpp) instead of one estimated from the run itself.
 void add_noise_run_option(CLI::App* cmd, std::optional<std::int64_t>& noise_run);
-/// Throws core::InputError: a run without a table weighs its poses by its own pose noise.
-[[noreturn]] void throw_noise_run_on_table_free(std::int64_t run);
 
 /// The parameter table (value, sigma, unit), the parameters the run cannot determine, and the
 /// fit quality against the noise floor.

@@ -10,6 +10,7 @@
 
 #include "analysis/fit_history.hpp"
 #include "analysis/noise_json.hpp"
+#include "analysis/noise_run.hpp"
 #include "core/error.hpp"
 #include "core/units.hpp"
 #include "report/static_report.hpp"
@@ -323,7 +324,12 @@ ReportData gather_report(store::Database& db, const ReportRequest& request) {
   }
   if (r.fitted()) {
     try {
-      r.diagnosis = solver::diagnose(data, model, options);
+      solver::DiagnoseOptions diagnose_options;
+      if (request.noise_run) {
+        diagnose_options.noise.known_wander =
+            noise_run_wander(db, *request.noise_run, request.device, data);
+      }
+      r.diagnosis = solver::diagnose(data, model, options, diagnose_options);
     } catch (const core::InputError& e) {
       // The model asks more of the run than its steps determine: the page says so.
       r.no_fit_reason = fmt::format("the run does not determine the model: {}", e.what());

@@ -7,6 +7,7 @@
 #include <typeinfo>
 #include <utility>
 
+#include "analysis/noise_run.hpp"
 #include "core/error.hpp"
 #include "noise/run_noise.hpp"
 #include "render/gnuplot_svg.hpp"
@@ -193,6 +194,7 @@ ReportPage gather_report_page(store::Database& db, const ReportRequest& request)
     page.table = gather_report(db, request);
     return page;
   }
+  if (request.noise_run) throw_noise_run_on_table_free(request.run);
   if (solver::run_is_at_rest(db, request.run)) {
     page.static_record = gather_static_report(
         db, request,

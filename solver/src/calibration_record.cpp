@@ -49,7 +49,8 @@ nlohmann::json make_calibration_record(const RunSetup& setup, const Model& model
   r["fit"] = {{"chi2_dof", fit.chi2_dof},
               {"dof", fit.dof},
               {"residual_rms", fit_json["residual_rms"]},
-              {"noise_floor", fit_json["noise_floor"]}};
+              {"noise_floor", fit_json["noise_floor"]},
+              {"noise_model", fit_json["noise_model"]}};
   if (!noise.is_null()) r["noise"] = noise;
   r["temperature_ref_c"] = setup.temperature_ref_c;
   r["valid_temperature_c"] = {{"min", tmin}, {"max", tmax}};

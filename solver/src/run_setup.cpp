@@ -18,6 +18,28 @@ Eigen::Vector3d vector3(const nlohmann::json& j, const std::string& where) {
 
 }  // namespace
 
+UnitIdentity unit_identity(const store::RunRecord& run, const std::string& device) {
+  UnitIdentity unit;
+  const nlohmann::json& snap = run.station_snapshot;
+  if (snap.is_object()) {
+    bool named = false;
+    for (const auto& imu : snap.value("imus", nlohmann::json::array())) {
+      if (imu.value("name", "") != device) continue;
+      unit = {imu.value("model", ""), imu.value("serial", "")};
+      named = true;
+    }
+    const nlohmann::json imu = snap.value("imu", nlohmann::json::object());
+    if (!named && imu.is_object()) unit = {imu.value("model", ""), imu.value("serial", "")};
+  }
+  // The unit recorded for the run (read from the device, or given with it) is who was measured.
+  for (const store::RunUnit& recorded : run.units) {
+    if (recorded.imu != device) continue;
+    if (!recorded.model.empty()) unit.model = recorded.model;
+    unit.serial = recorded.serial;
+  }
+  return unit;
+}
+
 RunSetup run_setup(const store::RunRecord& run, std::int64_t run_id, const std::string& device) {
   const nlohmann::json& snap = run.station_snapshot;
   const std::string where = fmt::format("run {} station snapshot", run_id);
@@ -48,10 +70,11 @@ RunSetup run_setup(const store::RunRecord& run, std::int64_t run_id, const std::
         core::from_roll_pitch_yaw_deg(vector3(snap["mount_rpy_deg"], where + ": mount_rpy_deg"));
   }
   setup.station = snap.value("name", "");
+  const UnitIdentity unit = unit_identity(run, device);
+  setup.imu_model = unit.model;
+  setup.imu_serial = unit.serial;
   for (const auto& imu : snap.value("imus", nlohmann::json::array())) {
     if (imu.value("name", "") != device) continue;
-    setup.imu_model = imu.value("model", "");
-    setup.imu_serial = imu.value("serial", "");
     if (imu.contains("mount_rpy_deg")) {
       setup.geometry.mount_C_PB = core::from_roll_pitch_yaw_deg(
           vector3(imu["mount_rpy_deg"], where + ": imus." + device + ".mount_rpy_deg"));
@@ -59,12 +82,6 @@ RunSetup run_setup(const store::RunRecord& run, std::int64_t run_id, const std::
     if (imu.contains("temperature_ref_c") && imu["temperature_ref_c"].is_number()) {
       setup.temperature_ref_c = imu["temperature_ref_c"].get<double>();
     }
-  }
-  // The unit recorded for the run (read from the device, or given with it) is who was measured.
-  for (const store::RunUnit& unit : run.units) {
-    if (unit.imu != device) continue;
-    if (!unit.model.empty()) setup.imu_model = unit.model;
-    setup.imu_serial = unit.serial;
   }
   return setup;
 }

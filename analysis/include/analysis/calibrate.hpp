@@ -33,10 +33,14 @@ struct CalibrationOutcome {
 /// history, and builds the record with the run's noise figures (calibration_noise_figures()).
 /// A run without a table is fitted by table_free_fit() instead (`model` read by
 /// table_free_model(), the static poses as `poses` says) and recorded by
-/// table_free_calibration_record(). Throws as fit_request() or table_free_fit();
+/// table_free_calibration_record(). With `noise_run`, a table run's steps are weighed by the
+/// wander of that static run of the same unit (noise_run.hpp) instead of one estimated from the
+/// run itself, and the record's fit says so (its "noise_model"). Throws as fit_request() or
+/// table_free_fit(); core::InputError naming --noise-run for a run without a table;
 /// std::runtime_error if the record breaks its own schema (a bug).
 CalibrationOutcome calibrate_run(store::Database& db, std::int64_t run, const solver::Model& model,
-                                 const std::string& device, const TableFreeFitRequest& poses = {});
+                                 const std::string& device, const TableFreeFitRequest& poses = {},
+                                 std::optional<std::int64_t> noise_run = std::nullopt);
 
 /// The units of `run` that `calstand calibrate` calibrates: `device` alone when given, else
 /// every IMU with samples (every unit on the fixture), in name order. Throws core::InputError

@@ -70,4 +70,8 @@ solver::KnownWander wander_of_static_record(const solver::RunData& record,
 solver::KnownWander noise_run_wander(store::Database& db, std::int64_t noise_run,
                                      const std::string& device, const solver::RunData& run);
 
+/// Throws core::InputError naming --noise-run: `run` was recorded without a table, and its
+/// poses are weighed by their own noise, not a static run's.
+[[noreturn]] void throw_noise_run_on_table_free(std::int64_t run);
+
 }  // namespace calstand::analysis

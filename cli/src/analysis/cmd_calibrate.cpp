@@ -2,9 +2,11 @@
 // (correct a run's raw samples with a record, as a new run).
 #include <fmt/format.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,7 +24,8 @@ namespace calstand::cli {
 namespace {
 
 struct CalibrateOptions : RunModelOptions {
-  StaticPoseOptions poses;  ///< runs without a table
+  StaticPoseOptions poses;                ///< runs without a table
+  std::optional<std::int64_t> noise_run;  ///< the wander from this static run of the unit
   std::string out;
   std::string out_dir = ".";
   bool as_json = false;
@@ -41,8 +44,8 @@ void run_calibrate(const CalibrateOptions& opt) {
   }
   std::vector<analysis::CalibrationOutcome> outcomes;
   for (const std::string& device : devices) {
-    outcomes.push_back(analysis::calibrate_run(db, opt.run, model, device,
-                                               static_pose_request(opt.poses, device)));
+    outcomes.push_back(analysis::calibrate_run(
+        db, opt.run, model, device, static_pose_request(opt.poses, device), opt.noise_run));
   }
   nlohmann::json listed = nlohmann::json::array();
   for (const analysis::CalibrationOutcome& c : outcomes) {
@@ -103,6 +106,7 @@ void register_calibrate(CLI::App& app) {
       "database and write its JSON");
   add_run_model_options(cmd, *opt, false);
   add_static_pose_options(cmd, opt->poses);
+  add_noise_run_option(cmd, opt->noise_run);
   cmd->add_option("--out", opt->out,
                   "Record file, for one unit (default calibration-run<ID>-<device>.json)");
   cmd->add_option("--out-dir", opt->out_dir, "Folder of the record files (one per unit)")

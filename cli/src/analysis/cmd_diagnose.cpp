@@ -12,6 +12,7 @@
 
 #include "analysis/fit_history.hpp"
 #include "analysis/fit_request.hpp"
+#include "analysis/noise_run.hpp"
 #include "analysis/table_free_diagnose.hpp"
 #include "commands.hpp"
 #include "fit_printer.hpp"
@@ -73,7 +74,7 @@ void run_diagnose(const DiagnoseOptions& opt) {
   request.history_command = opt.suggest ? "" : "diagnose";
   store::Database db = open_existing_database(opt.db);
   if (analysis::needs_table_free_fit(db, opt.run)) {
-    if (opt.noise_run) throw_noise_run_on_table_free(opt.run);
+    if (opt.noise_run) analysis::throw_noise_run_on_table_free(opt.run);
     analysis::TableFreeFitRequest table_free =
         analysis::table_free_request(request.model, static_pose_request(opt.poses, opt.device));
     table_free.history_command = request.history_command;

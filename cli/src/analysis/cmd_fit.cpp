@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "analysis/fit_request.hpp"
+#include "analysis/noise_run.hpp"
 #include "commands.hpp"
 #include "core/error.hpp"
 #include "fit_printer.hpp"
@@ -67,7 +68,7 @@ void run_fit(const FitCommandOptions& opt) {
   store::Database db = open_existing_database(opt.db);
   if (analysis::needs_table_free_fit(db, opt.run)) {
     // No orientation is known: the table-free methods, with the optional terms of the model.
-    if (opt.noise_run) throw_noise_run_on_table_free(opt.run);
+    if (opt.noise_run) analysis::throw_noise_run_on_table_free(opt.run);
     if (per_plateau) {
       throw core::InputError("--per-plateau", fmt::format("run {} was recorded without a table: "
                                                           "there are no temperature plateaus "

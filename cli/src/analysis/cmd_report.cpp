@@ -126,6 +126,7 @@ void register_report(CLI::App& app) {
   cmd->add_flag("!--no-noise-model", opt->request.noise_model,
                 "A record at rest: leave out the composite noise model (calstand noise-id; "
                 "minutes on a record of hours)");
+  add_noise_run_option(cmd, opt->request.noise_run);
   cmd->add_option("--out", opt->out,
                   "The file to write: HTML, or PDF when it ends in .pdf (headless Chromium)")
       ->required();

@@ -37,14 +37,6 @@ void add_noise_run_option(CLI::App* cmd, std::optional<std::int64_t>& noise_run)
       ->check(CLI::PositiveNumber);
 }
 
-void throw_noise_run_on_table_free(std::int64_t run) {
-  throw core::InputError("--noise-run",
-                         fmt::format("run {} was recorded without a table: its poses are weighed "
-                                     "by their own noise (the pose means' wander), not a static "
-                                     "run's",
-                                     run));
-}
-
 void print_fit(const solver::FitResult& fit) {
   fmt::print("model: {}\n\n", fit.model);
   fmt::print("{:<28} {:>15} {:>12}  {}\n", "parameter", "value", "sigma", "unit");

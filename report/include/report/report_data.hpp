@@ -32,6 +32,9 @@ struct ReportRequest {
   /// The page of a record at rest identifies each channel's composite noise model (GMWM:
   /// seconds a channel on a 12 min record at 100 Hz, minutes on hours at 400 Hz); false skips it.
   bool noise_model = true;
+  /// The wander from this static run of the same unit (analysis/noise_run.hpp) instead of one
+  /// estimated from the run's own step means; a run with a table only.
+  std::optional<std::int64_t> noise_run;
 };
 
 /// One condition kind of the steps, used to colour them in the plots.

@@ -25,6 +25,17 @@ struct RunSetup {
   double temperature_ref_c = 25.0;  ///< T_ref of dT = T - T_ref [degC]
 };
 
+/// Which unit a device of a run was: its model and serial ("" where not known).
+struct UnitIdentity {
+  std::string model;
+  std::string serial;
+};
+
+/// The unit `device` was in `run`: as recorded with the run (read from the device, or given
+/// with it), else as its snapshot names it (a station snapshot's "imus", an import's "imu").
+/// Needs neither site nor table: a record without a table has a unit too.
+UnitIdentity unit_identity(const store::RunRecord& run, const std::string& device);
+
 /// Reads the setup from a run's station snapshot (a calstand-station/1 document for recorded
 /// runs, the calstand-import/1 meta.json for imported ones). Throws core::InputError naming the
 /// run and field when the snapshot lacks what the solver needs.

@@ -12,8 +12,10 @@
 #include <vector>
 
 #include "../solver/warm_up_campaign.hpp"
+#include "analysis/calibrate.hpp"
 #include "analysis/fit_request.hpp"
 #include "core/error.hpp"
+#include "imported_session.hpp"
 #include "recorded_run.hpp"
 #include "solver/custom_term.hpp"
 #include "solver/diagnose.hpp"
@@ -163,6 +165,20 @@ TEST_F(NoiseRunTest, TheStaticRunsWanderWeighsTheFitAndTheDiagnosis) {
             std::string::npos)
       << d.diagnosis.fit.noise.method;
 
+  // `calibrate --noise-run`: the record's parameters are weighed the same way, and it says so.
+  const solver::Model model = solver::Model::parse("gyro_bias,accel_bias");
+  const CalibrationOutcome own = calibrate_run(db, run, model, "");
+  const CalibrationOutcome known = calibrate_run(db, run, model, "", {}, still);
+  const std::string method = known.record["fit"]["noise_model"].value("method", "");
+  EXPECT_NE(method.find(fmt::format("static run {}", still)), std::string::npos) << method;
+  EXPECT_EQ(own.record["fit"]["noise_model"].value("method", "").find("static run"),
+            std::string::npos);
+  EXPECT_EQ(known.fit.parameters.size(), fit.fit.parameters.size());
+  for (std::size_t i = 0; i < known.fit.parameters.size(); ++i) {
+    EXPECT_DOUBLE_EQ(known.fit.parameters[i].sigma, fit.fit.parameters[i].sigma)
+        << known.fit.parameters[i].name;
+  }
+
   const std::int64_t short_still = calstand::testing::record_run(
       db_file_.path(), "static-allan", {"duration_s=60", "soak_s=1", "warmup_s=1"}, 21);
   request.noise_run = short_still;
@@ -171,6 +187,45 @@ TEST_F(NoiseRunTest, TheStaticRunsWanderWeighsTheFitAndTheDiagnosis) {
     FAIL() << "a 60 s static run gave a wander";
   } catch (const core::InputError& e) {
     EXPECT_EQ(e.where(), fmt::format("noise run {}", short_still)) << e.what();
+  }
+}
+
+// A record at rest made by another tool, imported without a table or a site (an ADIS16488-class
+// unit's, from sim/hand_session.hpp), serves as well: its wander needs neither. A run without a
+// table is refused, its poses being weighed by their own noise.
+TEST_F(NoiseRunTest, ARecordImportedWithoutATableServesAndARunWithoutOneIsRefused) {
+  const std::int64_t run =
+      calstand::testing::record_run(db_file_.path(), "six-position", {"capture_s=10"}, 21);
+  store::Database db(db_file_.path());
+  sim::HandSessionOptions at_rest;
+  at_rest.poses = 0;
+  at_rest.initial_rest_s = 600.0;
+  at_rest.imu.sample_rate_hz = 200.0;
+  const std::int64_t still = calstand::testing::import_session(
+      sim::simulate_hand_session(at_rest, 5), db, "noise-run-at-rest");
+  FitRequest request;
+  request.model = model_from_lists({"gyro_bias", "accel_bias"}, {});
+  request.noise_run = still;
+  const FitOutcome fit = fit_request(db, run, request);
+  EXPECT_NE(fit.fit.noise.method.find(fmt::format("static run {}", still)), std::string::npos)
+      << fit.fit.noise.method;
+  for (int c = solver::kGx; c <= solver::kGz; ++c) {
+    // The sheet's bias instability (5.1 deg/h floor) is what 600 s at rest shows of it.
+    EXPECT_NE(fit.fit.noise.channels[static_cast<std::size_t>(c)].wander.kind,
+              solver::WanderKind::kNone)
+        << c;
+  }
+
+  sim::HandSessionOptions turned;
+  turned.poses = 12;
+  turned.imu.sample_rate_hz = 200.0;
+  const std::int64_t hand = calstand::testing::import_session(sim::simulate_hand_session(turned, 6),
+                                                              db, "noise-run-hand");
+  try {
+    calibrate_run(db, hand, solver::Model::parse("gyro_bias,accel_bias"), "", {}, still);
+    FAIL() << "a run without a table took a static run's wander";
+  } catch (const core::InputError& e) {
+    EXPECT_EQ(e.where(), "--noise-run") << e.what();
   }
 }
 

@@ -62,6 +62,19 @@ TEST_F(ReportDataTest, ARunWithoutALongStaticRecordSaysWhyThereIsNoAllanSection)
       << r.noise_note;
 }
 
+TEST_F(ReportDataTest, AStaticRunOfTheUnitWeighsTheDiagnosisWithItsWander) {
+  const std::int64_t still = testing::record_run(db_file_.path(), "static-allan",
+                                                 {"duration_s=900", "soak_s=1", "warmup_s=1"}, 9);
+  store::Database db(db_file_.path());
+  request_.noise_run = still;
+  const ReportData r = gather_report(db, request_);
+  const std::string source = fmt::format("static run {}", still);
+  EXPECT_NE(r.diagnosis.fit.noise.method.find(source), std::string::npos)
+      << r.diagnosis.fit.noise.method;
+  request_.noise_run.reset();
+  EXPECT_EQ(gather_report(db, request_).diagnosis.fit.noise.method.find(source), std::string::npos);
+}
+
 TEST_F(ReportDataTest, SignalSeriesFollowTheStepMeans) {
   store::Database db(db_file_.path());
   const ReportData r = gather_report(db, request_);
