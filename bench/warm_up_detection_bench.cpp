@@ -17,9 +17,9 @@
 
 #include "../tests/unit/analysis/static_run_wander.hpp"
 #include "../tests/unit/solver/warm_up_campaign.hpp"
+#include "sim/imu_truth.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/noise_rows.hpp"
-#include "sim/imu_truth.hpp"
 #include "solver/step_noise.hpp"
 #include "solver/step_summary.hpp"
 
