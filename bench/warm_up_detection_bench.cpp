@@ -158,13 +158,12 @@ int floor_probe(int seeds, const std::string& noise) {
   return 0;
 }
 
-/// The simulated truth's own wander per channel (Gauss-Markov and rate random walk; a flicker
-/// over the campaign's span): the noise an oracle knows, for `known TIMES 0` (HOURS 0).
-solver::KnownWander truth_wander(const sim::ImuTruth& truth, const solver::RunData& campaign) {
+/// The simulated truth's own wander per channel (Gauss-Markov, flicker, rate random walk; the
+/// solver spreads a flicker over the campaign's band): the noise an oracle knows, for `known TIMES
+/// 0` (HOURS 0).
+solver::KnownWander truth_wander(const sim::ImuTruth& truth) {
   solver::KnownWander known;
   known.source = "the simulated truth";
-  const double span_s = campaign.steps.back().samples.back().device_time_s -
-                        campaign.steps.front().samples.front().device_time_s;
   for (int c = 0; c < solver::kChannels; ++c) {
     const sim::TriadNoise& n = c < 3 ? truth.gyro_noise : truth.accel_noise;
     const int axis = c % 3;
@@ -180,8 +179,6 @@ solver::KnownWander truth_wander(const sim::ImuTruth& truth, const solver::RunDa
       solver::WanderModel f;
       f.kind = solver::WanderKind::kFlicker;
       f.flicker_b = n.bias_instability[axis];
-      f.tau_min_s = 4.0 / truth.sample_rate_hz;
-      f.tau_max_s = 10.0 * span_s;
       parts.push_back(f);
     }
     if (n.random_walk[axis] > 0.0) {
@@ -220,7 +217,7 @@ int known_wander(int seeds, const std::string& only, double times, double hours)
             solver::DiagnoseOptions options;
             options.noise.known_wander =
                 hours > 0.0 ? calstand::testing::static_run_wander(truth, hours, seed + 3, data)
-                            : truth_wander(truth, data);
+                            : truth_wander(truth);
             const solver::Diagnosis d = solver::diagnose(data, model, {}, options);
             const bool hit = a > 0.0 && found(d, tau_s);
             const bool alarm = a == 0.0 && !d.suggestions.empty();

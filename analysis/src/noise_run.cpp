@@ -18,10 +18,6 @@
 namespace calstand::analysis {
 namespace {
 
-// A flicker band reaches this many run spans, as the wander kernels' does: beyond the run, a
-// slower component is a constant the bias absorbs.
-constexpr double kFlickerBandSpans = 10.0;
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -91,40 +87,6 @@ store::StepData averaged_capture(store::Database& db, std::int64_t run, std::siz
 
 }  // namespace
 
-FlickerBand flicker_band_of(const solver::RunData& run) {
-  std::vector<double> intervals;
-  double first = 0.0, last = 0.0;
-  bool any = false;
-  for (const store::StepData& step : run.steps) {
-    const auto& s = step.samples;
-    if (s.empty()) continue;
-    first = any ? std::min(first, s.front().receive_time_s) : s.front().receive_time_s;
-    last = any ? std::max(last, s.back().receive_time_s) : s.back().receive_time_s;
-    any = true;
-    if (s.size() > 1) {
-      intervals.push_back((s.back().receive_time_s - s.front().receive_time_s) /
-                          static_cast<double>(s.size() - 1));
-    }
-  }
-  if (intervals.empty()) {
-    throw core::InputError("run", "no step has two samples: there is no time scale to weigh it at");
-  }
-  FlickerBand band;
-  band.tau_min_s = solver::kWhiteFitShortestBlockSamples * median(intervals);
-  band.tau_max_s = kFlickerBandSpans * std::max(last - first, band.tau_min_s);
-  return band;
-}
-
-solver::WanderModel spread_for(const solver::WanderModel& wander, const FlickerBand& band) {
-  solver::WanderModel out = wander;
-  if (out.kind == solver::WanderKind::kFlicker) {
-    out.tau_min_s = band.tau_min_s;
-    out.tau_max_s = band.tau_max_s;
-  }
-  for (solver::WanderModel& part : out.parts) part = spread_for(part, band);
-  return out;
-}
-
 solver::RunData segment_record(const solver::RunData& record, double segment_s) {
   if (record.steps.empty()) throw core::InputError("static record", "has no step");
   const store::StepData& capture = record.steps.front();
@@ -187,13 +149,13 @@ solver::KnownWander wander_of_static_record(const solver::RunData& record,
   options.prefer_flicker = false;
   const solver::StepNoise noise = solver::estimate_step_noise(
       solver::summarize_steps(segments, biases), biases, solver::SensorRows::kBoth, options);
-  const FlickerBand band = flicker_band_of(run);
   solver::KnownWander out;
   out.source = fmt::format("{}: restricted likelihood of {} means of {:.0f} s over {:.1f} h",
                            source, segments.steps.size(), segment_s, record_s / 3600.0);
   for (std::size_t c = 0; c < out.wander.size(); ++c) {
     const solver::ChannelStepNoise& ch = noise.channels[c];
-    if (ch.determined) out.wander[c] = spread_for(ch.wander, band);
+    // A flicker is spread over the run's own band where the solver weighs it.
+    if (ch.determined) out.wander[c] = ch.wander;
   }
   return out;
 }

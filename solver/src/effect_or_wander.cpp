@@ -40,8 +40,9 @@ EffectOrWander::EffectOrWander(std::vector<StepSummary> rows, const Model& super
   log_rows_ = std::log(static_cast<double>(rows_.size() * fit_channels(sensor_rows).size()));
   auto kernels = std::make_shared<Kernels>();
   if (known) {
+    const FlickerBand band = flicker_band(rows_);
     for (const WanderModel& w : known->wander) {
-      kernels->wanders.push_back(detail::known_kernel(w, rows_));
+      kernels->wanders.push_back(detail::known_kernel(spread_over(w, band), rows_));
     }
   } else {
     static_cast<detail::WanderKernels&>(*kernels) = detail::make_wander_kernels(rows_);

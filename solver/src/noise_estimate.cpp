@@ -88,12 +88,13 @@ StepNoise with_known_wander(const std::vector<StepSummary>& steps, const NoiseFl
       "white noise from the scatter inside {} {}; wandering bias per channel from {} (not "
       "estimated from this run)",
       white.steps_used, white.from_static_steps ? "static steps" : "steps", known.source);
+  const FlickerBand band = flicker_band(steps);
   for (int c = 0; c < kChannels; ++c) {
     ChannelStepNoise& ch = noise.channels[static_cast<std::size_t>(c)];
     ch.note = why_no_noise_model(steps, rows, c);
     if (!ch.note.empty()) continue;
     ch.determined = true;
-    ch.wander = known.wander[static_cast<std::size_t>(c)];
+    ch.wander = spread_over(known.wander[static_cast<std::size_t>(c)], band);
     ch.source = known.source;
     // No wander beside it: the steps' own scatter at a tenth of a step, as where a run shows none.
     if (ch.wander.kind == WanderKind::kNone) noise.white.density[c] = white.batch_density[c];

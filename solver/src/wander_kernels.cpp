@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solver/octave_allan.hpp"
 #include "solver/variance_component.hpp"
 
 namespace calstand::solver::detail {
@@ -56,12 +57,42 @@ double log_likelihood(const Eigen::VectorXd& lambda, const Eigen::MatrixXd& Xh,
 
 }  // namespace
 
+}  // namespace calstand::solver::detail
+
+namespace calstand::solver {
+
+FlickerBand flicker_band(const std::vector<StepSummary>& steps) {
+  std::vector<double> sample_intervals;
+  double span = 0.0;
+  for (const StepSummary& s : steps) {
+    if (s.count > 1) sample_intervals.push_back(s.duration_s / static_cast<double>(s.count - 1));
+    span = std::max(span, s.end_s);
+  }
+  FlickerBand band;
+  band.tau_min_s = std::max(1e-3, kWhiteFitShortestBlockSamples * detail::median(sample_intervals));
+  band.tau_max_s = 10.0 * std::max(span, band.tau_min_s);
+  return band;
+}
+
+WanderModel spread_over(const WanderModel& wander, const FlickerBand& band) {
+  WanderModel out = wander;
+  if (out.kind == WanderKind::kFlicker) {
+    out.tau_min_s = band.tau_min_s;
+    out.tau_max_s = band.tau_max_s;
+  }
+  for (WanderModel& part : out.parts) part = spread_over(part, band);
+  return out;
+}
+
+}  // namespace calstand::solver
+
+namespace calstand::solver::detail {
+
 WanderKernels make_wander_kernels(const std::vector<StepSummary>& steps) {
-  std::vector<double> durations, counts, sample_intervals;
+  std::vector<double> durations, counts;
   double span = 0.0;
   for (const StepSummary& s : steps) {
     durations.push_back(std::max(s.duration_s, 1e-3));
-    if (s.count > 1) sample_intervals.push_back(s.duration_s / static_cast<double>(s.count - 1));
     counts.push_back(static_cast<double>(s.count));
     span = std::max(span, s.end_s);
   }
@@ -87,16 +118,15 @@ WanderKernels make_wander_kernels(const std::vector<StepSummary>& steps) {
   // components faster than a step move the step means too, by less than the slower ones, while
   // the floor holds none of them (an ADIS16488-class flicker floor from 1 s: without this band,
   // 1 clean run in 8 took a warm-up from the wander).
+  const FlickerBand band = flicker_band(steps);
   WanderModel flicker;
   flicker.kind = WanderKind::kFlicker;
   flicker.flicker_b = 1.0;
   flicker.tau_min_s = tau_lo;
-  flicker.tau_max_s = std::max(10.0 * span, 10.0 * tau_lo);
+  flicker.tau_max_s = std::max(band.tau_max_s, 10.0 * tau_lo);
   out.wanders.push_back(make_kernel(flicker, steps, 1));
-  const double shortest_block_s =
-      std::max(1e-3, kWhiteFitShortestBlockSamples * median(sample_intervals));
-  if (shortest_block_s < tau_lo) {
-    flicker.tau_min_s = shortest_block_s;
+  if (band.tau_min_s < tau_lo) {
+    flicker.tau_min_s = band.tau_min_s;
     out.wanders.push_back(make_kernel(flicker, steps, 1));
   }
   WanderModel walk;

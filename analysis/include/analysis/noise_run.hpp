@@ -27,21 +27,6 @@
 
 namespace calstand::analysis {
 
-/// The time constants a flicker term is spread over on a run [s]: from the shortest block the
-/// white floor is read at (solver::kWhiteFitShortestBlockSamples sample periods) to ten times
-/// the run's span, as the wander kernels' own flicker band (solver/src/wander_kernels.cpp).
-struct FlickerBand {
-  double tau_min_s = 0.0;
-  double tau_max_s = 0.0;
-};
-/// The band for `run` (its median sample interval and span). Throws core::InputError for a run
-/// without two samples in a step.
-FlickerBand flicker_band_of(const solver::RunData& run);
-
-/// `wander` as it moves the means of a run whose flicker band is `band`: a flicker (or a sum's
-/// flicker part) spread over the band, every other process as it is.
-solver::WanderModel spread_for(const solver::WanderModel& wander, const FlickerBand& band);
-
 /// The segments of `record`'s first step (a capture at rest), each `segment_s` long, as the
 /// steps of a run (the setup kept): the step means whose wander is estimated.
 solver::RunData segment_record(const solver::RunData& record, double segment_s);

@@ -73,9 +73,24 @@ struct StepNoise {
   bool correlated() const;
 };
 
+/// The time constants a flicker wander is spread over on a set of step means [s]: from the
+/// shortest block the white floor is read at (kWhiteFitShortestBlockSamples sample periods) to
+/// ten times the run's span. Beyond it a slower component is a constant the bias absorbs.
+struct FlickerBand {
+  double tau_min_s = 0.0;
+  double tau_max_s = 0.0;
+};
+/// The band of `steps` (their median sample interval and the last step's end).
+FlickerBand flicker_band(const std::vector<StepSummary>& steps);
+/// `wander` as it moves step means whose flicker band is `band`: a flicker (or a sum's flicker
+/// part) spread over the band, every other process as it is.
+WanderModel spread_over(const WanderModel& wander, const FlickerBand& band);
+
 /// Each channel's wander measured outside the run (a static run of the same unit: see
 /// analysis/noise_run.hpp), given to the fit instead of a wander estimated from the run's own
-/// step means: the wander is then no longer a free explanation of what the model lacks.
+/// step means: the wander is then no longer a free explanation of what the model lacks. A
+/// flicker is spread over the flicker band of the steps it weighs (spread_over()), whatever band
+/// it was measured on.
 struct KnownWander {
   std::array<WanderModel, kChannels> wander{};
   std::string source;  ///< where it was measured, e.g. "static run 4 (GMWM of 3.0 h at 50 Hz)"

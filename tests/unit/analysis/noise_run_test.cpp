@@ -24,37 +24,6 @@
 namespace calstand::analysis {
 namespace {
 
-TEST(SpreadFor, AFlickerTakesTheRunsBandAndOtherProcessesStayAsMeasured) {
-  const FlickerBand band{0.08, 1e5};
-  solver::WanderModel flicker;
-  flicker.kind = solver::WanderKind::kFlicker;
-  flicker.flicker_b = 5e-5;
-  flicker.tau_min_s = 20.0;
-  flicker.tau_max_s = 1e4;
-  solver::WanderModel gm;
-  gm.kind = solver::WanderKind::kGaussMarkov;
-  gm.sigma = 2e-4;
-  gm.tau_s = 300.0;
-  const solver::WanderModel f = spread_for(flicker, band);
-  EXPECT_DOUBLE_EQ(f.flicker_b, 5e-5);
-  EXPECT_DOUBLE_EQ(f.tau_min_s, 0.08);
-  EXPECT_DOUBLE_EQ(f.tau_max_s, 1e5);
-  const solver::WanderModel g = spread_for(gm, band);
-  EXPECT_DOUBLE_EQ(g.sigma, 2e-4);
-  EXPECT_DOUBLE_EQ(g.tau_s, 300.0);
-  solver::WanderModel sum;
-  sum.kind = solver::WanderKind::kSum;
-  sum.parts = {gm, flicker};
-  const solver::WanderModel s = spread_for(sum, band);
-  ASSERT_EQ(s.parts.size(), 2U);
-  EXPECT_DOUBLE_EQ(s.parts[1].tau_min_s, 0.08);
-  // A sum's covariance is its parts' (a step and a later one).
-  const double both = s.interval_mean_covariance(0.0, 60.0, 100.0, 160.0);
-  EXPECT_GT(both, 0.0);
-  EXPECT_DOUBLE_EQ(both, s.parts[0].interval_mean_covariance(0.0, 60.0, 100.0, 160.0) +
-                             s.parts[1].interval_mean_covariance(0.0, 60.0, 100.0, 160.0));
-}
-
 TEST(SegmentRecord, ConsecutiveSegmentsOfTheLengthAskedAndNoShortTail) {
   solver::RunData record;
   store::StepData capture;
@@ -117,23 +86,6 @@ TEST(WanderOfStaticRecord, MeasuresTheUnitsGaussMarkovBiasAndRefusesAShortRecord
     EXPECT_EQ(e.where(), "static run 9");
     EXPECT_NE(std::string(e.what()).find("at least 20"), std::string::npos) << e.what();
   }
-}
-
-TEST(FlickerBand, FromFourSamplePeriodsToTenSpans) {
-  solver::RunData run;
-  for (double start : {0.0, 500.0}) {
-    store::StepData step;
-    for (int i = 0; i <= 5000; ++i) {
-      core::ImuSample s;
-      s.receive_time_s = start + 0.02 * i;  // 50 Hz for 100 s
-      step.samples.push_back(s);
-    }
-    run.steps.push_back(step);
-  }
-  const FlickerBand band = flicker_band_of(run);
-  EXPECT_NEAR(band.tau_min_s, 4 * 0.02, 1e-9);
-  EXPECT_NEAR(band.tau_max_s, 10.0 * 600.0, 1e-6);
-  EXPECT_THROW(flicker_band_of(solver::RunData{}), core::InputError);
 }
 
 // A recorded static run of the known IMU (white noise only) weighs a six-position run of the same

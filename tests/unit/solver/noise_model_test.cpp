@@ -19,6 +19,7 @@
 #include "sim_run.hpp"
 #include "solver/diagnose.hpp"
 #include "solver/noise_estimate.hpp"
+#include "solver/octave_allan.hpp"
 #include "solver/step_noise.hpp"
 
 namespace calstand::solver {
@@ -76,6 +77,53 @@ double allan_from_covariance(const WanderModel& w, double t0, double T) {
   return 0.5 * (w.interval_mean_covariance(t0, t0 + T, t0, t0 + T) +
                 w.interval_mean_covariance(t0 + T, t0 + 2 * T, t0 + T, t0 + 2 * T)) -
          w.interval_mean_covariance(t0, t0 + T, t0 + T, t0 + 2 * T);
+}
+
+// A known wander (measured on a static run) weighs a run's step means with its flicker spread
+// over that run's band, the one the wander kernels try: from the shortest blocks the white
+// floor is read at to ten run spans.
+TEST(SpreadOver, AFlickerTakesTheRunsBandAndOtherProcessesStayAsMeasured) {
+  const FlickerBand band{0.08, 1e5};
+  WanderModel flicker;
+  flicker.kind = WanderKind::kFlicker;
+  flicker.flicker_b = 5e-5;
+  flicker.tau_min_s = 20.0;
+  flicker.tau_max_s = 1e4;
+  WanderModel gm;
+  gm.kind = WanderKind::kGaussMarkov;
+  gm.sigma = 2e-4;
+  gm.tau_s = 300.0;
+  const WanderModel f = spread_over(flicker, band);
+  EXPECT_DOUBLE_EQ(f.flicker_b, 5e-5);
+  EXPECT_DOUBLE_EQ(f.tau_min_s, 0.08);
+  EXPECT_DOUBLE_EQ(f.tau_max_s, 1e5);
+  const WanderModel g = spread_over(gm, band);
+  EXPECT_DOUBLE_EQ(g.sigma, 2e-4);
+  EXPECT_DOUBLE_EQ(g.tau_s, 300.0);
+  WanderModel sum;
+  sum.kind = WanderKind::kSum;
+  sum.parts = {gm, flicker};
+  const WanderModel s = spread_over(sum, band);
+  ASSERT_EQ(s.parts.size(), 2U);
+  EXPECT_DOUBLE_EQ(s.parts[1].tau_min_s, 0.08);
+  // A sum's covariance is its parts' (a step and a later one).
+  const double both = s.interval_mean_covariance(0.0, 60.0, 100.0, 160.0);
+  EXPECT_GT(both, 0.0);
+  EXPECT_DOUBLE_EQ(both, s.parts[0].interval_mean_covariance(0.0, 60.0, 100.0, 160.0) +
+                             s.parts[1].interval_mean_covariance(0.0, 60.0, 100.0, 160.0));
+}
+
+TEST(FlickerBand, FromFourSamplePeriodsToTenSpans) {
+  std::vector<StepSummary> steps(2);
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    steps[i].count = 5001;  // 50 Hz for 100 s
+    steps[i].duration_s = 100.0;
+    steps[i].start_s = 500.0 * static_cast<double>(i);
+    steps[i].end_s = steps[i].start_s + 100.0;
+  }
+  const FlickerBand band = flicker_band(steps);
+  EXPECT_NEAR(band.tau_min_s, kWhiteFitShortestBlockSamples * 0.02, 1e-9);
+  EXPECT_NEAR(band.tau_max_s, 10.0 * 600.0, 1e-6);
 }
 
 TEST(WanderModel, EachProcessHasItsAllanVariance) {
