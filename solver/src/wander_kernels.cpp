@@ -1,9 +1,12 @@
 #include "wander_kernels.hpp"
 
+#include <fmt/format.h>
+
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 
+#include "core/error.hpp"
 #include "solver/octave_allan.hpp"
 #include "solver/variance_component.hpp"
 
@@ -186,15 +189,27 @@ ChannelProblem channel_problem(const std::vector<StepSummary>& steps,
     for (std::size_t k = 0; k < columns.size(); ++k) {
       raw(i, static_cast<Eigen::Index>(k)) = s.regressors(channel, columns[k]);
     }
+    // A NaN would pass every comparison below and leave no column acting, or reach the QR.
+    if (!std::isfinite(p.ys[i]) || !raw.row(i).allFinite()) {
+      throw core::InputError(fmt::format("step {} ({})", s.index, s.label),
+                             fmt::format("its mean or regressors on channel {} are not finite: "
+                                         "its samples or table states hold NaN or infinity",
+                                         channel));
+    }
   }
   const Eigen::MatrixXd X = scaled_columns(steps, raw);
-  // Full rank: parameters acting on several channels (tilt) may be collinear on one alone.
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X.rows(), X.cols());
-  qr.setThreshold(kRankThreshold);
-  qr.compute(X);
-  const auto rank = static_cast<Eigen::Index>(qr.rank());
-  Eigen::MatrixXd kept(S, rank);
-  for (Eigen::Index k = 0; k < rank; ++k) kept.col(k) = X.col(qr.colsPermutation().indices()[k]);
+  Eigen::MatrixXd kept(S, 0);
+  if (X.cols() > 0) {  // Eigen's pivoting QR of no columns reads past its empty norms
+    // Full rank: parameters acting on several channels (tilt) may be collinear on one alone.
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X.rows(), X.cols());
+    qr.setThreshold(kRankThreshold);
+    qr.compute(X);
+    const auto rank = static_cast<Eigen::Index>(qr.rank());
+    kept.resize(S, rank);
+    for (Eigen::Index k = 0; k < rank; ++k) {
+      kept.col(k) = X.col(qr.colsPermutation().indices()[k]);
+    }
+  }
   // Extra columns after the design's own, each kept when it reaches outside their span (so that
   // a design with them nests the design without: the same columns and more).
   if (extra && extra->cols() > 0) {

@@ -9,10 +9,13 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <set>
 
+#include "../../../solver/src/wander_kernels.hpp"
+#include "core/error.hpp"
 #include "noise/noise_fit.hpp"
 #include "sim/noise.hpp"
 #include "sim/spec_sheet.hpp"
@@ -124,6 +127,33 @@ TEST(FlickerBand, FromFourSamplePeriodsToTenSpans) {
   const FlickerBand band = flicker_band(steps);
   EXPECT_NEAR(band.tau_min_s, kWhiteFitShortestBlockSamples * 0.02, 1e-9);
   EXPECT_NEAR(band.tau_max_s, 10.0 * 600.0, 1e-6);
+}
+
+// One channel's regression: a design none of whose columns acts on the channel (all gyro
+// columns on an accelerometer, say) leaves it no parameters, where Eigen's pivoting QR of no
+// columns read past its norms (a segfault in `calstand fit`); a step whose mean is not finite
+// is named, not fitted.
+TEST(ChannelProblem, NoColumnActingLeavesNoParametersAndANonFiniteStepIsNamed) {
+  std::vector<StepSummary> steps(5);
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    steps[i].index = i;
+    steps[i].label = "step";
+    steps[i].count = 100;
+    steps[i].regressors = Eigen::MatrixXd::Zero(kChannels, 2);
+    steps[i].regressors(0, 0) = 1.0;
+    steps[i].measured[2] = 1e-3 * static_cast<double>(i);
+  }
+  const detail::ChannelProblem p = detail::channel_problem(steps, {0, 1}, 2, 1.0);
+  EXPECT_EQ(p.parameters, 0);
+  EXPECT_EQ(p.Xs.cols(), 0);
+  EXPECT_EQ(detail::channel_problem(steps, {0, 1}, 0, 1.0).parameters, 1);
+  steps[3].measured[2] = std::numeric_limits<double>::quiet_NaN();
+  try {
+    detail::channel_problem(steps, {0, 1}, 2, 1.0);
+    FAIL() << "a NaN step mean was fitted";
+  } catch (const core::InputError& e) {
+    EXPECT_EQ(e.where(), "step 3 (step)") << e.what();
+  }
 }
 
 TEST(WanderModel, EachProcessHasItsAllanVariance) {
