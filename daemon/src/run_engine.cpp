@@ -569,8 +569,10 @@ void RunEngine::power(const Step& step, std::size_t index) {
                  fmt::format("{} powered {}", name, step.power_on ? "on" : "off"));
     ImuHealth& health = imu_health_[i];
     health.unpowered = !step.power_on;
-    // A unit that starts again counts from 0: its first sample is no sequence gap.
+    // A unit that starts again counts from 0: its first sample is no sequence gap, and its
+    // clock starts again.
     health.last_sequence.reset();
+    health.last_stamp_offset_s.reset();
     health.stale = false;
     health.last_sample_s = station_.clock().now_s();
     units.push_back(i);
@@ -655,6 +657,7 @@ void RunEngine::reestablish(std::size_t first_step, const std::vector<std::size_
       }
       imu_health_[u].unpowered = !s.power_on;
       imu_health_[u].last_sequence.reset();
+      imu_health_[u].last_stamp_offset_s.reset();
     }
   }
   if (last_temperature) set_temperature(plan_.steps[*last_temperature], *last_temperature);
@@ -742,6 +745,19 @@ void RunEngine::poll_imus() {
       }
       health.last_sequence = s.sequence;
     }
+    if (const double late_s = stamps_set_back_s(health, samples); late_s > 0.0) {
+      record_event(EventKind::kFault, imu.name(),
+                   fmt::format("time stamps set back {:.3f} s: the stream was held up longer than "
+                               "its clock estimate could tell, and its samples were stamped late",
+                               late_s));
+      if (capturing_ && !capturing_->invalid_reason &&
+          options_.stale_policy == GapPolicy::kRepeatCapture) {
+        capturing_->invalid_reason =
+            fmt::format("{} samples stamped up to {:.3f} s late", imu.name(), late_s);
+      } else if (capturing_ && options_.stale_policy == GapPolicy::kAbort) {
+        throw Aborted{fmt::format("{}: samples stamped up to {:.3f} s late", imu.name(), late_s)};
+      }
+    }
     if (missing > 0) {
       record_event(EventKind::kFault, imu.name(),
                    fmt::format("sequence gap: {} samples missing", missing));
@@ -784,6 +800,46 @@ void RunEngine::poll_imus() {
       }
     }
   }
+}
+
+double RunEngine::stamps_set_back_s(ImuHealth& health,
+                                    const std::vector<core::ImuSample>& samples) const {
+  // A streaming driver stamps a sample with its device time plus an offset it estimates from
+  // the arrivals (drivers::SampleClock): the least delay seen lately. A stream held up for
+  // longer than that memory has its hold-up taken for the link's delay, and its samples are
+  // stamped late: a capture window then takes in samples from before it (the end of a move,
+  // the last position) and lets later ones out, with nothing else to show for it. When the
+  // stream catches up, the estimate comes back down: station minus device time falls below
+  // what it was, by as much as the stamps had been late. Limits in wall seconds, as the
+  // driver's: link and scheduling delays do not speed up with an accelerated station clock.
+  const double k = std::max(1.0, station_.config().time_scale);
+  const double tolerance_s = options_.late_stamp_wall_s * k;
+  const double memory_s = 10.0 * k;  // the driver's estimate's memory (SampleClock)
+  const double jump_s = 5.0 * k;     // a device clock leaping further restarts its estimate
+  double set_back_s = 0.0;
+  for (const auto& s : samples) {
+    const double offset = s.receive_time_s - s.device_time_s;
+    const double device_step_s = s.device_time_s - health.last_device_time_s;
+    health.last_device_time_s = s.device_time_s;
+    // A device clock that jumped (restart, wrap, time set) starts a new estimate: the stamps
+    // before it were not late for that (the driver reports the jump itself).
+    if (!health.last_stamp_offset_s || device_step_s <= 0.0 || device_step_s > jump_s ||
+        s.device_time_s - health.offset_high_at_s > memory_s ||
+        offset > health.stamp_offset_high_s) {
+      health.stamp_offset_high_s = offset;
+      health.offset_high_at_s = s.device_time_s;
+      health.set_back_said_s = 0.0;
+    }
+    health.last_stamp_offset_s = offset;
+    // Stamps held at the last one fall a sample period at a time: said once the fall passes
+    // the tolerance, and again only as it grows by as much again.
+    const double fallen_s = health.stamp_offset_high_s - offset;
+    if (fallen_s > health.set_back_said_s + tolerance_s) {
+      set_back_s = fallen_s;
+      health.set_back_said_s = fallen_s;
+    }
+  }
+  return set_back_s;
 }
 
 void RunEngine::record_device_events() {

@@ -50,6 +50,10 @@ struct EngineOptions {
   double capture_band_factor = 2.0;      ///< capture invalid when |air - setpoint| exceeds this
                                          ///< times the soak tolerance
   double imu_stale_s = 1.0;              ///< no sample for this long is a stale stream [s]
+  /// A stream whose time stamps fall back against its device clock by more than this many wall
+  /// seconds (times the station's time_scale) was stamped late before: its capture is treated
+  /// as one that saw the stream stale (stale_policy) [s].
+  double late_stamp_wall_s = 0.02;
   /// A table or chamber link down (unreadable, not faulted) is ridden out this long [s].
   double link_outage_s = 5.0;
   GapPolicy gap_policy = GapPolicy::kRecord;
@@ -229,11 +233,22 @@ class RunEngine {
   // IMU stream health, per device.
   struct ImuHealth {
     std::optional<std::uint32_t> last_sequence;
+    /// Station minus device time: of the last sample, and the highest since `offset_high_at_s`
+    /// (device time). Constant while the driver's time stamps hold; set back when the driver
+    /// finds they were late.
+    std::optional<double> last_stamp_offset_s;
+    double stamp_offset_high_s = 0.0;
+    double offset_high_at_s = 0.0;
+    double set_back_said_s = 0.0;  ///< how much of the fall from that high was reported [s]
+    double last_device_time_s = 0.0;
     double last_sample_s = 0.0;
     bool stale = false;
     /// Switched off by a power step: its silence is meant, not a stale stream.
     bool unpowered = false;
   };
+  /// How far the driver set the time stamps of `samples` back against their device clock
+  /// (beyond late_stamp_wall_s): the stamps before were late by as much; 0 when they held.
+  double stamps_set_back_s(ImuHealth& health, const std::vector<core::ImuSample>& samples) const;
   std::vector<ImuHealth> imu_health_;
   double last_telemetry_s_ = -1e300;
   /// While an oscillation runs: the control tick [s], short enough to sample the encoder's sine

@@ -95,12 +95,15 @@ class SimTableBackend final : public TableServerBackend {
   /// The limits in force [deg/s, deg/s^2] (as set by `:limit`, initially the axis's own).
   std::pair<double, double> limits(int axis);
   /// Where world time stands now when the world advances in slices behind a wall clock
-  /// (SimWorldRunner::clock_s): a reported angle is moved on at its rate to it, as a
-  /// controller reads its encoder at the moment of the query. Unset: the world's own time.
+  /// (SimWorldRunner::clock_s): each query and command first brings the world to it, as a
+  /// controller reads its encoder and acts at the moment of the query. Unset: the world's own
+  /// time.
   void set_clock(std::function<double()> now_s) { now_s_ = std::move(now_s); }
 
  private:
   std::function<double()> now_s_;
+  /// Advances the world to now_s_() (caller holds the lock).
+  void catch_up();
   struct AxisControl {
     acutrol::WireMode selected = acutrol::WireMode::kRest;
     double max_rate_dps = 0.0;

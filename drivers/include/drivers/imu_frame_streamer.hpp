@@ -21,8 +21,10 @@ namespace calstand::drivers {
 /// opens. The host's bytes (configuration, identity requests) are answered by the emulator;
 /// push() is called by the world as samples are produced and never blocks; a writer thread
 /// sends what the emulator makes of them. As on a real line, what nobody reads is lost: a write
-/// nobody takes within a second drops every frame queued, beyond `max_queued_frames` (a held
-/// burst) the oldest frames are dropped (counted), and the receiver sees a sequence gap.
+/// nobody takes within a second drops every frame queued, and from then until a write is taken
+/// again only the newest frame is kept (a client opening the line later does not get the frames
+/// of before as its first); beyond `max_queued_frames` (a held burst) the oldest frames are
+/// dropped (counted), and the receiver sees a sequence gap.
 class ImuFrameStreamer {
  public:
   explicit ImuFrameStreamer(std::unique_ptr<ImuDeviceEmulator> emulator,

@@ -17,6 +17,16 @@ class SampleClock {
   /// Arrivals must be given in the order they happened.
   explicit SampleClock(double window_s = 10.0, double jump_s = 5.0)
       : window_s_(window_s), jump_s_(jump_s) {}
+  /// The clock for a station whose clock runs `time_scale` times faster than the wall (a
+  /// rehearsal against `calstand sim-station --time-scale K`): the window and the jump limit
+  /// are kept in wall seconds. They guard against link and scheduling delays, which do not
+  /// speed up with the station: at K = 20 a window of 10 station seconds is half a second of
+  /// wall time, and a reader held up for longer than that (a busy machine) took its own delay
+  /// for the link's, stamping whole captures seconds late.
+  static SampleClock for_time_scale(double time_scale) {
+    const double k = time_scale > 0.0 ? time_scale : 1.0;
+    return SampleClock(10.0 * k, 5.0 * k);
+  }
 
   /// Station time [s] of the sample taken at `device_time_s` and received at `arrival_s`
   /// (station clock). Never later than `arrival_s`; never earlier than the previous result.

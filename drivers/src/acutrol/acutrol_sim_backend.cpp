@@ -1,6 +1,5 @@
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -52,18 +51,24 @@ SimTableBackend::SimTableBackend(sim::SimWorld& world, std::mutex& world_mutex)
 
 std::string SimTableBackend::identity() { return "CALSTAND,ACUTROL-SIM,0,1.0"; }
 
+void SimTableBackend::catch_up() {
+  // The world advances in slices on its runner's thread, and falls behind when that thread
+  // waits for a CPU (a busy machine: tens of ms of wall time, a second of world time at 20x).
+  // A controller answers from its axes as they are at the moment of the query, and acts on a
+  // command then: the world is brought to that moment first. Answered from where the world
+  // stood, a turning axis read up to a second behind its time stamp (a rate step's telemetry
+  // showed a rate of 45 deg/s for 60), and a command took effect that much earlier in the
+  // world than the client sent it.
+  if (now_s_) world_.advance_to(now_s_());
+}
+
 TableServerBackend::AxisReport SimTableBackend::report(int axis) {
   std::lock_guard lock(mutex_);
+  catch_up();
   const core::AxisState s = sim_axis(world_, axis).state();
   const auto& c = control(axis);
   AxisReport r;
   r.angle_deg = s.angle_deg;
-  if (now_s_) {
-    // The world stands at the end of its last slice; the query is now. At most one slice's
-    // worth (a world that fell behind is not extrapolated across the gap).
-    const double ahead_s = std::clamp(now_s_() - world_.now_s(), 0.0, 0.1);
-    r.angle_deg = std::remainder(s.angle_deg + s.rate_dps * ahead_s, 360.0);
-  }
   r.rate_dps = s.rate_dps;
   r.status.mode = to_wire_mode(s.mode);
   r.status.settled = s.in_position;
@@ -92,6 +97,7 @@ Refusal SimTableBackend::motion_refusal(int axis) {
 
 Refusal SimTableBackend::select_mode(int axis, WireMode mode) {
   std::lock_guard lock(mutex_);
+  catch_up();
   if (auto r = motion_refusal(axis)) return r;
   control(axis).selected = mode;
   return std::nullopt;
@@ -99,6 +105,7 @@ Refusal SimTableBackend::select_mode(int axis, WireMode mode) {
 
 Refusal SimTableBackend::demand_position(int axis, double angle_deg) {
   std::lock_guard lock(mutex_);
+  catch_up();
   if (auto r = motion_refusal(axis)) return r;
   if (control(axis).selected != WireMode::kPosition) {
     return refuse(
@@ -112,6 +119,7 @@ Refusal SimTableBackend::demand_position(int axis, double angle_deg) {
 
 Refusal SimTableBackend::demand_rate(int axis, double rate_dps) {
   std::lock_guard lock(mutex_);
+  catch_up();
   if (auto r = motion_refusal(axis)) return r;
   auto& c = control(axis);
   if (c.selected != WireMode::kRate) {
@@ -130,6 +138,7 @@ Refusal SimTableBackend::demand_rate(int axis, double rate_dps) {
 
 Refusal SimTableBackend::demand_sine(int axis, double amplitude_deg, double frequency_hz) {
   std::lock_guard lock(mutex_);
+  catch_up();
   if (auto r = motion_refusal(axis)) return r;
   auto& c = control(axis);
   if (c.selected != WireMode::kSine) {
@@ -167,12 +176,14 @@ Refusal SimTableBackend::set_limits(int axis, double max_rate_dps, double max_ac
 
 void SimTableBackend::stop(int axis) {
   std::lock_guard lock(mutex_);
+  catch_up();
   sim_axis(world_, axis).stop();
   control(axis).selected = WireMode::kRest;
 }
 
 Refusal SimTableBackend::close_interlock(int axis) {
   std::lock_guard lock(mutex_);
+  catch_up();
   auto& c = control(axis);
   if (!c.interlock_open) return std::nullopt;
   if (c.cause_present) {

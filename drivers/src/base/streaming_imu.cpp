@@ -19,13 +19,20 @@ constexpr auto kFirstBackoff = 100ms;
 constexpr auto kMaxBackoff = 5000ms;
 constexpr auto kStopCheck = 10ms;
 
+/// Station seconds per wall second: a rehearsal's accelerated clock, else 1.
+double station_time_scale(const core::Clock& clock) {
+  const auto* steady = dynamic_cast<const core::SteadyClock*>(&clock);
+  return steady != nullptr ? steady->time_scale() : 1.0;
+}
+
 }  // namespace
 
 StreamingImu::StreamingImu(std::string name, core::Clock& clock,
                            std::initializer_list<std::string_view> extra_faults)
     : name_(std::move(name)),
       clock_(clock),
-      faults_{"read_errors", "reopens", "buffer_overflows", "clock_restarts"} {
+      faults_{"read_errors", "reopens", "buffer_overflows", "clock_restarts"},
+      sample_clock_(SampleClock::for_time_scale(station_time_scale(clock))) {
   for (auto n : extra_faults) faults_.set(n, 0);
 }
 

@@ -77,12 +77,32 @@ void ImuFrameStreamer::host_loop() {
 void ImuFrameStreamer::loop() {
   using namespace std::chrono_literals;
   std::vector<std::uint8_t> batch;
+  // Nobody has read the line since a write timed out (no client has it open, or one stopped
+  // reading). A real unit's frames are then lost as they are sent; queued here, and held up for
+  // the second a write may wait, they went to the next client that opened the line, after its
+  // flush, as the first frames it saw: seconds of the world's time before it (at --time-scale
+  // 20, a second of wall time is 20 s of frames), which it stamped as they arrived. While the
+  // line is unread only the newest frame is offered, with a short wait.
+  bool unread = false;
   while (running_) {
     std::size_t frames = 0;
     {
       std::unique_lock lock(mutex_);
       wake_.wait_for(lock, 50ms, [&] { return (!queue_.empty() && !held_) || !running_; });
       if (held_) continue;
+      if (unread) {
+        std::size_t frames_queued = 0;
+        for (const Queued& q : queue_) frames_queued += q.is_frame ? 1 : 0;
+        for (auto it = queue_.begin(); it != queue_.end() && frames_queued > 1;) {
+          if (!it->is_frame) {
+            ++it;
+            continue;
+          }
+          ++dropped_;
+          --frames_queued;
+          it = queue_.erase(it);
+        }
+      }
       // Batch what is queued into one write: a few syscalls per millisecond, not per frame.
       batch.clear();
       while (!queue_.empty() && batch.size() < 64 * 1024) {
@@ -97,12 +117,14 @@ void ImuFrameStreamer::loop() {
     // the write time out, and what did not fit is lost with everything queued behind it, as on
     // a real line (the receiver resynchronises). Kept, the queue would hand the next client
     // seconds of stale frames ahead of the reply to its first request.
-    const auto r = pty_.write(batch, 1000ms);
+    const auto r = pty_.write(batch, unread ? 20ms : 1000ms);
     if (r.ok()) {
       sent_ += frames;
+      unread = false;
     } else {
       dropped_ += frames;
       drop_queued_frames();
+      unread = true;
     }
   }
 }

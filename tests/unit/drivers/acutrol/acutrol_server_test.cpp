@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <mutex>
 #include <random>
 #include <string>
 
 #include "acutrol_test_support.hpp"
 #include "drivers/tcp_client.hpp"
+#include "sim/sim_world.hpp"
 
 namespace calstand::drivers {
 namespace {
@@ -234,6 +236,32 @@ TEST(AcutrolServer, ServesOverAPseudoTerminal) {
   }
   ASSERT_TRUE(reply);
   EXPECT_EQ(reply->text, "CALSTAND,ACUTROL-SIM,0,1.0");
+}
+
+// sim-station's world advances in slices on its runner's thread, which a busy machine keeps
+// waiting (tens of ms of wall time, a second of world time at 20x). A query is answered from
+// the axis at the query's time and a command acts then, as on a controller: the world is
+// brought there first. Answered from where the world stood, a rate step's telemetry read its
+// axis a second behind its time stamp, and the engine took the slope for a rate of 45 deg/s.
+TEST(SimTableBackend, AWorldBehindItsClockIsBroughtToTheQueryFirst) {
+  sim::SimWorld world(test::table_only_station());
+  sim::SimWorld reference(test::table_only_station());  // the same commands, advanced on time
+  std::mutex mutex;
+  SimTableBackend backend(world, mutex);
+  double now_s = 2.0;
+  backend.set_clock([&] { return now_s; });
+  // The command comes at 2 s, when the runner has not moved the world on from 0.
+  ASSERT_FALSE(backend.select_mode(acutrol::kInnerAxis, acutrol::WireMode::kRate));
+  ASSERT_FALSE(backend.demand_rate(acutrol::kInnerAxis, 60.0));
+  EXPECT_DOUBLE_EQ(world.now_s(), 2.0);
+  reference.advance_to(2.0);
+  ASSERT_TRUE(reference.table().inner().command_rate(60.0).ok);
+  now_s = 12.0;  // and again nothing moved it since
+  const auto r = backend.report(acutrol::kInnerAxis);
+  reference.advance_to(12.0);
+  const core::AxisState expected = reference.table().inner().state();
+  EXPECT_NEAR(r.angle_deg, expected.angle_deg, 1e-9);
+  EXPECT_NEAR(r.rate_dps, 60.0, 1e-9);
 }
 
 TEST_F(AcutrolServerTest, SineDemandOscillatesAboutThePresentAngleWithinTheLimits) {

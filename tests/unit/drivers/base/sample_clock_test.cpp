@@ -78,5 +78,35 @@ TEST(SampleClock, ALongDeliveryStallKeepsTheSampleInstants) {
   EXPECT_EQ(clock.restarts(), 0u);
 }
 
+TEST(SampleClock, AReaderHeldUpLongerThanTheWindowInStationTimeKeepsTheInstantsAtTimeScale20) {
+  // A station clock 20 times the wall's (sim-station --time-scale 20), a 200 Hz unit, 1 ms of
+  // wall time on the link. Then a busy machine holds the reader up: for 30 s of station time
+  // (1.5 s of wall time) every sample waits 5 s more, as a pty full of frames drains no faster
+  // than they come. Seen in the command-set station test under load: the window of 10 station
+  // seconds (0.5 s of wall time) forgot the link's own delay and took the hold-up for it, and
+  // stamped a capture's window full of samples from the move before it.
+  constexpr double kScale = 20.0;
+  SampleClock clock = SampleClock::for_time_scale(kScale);
+  const double link_s = 0.001 * kScale;
+  const double offset = 100.0;
+  double worst = 0.0;
+  for (int i = 0; i < 200 * 60; ++i) {
+    const double device = 0.005 * i;
+    const bool held_up = device >= 10.0 && device < 40.0;
+    const double arrival = device + offset + link_s + (held_up ? 5.0 : 0.0);
+    worst = std::max(worst, std::abs(clock.stamp(device, arrival) - (device + offset + link_s)));
+  }
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_EQ(clock.restarts(), 0u);
+}
+
+TEST(SampleClock, ForTimeScaleOneIsTheLabClock) {
+  // At the wall's own pace the window and the jump limit are the lab's: 10 s and 5 s.
+  SampleClock clock = SampleClock::for_time_scale(1.0);
+  for (int i = 0; i < 100; ++i) clock.stamp(0.01 * i, 50.0 + 0.01 * i);
+  clock.stamp(0.99 + 6.0, 50.0 + 0.99 + 6.0);  // leaps 6 s ahead: a new epoch
+  EXPECT_EQ(clock.restarts(), 1u);
+}
+
 }  // namespace
 }  // namespace calstand::drivers
