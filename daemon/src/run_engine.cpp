@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "drivers/sample_clock.hpp"
+
 namespace calstand::daemon {
 
 using procedures::Step;
@@ -814,8 +816,8 @@ double RunEngine::stamps_set_back_s(ImuHealth& health,
   // driver's: link and scheduling delays do not speed up with an accelerated station clock.
   const double k = std::max(1.0, station_.config().time_scale);
   const double tolerance_s = options_.late_stamp_wall_s * k;
-  const double memory_s = 10.0 * k;  // the driver's estimate's memory (SampleClock)
-  const double jump_s = 5.0 * k;     // a device clock leaping further restarts its estimate
+  const double memory_s = drivers::SampleClock::kWindowWallS * k;  // the estimate's memory
+  const double jump_s = drivers::SampleClock::kJumpWallS * k;      // a leap restarts the estimate
   double set_back_s = 0.0;
   for (const auto& s : samples) {
     const double offset = s.receive_time_s - s.device_time_s;

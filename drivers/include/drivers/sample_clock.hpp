@@ -14,8 +14,13 @@ namespace calstand::drivers {
 /// Not thread safe: one per stream, used from the stream's reader.
 class SampleClock {
  public:
+  /// The estimate's memory and the device clock leap that restarts it, in wall seconds: long
+  /// beside a link's bursts and a reader's scheduling hold-ups.
+  static constexpr double kWindowWallS = 10.0;
+  static constexpr double kJumpWallS = 5.0;
+
   /// Arrivals must be given in the order they happened.
-  explicit SampleClock(double window_s = 10.0, double jump_s = 5.0)
+  explicit SampleClock(double window_s = kWindowWallS, double jump_s = kJumpWallS)
       : window_s_(window_s), jump_s_(jump_s) {}
   /// The clock for a station whose clock runs `time_scale` times faster than the wall (a
   /// rehearsal against `calstand sim-station --time-scale K`): the window and the jump limit
@@ -25,7 +30,7 @@ class SampleClock {
   /// for the link's, stamping whole captures seconds late.
   static SampleClock for_time_scale(double time_scale) {
     const double k = time_scale > 0.0 ? time_scale : 1.0;
-    return SampleClock(10.0 * k, 5.0 * k);
+    return SampleClock(kWindowWallS * k, kJumpWallS * k);
   }
 
   /// Station time [s] of the sample taken at `device_time_s` and received at `arrival_s`
