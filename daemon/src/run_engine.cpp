@@ -520,8 +520,8 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
         EventKind::kInterlock, "engine",
         fmt::format("step {} capture attempt {} invalidated: {}", index, attempt, *invalid));
     if (tries + 1 == options_.max_capture_attempts) break;  // no attempt left to prepare for
-    // A repeat while an IMU is still silent would be invalid at once: give the streams time
-    // to come back first.
+    // A repeat while an IMU is still silent, or its reader still catching up, would be invalid
+    // at once: give the streams time to come back first.
     wait_for_streams();
     // Before repeating, command the setpoint again (the controller may have been upset) and
     // let the chamber come back into its band (re-soak).
@@ -544,16 +544,19 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
 }
 
 void RunEngine::wait_for_streams() {
-  auto any_stale = [&] {
+  const double hold_s = options_.stamps_hold_wall_s * std::max(1.0, station_.config().time_scale);
+  // Stale, or its stamps set back lately (its reader still catching up on a hold-up).
+  auto any_unsettled = [&] {
+    const double now = station_.clock().now_s();
     for (const auto& h : imu_health_) {
-      if (h.stale) return true;
+      if (h.stale || now - h.set_back_at_s < hold_s) return true;
     }
     return false;
   };
-  if (!any_stale()) return;
+  if (!any_unsettled()) return;
   set_phase("waiting for IMU streams");
   const double end = station_.clock().now_s() + options_.stream_recovery_timeout_s;
-  while (any_stale() && station_.clock().now_s() < end) tick();
+  while (any_unsettled() && station_.clock().now_s() < end) tick();
 }
 
 void RunEngine::power(const Step& step, std::size_t index) {
@@ -748,6 +751,7 @@ void RunEngine::poll_imus() {
       health.last_sequence = s.sequence;
     }
     if (const double late_s = stamps_set_back_s(health, samples); late_s > 0.0) {
+      health.set_back_at_s = station_.clock().now_s();
       record_event(EventKind::kFault, imu.name(),
                    fmt::format("time stamps set back {:.3f} s: the stream was held up longer than "
                                "its clock estimate could tell, and its samples were stamped late",

@@ -54,6 +54,10 @@ struct EngineOptions {
   /// seconds (times the station's time_scale) was stamped late before: its capture is treated
   /// as one that saw the stream stale (stale_policy) [s].
   double late_stamp_wall_s = 0.02;
+  /// A capture repeated for late stamps starts once every stream's stamps have held this many
+  /// wall seconds (times the time_scale): a reader still catching up sets them back again, and
+  /// an immediate repeat would be spent on the same hold-up [s].
+  double stamps_hold_wall_s = 1.0;
   /// A table or chamber link down (unreadable, not faulted) is ridden out this long [s].
   double link_outage_s = 5.0;
   GapPolicy gap_policy = GapPolicy::kRecord;
@@ -239,7 +243,8 @@ class RunEngine {
     std::optional<double> last_stamp_offset_s;
     double stamp_offset_high_s = 0.0;
     double offset_high_at_s = 0.0;
-    double set_back_said_s = 0.0;  ///< how much of the fall from that high was reported [s]
+    double set_back_said_s = 0.0;   ///< how much of the fall from that high was reported [s]
+    double set_back_at_s = -1e300;  ///< station time the stamps were last seen set back [s]
     double last_device_time_s = 0.0;
     double last_sample_s = 0.0;
     bool stale = false;

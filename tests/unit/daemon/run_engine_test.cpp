@@ -621,6 +621,11 @@ TEST(RunEngine, SamplesStampedLateInvalidateTheCaptureWhenTheirStampsAreSetBack)
   EXPECT_FALSE(journal.has_event(EventKind::kFault, "stream stale"));
   ASSERT_EQ(journal.discarded.size(), 1u);
   EXPECT_EQ(journal.completed.back().second, 2);
+  // The repeat waited for the stamps to hold (1 s here) after they were set back at 2 s, where
+  // the reader catches up: an immediate one would be spent on a hold-up still draining.
+  const auto repeat = journal.attempts.find({0, 2, station.imu(0).name()});
+  ASSERT_NE(repeat, journal.attempts.end());
+  EXPECT_GE(repeat->second.first_time_s, 2.0 + EngineOptions{}.stamps_hold_wall_s - 0.05);
 }
 
 TEST(RunEngine, TimeStampsThatHoldOrFollowADeviceClockJumpAreNotSetBack) {
