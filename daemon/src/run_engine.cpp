@@ -544,7 +544,7 @@ int RunEngine::capture(std::size_t index, double duration_s, int first_attempt) 
 }
 
 void RunEngine::wait_for_streams() {
-  const double hold_s = options_.stamps_hold_wall_s * std::max(1.0, station_.config().time_scale);
+  const double hold_s = options_.stamps_hold_wall_s * station_.clock().time_scale();
   // Stale, or its stamps set back lately (its reader still catching up on a hold-up).
   auto any_unsettled = [&] {
     const double now = station_.clock().now_s();
@@ -818,7 +818,7 @@ double RunEngine::stamps_set_back_s(ImuHealth& health,
   // stream catches up, the estimate comes back down: station minus device time falls below
   // what it was, by as much as the stamps had been late. Limits in wall seconds, as the
   // driver's: link and scheduling delays do not speed up with an accelerated station clock.
-  const double k = std::max(1.0, station_.config().time_scale);
+  const double k = station_.clock().time_scale();
   const double tolerance_s = options_.late_stamp_wall_s * k;
   const double memory_s = drivers::SampleClock::kWindowWallS * k;  // the estimate's memory
   const double jump_s = drivers::SampleClock::kJumpWallS * k;      // a leap restarts the estimate

@@ -17,6 +17,9 @@ class Clock {
   virtual void sleep_until(double t_s) = 0;
   /// True when time only moves when the simulator advances it.
   virtual bool is_virtual() const = 0;
+  /// Station seconds per wall second: limits that guard against link and scheduling delays
+  /// are kept in wall seconds with it. 1 unless a clock runs faster than the wall.
+  virtual double time_scale() const { return 1.0; }
 };
 
 /// std::chrono::steady_clock, epoch at construction. Thread safe. `time_scale` station seconds
@@ -27,8 +30,7 @@ class SteadyClock final : public Clock {
  public:
   explicit SteadyClock(double time_scale = 1.0, double start_s = 0.0);
   double now_s() const override;
-  /// Station seconds per wall second.
-  double time_scale() const { return time_scale_; }
+  double time_scale() const override { return time_scale_; }
   void sleep_until(double t_s) override;
   bool is_virtual() const override { return false; }
 

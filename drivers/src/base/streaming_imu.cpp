@@ -19,12 +19,6 @@ constexpr auto kFirstBackoff = 100ms;
 constexpr auto kMaxBackoff = 5000ms;
 constexpr auto kStopCheck = 10ms;
 
-/// Station seconds per wall second: a rehearsal's accelerated clock, else 1.
-double station_time_scale(const core::Clock& clock) {
-  const auto* steady = dynamic_cast<const core::SteadyClock*>(&clock);
-  return steady != nullptr ? steady->time_scale() : 1.0;
-}
-
 }  // namespace
 
 StreamingImu::StreamingImu(std::string name, core::Clock& clock,
@@ -32,7 +26,7 @@ StreamingImu::StreamingImu(std::string name, core::Clock& clock,
     : name_(std::move(name)),
       clock_(clock),
       faults_{"read_errors", "reopens", "buffer_overflows", "clock_restarts"},
-      sample_clock_(SampleClock::for_time_scale(station_time_scale(clock))) {
+      sample_clock_(SampleClock::for_time_scale(clock.time_scale())) {
   for (auto n : extra_faults) faults_.set(n, 0);
 }
 

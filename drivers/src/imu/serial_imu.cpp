@@ -42,9 +42,7 @@ SerialImu::SerialImu(const core::ImuConfig& config, core::Clock& clock, const st
     : StreamingImu(config.name, clock) {
   auto c = SerialImuConnection::from_json(config.connection, where);
   // A station rehearsed K times faster than the wall (sim-station) has units that are too.
-  if (const auto* steady = dynamic_cast<const core::SteadyClock*>(&clock)) {
-    c.settings.time_scale = steady->time_scale();
-  }
+  c.settings.time_scale = clock.time_scale();
   const ImuWireFormat& format = imu_wire_format(c.format, where + ".format");
   auto port = std::make_unique<SerialPort>(c.serial);
   port_ = port.get();
