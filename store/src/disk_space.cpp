@@ -32,6 +32,14 @@ std::uint64_t free_bytes_beside(const std::string& db_path) {
   return info.available;
 }
 
+std::uint64_t free_bytes_counting_wal(const std::string& db_path) {
+  std::error_code ec;
+  const fs::path wal = fs::path(db_path + "-wal");
+  // A log removed between the two readings is counted in the free space the second one sees.
+  const std::uint64_t wal_bytes = fs::is_regular_file(wal, ec) ? fs::file_size(wal, ec) : 0;
+  return free_bytes_beside(db_path) + (ec ? 0 : wal_bytes);
+}
+
 std::optional<std::string> disk_space_shortfall(const std::string& db_path, double min_free_mb) {
   const double free_mb = static_cast<double>(free_bytes_beside(db_path)) / kBytesPerMb;
   if (free_mb >= min_free_mb) return std::nullopt;

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "daemon_test_support.hpp"
@@ -267,6 +268,10 @@ TEST(DaemonProcess, FullDiskInterruptsTheRunRefusesNewRunsAndResumesOnceSpaceIsB
     return r.status == 200 && r.body["steps_done"].get<std::size_t>() >= 1 &&
            r.body.contains("live") && r.body["live"]["phase"] == "capturing";
   }));
+  // A reader of the database (a report, the console) is open while the disk fills: the daemon's
+  // connections are then not the last, and the write-ahead log stays until the reader closes.
+  std::optional<store::Database> reader(std::in_place, db);
+  store::RunStore(*reader).load_run(run);
   // Room for about half a capture more.
   disk.set_capacity(disk.used_bytes() + 3 * 1024 * 1024);
   nlohmann::json status;
@@ -283,6 +288,9 @@ TEST(DaemonProcess, FullDiskInterruptsTheRunRefusesNewRunsAndResumesOnceSpaceIsB
     return shown["waiting"].is_string() &&
            shown["waiting"].get<std::string>().find("disk full") != std::string::npos;
   })) << shown.dump(2);
+  // The reader closes last and its checkpoint drops the log: bytes back that were the run's own,
+  // not space an operator freed.
+  reader.reset();
   const auto refused =
       api.post_json("/runs", {{"procedure", "six-position"}, {"parameters", {{"capture_s", 2}}}});
   EXPECT_EQ(refused.status, 507) << refused.raw;

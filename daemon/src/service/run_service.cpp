@@ -214,17 +214,17 @@ std::optional<std::string> RunService::disk_shortfall() {
     return why;
   }
   if (measure_after_full_.exchange(false)) {
-    // A new run needs its disk reserve too. And the reserve the full run released, with the
-    // journal SQLite drops as the run ends, may come back after this reading (another thread
-    // may ask first): counting the reserve keeps that from passing for space an operator freed.
+    // A new run needs its disk reserve too. The write-ahead log is counted as free: it goes
+    // when the last connection closes, which may be a reader's after this reading, and its
+    // bytes are the stopped run's own, not space an operator freed.
     const auto policy = options_.station.policy;
     free_bytes_needed_after_full_ =
-        store::free_bytes_beside(options_.db_path) +
+        store::free_bytes_counting_wal(options_.db_path) +
         static_cast<std::uint64_t>((policy.min_free_disk_mb + policy.disk_reserve_mb) *
                                    kBytesPerMb);
   }
   if (const std::uint64_t needed = free_bytes_needed_after_full_; needed > 0) {
-    const std::uint64_t free = store::free_bytes_beside(options_.db_path);
+    const std::uint64_t free = store::free_bytes_counting_wal(options_.db_path);
     if (free < needed) {
       return fmt::format(
           "disk full: the last run stopped on a full disk; {:.1f} MB free now, waiting for "
@@ -474,9 +474,8 @@ void RunService::execute(std::int64_t run, bool resuming) {
     }
   }
 
-  if (final_state == RunState::kInterrupted && store::says_disk_full(reason)) {
-    measure_after_full_ = true;
-  }
+  const bool stopped_on_full_disk =
+      final_state == RunState::kInterrupted && store::says_disk_full(reason);
   if (final_state == RunState::kInterrupted || final_state == RunState::kHeld) {
     // The engine recorded the run as interrupted (or held) in the same write that ended it: a
     // crash from here on still leaves it resumable.
@@ -495,6 +494,10 @@ void RunService::execute(std::int64_t run, bool resuming) {
     store::dequeue_run(wired->database(), run);
     spdlog::info("run {}: {}{}", run, to_string(final_state),
                  reason.empty() ? "" : " (" + reason + ")");
+  }
+  if (stopped_on_full_disk) {
+    wired.reset();  // the run's connections closed before the space left is read
+    measure_after_full_ = true;
   }
 }
 

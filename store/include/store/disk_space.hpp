@@ -11,6 +11,12 @@ namespace calstand::store {
 /// asked.
 std::uint64_t free_bytes_beside(const std::string& db_path);
 
+/// free_bytes_beside() plus the bytes of the database's write-ahead log (`<db>-wal`), which
+/// SQLite gives back when the last connection to the database closes. Whoever closes last (a
+/// reader, not the daemon) decides when that is, so a comparison of free space across a run's
+/// end counts the log as free on both sides: its deletion is then not taken for space freed.
+std::uint64_t free_bytes_counting_wal(const std::string& db_path);
+
 /// Why a run cannot start on `db_path` for lack of space: "only 12.3 MB free on the database's
 /// filesystem (/var/lib/calstand); a run needs at least 64 MB ..." when fewer than
 /// `min_free_mb` MB are free; none when there is enough.

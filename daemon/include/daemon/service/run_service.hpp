@@ -163,7 +163,8 @@ class RunService {
   // would resume, fill the disk and stop again in a loop. Set by the run thread, read by submit.
   std::atomic<std::uint64_t> free_bytes_needed_after_full_{0};
   // A run stopped on a full disk and the space then free is not measured yet: measured once the
-  // run's connections are closed (its write-ahead log gone), at the next look.
+  // run's connections are closed, at the next look (its write-ahead log counted as free, since
+  // a reader may still hold it).
   std::atomic<bool> measure_after_full_{false};
   /// Why no run may start for lack of space; none when there is enough.
   std::optional<std::string> disk_shortfall();
