@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "daemon_test_support.hpp"
 #include "sim/sim_world.hpp"
