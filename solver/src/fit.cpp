@@ -114,6 +114,78 @@ Eigen::VectorXd parameter_inflation(const SensorQuality& q, const Model& model,
   return f;
 }
 
+// The parameters the design `A` (whitened, a column per model parameter) determines, in model
+// order: each column not `excluded` is taken when it stands out of the span of the ones taken
+// before it (Gram-Schmidt on normalised columns, orthogonalised twice); why each other one is
+// not taken goes to `out`.
+std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const Model& model,
+                                               const std::vector<bool>& excluded,
+                                               const FitOptions& options,
+                                               std::vector<Unidentifiable>& out) {
+  double largest_column = 0.0;
+  for (Eigen::Index c = 0; c < A.cols(); ++c)
+    largest_column = std::max(largest_column, A.col(c).norm());
+  std::vector<Eigen::Index> accepted;
+  Eigen::MatrixXd basis(A.rows(), 0);
+  for (std::size_t p = 0; p < model.size(); ++p) {
+    const auto col = static_cast<Eigen::Index>(p);
+    const std::string& name = model.parameters()[p].name;
+    if (excluded[p]) continue;
+    const core::TermSensor sensor = model.parameters()[p].sensor;
+    if ((options.rows == SensorRows::kGyro && sensor == core::TermSensor::kAccel) ||
+        (options.rows == SensorRows::kAccel && sensor == core::TermSensor::kGyro)) {
+      out.push_back({name, "its sensor's rows are not part of this fit", {}});
+      continue;
+    }
+    const double norm = A.col(col).norm();
+    // Zero up to rounding counts as zero: a force component at 90 degrees is 6e-16 g, not 0,
+    // and normalising it would let rounding noise take a real parameter's place.
+    if (!(norm > kZeroColumnShare * largest_column)) {
+      out.push_back({name, "the run does not excite it (its regressor is zero in every step)", {}});
+      continue;
+    }
+    Eigen::VectorXd v = A.col(col) / norm;
+    for (int pass = 0; pass < 2; ++pass) v -= basis * (basis.transpose() * v);
+    const double sine = v.norm();
+    if (sine < options.near_collinear_sine) {
+      // Which accepted parameters it leans on: the largest contributions of its projection.
+      Unidentifiable u;
+      u.name = name;
+      if (!accepted.empty()) {
+        Eigen::MatrixXd Aa(A.rows(), static_cast<Eigen::Index>(accepted.size()));
+        for (std::size_t k = 0; k < accepted.size(); ++k)
+          Aa.col(static_cast<Eigen::Index>(k)) = A.col(accepted[k]);
+        const Eigen::VectorXd coef = Aa.colPivHouseholderQr().solve(A.col(col));
+        Eigen::VectorXd contribution(coef.size());
+        for (Eigen::Index k = 0; k < coef.size(); ++k)
+          contribution[k] = std::abs(coef[k]) * Aa.col(k).norm();
+        const double biggest = contribution.maxCoeff();
+        for (Eigen::Index k = 0; k < coef.size(); ++k) {
+          if (contribution[k] >= 0.1 * biggest) {
+            u.related.push_back(
+                model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])]
+                    .name);
+          }
+        }
+      }
+      const std::string with = u.related.empty() ? std::string("the other parameters")
+                                                 : fmt::format("{}", fmt::join(u.related, ", "));
+      u.reason = sine < options.collinear_sine
+                     ? fmt::format("not determined by this run: its effect equals that of {}", with)
+                     : fmt::format(
+                           "nearly collinear with {} (sine {:.1e}): it would be fitted to "
+                           "noise",
+                           with, sine);
+      out.push_back(std::move(u));
+      continue;
+    }
+    basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
+    basis.col(basis.cols() - 1) = v / sine;
+    accepted.push_back(col);
+  }
+  return accepted;
+}
+
 }  // namespace
 
 std::vector<double> temperature_plateaus(const std::vector<StepSummary>& steps) {
@@ -204,74 +276,27 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
   fit.rows = options.rows;
 
   // Identifiability: rules first, then columns in model order against the span of the ones
-  // accepted before them (Gram-Schmidt on normalised columns, orthogonalised twice).
+  // accepted before them (Gram-Schmidt on normalised columns, orthogonalised twice). A column
+  // the run barely excites (found by the solve below) is taken out and the pass made again: a
+  // parameter held as collinear with it is then judged against what is really determined. On a
+  // static run gyro_scale.x acts through the Earth rate's up component, which follows gravity:
+  // judged first, it held gyro_g_sensitivity.xy at zero and was then dropped itself, leaving
+  // that g-sensitivity to no parameter at all.
   std::vector<bool> excluded(P, false);
-  temperature_rules(model, distinct_temperatures(steps), excluded, fit.unidentifiable);
-  std::vector<Eigen::Index> accepted;
-  Eigen::MatrixXd basis(rows, 0);
-  double largest_column = 0.0;
-  for (Eigen::Index c = 0; c < A.cols(); ++c)
-    largest_column = std::max(largest_column, A.col(c).norm());
-  for (std::size_t p = 0; p < P; ++p) {
-    const auto col = static_cast<Eigen::Index>(p);
-    const std::string& name = model.parameters()[p].name;
-    if (excluded[p]) continue;
-    const core::TermSensor sensor = model.parameters()[p].sensor;
-    if ((options.rows == SensorRows::kGyro && sensor == core::TermSensor::kAccel) ||
-        (options.rows == SensorRows::kAccel && sensor == core::TermSensor::kGyro)) {
-      fit.unidentifiable.push_back({name, "its sensor's rows are not part of this fit", {}});
-      continue;
-    }
-    const double norm = A.col(col).norm();
-    // Zero up to rounding counts as zero: a force component at 90 degrees is 6e-16 g, not 0,
-    // and normalising it would let rounding noise take a real parameter's place.
-    if (!(norm > kZeroColumnShare * largest_column)) {
-      fit.unidentifiable.push_back(
-          {name, "the run does not excite it (its regressor is zero in every step)", {}});
-      continue;
-    }
-    Eigen::VectorXd v = A.col(col) / norm;
-    for (int pass = 0; pass < 2; ++pass) v -= basis * (basis.transpose() * v);
-    const double sine = v.norm();
-    if (sine < options.near_collinear_sine) {
-      // Which accepted parameters it leans on: the largest contributions of its projection.
-      Unidentifiable u;
-      u.name = name;
-      if (!accepted.empty()) {
-        Eigen::MatrixXd Aa(rows, static_cast<Eigen::Index>(accepted.size()));
-        for (std::size_t k = 0; k < accepted.size(); ++k)
-          Aa.col(static_cast<Eigen::Index>(k)) = A.col(accepted[k]);
-        const Eigen::VectorXd coef = Aa.colPivHouseholderQr().solve(A.col(col));
-        Eigen::VectorXd contribution(coef.size());
-        for (Eigen::Index k = 0; k < coef.size(); ++k)
-          contribution[k] = std::abs(coef[k]) * Aa.col(k).norm();
-        const double biggest = contribution.maxCoeff();
-        for (Eigen::Index k = 0; k < coef.size(); ++k) {
-          if (contribution[k] >= 0.1 * biggest) {
-            u.related.push_back(
-                model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])]
-                    .name);
-          }
-        }
-      }
-      const std::string with = u.related.empty() ? std::string("the other parameters")
-                                                 : fmt::format("{}", fmt::join(u.related, ", "));
-      u.reason = sine < options.collinear_sine
-                     ? fmt::format("not determined by this run: its effect equals that of {}", with)
-                     : fmt::format(
-                           "nearly collinear with {} (sine {:.1e}): it would be fitted to "
-                           "noise",
-                           with, sine);
-      fit.unidentifiable.push_back(std::move(u));
-      continue;
-    }
-    basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
-    basis.col(basis.cols() - 1) = v / sine;
-    accepted.push_back(col);
-  }
+  std::vector<Unidentifiable> by_rule;
+  temperature_rules(model, distinct_temperatures(steps), excluded, by_rule);
+  std::vector<Unidentifiable> barely_excited;  // found by the solves, kept across the passes
+  const auto identifiable = [&] {
+    fit.unidentifiable = by_rule;
+    auto accepted = identifiable_columns(A, model, excluded, options, fit.unidentifiable);
+    fit.unidentifiable.insert(fit.unidentifiable.end(), barely_excited.begin(),
+                              barely_excited.end());
+    return accepted;
+  };
+  std::vector<Eigen::Index> accepted = identifiable();
 
   // Solve; drop parameters the run barely excites (sigma beyond any real sensor's value) and
-  // solve again, until every remaining one is determined.
+  // judge and solve again, until every remaining one is determined.
   Eigen::Index k = 0;
   Eigen::MatrixXd Ak;
   Eigen::VectorXd scale, theta;
@@ -319,18 +344,19 @@ FitResult fit_model(const std::vector<StepSummary>& steps, const Model& model,
       const double sigma = std::sqrt(cov(j, j) * inflation[j]);
       const double bound = implausible_sigma(info.unit);
       if (sigma > bound) {
-        fit.unidentifiable.push_back(
+        barely_excited.push_back(
             {info.name,
              fmt::format("the run barely excites it: its sigma would be {:.2g} {} (beyond the "
                          "{:g} {} of any real sensor)",
                          sigma, info.unit, bound, info.unit),
              {}});
+        excluded[p] = true;
       } else {
         kept.push_back(accepted[static_cast<std::size_t>(j)]);
       }
     }
     if (kept.size() == accepted.size()) break;
-    accepted = std::move(kept);
+    accepted = identifiable();
   }
   fit.chi2 = chi2;
   fit.dof = static_cast<int>(rows - k);
