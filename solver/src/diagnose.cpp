@@ -444,6 +444,22 @@ Diagnosis diagnose(const RunData& data, const Model& model, const FitOptions& op
       d.advice +=
           fmt::format(" Try a custom term built on it, e.g. --custom k1={}:{}", sensor, top.signal);
     }
+    // A short run (a six-position test's six step means) cannot measure the unit's wandering
+    // bias: its misfit is then judged against the white noise alone, and a flicker floor reads
+    // as a missing effect. Said, with the way to tell them apart.
+    std::vector<std::string> unmeasured;
+    for (int c : fit_channels(d.fit.rows)) {
+      if (noise.channels[static_cast<std::size_t>(c)].too_few_steps) {
+        unmeasured.emplace_back(channel_name(c));
+      }
+    }
+    if (!unmeasured.empty()) {
+      d.advice += fmt::format(
+          " This run could not measure the unit's wandering bias on {} (see the noise model): "
+          "the residual may be that wander, not an effect. A static run of the unit (hours at "
+          "rest) given as --noise-run tells the two apart.",
+          fmt::join(unmeasured, ", "));
+    }
   }
   return d;
 }

@@ -170,6 +170,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
       ch.note =
           "the run has fewer step means than the catalogue has parameters: the wander "
           "cannot be told from a missing effect; weights from the scatter inside the steps";
+      ch.too_few_steps = true;
       without_wander(c);
       continue;
     }
@@ -181,6 +182,7 @@ StepNoise estimate_step_noise(const std::vector<StepSummary>& steps, const Model
           "acting on {} (at least {} needed to see a wandering bias); weights "
           "from the scatter inside the steps",
           steps.size(), dof, p.parameters, channel_name(c), options.min_dof);
+      ch.too_few_steps = true;
       without_wander(c);
       continue;
     }

@@ -66,9 +66,22 @@ void print_fit(const solver::FitResult& fit) {
         fit.noise_floor[5]);
   }
   print_noise_model(fit);
-  const auto verdict = [](const char* sensor, double chi2_dof, int dof) {
+  const auto verdict = [&](const char* sensor, double chi2_dof, int dof) {
     if (!std::isfinite(chi2_dof)) return;
-    if (solver::above_noise(chi2_dof, dof)) {
+    // Weighed by the white noise alone (the run has too few steps to measure a wander on the
+    // sensor), an excess may be the wander: it is not called a missing effect.
+    const int first = sensor[0] == 'g' ? solver::kGx : solver::kAx;
+    bool too_few_steps = false;
+    for (int c = first; c < first + 3; ++c)
+      too_few_steps =
+          too_few_steps || fit.noise.channels[static_cast<std::size_t>(c)].too_few_steps;
+    if (solver::above_noise(chi2_dof, dof) && too_few_steps) {
+      fmt::print(
+          "  {}: the residuals are {:.2g} times the white noise, more than chance gives over {} "
+          "degrees of freedom: a missing effect or a wandering bias this run cannot measure "
+          "(`calstand diagnose`, with a static run as --noise-run, tells them apart)\n",
+          sensor, std::sqrt(chi2_dof), dof);
+    } else if (solver::above_noise(chi2_dof, dof)) {
       fmt::print(
           "  {}: the residuals are {:.2g} times the noise, more than chance gives over {} "
           "degrees of freedom: the model misses an effect (try `calstand diagnose`)\n",

@@ -53,6 +53,9 @@ struct ChannelStepNoise {
   bool determined = false;
   std::string source;  ///< e.g. "restricted likelihood of 216 step means (60 parameters)"
   std::string note;    ///< why the correlated part was not determined, or a caution
+  /// Not determined because the run has too few step means to see a wandering bias (a
+  /// six-position test): a misfit against the white noise alone may then be that wander.
+  bool too_few_steps = false;
   double log_likelihood_gain = 0.0;  ///< REML gain of the chosen wander over white noise alone
 };
 

@@ -184,5 +184,32 @@ TEST(HiddenEffects, AnEffectOutsideTheCatalogueIsNotPretendedAway) {
   EXPECT_LT(with.chi2_dof, 1.3);
 }
 
+// A six-position test of an ADIS16488-class unit, fitted with every term it can show at one
+// temperature: six step means cannot measure the unit's flicker, so the misfit against the white
+// noise alone is its wander as much as an effect. The diagnosis says that and the way to tell
+// them apart, instead of only "no catalogue term explains the residual".
+TEST(HiddenEffects, ASixPositionRunSaysItCannotMeasureTheWander) {
+  const sim::ImuTruth truth = testing::datasheet_unit("adis16488", 5);
+  const RunData data = testing::simulate_run(truth, testing::six_positions(25.0, 60.0), 5);
+  const Diagnosis d = diagnose(data, Model::parse(std::string(kBaseModel) + ",gyro_g_sensitivity"));
+  for (const ChannelStepNoise& ch : d.fit.noise.channels) {
+    EXPECT_FALSE(ch.determined) << ch.note;
+    EXPECT_TRUE(ch.too_few_steps) << ch.note;
+  }
+  ASSERT_FALSE(d.explained) << d.advice;  // this draw's flicker puts the gyros at chi2/dof > 2
+  EXPECT_NE(d.advice.find("could not measure the unit's wandering bias"), std::string::npos)
+      << d.advice;
+  EXPECT_NE(d.advice.find("--noise-run"), std::string::npos) << d.advice;
+}
+
+// A run long enough to measure its wander never gets that caution.
+TEST(HiddenEffects, ARunThatMeasuresItsWanderGetsNoCaution) {
+  const Diagnosis d = diagnose(testing::simulate_run(base_unit(), hidden_effects_campaign(), 9),
+                               Model::parse(kBaseModel));
+  for (const ChannelStepNoise& ch : d.fit.noise.channels) EXPECT_FALSE(ch.too_few_steps) << ch.note;
+  EXPECT_EQ(d.advice.find("could not measure the unit's wandering bias"), std::string::npos)
+      << d.advice;
+}
+
 }  // namespace
 }  // namespace calstand::solver
