@@ -17,6 +17,9 @@ namespace {
 
 // A whitened regressor column smaller than this share of the largest is zero to rounding.
 constexpr double kZeroColumnShare = 1e-12;
+// How far above its own noise a parameter at an implausible size must stand for its column to be
+// judged in model order (identifiable_columns).
+constexpr double kPlausibleSigmas = 3.0;
 
 bool uses_channel(SensorRows rows, int channel) {
   if (rows == SensorRows::kGyro) return channel < kAx;
@@ -117,7 +120,8 @@ Eigen::VectorXd parameter_inflation(const SensorQuality& q, const Model& model,
 // The parameters the design `A` (whitened, a column per model parameter) determines, in model
 // order: each column not `excluded` is taken when it stands out of the span of the ones taken
 // before it (Gram-Schmidt on normalised columns, orthogonalised twice); why each other one is
-// not taken goes to `out`.
+// not taken goes to `out`. Columns the run barely reaches are judged last (below), so that
+// where two share a span it goes to the parameter the run can measure.
 std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const Model& model,
                                                const std::vector<bool>& excluded,
                                                const FitOptions& options,
@@ -125,9 +129,22 @@ std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const M
   double largest_column = 0.0;
   for (Eigen::Index c = 0; c < A.cols(); ++c)
     largest_column = std::max(largest_column, A.col(c).norm());
+  // A parameter that could not stand kPlausibleSigmas above its own noise even at a size no
+  // real sensor reaches (its column's norm times that size, in whitened units) is judged after
+  // the others. At rest a gyro's misalignment acts only through the Earth rate (15 deg/h times
+  // a milliradian) while a g-sensitivity of 0.01 (deg/s)/g moves the gyro by 36 deg/h, and on a
+  // six-position run the two columns share a span: in model order the misalignment took it.
+  std::vector<std::size_t> order;
+  std::vector<std::size_t> weak;
+  for (std::size_t p = 0; p < model.size(); ++p) {
+    const double reach =
+        A.col(static_cast<Eigen::Index>(p)).norm() * implausible_sigma(model.parameters()[p].unit);
+    (reach < kPlausibleSigmas ? weak : order).push_back(p);
+  }
+  order.insert(order.end(), weak.begin(), weak.end());
   std::vector<Eigen::Index> accepted;
   Eigen::MatrixXd basis(A.rows(), 0);
-  for (std::size_t p = 0; p < model.size(); ++p) {
+  for (const std::size_t p : order) {
     const auto col = static_cast<Eigen::Index>(p);
     const std::string& name = model.parameters()[p].name;
     if (excluded[p]) continue;
@@ -183,6 +200,7 @@ std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const M
     basis.col(basis.cols() - 1) = v / sine;
     accepted.push_back(col);
   }
+  std::sort(accepted.begin(), accepted.end());  // reported in model order
   return accepted;
 }
 
