@@ -20,6 +20,10 @@ constexpr double kZeroColumnShare = 1e-12;
 // How far above its own noise a parameter at an implausible size must stand for its column to be
 // judged in model order (identifiable_columns).
 constexpr double kPlausibleSigmas = 3.0;
+// How many times a parameter's reach must exceed those it is collinear with to take their span
+// (identifiable_columns): far apart, so that two comparable terms (an accelerometer's scale
+// asymmetry and quadratic on +-1 g) keep model order.
+constexpr double kReachRatio = 100.0;
 
 bool uses_channel(SensorRows rows, int channel) {
   if (rows == SensorRows::kGyro) return channel < kAx;
@@ -117,31 +121,17 @@ Eigen::VectorXd parameter_inflation(const SensorQuality& q, const Model& model,
   return f;
 }
 
-// The parameters the design `A` (whitened, a column per model parameter) determines, in model
-// order: each column not `excluded` is taken when it stands out of the span of the ones taken
-// before it (Gram-Schmidt on normalised columns, orthogonalised twice); why each other one is
-// not taken goes to `out`. Columns the run barely reaches are judged last (below), so that
-// where two share a span it goes to the parameter the run can measure.
-std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const Model& model,
-                                               const std::vector<bool>& excluded,
-                                               const FitOptions& options,
-                                               std::vector<Unidentifiable>& out) {
+// One judgement of the columns in `order` (Gram-Schmidt on normalised columns, orthogonalised
+// twice): each column not `excluded` is taken when it stands out of the span of the ones taken
+// before it; why each other one is not taken goes to `out`, and for a (nearly) collinear one
+// the taken columns it leans on to `leans_on`.
+std::vector<Eigen::Index> judge_columns(
+    const Eigen::MatrixXd& A, const Model& model, const std::vector<std::size_t>& order,
+    const std::vector<bool>& excluded, const FitOptions& options, std::vector<Unidentifiable>& out,
+    std::vector<std::pair<std::size_t, std::vector<std::size_t>>>& leans_on) {
   double largest_column = 0.0;
   for (Eigen::Index c = 0; c < A.cols(); ++c)
     largest_column = std::max(largest_column, A.col(c).norm());
-  // A parameter that could not stand kPlausibleSigmas above its own noise even at a size no
-  // real sensor reaches (its column's norm times that size, in whitened units) is judged after
-  // the others. At rest a gyro's misalignment acts only through the Earth rate (15 deg/h times
-  // a milliradian) while a g-sensitivity of 0.01 (deg/s)/g moves the gyro by 36 deg/h, and on a
-  // six-position run the two columns share a span: in model order the misalignment took it.
-  std::vector<std::size_t> order;
-  std::vector<std::size_t> weak;
-  for (std::size_t p = 0; p < model.size(); ++p) {
-    const double reach =
-        A.col(static_cast<Eigen::Index>(p)).norm() * implausible_sigma(model.parameters()[p].unit);
-    (reach < kPlausibleSigmas ? weak : order).push_back(p);
-  }
-  order.insert(order.end(), weak.begin(), weak.end());
   std::vector<Eigen::Index> accepted;
   Eigen::MatrixXd basis(A.rows(), 0);
   for (const std::size_t p : order) {
@@ -168,6 +158,7 @@ std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const M
       // Which accepted parameters it leans on: the largest contributions of its projection.
       Unidentifiable u;
       u.name = name;
+      std::vector<std::size_t> related;
       if (!accepted.empty()) {
         Eigen::MatrixXd Aa(A.rows(), static_cast<Eigen::Index>(accepted.size()));
         for (std::size_t k = 0; k < accepted.size(); ++k)
@@ -179,21 +170,20 @@ std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const M
         const double biggest = contribution.maxCoeff();
         for (Eigen::Index k = 0; k < coef.size(); ++k) {
           if (contribution[k] >= 0.1 * biggest) {
-            u.related.push_back(
-                model.parameters()[static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)])]
-                    .name);
+            related.push_back(static_cast<std::size_t>(accepted[static_cast<std::size_t>(k)]));
+            u.related.push_back(model.parameters()[related.back()].name);
           }
         }
       }
       const std::string with = u.related.empty() ? std::string("the other parameters")
                                                  : fmt::format("{}", fmt::join(u.related, ", "));
-      u.reason = sine < options.collinear_sine
-                     ? fmt::format("not determined by this run: its effect equals that of {}", with)
-                     : fmt::format(
-                           "nearly collinear with {} (sine {:.1e}): it would be fitted to "
-                           "noise",
-                           with, sine);
+      u.reason =
+          sine < options.collinear_sine
+              ? fmt::format("not determined by this run: its effect equals that of {}", with)
+              : fmt::format("nearly collinear with {} (sine {:.1e}): it would be fitted to noise",
+                            with, sine);
       out.push_back(std::move(u));
+      leans_on.emplace_back(p, std::move(related));
       continue;
     }
     basis.conservativeResize(Eigen::NoChange, basis.cols() + 1);
@@ -202,6 +192,53 @@ std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const M
   }
   std::sort(accepted.begin(), accepted.end());  // reported in model order
   return accepted;
+}
+
+// The parameters the design `A` (whitened, a column per model parameter) determines: judged in
+// model order, except that where columns share a span it goes to the parameter the run can
+// measure. A parameter's reach is its column's norm times a size no real sensor's parameter
+// reaches (implausible_sigma): how many of its own sigmas it could show at most.
+// - A parameter of reach under kPlausibleSigmas is judged after the others.
+// - A parameter held as collinear with taken ones whose reach is kReachRatio times theirs has
+//   them judged after it instead (and the columns judged again).
+// At rest a gyro's scale factor and misalignment act only through the Earth rate (15 deg/h
+// times a milliradian), whose up component follows gravity, while a g-sensitivity of 0.01
+// (deg/s)/g moves the gyro by 36 deg/h: in model order the scale and misalignment took the span
+// of four g-sensitivities on a six-position run.
+std::vector<Eigen::Index> identifiable_columns(const Eigen::MatrixXd& A, const Model& model,
+                                               const std::vector<bool>& excluded,
+                                               const FitOptions& options,
+                                               std::vector<Unidentifiable>& out) {
+  std::vector<double> reach(model.size());
+  std::vector<std::size_t> order, weak;
+  for (std::size_t p = 0; p < model.size(); ++p) {
+    reach[p] =
+        A.col(static_cast<Eigen::Index>(p)).norm() * implausible_sigma(model.parameters()[p].unit);
+    (reach[p] < kPlausibleSigmas ? weak : order).push_back(p);
+  }
+  order.insert(order.end(), weak.begin(), weak.end());
+  std::vector<bool> deferred(model.size(), false);
+  const std::size_t first_out = out.size();
+  for (;;) {
+    out.resize(first_out);
+    std::vector<std::pair<std::size_t, std::vector<std::size_t>>> leans_on;
+    std::vector<Eigen::Index> accepted =
+        judge_columns(A, model, order, excluded, options, out, leans_on);
+    std::vector<std::size_t> defer;
+    for (const auto& [p, related] : leans_on) {
+      for (const std::size_t r : related) {
+        if (!deferred[r] && reach[r] * kReachRatio < reach[p]) {
+          deferred[r] = true;
+          defer.push_back(r);
+        }
+      }
+    }
+    if (defer.empty()) return accepted;
+    // Each deferred parameter goes to the end, in the order it had.
+    std::stable_partition(order.begin(), order.end(), [&](std::size_t p) {
+      return std::find(defer.begin(), defer.end(), p) == defer.end();
+    });
+  }
 }
 
 }  // namespace
