@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <optional>
 
 #ifdef __linux__
 #include <sys/mman.h>
@@ -19,6 +20,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "noise/edf.hpp"
+#include "noise/noise_identification.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -423,13 +425,29 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
       var[k] = allan_variance_from_phase(x, ms[k], options.kind);
     terms[k] = term_count(options.kind, x.size(), ms[k]);
   }
-  return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options);
+  // The noise type at each m by the lag-1 autocorrelation of the decimated phase (Riley and
+  // Greenhall 2004, as Stable32 and the total deviations do); where too few decimated points
+  // remain, the last one identified at a shorter tau, white FM if none was.
+  std::vector<int> identified;
+  if (options.intervals && !options.alpha) {
+    const bool hadamard =
+        options.kind == AllanKind::kHadamard || options.kind == AllanKind::kHadamardNonOverlapping;
+    std::optional<int> last;
+    for (std::size_t m : ms) {
+      const auto id = identify_noise_lag1(x, m, hadamard ? 3 : 2, min_alpha(options.kind));
+      if (id) last = id->alpha;
+      identified.push_back(last.value_or(0));
+    }
+  }
+  return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options,
+                                     identified);
 }
 
 AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
                                         std::span<const double> var,
                                         std::span<const std::size_t> terms, std::size_t samples,
-                                        double sample_rate_hz, const AllanOptions& options) {
+                                        double sample_rate_hz, const AllanOptions& options,
+                                        std::span<const int> identified_alpha) {
   AllanResult result;
   result.kind = options.kind;
   result.sample_rate_hz = sample_rate_hz;
@@ -457,6 +475,10 @@ AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
       p.alpha = *options.alpha;
     } else {
       slopes[k] = local_slope(msv, varv, k);
+      if (!identified_alpha.empty()) {
+        p.alpha = identified_alpha[k];
+        continue;
+      }
       p.alpha = alpha_from_slope(slopes[k], options.kind);
       // White PM gives by far the most degrees of freedom, so a noisy slope mistaken for it
       // would give absurdly narrow intervals. In inertial data it can only dominate at the

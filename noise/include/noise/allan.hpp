@@ -127,10 +127,13 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
 /// `samples` rate samples. The noise type, EDF and intervals are chosen exactly as allan()
 /// chooses them (options.taus is not used). For an estimator that computes the variances
 /// another way (solver::DeviationStream, a streamed record).
+/// `identified_alpha` (one per m, or empty): the noise type identified at each m by the lag-1
+/// autocorrelation, used instead of the local slope when options.alpha is not given.
 AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
                                         std::span<const double> var,
                                         std::span<const std::size_t> terms, std::size_t samples,
-                                        double sample_rate_hz, const AllanOptions& options);
+                                        double sample_rate_hz, const AllanOptions& options,
+                                        std::span<const int> identified_alpha = {});
 
 /// The variance of `kind` at averaging factor m of the rate samples whose phase (cumulative sum
 /// in sample units, phase[0] = 0, phase.size() = samples + 1) is given; the building block of
