@@ -12,6 +12,7 @@
 #include <limits>
 #include <new>
 #include <optional>
+#include <stdexcept>
 
 #ifdef __linux__
 #include <sys/mman.h>
@@ -123,15 +124,6 @@ std::size_t term_count(AllanKind kind, std::size_t phase_points, std::size_t m) 
       return (phase_points - 1) / m - 2;
   }
   return 0;
-}
-
-// Noise exponent nearest to the local slope mu of log variance against log tau (mu = -alpha-1,
-// and mu = -3 on the modified curve for white PM), clamped to what the estimator converges for.
-int alpha_from_slope(double mu, AllanKind kind) {
-  int alpha = static_cast<int>(std::lround(-mu - 1.0));
-  // Allan and Hadamard fall as tau^-2 for both white and flicker PM; take white PM.
-  if (kind != AllanKind::kModified && alpha >= 1) alpha = 2;
-  return std::clamp(alpha, min_alpha(kind), kMaxAlpha);
 }
 
 // The degrees of freedom of phase noise, bounded by the data length.
@@ -426,28 +418,41 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
     terms[k] = term_count(options.kind, x.size(), ms[k]);
   }
   // The noise type at each m by the lag-1 autocorrelation of the decimated phase (Riley and
-  // Greenhall 2004, as Stable32 and the total deviations do); where too few decimated points
-  // remain, the last one identified at a shorter tau, white FM if none was.
-  std::vector<int> identified;
+  // Greenhall 2004, as Stable32 and the total deviations do), and at the longest octave factor
+  // it can identify, carried to the taus beyond (see allan_result_from_variances).
+  std::vector<std::optional<int>> identified;
+  std::optional<int> carried;
   if (options.intervals && !options.alpha) {
-    const bool hadamard =
-        options.kind == AllanKind::kHadamard || options.kind == AllanKind::kHadamardNonOverlapping;
-    std::optional<int> last;
-    for (std::size_t m : ms) {
-      const auto id = identify_noise_lag1(x, m, hadamard ? 3 : 2, min_alpha(options.kind));
-      if (id) last = id->alpha;
-      identified.push_back(last.value_or(0));
+    const int dmax = difference_order(options.kind);
+    const auto identify_at = [&](std::size_t m) -> std::optional<int> {
+      if (rate.size() / m + 1 < kLag1MinPoints) return std::nullopt;
+      Lag1Accumulator acc(dmax);
+      acc.push(x.data(), (x.size() - 1) / m + 1, m, 0.0);
+      const auto id = acc.identify(dmax, min_alpha(options.kind));
+      return id ? std::optional<int>(id->alpha) : std::nullopt;
+    };
+    for (const std::size_t m : ms) identified.push_back(identify_at(m));
+    const std::size_t longest = lag1_longest_octave_factor(rate.size());
+    if (longest > 0) {
+      const auto it = std::find(ms.begin(), ms.end(), longest);
+      carried = it != ms.end() ? identified[static_cast<std::size_t>(it - ms.begin())]
+                               : identify_at(longest);
     }
   }
   return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options,
-                                     identified);
+                                     identified, carried);
 }
 
 AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
                                         std::span<const double> var,
                                         std::span<const std::size_t> terms, std::size_t samples,
                                         double sample_rate_hz, const AllanOptions& options,
-                                        std::span<const int> identified_alpha) {
+                                        std::span<const std::optional<int>> identified,
+                                        std::optional<int> carried) {
+  if (options.intervals && !options.alpha && identified.size() != ms.size()) {
+    throw std::logic_error(fmt::format("{} noise types identified for {} averaging factors",
+                                       identified.size(), ms.size()));
+  }
   AllanResult result;
   result.kind = options.kind;
   result.sample_rate_hz = sample_rate_hz;
@@ -475,15 +480,13 @@ AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
       p.alpha = *options.alpha;
     } else {
       slopes[k] = local_slope(msv, varv, k);
-      if (!identified_alpha.empty()) {
-        p.alpha = identified_alpha[k];
-        continue;
+      if (identified[k]) {
+        p.alpha = *identified[k];
+      } else {
+        // Too few decimated points (or constant data): the type identified at the longest
+        // octave tau the method reaches, white FM if it found none.
+        p.alpha = carried.value_or(0);
       }
-      p.alpha = alpha_from_slope(slopes[k], options.kind);
-      // White PM gives by far the most degrees of freedom, so a noisy slope mistaken for it
-      // would give absurdly narrow intervals. In inertial data it can only dominate at the
-      // short end (quantization), so it is accepted only in an unbroken run from the first tau.
-      if (p.alpha == 2 && k > 0 && result.points[k - 1].alpha != 2) p.alpha = 0;
     }
   }
   for (std::size_t k = 0; k < ms.size() && options.intervals; ++k) {

@@ -303,6 +303,43 @@ TEST(Allan, EdfBoundedByTheDataLengthWhereNoiseTurnsFromPhaseToFrequency) {
   EXPECT_GT(r.points[3].edf, 0.4 * static_cast<double>(n)) << r.points[3].tau_s;
 }
 
+// The noise type of a tau is the record's, not the tau list's: lag-1 names it at the tau itself,
+// and beyond the last tau it can name (30 decimated points) it is carried from the longest
+// octave tau it can (2048 s of 65536 s), whatever the list holds. Carried from the list's last
+// named tau instead, 10000 s would be flicker PM in the decade list (1000 s) and white FM in the
+// dense one (1995 s) on this record.
+TEST(Allan, NoiseTypeOfATauDoesNotDependOnTheTauList) {
+  const std::vector<double> y = phase_to_frequency_transition(4, 65536, 1024.0);
+  const auto run = [&](const char* taus) {
+    AllanOptions o;
+    o.taus = TauSet::parse(taus);
+    return allan(y, 1.0, o);
+  };
+  const AllanResult dense = run("dense");
+  std::size_t compared = 0;
+  for (const char* taus : {"decade", "octave", "10000", "3,1000,1995,2048,30000"}) {
+    const AllanResult other = run(taus);
+    for (const AllanPoint& p : other.points) {
+      for (const AllanPoint& q : dense.points) {
+        if (q.m != p.m) continue;
+        EXPECT_EQ(p.alpha, q.alpha) << taus << ": tau " << p.tau_s;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GE(compared, 12u);
+  const auto alpha_at = [&](std::size_t m) {
+    for (const AllanPoint& p : dense.points) {
+      if (p.m == m) return p.alpha;
+    }
+    return 99;
+  };
+  // The record's types around the last named tau (the premise of the comment above).
+  EXPECT_EQ(alpha_at(1000), 1);
+  EXPECT_EQ(alpha_at(1995), 0);
+  EXPECT_EQ(alpha_at(10000), run("2048").points[0].alpha);
+}
+
 TEST(Allan, IntervalsHoldTheTruthAcrossAPhaseToFrequencyTransition) {
   // Coverage at every tau over 100 records of 16384 s with the change at 512 s, within 3.5
   // binomial sigmas of 0.683 from below (the bound may make intervals conservative, never
@@ -331,7 +368,7 @@ TEST(Allan, IntervalsHoldTheTruthAcrossAPhaseToFrequencyTransition) {
   }
 }
 
-TEST(Allan, EstimatesNoiseTypeFromSlope) {
+TEST(Allan, IdentifiesTheNoiseType) {
   sim::RandomWalk walk(1.0, 1.0, 3);
   std::vector<double> y(20000);
   for (double& v : y) v = walk.next();
