@@ -112,11 +112,14 @@ struct AllanResult {
 /// (lag1_longest_octave_factor()) is carried, whatever the tau set, white FM if it named none
 /// (Stable32 switches to the B1 ratio there; not implemented).
 ///
-/// A phase-noise EDF, which grows with the sample count, is bounded by the data length: by the
-/// white-FM EDF at that tau (about 3 N / (2 m), the most any frequency noise gives) divided by
-/// the squared share of frequency noise in the variance, read from the local slope, and taken
-/// as 1 where frequency noise is identified within a factor of 2 in tau (a transition;
-/// reasoning in allan.cpp). Give alpha to override (no bound is applied then).
+/// A phase-noise EDF (white or flicker PM), which grows with the sample count, is bounded by
+/// the data length: by the white-FM EDF at that tau (about 3 N / (2 m), the most any frequency
+/// noise gives) divided by the squared share of frequency noise in the variance (reasoning in
+/// allan.cpp). Where the type was identified the share is read from the local slope of the
+/// curve (fitted over the taus within a factor of 2), which leaves a pure phase-noise tau its
+/// EDF and bounds one the method names phase noise while frequency noise holds a fair share;
+/// where phase noise was carried the share is taken as 1 (white FM's EDF). Give alpha to
+/// override (no bound is applied then).
 ///
 /// Throws core::InputError for empty or too short data (fewer than 2 samples, 3 for the
 /// others), a non-finite sample (its index is named), a non-positive or non-finite rate,
