@@ -57,7 +57,9 @@ StabilityAnalysis stability_of(const solver::RunNoise& noise, double min_tau_sam
     // The minimum among the points with at least kMinFloorEdf degrees of freedom (their own,
     // from the curve's local noise type), or of all when none has: the last few points scatter
     // by a factor of two and more, and their lowest would be a minimum of the noise, biased
-    // low, whose interval need not hold the floor.
+    // low, whose interval need not hold the floor (a 700 s record's last point, 1.1 EDF, read
+    // a gyro's curve 6 times below the line of the points before it). Which point that is may
+    // change with one point's EDF crossing 10; whether a floor was seen does not (below).
     const bool any_firm =
         std::any_of(points.begin(), points.end(),
                     [](const solver::AllanPoint& p) { return p.edf >= kMinFloorEdf; });
@@ -71,11 +73,22 @@ StabilityAnalysis stability_of(const solver::RunNoise& noise, double min_tau_sam
       s.bias_instability_lo = k * floor->lo / kFlickerFloor;
       s.bias_instability_hi = k * floor->hi / kFlickerFloor;
       s.min_tau_s = floor->tau_s;
-      // A floor is where the curve turns up again: a later point whose interval lies wholly
-      // above the minimum's. A minimum at (or near) the last averaging times that noise alone
-      // put there is not one.
-      s.floor_resolved = std::any_of(floor + 1, points.end(),
+      // A floor is where the curve turns up again and stays up: a later point whose interval
+      // lies wholly above the minimum's, and after it no point reading lower than the minimum,
+      // whatever its degrees of freedom. A minimum at (or near) the last averaging times that
+      // noise alone put there is not one, nor is the dip before a Gauss-Markov bias's Allan
+      // bump when the curve comes down below it again after the bump: the figure is then only
+      // a bound. So the verdict does not turn on whether a late point has 7.9 or 10.2 EDF (the
+      // noise type lag-1 carries there, or the one its slope shows): below 10 it is left out of
+      // the minimum, and the minimum before the bump that it undercuts is no floor; above, it is
+      // the minimum, and nothing after it lies wholly above. Points between the minimum and the
+      // rise (a flat flicker floor's scatter) do not count against it.
+      const auto rise = std::find_if(floor + 1, points.end(),
                                      [&](const solver::AllanPoint& p) { return p.lo > floor->hi; });
+      s.floor_resolved = rise != points.end() &&
+                         std::none_of(rise + 1, points.end(), [&](const solver::AllanPoint& p) {
+                           return p.deviation < floor->deviation;
+                         });
     }
     // As the noise-term fit: without the shortest averaging times, where the IMU's
     // anti-aliasing filter lowers the curve and a vanishing correlation time would fit it.

@@ -11,6 +11,8 @@
 #include <cstdlib>
 #include <limits>
 #include <new>
+#include <optional>
+#include <stdexcept>
 
 #ifdef __linux__
 #include <sys/mman.h>
@@ -19,6 +21,7 @@
 #include "core/error.hpp"
 #include "core/text.hpp"
 #include "noise/edf.hpp"
+#include "noise/noise_identification.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -123,15 +126,6 @@ std::size_t term_count(AllanKind kind, std::size_t phase_points, std::size_t m) 
   return 0;
 }
 
-// Noise exponent nearest to the local slope mu of log variance against log tau (mu = -alpha-1,
-// and mu = -3 on the modified curve for white PM), clamped to what the estimator converges for.
-int alpha_from_slope(double mu, AllanKind kind) {
-  int alpha = static_cast<int>(std::lround(-mu - 1.0));
-  // Allan and Hadamard fall as tau^-2 for both white and flicker PM; take white PM.
-  if (kind != AllanKind::kModified && alpha >= 1) alpha = 2;
-  return std::clamp(alpha, min_alpha(kind), kMaxAlpha);
-}
-
 // The degrees of freedom of phase noise, bounded by the data length.
 //
 // Phase noise (white or flicker PM, alpha 2 or 1) is the one case in which the EDF of the
@@ -149,23 +143,31 @@ int alpha_from_slope(double mu, AllanKind kind) {
 // (the other covariances vanish), so Var(s^2) >= Var(s_b^2) = 2 (q sigma^2)^2 / edf_b, and with
 // edf = 2 sigma^4 / Var(s^2): edf <= edf_b / q^2 <= edf_whiteFM(m, N) / q^2. That is the
 // bound applied to a phase-noise point: the data length (through white FM's EDF) divided by
-// the squared frequency-noise share. The share comes from the local slope mu, which moves
-// from the phase-noise slope towards white FM's (-1) as frequency noise mixes in:
+// the squared frequency-noise share.
+//
+// Where the lag-1 method identified phase noise, the share comes from the local slope mu,
+// which moves from the phase-noise slope towards white FM's (-1) as frequency noise mixes in:
 // q = (mu - mu_phase) / (-1 - mu_phase), clamped to [0, 1]. Pure phase noise (q near 0) keeps
-// its EDF; a slope window that reaches a tau identified as frequency noise straddles the
-// change, where the slope averages across it and cannot give the share, so q = 1 there (the
-// white-FM EDF itself, as Stable32 gives at such taus). Without the bound a record of
-// 241,000 s gave EDF 117,800 at tau 8192 s (interval +-0.2 %); white FM's is about 42 (+-11 %).
+// its EDF. The method names the dominant power law of the decimated phase, so it still calls
+// a tau white or flicker PM while frequency noise holds a fair share of the variance (on white
+// PM plus white FM, flicker PM up to a share of about a half): without the bound a record of
+// 65,536 s with the change at 8192 s gets white PM's EDF, 32,000, at 2048 s, where the share
+// (20 %) allows 1144 at most (tests/unit/noise/allan_test.cpp). Unlike the slope-identified types
+// this bound once served, an identified type is not bounded further where a neighbouring tau is
+// frequency noise: on allantools' Cs 5071A record that rule cut Stable32's flicker-PM EDF at 100 s
+// (+-0.37 %) to white FM's (+-0.77 %) because 200 s is white FM, though the slope there gives a
+// share of 15 to 17 %.
+//
+// Where the method could not identify (fewer than 30 decimated points, the last octave or so)
+// and phase noise is carried from a shorter tau, nothing tells the share: the slope at the
+// end of a curve is that of a handful of spans, and carried types are all alike, so the
+// neighbours tell nothing either. q = 1 there: white FM's EDF (about 1.5 times the fewer than
+// 30 spans of tau) caps the phase-noise one. Without it the same record gave EDF 22,700 at
+// 16,384 s, where frequency noise is two thirds of the variance and 9 is the most it allows.
 double frequency_noise_share(const std::vector<AllanPoint>& points,
-                             const std::vector<double>& slopes, std::size_t k, AllanKind kind) {
-  const double centre = std::log(static_cast<double>(points[k].m));
-  for (std::size_t j = 0; j < points.size(); ++j) {
-    const double d = std::abs(std::log(static_cast<double>(points[j].m)) - centre);
-    // Within the slope window (a factor of 2, as local_slope()), or an immediate neighbour
-    // of a sparse (decade) tau set.
-    const bool near = d <= std::log(2.0) + 1e-9 || j + 1 == k || j == k + 1;
-    if (j != k && near && points[j].alpha <= 0) return 1.0;
-  }
+                             const std::vector<double>& slopes, std::size_t k, AllanKind kind,
+                             bool carried) {
+  if (carried) return 1.0;
   // The slope of the phase noise named: -2 on the Allan and Hadamard curves (white and
   // flicker PM alike); on the modified curve -3 for white PM, -2 for flicker PM.
   const double mu_phase = kind == AllanKind::kModified && points[k].alpha == 2 ? -3.0 : -2.0;
@@ -423,13 +425,42 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
       var[k] = allan_variance_from_phase(x, ms[k], options.kind);
     terms[k] = term_count(options.kind, x.size(), ms[k]);
   }
-  return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options);
+  // The noise type at each m by the lag-1 autocorrelation of the decimated phase (Riley and
+  // Greenhall 2004, as Stable32 and the total deviations do), and at the longest octave factor
+  // it can identify, carried to the taus beyond (see allan_result_from_variances).
+  std::vector<std::optional<int>> identified;
+  std::optional<int> carried;
+  if (options.intervals && !options.alpha) {
+    const int dmax = difference_order(options.kind);
+    const auto identify_at = [&](std::size_t m) -> std::optional<int> {
+      if (rate.size() / m + 1 < kLag1MinPoints) return std::nullopt;
+      Lag1Accumulator acc(dmax);
+      acc.push(x.data(), (x.size() - 1) / m + 1, m, 0.0);
+      const auto id = acc.identify(dmax, min_alpha(options.kind));
+      return id ? std::optional<int>(id->alpha) : std::nullopt;
+    };
+    for (const std::size_t m : ms) identified.push_back(identify_at(m));
+    const std::size_t longest = lag1_longest_octave_factor(rate.size());
+    if (longest > 0) {
+      const auto it = std::find(ms.begin(), ms.end(), longest);
+      carried = it != ms.end() ? identified[static_cast<std::size_t>(it - ms.begin())]
+                               : identify_at(longest);
+    }
+  }
+  return allan_result_from_variances(ms, var, terms, rate.size(), sample_rate_hz, options,
+                                     identified, carried);
 }
 
 AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
                                         std::span<const double> var,
                                         std::span<const std::size_t> terms, std::size_t samples,
-                                        double sample_rate_hz, const AllanOptions& options) {
+                                        double sample_rate_hz, const AllanOptions& options,
+                                        std::span<const std::optional<int>> identified,
+                                        std::optional<int> carried) {
+  if (options.intervals && !options.alpha && identified.size() != ms.size()) {
+    throw std::logic_error(fmt::format("{} noise types identified for {} averaging factors",
+                                       identified.size(), ms.size()));
+  }
   AllanResult result;
   result.kind = options.kind;
   result.sample_rate_hz = sample_rate_hz;
@@ -447,6 +478,7 @@ AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> slopes(ms.size(), nan);
+  std::vector<char> is_carried(ms.size(), 0);
   for (std::size_t k = 0; k < ms.size(); ++k) {
     AllanPoint& p = result.points[k];
     if (!options.intervals) {
@@ -457,11 +489,14 @@ AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
       p.alpha = *options.alpha;
     } else {
       slopes[k] = local_slope(msv, varv, k);
-      p.alpha = alpha_from_slope(slopes[k], options.kind);
-      // White PM gives by far the most degrees of freedom, so a noisy slope mistaken for it
-      // would give absurdly narrow intervals. In inertial data it can only dominate at the
-      // short end (quantization), so it is accepted only in an unbroken run from the first tau.
-      if (p.alpha == 2 && k > 0 && result.points[k - 1].alpha != 2) p.alpha = 0;
+      if (identified[k]) {
+        p.alpha = *identified[k];
+      } else {
+        // Too few decimated points (or constant data): the type identified at the longest
+        // octave tau the method reaches, white FM if it found none.
+        p.alpha = carried.value_or(0);
+        is_carried[k] = 1;
+      }
     }
   }
   for (std::size_t k = 0; k < ms.size() && options.intervals; ++k) {
@@ -469,7 +504,8 @@ AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
     p.edf = equivalent_dof(options.kind, p.alpha, p.m, samples);
     if (!options.alpha && p.alpha >= 1) {
       // Phase noise: bounded by the data length and the frequency-noise share (see above).
-      const double q = frequency_noise_share(result.points, slopes, k, options.kind);
+      const double q =
+          frequency_noise_share(result.points, slopes, k, options.kind, is_carried[k] != 0);
       if (q > 0.0) {
         p.edf = std::min(p.edf, equivalent_dof(options.kind, 0, p.m, samples) / (q * q));
       }

@@ -6,12 +6,16 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include "core/error.hpp"
+#include "noise/edf.hpp"
+#include "noise/noise_identification.hpp"
 
 namespace calstand::solver {
 namespace {
@@ -249,8 +253,33 @@ struct DeviationStream::State {
   double phase_rel = 0.0;
   std::vector<double> scratch;
   std::unique_ptr<PhaseSeries> root;
+  // The lag-1 noise identification's sums of the phase decimated by m = 2^j, j = 0, 1, ...: a
+  // level is made when point 2^j arrives (its first point is phase[0] = 0).
+  int lag1_dmax = 2;
+  std::vector<Lag1Accumulator> lag1;
 
   bool has(AllanKind k) const { return std::find(kinds.begin(), kinds.end(), k) != kinds.end(); }
+
+  // Phase points first_index, first_index + 1, ... (first_index >= 1), origin + rel[k], to
+  // the octave factors that take them: point i is every 2^j-th point for 2^j dividing i. Each
+  // factor's points are taken in order, so the sums do not depend on the blocks.
+  void identify_points(const double* rel, std::size_t n, std::size_t first_index,
+                       long double origin) {
+    const auto base = static_cast<double>(origin);
+    const std::size_t end = first_index + n;
+    for (std::size_t j = 0;; ++j) {
+      const std::size_t step = std::size_t{1} << j;
+      const std::size_t first = (first_index + step - 1) / step * step;
+      if (first >= end) break;  // nor any multiple of 2^(j+1)
+      if (j == lag1.size()) {
+        // Point 2^j, never reached before: the factor's first point is phase[0] = 0.
+        lag1.emplace_back(lag1_dmax);
+        lag1.back().push(0.0);
+      }
+      lag1[j].push(rel + (first - first_index), (end - 1 - first) / step + 1, step, base);
+      if (j == 63) break;
+    }
+  }
 
   // The phase is summed in double from an origin that moves (in long double) every
   // kOriginPoints points of the record, at fixed indices: the sums stay as small as the phase's
@@ -277,6 +306,7 @@ struct DeviationStream::State {
         scratch[k] = p;
       }
       phase_rel = p;
+      identify_points(scratch.data(), take, root->count, phase_origin);
       root->push(scratch.data(), take, phase_origin);
       i += take;
     }
@@ -315,6 +345,7 @@ DeviationStream::DeviationStream(std::vector<AllanKind> kinds, std::size_t exact
   const bool a = s.has(AllanKind::kAllan), h = s.has(AllanKind::kHadamard),
              mod = s.has(AllanKind::kModified);
   s.root = std::make_unique<PhaseSeries>(0, exact_max_m, a, h, mod, a || h, mod);
+  s.lag1_dmax = h ? difference_order(AllanKind::kHadamard) : difference_order(AllanKind::kAllan);
 }
 
 DeviationStream::~DeviationStream() = default;
@@ -421,7 +452,28 @@ AllanResult DeviationStream::result(double sample_rate_hz, const AllanOptions& o
     var.push_back(v);
     terms.push_back(t);
   }
-  return allan_result_from_variances(ms, var, terms, s.samples, sample_rate_hz, options);
+  // The noise types as allan() identifies them, from the lag-1 sums. allan()'s phase has the
+  // whole record's mean rate removed, this one the first block's: it is allan()'s plus a ramp
+  // of c per sample, c = the whole record's mean less the first block's = phase[N] / N, which
+  // the d = 0 sums take out (the differenced series only shift by it).
+  std::vector<std::optional<int>> identified;
+  std::optional<int> carried;
+  if (options.intervals && !options.alpha) {
+    const int dmax = difference_order(options.kind);
+    const double c = static_cast<double>((s.phase_origin + static_cast<long double>(s.phase_rel)) /
+                                         static_cast<long double>(s.samples));
+    const auto identify_at = [&](std::size_t m) -> std::optional<int> {
+      const auto j = static_cast<std::size_t>(std::countr_zero(m));
+      if (j >= s.lag1.size()) return std::nullopt;
+      const auto id = s.lag1[j].identify(dmax, min_alpha(options.kind), c * static_cast<double>(m));
+      return id ? std::optional<int>(id->alpha) : std::nullopt;
+    };
+    for (const std::size_t m : ms) identified.push_back(identify_at(m));
+    const std::size_t longest = lag1_longest_octave_factor(s.samples);
+    if (longest > 0) carried = identify_at(longest);
+  }
+  return allan_result_from_variances(ms, var, terms, s.samples, sample_rate_hz, options, identified,
+                                     carried);
 }
 
 WaveletMoments DeviationStream::moments(double sample_rate_hz) {

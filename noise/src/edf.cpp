@@ -112,10 +112,6 @@ double sz(double t, double f, int alpha, int d) {
   return sum;
 }
 
-int difference_order(AllanKind kind) {
-  return kind == AllanKind::kHadamard || kind == AllanKind::kHadamardNonOverlapping ? 3 : 2;
-}
-
 // Up to this many lags the estimator's variance is summed term by term.
 constexpr double kMaxDirectLags = 400.0;
 // Up to this m the modified variance's kernel is built from the exact discrete average of m
@@ -155,6 +151,10 @@ double inverse_edf_direct(const Kernel& kernel, double terms, double lags, doubl
 }
 
 }  // namespace
+
+int difference_order(AllanKind kind) {
+  return kind == AllanKind::kHadamard || kind == AllanKind::kHadamardNonOverlapping ? 3 : 2;
+}
 
 int min_alpha(AllanKind kind) { return difference_order(kind) == 3 ? -4 : -2; }
 

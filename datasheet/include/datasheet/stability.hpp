@@ -28,8 +28,9 @@ struct ChannelStability {
   double bias_instability_hi = 0.0;
   double min_tau_s = 0.0;  ///< where the floor lies [s]
   /// The curve rises again after its minimum inside the record (a later point's interval lies
-  /// wholly above the minimum's): a floor was seen. Otherwise the deviation has not turned up
-  /// within the record and the figure is only a bound.
+  /// wholly above the minimum's) and does not come down again (no point after that one reads
+  /// lower than the minimum, as after a Gauss-Markov bias's Allan bump): a floor was seen.
+  /// Otherwise the figure is only a bound.
   bool floor_resolved = false;
   /// Which wandering bias the Allan curve shows (solver::choose_bias_model(): white + Gauss-
   /// Markov + rate random walk against white + flicker + rate random walk, by AIC), and why.
@@ -77,7 +78,8 @@ StabilityAnalysis analyse_stability(store::Database& db, std::int64_t run,
 
 /// The stability from a noise analysis already made, for a caller that holds the samples: the
 /// report reads a long capture once for its Allan plot and its stability figures. The floor's
-/// rules (the minimum among points of 10 edf or more, a later point wholly above it) are made
+/// rules (the minimum among points of 10 edf or more, a later point wholly above it and none
+/// after that below it) are made
 /// for octave averaging times (solver::RunNoiseOptions' default, as analyse_stability() reads
 /// the capture): a denser curve finds floors that are not there. `min_tau_samples` as
 /// solver::RunNoiseOptions (the bias model fit leaves out the shorter averaging times). Throws

@@ -65,7 +65,7 @@ struct AllanOptions {
   /// Power-law noise exponent alpha of S_y(f) ~ f^alpha used for the degrees of freedom:
   /// 2 white PM (quantization), 1 flicker PM, 0 white FM (angle/velocity random walk), -1
   /// flicker FM (bias instability), -2 random-walk FM (rate random walk); Hadamard also -3, -4.
-  /// None: estimated at each tau from the local log-log slope of the curve (see allan()).
+  /// None: identified at each tau by the lag-1 autocorrelation, as Stable32 does (see allan()).
   std::optional<int> alpha;
   /// Compute equivalent degrees of freedom and intervals (false: only the deviations; edf, lo
   /// and hi are then NaN).
@@ -102,19 +102,24 @@ struct AllanResult {
 ///
 /// The data's mean is removed first (no estimator here sees a constant) and the phase is its
 /// cumulative sum, so each tau costs one pass over the data (the Allan taus share one blocked
-/// pass). Confidence intervals
-/// come from equivalent_dof() and chi-square quantiles. Without options.alpha the noise type at
-/// each tau is the power law nearest to the local slope of the variance (mu = -alpha - 1 on
-/// log variance against log tau, fitted over the taus within a factor of 2). A slope of -2 on
-/// the Allan or Hadamard curve is taken as white PM (quantization noise), not flicker PM, which
-/// inertial sensors rarely show, and only in an unbroken run from the shortest tau: elsewhere
-/// it is a noisy slope, and white PM's many degrees of freedom would make the interval far too
-/// narrow (white FM is used instead). A phase-noise EDF, which grows with the sample count,
-/// is bounded by the data length: by the white-FM EDF at that tau (about 3 N / (2 m), the
-/// most any frequency noise gives) divided by the squared share of frequency noise in the
-/// variance, read from the local slope, and taken as 1 where frequency noise is identified
-/// within a factor of 2 in tau (a transition; reasoning in allan.cpp). Give alpha to override
-/// (no bound is applied then).
+/// pass). Confidence intervals come from equivalent_dof() and chi-square quantiles.
+///
+/// Without options.alpha the noise type at each tau is identified by the lag-1 autocorrelation
+/// of the phase decimated by m (identify_noise_lag1(), Riley and Greenhall 2004; NIST SP 1065
+/// 5.5.5), as Stable32 and the total deviations do: it depends on the record and the tau alone,
+/// not on the other taus asked for. Beyond the last tau the method reaches (30 decimated points,
+/// about N / 29), the type identified at the longest octave tau it reaches
+/// (lag1_longest_octave_factor()) is carried, whatever the tau set, white FM if it named none
+/// (Stable32 switches to the B1 ratio there; not implemented).
+///
+/// A phase-noise EDF (white or flicker PM), which grows with the sample count, is bounded by
+/// the data length: by the white-FM EDF at that tau (about 3 N / (2 m), the most any frequency
+/// noise gives) divided by the squared share of frequency noise in the variance (reasoning in
+/// allan.cpp). Where the type was identified the share is read from the local slope of the
+/// curve (fitted over the taus within a factor of 2), which leaves a pure phase-noise tau its
+/// EDF and bounds one the method names phase noise while frequency noise holds a fair share;
+/// where phase noise was carried the share is taken as 1 (white FM's EDF). Give alpha to
+/// override (no bound is applied then).
 ///
 /// Throws core::InputError for empty or too short data (fewer than 2 samples, 3 for the
 /// others), a non-finite sample (its index is named), a non-positive or non-finite rate,
@@ -124,13 +129,18 @@ AllanResult allan(std::span<const double> rate, double sample_rate_hz,
 
 /// The deviation curve allan() gives once the variances are known: `var[k]` is the variance at
 /// averaging factor ms[k] (increasing), summed over terms[k] difference terms, of a record of
-/// `samples` rate samples. The noise type, EDF and intervals are chosen exactly as allan()
-/// chooses them (options.taus is not used). For an estimator that computes the variances
-/// another way (solver::DeviationStream, a streamed record).
+/// `samples` rate samples. The EDF and intervals are chosen exactly as allan() chooses them
+/// (options.taus is not used), from the noise types the caller identified as allan() does:
+/// `identified[k]` the lag-1 type at ms[k] (nullopt where the method cannot tell), `carried`
+/// the one at lag1_longest_octave_factor(samples). For an estimator that computes the variances
+/// another way (solver::DeviationStream, a streamed record). Unless options.alpha is given or
+/// options.intervals is false, `identified` must hold one entry per m (std::logic_error).
 AllanResult allan_result_from_variances(std::span<const std::size_t> ms,
                                         std::span<const double> var,
                                         std::span<const std::size_t> terms, std::size_t samples,
-                                        double sample_rate_hz, const AllanOptions& options);
+                                        double sample_rate_hz, const AllanOptions& options,
+                                        std::span<const std::optional<int>> identified,
+                                        std::optional<int> carried);
 
 /// The variance of `kind` at averaging factor m of the rate samples whose phase (cumulative sum
 /// in sample units, phase[0] = 0, phase.size() = samples + 1) is given; the building block of

@@ -33,6 +33,15 @@ namespace calstand::solver {
 /// moved to its newest point at each buffer shift, so the sums and the stored values stay
 /// bounded by the phase's excursion over 4096 samples or a buffer, whatever the bias and the
 /// length. The results do not depend on how the record is split into blocks.
+///
+/// Noise types: the lag-1 identification allan() makes at each tau (identify_noise_lag1(): the
+/// phase decimated by m, differenced up to 2 or 3 times) is accumulated for every octave m at
+/// once from the full-rate phase, a Lag1Accumulator per m (count, sum, sum of squares, sum of
+/// neighbour products, first and last value per difference order): O(log N) memory. The phase
+/// here has the first block's mean rate removed, allan()'s the whole record's; the difference,
+/// a linear ramp, is taken out of the sums at result() time, so the types, EDFs and intervals
+/// are allan()'s (up to the rounding of one-pass sums, which moves a type only when its
+/// autocorrelation sits on a rounding boundary).
 class DeviationStream {
  public:
   /// Default exact range: every start sample up to m = 2^15 (32.8 s at 1 kHz).

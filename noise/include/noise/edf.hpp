@@ -6,6 +6,11 @@
 
 namespace calstand::solver {
 
+/// Order d of the phase differences of `kind`: 2 for the Allan and modified Allan variances, 3
+/// for the Hadamard ones; also the most differences the lag-1 noise identification takes for it
+/// (identify_noise_lag1(), dmax).
+int difference_order(AllanKind kind);
+
 /// Range of noise exponents alpha for which the estimator `kind` converges (alpha + 2d > 1,
 /// d = 2 for Allan and modified, 3 for Hadamard): [-2, 2] or [-4, 2].
 int min_alpha(AllanKind kind);

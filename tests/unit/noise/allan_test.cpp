@@ -6,11 +6,14 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/error.hpp"
 #include "noise/edf.hpp"
+#include "noise/noise_identification.hpp"
 #include "sim/noise.hpp"
 
 namespace calstand::solver {
@@ -75,6 +78,100 @@ TEST(Allan, NistStartsWithSeed) {
   // tests above do pin down which one SP 1065 used.
   const AllanResult r = nist(AllanKind::kAllan, true);
   EXPECT_GT(std::abs(r.points[1].deviation / 9.159953e-02 - 1.0), 1e-4);
+}
+
+// Stable32 1.60's octave tables of PHASE.DAT, Stable32's sample file, which is the phase of the
+// test set above (so nist_set() gives its deviations), as shipped with allantools' tests
+// (phase_dat_{oadev,mdev,ohdev,hdev}_octave.txt): AF, "#" (terms), alpha, and the 68.3 %
+// interval. Stable32 was run at alpha 0 (white FM; the uniform test set is white frequency
+// noise); the lag-1 method names white FM at every tau of it too (and carries it past 32 s,
+// the last octave with 30 decimated points), so the default run prints Stable32's noise type,
+// and --alpha 0 the same curve.
+//
+// The intervals agree to 1e-3 from `interval_from` on. Below it the two EDF models of white FM
+// part: Stable32's intervals imply EDF 792, 546, 310, 168 at m = 1, 2, 4, 8 (adev) where
+// equivalent_dof() gives 666, 570, 346, 182, converging by m = 64 (21.3 and 21.2). Stable32's
+// figures are those of Greenhall's algorithm with the phase averaged over one sample (F = m,
+// 782, 541, 306, 166 by the paper's formulas); equivalent_dof() takes point samples of the
+// phase, which is what the cumulative sum of rate data is (edf.cpp). That is a choice of the
+// EDF model, not of the noise type, and it is left as it is here.
+struct Stable32Row {
+  std::size_t m, terms;
+  double lo, dev, hi;
+};
+
+void expect_stable32_table(AllanKind kind, std::size_t interval_from,
+                           const std::vector<Stable32Row>& rows) {
+  const std::vector<double> y = nist_set();
+  for (const std::optional<int> alpha : {std::optional<int>(), std::optional<int>(0)}) {
+    AllanOptions o;
+    o.kind = kind;
+    o.taus = TauSet::parse("1,2,4,8,16,32,64,128");
+    o.alpha = alpha;
+    const AllanResult r = allan(y, 1.0, o);
+    ASSERT_EQ(r.points.size(), rows.size());
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const AllanPoint& p = r.points[k];
+      SCOPED_TRACE(std::string(to_string(kind)) + " m " + std::to_string(p.m) +
+                   (alpha ? " alpha 0" : " identified"));
+      EXPECT_EQ(p.m, rows[k].m);
+      EXPECT_EQ(p.terms, rows[k].terms);
+      EXPECT_EQ(p.alpha, 0);
+      expect_relative(p.deviation, rows[k].dev, 1e-4);  // five digits printed
+      if (p.m >= interval_from) {
+        expect_relative(p.lo, rows[k].lo, 1e-3);
+        expect_relative(p.hi, rows[k].hi, 1e-3);
+      }
+    }
+  }
+}
+
+TEST(Allan, Stable32PhaseDatOverlappingAllan) {
+  expect_stable32_table(AllanKind::kAllan, 64,
+                        {{1, 999, 2.8515e-01, 2.9223e-01, 2.9987e-01},
+                         {2, 997, 1.9520e-01, 2.0102e-01, 2.0738e-01},
+                         {4, 993, 1.3931e-01, 1.4479e-01, 1.5098e-01},
+                         {8, 985, 1.0038e-01, 1.0570e-01, 1.1198e-01},
+                         {16, 969, 5.7696e-02, 6.1915e-02, 6.7217e-02},
+                         {32, 937, 4.3654e-02, 4.8082e-02, 5.4202e-02},
+                         {64, 873, 3.1755e-02, 3.6237e-02, 4.3377e-02},
+                         {128, 745, 2.3045e-02, 2.7674e-02, 3.7027e-02}});
+}
+
+TEST(Allan, Stable32PhaseDatModifiedAllan) {
+  expect_stable32_table(AllanKind::kModified, 4,
+                        {{1, 999, 2.8515e-01, 2.9223e-01, 2.9987e-01},
+                         {2, 996, 1.5336e-01, 1.5821e-01, 1.6355e-01},
+                         {4, 990, 1.0322e-01, 1.0780e-01, 1.1304e-01},
+                         {8, 978, 6.9840e-02, 7.4192e-02, 7.9481e-02},
+                         {16, 954, 3.8022e-02, 4.1376e-02, 4.5809e-02},
+                         {32, 906, 3.0466e-02, 3.4255e-02, 3.9933e-02},
+                         {64, 810, 2.3687e-02, 2.7871e-02, 3.5511e-02},
+                         {128, 618, 1.4874e-02, 1.8669e-02, 2.8584e-02}});
+}
+
+TEST(Allan, Stable32PhaseDatOverlappingHadamard) {
+  expect_stable32_table(AllanKind::kHadamard, 32,
+                        {{1, 998, 2.8635e-01, 2.9439e-01, 3.0315e-01},
+                         {2, 995, 1.9491e-01, 2.0125e-01, 2.0825e-01},
+                         {4, 989, 1.3777e-01, 1.4368e-01, 1.5043e-01},
+                         {8, 977, 1.0388e-01, 1.0987e-01, 1.1704e-01},
+                         {16, 953, 5.6173e-02, 6.0638e-02, 6.6369e-02},
+                         {32, 905, 4.0664e-02, 4.5095e-02, 5.1382e-02},
+                         {64, 809, 2.9271e-02, 3.3824e-02, 4.1477e-02},
+                         {128, 617, 2.3761e-02, 2.9147e-02, 4.1367e-02}});
+}
+
+TEST(Allan, Stable32PhaseDatHadamard) {
+  expect_stable32_table(AllanKind::kHadamardNonOverlapping, 8,
+                        {{1, 998, 2.8635e-01, 2.9439e-01, 3.0315e-01},
+                         {2, 498, 1.9887e-01, 2.0716e-01, 2.1659e-01},
+                         {4, 248, 1.4054e-01, 1.4890e-01, 1.5896e-01},
+                         {8, 123, 1.0744e-01, 1.1649e-01, 1.2829e-01},
+                         {16, 60, 5.3296e-02, 5.9589e-02, 6.8811e-02},
+                         {32, 29, 4.6987e-02, 5.4697e-02, 6.8092e-02},
+                         {64, 13, 2.4870e-02, 3.0569e-02, 4.3652e-02},
+                         {128, 5, 2.8841e-02, 3.8060e-02, 7.3807e-02}});
 }
 
 // The overlapping Hadamard deviation by its definition: averages over every window of m
@@ -283,24 +380,91 @@ std::vector<double> phase_to_frequency_transition(std::uint64_t seed, std::size_
   return y;
 }
 
+// Frequency noise's share of the Allan variance of phase_to_frequency_transition() at m.
+double white_fm_share(double m, double crossover) { return m / (crossover + m); }
+
 TEST(Allan, EdfBoundedByTheDataLengthWhereNoiseTurnsFromPhaseToFrequency) {
-  // 65536 s of data. The last taus the slope still calls phase noise have frequency noise in
-  // their variance: their EDF is that of a record of N / m spans, not white PM's N / 2.
+  // 65536 s of data, the change at 8192 s. The lag-1 method can name the noise up to 2048 s
+  // (30 decimated points), where frequency noise is still only a fifth of the variance, so it
+  // names phase noise there and that is carried to the last taus, where frequency noise is a
+  // third to four fifths of it. Phase noise's EDF grows with N (white PM: N / 2 at every
+  // tau); with a share q of frequency noise the estimate's EDF is at most white FM's / q^2
+  // (allan.cpp), which is what the interval must respect there.
   const std::size_t n = 65536;
-  const AllanResult r = allan(phase_to_frequency_transition(7, n, 8192.0), 1.0);
-  bool bounded_one = false;
-  for (std::size_t k = 0; k + 1 < r.points.size(); ++k) {
-    const AllanPoint& p = r.points[k];
-    if (p.alpha >= 1 && r.points[k + 1].alpha <= 0) {
-      bounded_one = true;
-      SCOPED_TRACE(p.tau_s);
-      EXPECT_LE(p.edf, 1.0001 * equivalent_dof(AllanKind::kAllan, 0, p.m, n));
-      EXPECT_LT(p.edf, 3.0 * static_cast<double>(n) / static_cast<double>(p.m));
+  const double crossover = 8192.0;
+  const AllanResult r = allan(phase_to_frequency_transition(7, n, crossover), 1.0);
+  bool carried_phase_noise = false;
+  for (const AllanPoint& p : r.points) {
+    SCOPED_TRACE(p.tau_s);
+    const double white_fm = equivalent_dof(AllanKind::kAllan, 0, p.m, n);
+    const double q = white_fm_share(static_cast<double>(p.m), crossover);
+    // The type and the share come from the same record (at 2048 s, 33 decimated points and a
+    // slope over three taus): the EDF may exceed the true bound by a small factor (2.4 at
+    // 2048 s here), never by the factor 28 white PM's EDF would (before the bound existed, the
+    // slope rule gave 2800 on a record of 241,000 s).
+    EXPECT_LT(p.edf, 3.0 * white_fm / (q * q));
+    if (p.m > n / (kLag1MinPoints - 1) && p.alpha >= 1) {
+      // Phase noise carried where the method cannot name the noise: at most white FM's EDF.
+      carried_phase_noise = true;
+      EXPECT_LE(p.edf, 1.0001 * white_fm);
     }
   }
-  EXPECT_TRUE(bounded_one) << "no phase-to-frequency transition in the curve";
+  EXPECT_TRUE(carried_phase_noise) << "the premise: phase noise named up to the last taus";
   // Pure phase noise (a deep white PM run) keeps its many degrees of freedom.
+  EXPECT_EQ(r.points[3].alpha, 2);
   EXPECT_GT(r.points[3].edf, 0.4 * static_cast<double>(n)) << r.points[3].tau_s;
+}
+
+TEST(Allan, IdentifiedPhaseNoiseNextToFrequencyNoiseKeepsItsEdf) {
+  // As at 100 s of allantools' Cs 5071A record (Stable32: flicker PM, +-0.37 %, next to white
+  // FM at 200 s): the change at 300 s of 65536 s; lag-1 names flicker PM at 128 s, where
+  // frequency noise is 30 % of the variance, and white FM at 256 s. Flicker PM's EDF stands
+  // (the share allows up to 8500); the white FM EDF a neighbour of frequency noise once got
+  // (766) would make the interval twice as wide as the data need.
+  const std::size_t n = 65536;
+  const AllanResult r = allan(phase_to_frequency_transition(0, n, 300.0), 1.0);
+  ASSERT_EQ(r.points[7].m, 128u);
+  EXPECT_EQ(r.points[7].alpha, 1);
+  EXPECT_EQ(r.points[8].alpha, 0);
+  EXPECT_NEAR(r.points[7].edf / equivalent_dof(AllanKind::kAllan, 1, 128, n), 1.0, 1e-12);
+  EXPECT_GT(r.points[7].edf, 4.0 * equivalent_dof(AllanKind::kAllan, 0, 128, n));
+}
+
+// The noise type of a tau is the record's, not the tau list's: lag-1 names it at the tau itself,
+// and beyond the last tau it can name (30 decimated points) it is carried from the longest
+// octave tau it can (2048 s of 65536 s), whatever the list holds. Carried from the list's last
+// named tau instead, 10000 s would be flicker PM in the decade list (1000 s) and white FM in the
+// dense one (1995 s) on this record.
+TEST(Allan, NoiseTypeOfATauDoesNotDependOnTheTauList) {
+  const std::vector<double> y = phase_to_frequency_transition(4, 65536, 1024.0);
+  const auto run = [&](const char* taus) {
+    AllanOptions o;
+    o.taus = TauSet::parse(taus);
+    return allan(y, 1.0, o);
+  };
+  const AllanResult dense = run("dense");
+  std::size_t compared = 0;
+  for (const char* taus : {"decade", "octave", "10000", "3,1000,1995,2048,30000"}) {
+    const AllanResult other = run(taus);
+    for (const AllanPoint& p : other.points) {
+      for (const AllanPoint& q : dense.points) {
+        if (q.m != p.m) continue;
+        EXPECT_EQ(p.alpha, q.alpha) << taus << ": tau " << p.tau_s;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GE(compared, 12u);
+  const auto alpha_at = [&](std::size_t m) {
+    for (const AllanPoint& p : dense.points) {
+      if (p.m == m) return p.alpha;
+    }
+    return 99;
+  };
+  // The record's types around the last named tau (the premise of the comment above).
+  EXPECT_EQ(alpha_at(1000), 1);
+  EXPECT_EQ(alpha_at(1995), 0);
+  EXPECT_EQ(alpha_at(10000), run("2048").points[0].alpha);
 }
 
 TEST(Allan, IntervalsHoldTheTruthAcrossAPhaseToFrequencyTransition) {
@@ -331,7 +495,7 @@ TEST(Allan, IntervalsHoldTheTruthAcrossAPhaseToFrequencyTransition) {
   }
 }
 
-TEST(Allan, EstimatesNoiseTypeFromSlope) {
+TEST(Allan, IdentifiesTheNoiseType) {
   sim::RandomWalk walk(1.0, 1.0, 3);
   std::vector<double> y(20000);
   for (double& v : y) v = walk.next();

@@ -137,7 +137,7 @@ TEST(DeviationStream, LargeBiasMatchesAllan) {
 }
 
 // How the record is split into blocks does not change a bit of the result (strided levels
-// included: a budget of 2^6).
+// included: a budget of 2^6), noise types and EDFs included.
 TEST(DeviationStream, BlockSizesGiveIdenticalResults) {
   const std::vector<double> y = stream_record(150001, 3u);
   DeviationStream whole({AllanKind::kAllan, AllanKind::kHadamard, AllanKind::kModified}, 64);
@@ -155,6 +155,8 @@ TEST(DeviationStream, BlockSizesGiveIdenticalResults) {
         EXPECT_EQ(a.points[k].deviation, b.points[k].deviation)
             << to_string(kind) << " block " << block << " m " << a.points[k].m;
         EXPECT_EQ(a.points[k].terms, b.points[k].terms);
+        EXPECT_EQ(a.points[k].alpha, b.points[k].alpha);
+        EXPECT_EQ(a.points[k].edf, b.points[k].edf);
       }
     }
   }

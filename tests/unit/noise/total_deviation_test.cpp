@@ -6,9 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/error.hpp"
@@ -336,6 +339,109 @@ TEST(NoiseIdentification, Lag1NamesSimulatedPowerLaws) {
   }
   // Too few decimated points: no answer rather than a guess.
   EXPECT_FALSE(identify_noise_lag1(white_fm, n / 20, 2, -2).has_value());
+}
+
+// The streamed form (Lag1Accumulator, one decimated point at a time, one-pass sums) gives the
+// in-memory answer: the same type, differences and points, the estimate to rounding; with a
+// linear phase ramp added to the points and named to identify(), the answer without it. The ramp
+// matters: on white PM it alone makes the in-memory method difference the phase once more.
+// Ramps up to a thousand times the series' spread over the record, what DeviationStream meets
+// on white PM 65,536,000 samples long (its ramp is the error of the first 65,536 samples'
+// mean, |phase[65536]| / 65536 per sample); taking a ramp out of one-pass sums cancels, about
+// 1e-16 times that ratio squared times the sums' own growth: 1.5e-9 in alpha at m = 1 here.
+TEST(NoiseIdentification, Lag1StreamedSumsGiveTheInMemoryAnswer) {
+  std::mt19937_64 rng(77);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const std::size_t n = 20001;
+  std::vector<double> white_pm(n), white_fm(n), rw_fm(n), flicker_like(n);
+  double phase = 0.0, freq = 0.0, phase2 = 0.0, slow = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    white_pm[i] = g(rng);
+    phase += g(rng);
+    white_fm[i] = phase;
+    freq += g(rng);
+    phase2 += freq;
+    rw_fm[i] = phase2;
+    slow = 0.99 * slow + g(rng);  // a Gauss-Markov phase: between white PM and white FM
+    flicker_like[i] = slow + 0.3 * g(rng);
+  }
+  const auto spread = [](const std::vector<double>& x) {
+    double mean = 0.0, sq = 0.0;
+    for (const double v : x) mean += v;
+    mean /= static_cast<double>(x.size());
+    for (const double v : x) sq += (v - mean) * (v - mean);
+    return std::sqrt(sq / static_cast<double>(x.size()));
+  };
+  const auto streamed = [](const std::vector<double>& x, std::size_t m, int dmax, int min_alpha,
+                           double ramp) {
+    Lag1Accumulator acc(Lag1Accumulator::kMaxDifferences);
+    for (std::size_t i = 0, k = 0; i < x.size(); i += m, ++k) {
+      acc.push(x[i] + ramp * static_cast<double>(k));
+    }
+    return acc.identify(dmax, min_alpha, ramp);
+  };
+  for (const auto* x : {&white_pm, &white_fm, &rw_fm, &flicker_like}) {
+    for (const std::size_t m : {1u, 3u, 16u, 100u, 600u}) {
+      for (const int dmax : {2, 3}) {
+        for (const double excursion : {0.0, 30.0, -1000.0}) {
+          const double ramp =
+              excursion * spread(*x) / static_cast<double>((x->size() - 1) / m);  // per point
+          SCOPED_TRACE("m " + std::to_string(m) + " dmax " + std::to_string(dmax) + " excursion " +
+                       std::to_string(excursion));
+          const auto want = identify_noise_lag1(*x, m, dmax, dmax == 3 ? -4 : -2);
+          const auto got = streamed(*x, m, dmax, dmax == 3 ? -4 : -2, ramp);
+          ASSERT_TRUE(want.has_value());
+          ASSERT_TRUE(got.has_value());
+          EXPECT_EQ(got->alpha, want->alpha);
+          EXPECT_EQ(got->differences, want->differences);
+          EXPECT_EQ(got->points, want->points);
+          EXPECT_NEAR(got->alpha_estimate, want->alpha_estimate, 1e-8);
+        }
+      }
+    }
+  }
+  // 20001 points decimated by 690 leave 29: no answer, as in memory.
+  EXPECT_FALSE(streamed(white_fm, 690, 2, -2, 0.0).has_value());
+  EXPECT_FALSE(identify_noise_lag1(white_fm, 690, 2, -2).has_value());
+  // The ramp is what the correction takes out: left in, white PM is no longer white PM.
+  std::vector<double> ramped = white_pm;
+  for (std::size_t i = 0; i < n; ++i) ramped[i] += 0.01 * static_cast<double>(i);
+  EXPECT_EQ(identify_noise_lag1(white_pm, 1, 2, -2)->differences, 0);
+  EXPECT_NE(identify_noise_lag1(ramped, 1, 2, -2)->differences, 0);
+  // Pushed in pieces of any size and stride (pairs at a time, in two lanes by the points'
+  // parity) or one point at a time: the same sums, bit for bit.
+  for (const std::size_t stride : {1u, 5u}) {
+    Lag1Accumulator one(3), pieces(3);
+    const double offset = 0.25;
+    std::size_t i = 0;
+    for (std::size_t size = 0; i < n; size = (size * 7 + 3) % 64) {
+      const std::size_t take = std::min(size, (n - i + stride - 1) / stride);
+      pieces.push(rw_fm.data() + i, take, stride, offset);
+      for (std::size_t k = 0; k < take; ++k) one.push(rw_fm[i + k * stride] + offset);
+      i += take * stride;
+    }
+    for (const int dmax : {0, 1, 2, 3}) {
+      EXPECT_EQ(one.identify(dmax, -4, 0.5)->alpha_estimate,
+                pieces.identify(dmax, -4, 0.5)->alpha_estimate)
+          << "stride " << stride << " dmax " << dmax;
+    }
+  }
+  EXPECT_THROW(Lag1Accumulator(4), std::invalid_argument);
+  EXPECT_THROW(Lag1Accumulator(2).identify(3, -4), std::invalid_argument);
+}
+
+// The longest octave factor with 30 decimated points: floor(N / m) + 1 >= 30.
+TEST(NoiseIdentification, Lag1LongestOctaveFactor) {
+  EXPECT_EQ(lag1_longest_octave_factor(28), 0u);
+  EXPECT_EQ(lag1_longest_octave_factor(29), 1u);        // 30 phase points at m = 1
+  EXPECT_EQ(lag1_longest_octave_factor(1000), 32u);     // 32 points at 32, 16 at 64
+  EXPECT_EQ(lag1_longest_octave_factor(65536), 2048u);  // 33 points at 2048, 17 at 4096
+  EXPECT_EQ(lag1_longest_octave_factor(556989), 16384u);
+  for (const std::size_t n : {29u, 1000u, 65536u, 556989u}) {
+    const std::size_t m = lag1_longest_octave_factor(n);
+    EXPECT_GE(n / m + 1, kLag1MinPoints) << n;
+    EXPECT_LT(n / (2 * m) + 1, kLag1MinPoints) << n;
+  }
 }
 
 TEST(TotalDeviation, BadInput) {
